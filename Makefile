@@ -1,0 +1,47 @@
+# cellsim: every target installs the system packages it needs (apt-get, with sudo when
+# not root) before building. The two quick-start commands are `make paper` and `make test`.
+
+APT_PACKAGES := libsundials-dev libsuitesparse-dev libclang-dev pkg-config \
+                libfontconfig1-dev libfreetype-dev fonts-dejavu-core
+CARGO ?= cargo
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+.PHONY: all deps build paper test robertson bench lint clean
+
+all: build
+
+# Install the missing Debian/Ubuntu packages (only those not already installed).
+deps:
+	@command -v $(CARGO) >/dev/null || { echo "cargo not found: install Rust from https://rustup.rs"; exit 1; }
+	@missing=""; for p in $(APT_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing:$$missing"; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
+	fi
+
+build: deps
+	$(CARGO) build --release
+
+# The main job: the paper's scenes, plots written to plots/.
+paper: deps
+	$(CARGO) run --release --example robertson
+
+# All tests (release mode: the finite-element tests are numeric).
+test: deps
+	$(CARGO) test --release
+
+robertson: deps
+	$(CARGO) run --release --example robertson
+
+bench: deps
+	$(CARGO) bench
+
+lint: deps
+	$(CARGO) fmt --all -- --check
+	$(CARGO) clippy --release --all-targets -- -D warnings
+
+clean:
+	$(CARGO) clean

@@ -1,0 +1,1 @@
+//! The case file (RON) schema, its defaults and validation.

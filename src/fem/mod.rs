@@ -1,0 +1,1 @@
+//! Mesh, P2 elements, quadrature.

@@ -1,0 +1,13 @@
+//! cellsim: a finite-element model of a living cell settling under gravity, spreading by
+//! adhesion and contracting its actin on a flat or micropillared substrate.
+//!
+//! The semi-discrete system is one implicit DAE `F(t, y, ẏ) = 0` (module [`dae`]),
+//! integrated by SUNDIALS IDA (variable-order BDF, [`sundials`]) or by a fixed-step BDF2
+//! that verifies it ([`dae::bdf2`]).
+#![deny(unsafe_code)]
+
+pub mod case;
+pub mod dae;
+pub mod fem;
+pub mod physics;
+pub mod sundials;

@@ -1,0 +1,1 @@
+//! Material laws, active strain, substrate, contact, adhesion, gravity and phases: pure functions.

@@ -1,0 +1,1 @@
+//! The only FFI: SUNDIALS IDA and KLU behind safe types.
