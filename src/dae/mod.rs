@@ -1,1 +1,212 @@
-//! The `Dae` trait, the sparse linear solvers and the integrators that see only that trait.
+//! The DAE layer: the [`Dae`] trait, the sparse linear solvers and the integrators that
+//! see only that trait.
+//!
+//! A fully implicit system `F(t, y, ẏ) = 0` of size n is described by
+//! - its residual F;
+//! - the fixed sparsity pattern of the iteration matrix `J = ∂F/∂y + cj ∂F/∂ẏ` and a
+//!   routine that fills J's values (in that pattern's order) for a given `cj`;
+//! - which components are differential (ẏ appears) and which algebraic;
+//! - consistent initial values (y₀, ẏ₀);
+//! - the breakpoints where the forcing has a kink, so that no step straddles one.
+//!
+//! The residual (or Jacobian) may report an inadmissible state ([`DaeError::Inadmissible`],
+//! e.g. an inverted element), which the integrators treat as a recoverable failure: the
+//! step is cut and retried.
+//!
+//! Two integrators implement [`Integrator`]: SUNDIALS IDA ([`crate::sundials::Ida`],
+//! variable order and step) and the fixed-step [`bdf2::Bdf2`] that verifies it. Both use
+//! the same [`linsolve::LinearSolver`] (faer's sparse LU by default, SUNDIALS' KLU as an
+//! alternative).
+
+pub mod bdf2;
+pub mod linsolve;
+pub mod problems;
+
+use faer::sparse::SymbolicSparseColMat;
+use serde::{Deserialize, Serialize};
+
+pub use linsolve::{LinearSolver, LinearSolverKind};
+
+/// The sparsity pattern of the iteration matrix (compressed sparse columns, row indices
+/// sorted within each column). Values handed to [`Dae::jacobian`] follow its order.
+pub type Pattern = SymbolicSparseColMat<usize>;
+
+/// A recoverable or fatal failure reported by the problem itself.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum DaeError {
+    /// The state cannot be evaluated (e.g. an element with det F ≤ 0). Recoverable: the
+    /// integrator cuts its step.
+    #[error("inadmissible state: {0}")]
+    Inadmissible(String),
+    /// Anything else: the integration stops.
+    #[error("{0}")]
+    Fatal(String),
+}
+
+/// A fully implicit DAE `F(t, y, ẏ) = 0`: the only thing integrators see.
+pub trait Dae {
+    /// Number of unknowns n.
+    fn size(&self) -> usize;
+
+    /// Residual `r = F(t, y, ẏ)`.
+    fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError>;
+
+    /// The pattern of `J = ∂F/∂y + cj ∂F/∂ẏ`, fixed for the run.
+    fn pattern(&self) -> &Pattern;
+
+    /// Fills `values` (length `pattern().compute_nnz()`, the pattern's order) with
+    /// `J = ∂F/∂y + cj ∂F/∂ẏ` at (t, y, ẏ). Every value must be written (not accumulated).
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        cj: f64,
+        values: &mut [f64],
+    ) -> Result<(), DaeError>;
+
+    /// For each component: `true` if differential (ẏᵢ appears in F), `false` if algebraic.
+    fn differential(&self) -> Vec<bool>;
+
+    /// Consistent initial values `(t₀, y₀, ẏ₀)`.
+    fn initial(&self) -> (f64, Vec<f64>, Vec<f64>);
+
+    /// Times where the forcing has a kink (phase boundaries). Integrators stop exactly there.
+    fn breakpoints(&self) -> Vec<f64> {
+        Vec::new()
+    }
+}
+
+/// Absolute tolerance: one value for every component, or one per component.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Atol {
+    /// Same absolute tolerance for every component.
+    Scalar(f64),
+    /// One absolute tolerance per component.
+    Vector(Vec<f64>),
+}
+
+impl Atol {
+    /// The tolerance of component `i`.
+    pub fn get(&self, i: usize) -> f64 {
+        match self {
+            Atol::Scalar(a) => *a,
+            Atol::Vector(v) => v[i],
+        }
+    }
+}
+
+/// Error weights `wᵢ = 1 / (rtol |yᵢ| + atolᵢ)` as used by IDA's WRMS norm.
+pub fn error_weights(y: &[f64], rtol: f64, atol: &Atol, w: &mut [f64]) {
+    for (i, (wi, yi)) in w.iter_mut().zip(y).enumerate() {
+        *wi = 1.0 / (rtol * yi.abs() + atol.get(i));
+    }
+}
+
+/// Weighted root-mean-square norm `sqrt(Σ (vᵢ wᵢ)² / n)`.
+pub fn wrms_norm(v: &[f64], w: &[f64]) -> f64 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    let s: f64 = v.iter().zip(w).map(|(a, b)| (a * b) * (a * b)).sum();
+    (s / v.len() as f64).sqrt()
+}
+
+/// Integrator statistics after (part of) a run.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Stats {
+    /// Accepted steps.
+    pub steps: u64,
+    /// Residual evaluations (including those for initial-condition calculation).
+    pub residual_evals: u64,
+    /// Jacobian evaluations.
+    pub jacobian_evals: u64,
+    /// Numerical LU factorizations.
+    pub lu_factorizations: u64,
+    /// Newton iterations.
+    pub newton_iters: u64,
+    /// Newton convergence failures.
+    pub newton_failures: u64,
+    /// Local error-test failures (IDA only; 0 for fixed-step BDF2).
+    pub error_test_failures: u64,
+    /// Order used on the last step.
+    pub last_order: u32,
+    /// Size of the last step.
+    pub last_step: f64,
+}
+
+/// Why an integration stopped before its target time.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum IntegratorError {
+    /// A SUNDIALS function returned an error code.
+    #[error("{function} failed at t = {t:.6e} with flag {flag} ({name}): {message}")]
+    Sundials {
+        /// The SUNDIALS function that failed.
+        function: &'static str,
+        /// Its return flag.
+        flag: i32,
+        /// The flag's name (IDAGetReturnFlagName).
+        name: String,
+        /// The last message from SUNDIALS' error handler.
+        message: String,
+        /// Integration time when it failed.
+        t: f64,
+    },
+    /// The Newton iteration failed repeatedly (BDF2).
+    #[error("Newton iteration did not converge at t = {t:.6e} (step {step}, h = {h:.3e}): {reason}")]
+    NewtonFailed {
+        /// Time at the start of the failing step.
+        t: f64,
+        /// Step number.
+        step: u64,
+        /// Step size.
+        h: f64,
+        /// What went wrong last.
+        reason: String,
+    },
+    /// The step size fell below its minimum.
+    #[error("step size fell below its minimum at t = {t:.6e} (h = {h:.3e}): {reason}")]
+    StepTooSmall {
+        /// Time.
+        t: f64,
+        /// Last step attempted.
+        h: f64,
+        /// The last failure.
+        reason: String,
+    },
+    /// The linear solver failed (structurally singular matrix, ...).
+    #[error("linear solver: {0}")]
+    Linear(String),
+    /// The problem reported a fatal error.
+    #[error("problem error at t = {t:.6e}: {message}")]
+    Problem {
+        /// Time.
+        t: f64,
+        /// The message.
+        message: String,
+    },
+    /// Invalid options or input.
+    #[error("invalid input: {0}")]
+    Input(String),
+}
+
+/// What every integrator offers to a driver: advance to a time, look at the state.
+pub trait Integrator {
+    /// Advances the solution to `tout` (never past the next breakpoint without stopping
+    /// there) and returns the state at `tout`. `on_step` is called after every internal
+    /// step with (t, stats) so a driver can show progress.
+    fn advance_to(
+        &mut self,
+        tout: f64,
+        on_step: &mut dyn FnMut(f64, &Stats),
+    ) -> Result<(), IntegratorError>;
+    /// Current output time (the last `tout` reached).
+    fn t(&self) -> f64;
+    /// y at the current output time.
+    fn y(&self) -> &[f64];
+    /// ẏ at the current output time.
+    fn yp(&self) -> &[f64];
+    /// Statistics so far.
+    fn stats(&self) -> Stats;
+}

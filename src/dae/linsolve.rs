@@ -1,0 +1,268 @@
+//! Sparse direct solvers for the iteration matrix `J = ∂F/∂y + cj ∂F/∂ẏ`.
+//!
+//! Shaped as *analyse once, factorize many times*: [`LinearSolver::analyse`] sees the fixed
+//! pattern once (fill-reducing ordering, symbolic factorization), [`LinearSolver::factorize`]
+//! is called at every Jacobian update with new values in that pattern's order, and
+//! [`LinearSolver::solve_in_place`] back-substitutes.
+//!
+//! Backends: faer's supernodal sparse LU, sequential ([`FaerLu`], the default; measured
+//! faster than its 2-thread run and than KLU on P2 elasticity matrices), and SUNDIALS' KLU
+//! with AMD ordering ([`crate::sundials::KluLu`]).
+
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::lu::{LuRef, LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu};
+use faer::sparse::SparseColMatRef;
+use faer::{Conj, MatMut, Par};
+use serde::{Deserialize, Serialize};
+
+use super::Pattern;
+
+/// Why a linear solver failed.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum LinearSolverError {
+    /// Called out of order (e.g. solve before factorize).
+    #[error("linear solver used before {0}")]
+    NotReady(&'static str),
+    /// The matrix is singular (structurally or numerically); recoverable by the
+    /// integrator (a smaller step changes `cj`).
+    #[error("singular matrix: {0}")]
+    Singular(String),
+    /// Anything else.
+    #[error("{0}")]
+    Other(String),
+}
+
+/// A sparse direct solver: analyse once, factorize many times, solve.
+pub trait LinearSolver {
+    /// Analyses the fixed pattern (ordering, symbolic factorization).
+    fn analyse(&mut self, pattern: &Pattern) -> Result<(), LinearSolverError>;
+    /// Numerical factorization with `values` in the pattern's order.
+    fn factorize(&mut self, values: &[f64]) -> Result<(), LinearSolverError>;
+    /// Solves `J x = b`, overwriting `b` with `x`.
+    fn solve_in_place(&mut self, b: &mut [f64]) -> Result<(), LinearSolverError>;
+    /// Short name for reports ("faer", "klu").
+    fn name(&self) -> &'static str;
+}
+
+/// Which sparse LU to use.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum LinearSolverKind {
+    /// faer's sequential supernodal LU (default).
+    #[default]
+    Faer,
+    /// SUNDIALS' KLU (SuiteSparse) with AMD ordering.
+    Klu,
+}
+
+impl LinearSolverKind {
+    /// A fresh solver of this kind.
+    pub fn build(self) -> Box<dyn LinearSolver> {
+        match self {
+            LinearSolverKind::Faer => Box::new(FaerLu::new()),
+            LinearSolverKind::Klu => Box::new(crate::sundials::KluLu::new()),
+        }
+    }
+}
+
+/// faer's sparse LU (column ordering by COLAMD, partial pivoting), symbolic analysis
+/// reused for every numerical factorization.
+pub struct FaerLu {
+    par: Par,
+    threshold: SupernodalThreshold,
+    pattern: Option<Pattern>,
+    symbolic: Option<SymbolicLu<usize>>,
+    numeric: NumericLu<usize, f64>,
+    mem: MemBuffer,
+    factorized: bool,
+}
+
+impl Default for FaerLu {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl FaerLu {
+    /// Sequential supernodal LU (the measured default).
+    pub fn new() -> Self {
+        Self::with_options(Par::Seq, SupernodalThreshold::FORCE_SUPERNODAL)
+    }
+
+    /// Chooses the parallelism and the supernodal/simplicial switch.
+    pub fn with_options(par: Par, threshold: SupernodalThreshold) -> Self {
+        Self {
+            par,
+            threshold,
+            pattern: None,
+            symbolic: None,
+            numeric: NumericLu::new(),
+            mem: MemBuffer::new(StackReq::EMPTY),
+            factorized: false,
+        }
+    }
+}
+
+impl LinearSolver for FaerLu {
+    fn analyse(&mut self, pattern: &Pattern) -> Result<(), LinearSolverError> {
+        let params = LuSymbolicParams {
+            supernodal_flop_ratio_threshold: self.threshold,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_lu(pattern.as_ref(), params)
+            .map_err(|e| LinearSolverError::Other(format!("faer symbolic LU: {e:?}")))?;
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_lu_scratch::<f64>(self.par, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, self.par),
+        ]);
+        self.mem = MemBuffer::try_new(req)
+            .map_err(|_| LinearSolverError::Other("out of memory for LU workspace".into()))?;
+        self.symbolic = Some(symbolic);
+        self.pattern = Some(pattern.clone());
+        self.factorized = false;
+        Ok(())
+    }
+
+    fn factorize(&mut self, values: &[f64]) -> Result<(), LinearSolverError> {
+        let (Some(pattern), Some(symbolic)) = (&self.pattern, &self.symbolic) else {
+            return Err(LinearSolverError::NotReady("analyse"));
+        };
+        self.factorized = false;
+        let a = SparseColMatRef::new(pattern.as_ref(), values);
+        let stack = MemStack::new(&mut self.mem);
+        symbolic
+            .factorize_numeric_lu(&mut self.numeric, a, self.par, stack, Default::default())
+            .map_err(|e| LinearSolverError::Singular(format!("faer numeric LU: {e:?}")))?;
+        self.factorized = true;
+        Ok(())
+    }
+
+    fn solve_in_place(&mut self, b: &mut [f64]) -> Result<(), LinearSolverError> {
+        let Some(symbolic) = &self.symbolic else {
+            return Err(LinearSolverError::NotReady("analyse"));
+        };
+        if !self.factorized {
+            return Err(LinearSolverError::NotReady("factorize"));
+        }
+        let n = b.len();
+        let lu = LuRef::new_unchecked(symbolic, &self.numeric);
+        let stack = MemStack::new(&mut self.mem);
+        lu.solve_in_place_with_conj(Conj::No, MatMut::from_column_major_slice_mut(b, n, 1), self.par, stack);
+        if b.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(LinearSolverError::Singular("non-finite solution (zero pivot)".into()))
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        "faer"
+    }
+}
+
+/// Position of every (row, col) entry in a pattern's value array, for refilling values
+/// by a precomputed permutation. Returns `None` for an entry not in the pattern.
+pub fn position(pattern: &Pattern, row: usize, col: usize) -> Option<usize> {
+    let cp = pattern.col_ptr();
+    let rows = &pattern.row_idx()[cp[col]..cp[col + 1]];
+    rows.binary_search(&row).ok().map(|k| cp[col] + k)
+}
+
+/// Builds a pattern from (row, col) pairs (duplicates merged, rows sorted in columns).
+pub fn pattern_from_entries(n: usize, entries: &[(usize, usize)]) -> Pattern {
+    let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for &(r, c) in entries {
+        cols[c].push(r);
+    }
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    let mut row_idx = Vec::new();
+    col_ptr.push(0);
+    for mut c in cols {
+        c.sort_unstable();
+        c.dedup();
+        row_idx.extend_from_slice(&c);
+        col_ptr.push(row_idx.len());
+    }
+    Pattern::new_checked(n, n, col_ptr, None, row_idx)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small unsymmetric matrix: a 1-D convection–diffusion stencil with a dense row.
+    fn test_matrix(n: usize) -> (Pattern, Vec<f64>) {
+        let mut entries = Vec::new();
+        for i in 0..n {
+            entries.push((i, i));
+            if i > 0 {
+                entries.push((i, i - 1));
+            }
+            if i + 1 < n {
+                entries.push((i, i + 1));
+            }
+            entries.push((0, i));
+        }
+        let p = pattern_from_entries(n, &entries);
+        let mut v = vec![0.0; p.compute_nnz()];
+        for &(r, c) in &entries {
+            let k = position(&p, r, c).unwrap();
+            v[k] = if r == c {
+                4.0 + r as f64 * 0.01
+            } else if r == 0 {
+                0.3
+            } else if c < r {
+                -1.3
+            } else {
+                -0.7
+            };
+        }
+        (p, v)
+    }
+
+    fn matvec(p: &Pattern, v: &[f64], x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; x.len()];
+        for j in 0..x.len() {
+            for k in p.col_ptr()[j]..p.col_ptr()[j + 1] {
+                y[p.row_idx()[k]] += v[k] * x[j];
+            }
+        }
+        y
+    }
+
+    fn check_solver(mut s: Box<dyn LinearSolver>) {
+        let n = 50;
+        let (p, v) = test_matrix(n);
+        s.analyse(&p).unwrap();
+        for scale in [1.0, 3.0] {
+            let vs: Vec<f64> = v.iter().map(|a| a * scale).collect();
+            s.factorize(&vs).unwrap();
+            let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+            let mut b = matvec(&p, &vs, &x);
+            s.solve_in_place(&mut b).unwrap();
+            let r = matvec(&p, &vs, &b);
+            let bb = matvec(&p, &vs, &x);
+            let res: f64 = r.iter().zip(&bb).map(|(a, c)| (a - c).abs()).fold(0.0, f64::max);
+            assert!(res < 1e-12, "{}: residual {res}", s.name());
+        }
+    }
+
+    #[test]
+    fn faer_solves_with_small_residual() {
+        check_solver(Box::new(FaerLu::new()));
+    }
+
+    #[test]
+    fn klu_solves_with_small_residual() {
+        check_solver(LinearSolverKind::Klu.build());
+    }
+
+    #[test]
+    fn solve_before_factorize_is_an_error() {
+        let (p, _) = test_matrix(5);
+        let mut s = FaerLu::new();
+        s.analyse(&p).unwrap();
+        assert!(matches!(s.solve_in_place(&mut [0.0; 5]), Err(LinearSolverError::NotReady(_))));
+    }
+}
