@@ -18,10 +18,12 @@
 //! - [`substrate`]: flat and micropillared substrates, penetration depth and normal (§5);
 //! - [`loads`]: contact, adhesion, adhesion-rate and gravity body forces (§5).
 
+pub mod active;
 pub mod material;
 pub mod phases;
 pub mod smooth;
 
+pub use active::{ActiveStrain, Bottom, Domain, Pac};
 pub use material::{MaterialPoint, Viscosity, Yeoh, admissible, material_point, piola_total};
 pub use phases::{Flip, Phases};
 pub use smooth::{heaviside, smooth_step, smooth_step_d};
