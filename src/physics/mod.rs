@@ -22,11 +22,13 @@ pub mod active;
 pub mod material;
 pub mod phases;
 pub mod smooth;
+pub mod substrate;
 
 pub use active::{ActiveStrain, Bottom, Domain, Pac};
 pub use material::{MaterialPoint, Viscosity, Yeoh, admissible, material_point, piola_total};
 pub use phases::{Flip, Phases};
 pub use smooth::{heaviside, smooth_step, smooth_step_d};
+pub use substrate::{Pillars, Substrate};
 
 use nalgebra::RealField;
 use num_dual::DualNum;
