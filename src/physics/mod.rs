@@ -19,12 +19,16 @@
 //! - [`loads`]: contact, adhesion, adhesion-rate and gravity body forces (§5).
 
 pub mod active;
+pub mod loads;
 pub mod material;
 pub mod phases;
 pub mod smooth;
 pub mod substrate;
 
 pub use active::{ActiveStrain, Bottom, Domain, Pac};
+pub use loads::{
+    Adhesion, Contact, adhesion_force, adhesion_rate, cofactor, contact_force, gravity_force, layer,
+};
 pub use material::{MaterialPoint, Viscosity, Yeoh, admissible, material_point, piola_total};
 pub use phases::{Flip, Phases};
 pub use smooth::{heaviside, smooth_step, smooth_step_d};
