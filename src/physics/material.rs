@@ -544,7 +544,7 @@ mod tests {
                 }
                 let e = rel(&Pfd, &P);
                 assert!(
-                    e < 1e-7,
+                    e < 1e-8,
                     "case {case}: rel. error {e:e}\nP = {P}\nPfd = {Pfd}"
                 );
             }
@@ -590,12 +590,15 @@ mod tests {
                         let dP = (piola_total(&mat, &visc, &Fp, &Fdot, &Fa)
                             - piola_total(&mat, &visc, &Fm, &Fdot, &Fa))
                             / (2.0 * h);
+                        // P is linear in Ḟ: a large step has no truncation error and
+                        // less round-off.
+                        let hv = 1e-2;
                         let (mut Gp, mut Gm) = (Fdot, Fdot);
-                        Gp[(k, l)] += h;
-                        Gm[(k, l)] -= h;
+                        Gp[(k, l)] += hv;
+                        Gm[(k, l)] -= hv;
                         let dPv = (piola_total(&mat, &visc, &F, &Gp, &Fa)
                             - piola_total(&mat, &visc, &F, &Gm, &Fa))
-                            / (2.0 * h);
+                            / (2.0 * hv);
                         for i in 0..2 {
                             for j in 0..2 {
                                 fd_F[(2 * i + j, col)] = dP[(i, j)];
@@ -607,7 +610,7 @@ mod tests {
                 let eF = (fd_F - mp.dP_dF).norm() / mp.dP_dF.norm();
                 let eV = (fd_Fdot - mp.dP_dFdot).norm() / mp.dP_dFdot.norm();
                 assert!(eF < 1e-7, "dP/dF case {case}: {eF:e}");
-                assert!(eV < 1e-7, "dP/dFdot case {case}: {eV:e}");
+                assert!(eV < 1e-9, "dP/dFdot case {case}: {eV:e}");
             }
         }
     }
@@ -684,7 +687,8 @@ mod tests {
                 rel(&(P / eps), &lin)
             };
             let (e5, e6) = (err(1e-5), err(1e-6));
-            assert!(e6 < 1e-3, "error at ε = 1e-6: {e6:e}");
+            // measured ≈ 1e-6 relative at ε = 1e-6
+            assert!(e6 < 1e-5, "error at ε = 1e-6: {e6:e}");
             // first order in ε: a tenfold smaller ε gives a tenfold smaller error
             let ratio = e5 / e6;
             assert!((5.0..20.0).contains(&ratio), "ratio {ratio}");
@@ -830,7 +834,8 @@ mod tests {
             })
             .collect();
         let reps = 2000;
-        let time = |name: &str, f: &dyn Fn(&Matrix2<f64>, &Matrix2<f64>, &Matrix2<f64>) -> f64| {
+        type Kernel<'a> = &'a dyn Fn(&Matrix2<f64>, &Matrix2<f64>, &Matrix2<f64>) -> f64;
+        let time = |name: &str, f: Kernel| {
             let t0 = Instant::now();
             let mut acc = 0.0;
             for _ in 0..reps {
