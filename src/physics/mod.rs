@@ -1,1 +1,130 @@
 //! Material laws, active strain, substrate, contact, adhesion, gravity and phases: pure functions.
+//!
+//! Everything here is in solver units (µm, s, pN; stress in Pa = pN/µm², body forces in
+//! pN/µm³ per unit reference volume). Nothing here knows about meshes or integrators.
+//!
+//! Functions of the unknowns (deformation gradient `F`, its rate `Ḟ`, the current position
+//! `x`, the adhesion coefficient `μ_as`) are generic over a scalar [`Real`], so the model
+//! gets exact tangents by evaluating them with forward-mode dual numbers
+//! (`num_dual::DualSVec64<N>`) and cheap residuals with `f64`. Quantities of the
+//! reference position or of time only (active strain `F_a`, phase functions, domain
+//! indicators) are plain `f64`.
+//!
+//! Module map (sections of `MODEL.md`):
+//! - [`smooth`]: the C² smooth step `S(s; a, b)` and regularised Heaviside `H_ε` (§5);
+//! - [`phases`]: the time switches `t_g`, `t_as`, `t_a` and the gravity flip `s_g` (§5);
+//! - [`material`]: compressible Yeoh solid with active strain and Kelvin–Voigt viscosity (§3);
+//! - [`active`]: the active-strain tensor `F_a` of the PAC and bottom fibres (§6);
+//! - [`substrate`]: flat and micropillared substrates, penetration depth and normal (§5);
+//! - [`loads`]: contact, adhesion, adhesion-rate and gravity body forces (§5).
+
+pub mod active;
+pub mod loads;
+pub mod material;
+pub mod phases;
+pub mod smooth;
+pub mod substrate;
+
+pub use active::{ActiveStrain, Bottom, Domain, Pac};
+pub use loads::{
+    Adhesion, Contact, adhesion_force, adhesion_rate, cofactor, contact_force, gravity_force, layer,
+};
+pub use material::{MaterialPoint, Viscosity, Yeoh, admissible, material_point, piola_total};
+pub use phases::{Flip, Phases};
+pub use smooth::{heaviside, smooth_step, smooth_step_d};
+pub use substrate::{Pillars, Substrate};
+
+use nalgebra::RealField;
+use num_dual::DualNum;
+
+/// The scalar type of every function of the unknowns: `f64` for residuals, a forward-mode
+/// dual number such as `num_dual::DualSVec64<N>` for exact tangents.
+///
+/// Implemented automatically for every type meeting the bounds. Both `DualNum` and
+/// `RealField` provide `sqrt`, `powi`, … under the same names; inside this module the
+/// helpers below pick the `DualNum` ones so calls are unambiguous.
+pub trait Real: DualNum<Primitive = f64> + RealField + Copy {}
+
+impl<T: DualNum<Primitive = f64> + RealField + Copy> Real for T {}
+
+/// Invalid physical parameters, caught when a parameter set is built or validated.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PhysicsError {
+    /// A parameter lies outside its admissible range.
+    #[error("invalid parameter `{name}` = {value}: {reason}")]
+    InvalidParameter {
+        /// Name of the parameter as in MODEL.md.
+        name: &'static str,
+        /// The offending value (solver units).
+        value: f64,
+        /// What the admissible range is.
+        reason: &'static str,
+    },
+}
+
+/// Shorthand used by the validators: `Err(InvalidParameter { .. })` unless `ok`.
+pub(crate) fn check(
+    ok: bool,
+    name: &'static str,
+    value: f64,
+    reason: &'static str,
+) -> Result<(), PhysicsError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(PhysicsError::InvalidParameter {
+            name,
+            value,
+            reason,
+        })
+    }
+}
+
+/// `T` from an `f64` constant (no derivative part).
+#[inline(always)]
+pub(crate) fn cst<T: Real>(v: f64) -> T {
+    T::from(v)
+}
+
+/// Real part (value) of a scalar, as `f64`.
+#[inline(always)]
+pub(crate) fn re<T: Real>(x: T) -> f64 {
+    x.re()
+}
+
+/// `x^n`, integer power (the `DualNum` one).
+#[inline(always)]
+pub(crate) fn powi<T: Real>(x: T, n: i32) -> T {
+    DualNum::powi(&x, n)
+}
+
+/// `x^p`, real power of a positive `x`.
+#[inline(always)]
+pub(crate) fn powf<T: Real>(x: T, p: f64) -> T {
+    DualNum::powf(&x, p)
+}
+
+/// Square root.
+#[inline(always)]
+pub(crate) fn sqrt<T: Real>(x: T) -> T {
+    DualNum::sqrt(&x)
+}
+
+/// Cube root.
+#[inline(always)]
+pub(crate) fn cbrt<T: Real>(x: T) -> T {
+    DualNum::cbrt(&x)
+}
+
+/// Natural logarithm.
+#[inline(always)]
+pub(crate) fn ln<T: Real>(x: T) -> T {
+    DualNum::ln(&x)
+}
+
+/// `|x|`, with the derivative of `x` for `x ≥ 0` (only used where the derivative at 0
+/// does not matter or is multiplied by 0).
+#[inline(always)]
+pub(crate) fn abs<T: Real>(x: T) -> T {
+    if x.re() < 0.0 { -x } else { x }
+}

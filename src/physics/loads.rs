@@ -1,0 +1,370 @@
+//! Body forces per unit reference volume (MODEL.md §5): contact, adhesion and gravity, and
+//! the rate of the adhesion coefficient. Forces in pN/µm³, positions in µm.
+//!
+//! Functions of the unknowns (`x`, `F`, `J`, `μ_as`) are generic over [`Real`] for exact
+//! tangents; gravity depends on time only and is `f64`.
+
+#![allow(non_snake_case)]
+
+use super::smooth::{heaviside, smooth_step};
+use super::substrate::Substrate;
+use super::{PhysicsError, Real, check, cst};
+use nalgebra::{Matrix2, Vector2};
+use serde::{Deserialize, Serialize};
+
+/// Penalty contact with the substrate.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Contact {
+    /// Penalty coefficient `μ_ct` [pN/µm³] (MODEL.md: 2e9 N/m³ = 2e3 pN/µm³).
+    pub mu_ct: f64,
+    /// Half-width `ε_ct` of the contact band [µm] (MODEL.md: 0.1).
+    pub eps: f64,
+}
+
+impl Default for Contact {
+    /// MODEL.md: `μ_ct = 2e3 pN/µm³`, `ε_ct = 0.1 µm`.
+    fn default() -> Self {
+        Self {
+            mu_ct: 2.0e3,
+            eps: 0.1,
+        }
+    }
+}
+
+impl Contact {
+    /// Checks `μ_ct ≥ 0`, `ε > 0`, finite.
+    pub fn validate(&self) -> Result<(), PhysicsError> {
+        check(
+            self.mu_ct.is_finite() && self.mu_ct >= 0.0,
+            "contact.mu_ct",
+            self.mu_ct,
+            "must be finite and >= 0",
+        )?;
+        check(
+            self.eps.is_finite() && self.eps > 0.0,
+            "contact.eps",
+            self.eps,
+            "must be finite and > 0",
+        )
+    }
+}
+
+/// Adhesive spreading in the fibronectin layer and the maturation of the adhesion
+/// coefficient `μ_as`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Adhesion {
+    /// Thickness `e_f` of the fibronectin layer over the substrate [µm] (MODEL.md: 1.5).
+    pub e_f: f64,
+    /// Half-width of the layer's Heaviside [µm] (MODEL.md does not say; default 0.1,
+    /// the contact band's `ε_ct`).
+    pub eps: f64,
+    /// Maturation rate `μ_as0` [pN/(µm³·s)] (MODEL.md: 1e6 N/(m³·s) = 1 pN/(µm³·s)).
+    pub mu_as0: f64,
+    /// Cap `μ_as,max` [pN/µm³] (MODEL.md: 1.4e9 N/m³ = 1.4e3 pN/µm³).
+    pub mu_as_max: f64,
+}
+
+impl Default for Adhesion {
+    /// MODEL.md: `e_f = 1.5 µm`, `μ_as0 = 1 pN/(µm³·s)`, `μ_as,max = 1.4e3 pN/µm³`;
+    /// layer smoothing `ε = 0.1 µm` (choice: MODEL.md gives none).
+    fn default() -> Self {
+        Self {
+            e_f: 1.5,
+            eps: 0.1,
+            mu_as0: 1.0,
+            mu_as_max: 1.4e3,
+        }
+    }
+}
+
+impl Adhesion {
+    /// Checks `e_f ≥ 0`, `ε > 0`, `μ_as0 ≥ 0`, `μ_as,max > 0`, finite.
+    pub fn validate(&self) -> Result<(), PhysicsError> {
+        check(
+            self.e_f.is_finite() && self.e_f >= 0.0,
+            "adhesion.e_f",
+            self.e_f,
+            "must be finite and >= 0",
+        )?;
+        check(
+            self.eps.is_finite() && self.eps > 0.0,
+            "adhesion.eps",
+            self.eps,
+            "must be finite and > 0",
+        )?;
+        check(
+            self.mu_as0.is_finite() && self.mu_as0 >= 0.0,
+            "adhesion.mu_as0",
+            self.mu_as0,
+            "must be finite and >= 0",
+        )?;
+        check(
+            self.mu_as_max.is_finite() && self.mu_as_max > 0.0,
+            "adhesion.mu_as_max",
+            self.mu_as_max,
+            "must be finite and > 0",
+        )
+    }
+}
+
+/// Contact force per unit reference volume [pN/µm³] at current position `x` with
+/// `J = det F`: `b_ct = J μ_ct H_ε(d(x)) n(x)`.
+pub fn contact_force<T: Real>(sub: &Substrate, c: &Contact, x: &Vector2<T>, J: T) -> Vector2<T> {
+    let (d, n) = sub.eval(x);
+    let h = heaviside(d, c.eps);
+    n * (J * h * c.mu_ct)
+}
+
+/// Fibronectin-layer indicator `H_ε(d(x) + e_f)` ∈ [0, 1] at current position `x` [µm]:
+/// 1 within `e_f − ε` of the substrate (and inside it).
+pub fn layer<T: Real>(sub: &Substrate, x: &Vector2<T>, e_f: f64, eps: f64) -> T {
+    let (d, _) = sub.eval(x);
+    heaviside(d + e_f, eps)
+}
+
+/// Cofactor `cof(F) = J F⁻ᵀ`; in 2-D `[[F₁₁, −F₁₀], [−F₀₁, F₀₀]]`, polynomial in `F`.
+pub fn cofactor<T: Real>(F: &Matrix2<T>) -> Matrix2<T> {
+    Matrix2::new(F[(1, 1)], -F[(1, 0)], -F[(0, 1)], F[(0, 0)])
+}
+
+/// Adhesive spreading force per unit reference volume [pN/µm³] (membrane only — the
+/// caller applies it there): `b_as = t_as μ_as H_ε(d(x) + e_f) cof(F) N`, with `N` the
+/// outward radial reference direction, `μ_as` [pN/µm³] the local adhesion coefficient and
+/// `t_as` the adhesion switch.
+pub fn adhesion_force<T: Real>(
+    sub: &Substrate,
+    ad: &Adhesion,
+    x: &Vector2<T>,
+    F: &Matrix2<T>,
+    N_ref: &Vector2<f64>,
+    mu_as: T,
+    t_as: f64,
+) -> Vector2<T> {
+    let h = layer(sub, x, ad.e_f, ad.eps);
+    let N: Vector2<T> = N_ref.map(cst::<T>);
+    cofactor(F) * N * (h * mu_as * t_as)
+}
+
+/// Rate of the adhesion coefficient [pN/(µm³·s)]:
+/// `μ̇_as = μ_as0 H_ε(d(x) + e_f) (1 − S(μ_as; 0.98 μ_as,max, μ_as,max))`.
+pub fn adhesion_rate<T: Real>(sub: &Substrate, ad: &Adhesion, x: &Vector2<T>, mu_as: T) -> T {
+    let h = layer(sub, x, ad.e_f, ad.eps);
+    let cap = smooth_step(mu_as, 0.98 * ad.mu_as_max, ad.mu_as_max);
+    h * (-cap + 1.0) * ad.mu_as0
+}
+
+/// Gravity per unit reference volume [pN/µm³]: `b_g = −ρ₀ g s_g t_g e_y`, with `ρ₀`
+/// [pN·s²/µm⁴] (1000 kg/m³ = 1e-9), `g` [µm/s²] (9.81e6), the gravity switch `t_g` and
+/// sign `s_g`.
+pub fn gravity_force(rho: f64, g: f64, t_g: f64, sign: f64) -> Vector2<f64> {
+    Vector2::new(0.0, -rho * g * sign * t_g)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::substrate::Pillars;
+    use num_dual::DualSVec64;
+
+    fn substrates() -> [Substrate; 2] {
+        [
+            Substrate::Flat { y_s: -2.0 },
+            Substrate::Pillars(Pillars::default()),
+        ]
+    }
+
+    /// Gradient part of a dual number with N variables.
+    fn eps<const N: usize>(v: &DualSVec64<N>) -> nalgebra::SVector<f64, N> {
+        v.eps.unwrap_generic(nalgebra::Const::<N>, nalgebra::U1)
+    }
+
+    #[test]
+    fn contact_is_zero_outside_and_full_inside() {
+        let c = Contact::default();
+        let s = Substrate::Flat { y_s: -2.0 };
+        let J = 1.3;
+        // above the band (d < −ε)
+        assert_eq!(
+            contact_force(&s, &c, &Vector2::new(0.0, -1.85), J),
+            Vector2::zeros()
+        );
+        // deep inside (d > ε)
+        let f = contact_force(&s, &c, &Vector2::new(0.0, -2.2), J);
+        assert_eq!(f, Vector2::new(0.0, J * c.mu_ct));
+        // on the surface: half
+        let f = contact_force(&s, &c, &Vector2::new(0.0, -2.0), J);
+        assert!((f.y - 0.5 * J * c.mu_ct).abs() < 1e-12);
+        // pillars: on a side, deep inside → along the outward side normal
+        let p = Substrate::Pillars(Pillars::default());
+        let mid = Pillars::default().y_top - 4.0; // mid-height of the pillars
+        let f = contact_force(&p, &c, &Vector2::new(11.7, mid), 1.0);
+        assert!((f - Vector2::new(c.mu_ct, 0.0)).norm() < 1e-9, "f = {f}");
+        let f = contact_force(&p, &c, &Vector2::new(12.2, mid), 1.0);
+        assert_eq!(f, Vector2::zeros());
+    }
+
+    #[test]
+    fn contact_force_derivatives_match_finite_differences() {
+        type D = DualSVec64<3>;
+        let c = Contact::default();
+        let h = 1e-7;
+        for s in substrates() {
+            // points inside the contact band of the flat surface and of the pillars
+            for (x, y, J) in [
+                (0.0, -1.97, 1.1),
+                (1.0, -2.04, 0.8),
+                (5.0, -0.68, 1.0),
+                (11.96, -3.0, 1.2),
+                (8.0, -0.33, 0.9),
+            ] {
+                let xd = Vector2::new(D::from_re(x).derivative(0), D::from_re(y).derivative(1));
+                let Jd = D::from_re(J).derivative(2);
+                let f = contact_force(&s, &c, &xd, Jd);
+                let base = [x, y, J];
+                for k in 0..3 {
+                    let mut p = base;
+                    let mut m = base;
+                    p[k] += h;
+                    m[k] -= h;
+                    let fp = contact_force(&s, &c, &Vector2::new(p[0], p[1]), p[2]);
+                    let fm = contact_force(&s, &c, &Vector2::new(m[0], m[1]), m[2]);
+                    let fd = (fp - fm) / (2.0 * h);
+                    let scale = c.mu_ct / c.eps;
+                    assert!(
+                        (fd.x - eps(&f.x)[k]).abs() < 1e-6 * scale,
+                        "{s:?} ({x},{y}) k={k}"
+                    );
+                    assert!(
+                        (fd.y - eps(&f.y)[k]).abs() < 1e-6 * scale,
+                        "{s:?} ({x},{y}) k={k}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn adhesion_force_and_rate_derivatives_match_finite_differences() {
+        // variables: x (2), F (4), μ_as (1)
+        type D = DualSVec64<7>;
+        let ad = Adhesion::default();
+        let h = 1e-6;
+        let N = Vector2::new(0.6, -0.8);
+        let F0 = Matrix2::new(1.1, 0.2, -0.3, 0.9);
+        for s in substrates() {
+            // in the layer's transition (d + e_f ∈ (−ε, ε)) and the cap's transition
+            for (x, y, mu) in [
+                (0.0, -0.45, 700.0),
+                (2.0, -0.52, 1380.0),
+                (8.3, 1.22, 1390.0),
+                (13.5, -3.0, 10.0),
+            ] {
+                let v = [x, y, F0[(0, 0)], F0[(0, 1)], F0[(1, 0)], F0[(1, 1)], mu];
+                let dual = |i: usize| D::from_re(v[i]).derivative(i);
+                let xd = Vector2::new(dual(0), dual(1));
+                let Fd = Matrix2::new(dual(2), dual(3), dual(4), dual(5));
+                let f = adhesion_force(&s, &ad, &xd, &Fd, &N, dual(6), 0.7);
+                let r = adhesion_rate(&s, &ad, &xd, dual(6));
+                let eval = |w: &[f64; 7]| {
+                    let X = Vector2::new(w[0], w[1]);
+                    let F = Matrix2::new(w[2], w[3], w[4], w[5]);
+                    (
+                        adhesion_force(&s, &ad, &X, &F, &N, w[6], 0.7),
+                        adhesion_rate(&s, &ad, &X, w[6]),
+                    )
+                };
+                for k in 0..7 {
+                    let step = if k == 6 { 1e-3 } else { h };
+                    let (mut p, mut m) = (v, v);
+                    p[k] += step;
+                    m[k] -= step;
+                    let ((fp, rp), (fm, rm)) = (eval(&p), eval(&m));
+                    let fd = (fp - fm) / (2.0 * step);
+                    let rd = (rp - rm) / (2.0 * step);
+                    let fscale = mu.max(1.0) / ad.eps;
+                    assert!(
+                        (fd.x - eps(&f.x)[k]).abs() < 1e-6 * fscale,
+                        "{s:?} f_x k={k}"
+                    );
+                    assert!(
+                        (fd.y - eps(&f.y)[k]).abs() < 1e-6 * fscale,
+                        "{s:?} f_y k={k}"
+                    );
+                    let rscale = ad.mu_as0 / ad.eps.min(0.02 * ad.mu_as_max);
+                    assert!(
+                        (rd - eps(&r)[k]).abs() < 1e-6 * rscale,
+                        "{s:?} rate k={k}: {rd} vs {}",
+                        eps(&r)[k]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn adhesion_values() {
+        let ad = Adhesion::default();
+        let s = Substrate::Flat { y_s: -2.0 };
+        let F = Matrix2::new(1.2, 0.1, 0.0, 0.8);
+        let N = Vector2::new(0.0, -1.0);
+        // inside the layer (d + e_f > ε): full force t_as μ cof(F) N; cof(F) = J F⁻ᵀ
+        let X = Vector2::new(0.0, -1.0);
+        let f = adhesion_force(&s, &ad, &X, &F, &N, 100.0, 0.5);
+        let cof = F.try_inverse().unwrap().transpose() * F.determinant();
+        assert!((f - cof * N * 50.0).norm() < 1e-12);
+        // outside the layer: none
+        let X = Vector2::new(0.0, -0.3);
+        assert_eq!(
+            adhesion_force(&s, &ad, &X, &F, &N, 100.0, 0.5),
+            Vector2::zeros()
+        );
+        assert_eq!(adhesion_rate(&s, &ad, &X, 0.0), 0.0);
+        // the rate is μ_as0 below the cap, 0 at the cap
+        let X = Vector2::new(0.0, -1.0);
+        assert_eq!(adhesion_rate(&s, &ad, &X, 0.0), ad.mu_as0);
+        assert_eq!(adhesion_rate(&s, &ad, &X, 0.97 * ad.mu_as_max), ad.mu_as0);
+        assert_eq!(adhesion_rate(&s, &ad, &X, ad.mu_as_max), 0.0);
+        assert!((adhesion_rate(&s, &ad, &X, 0.99 * ad.mu_as_max) - 0.5 * ad.mu_as0).abs() < 1e-12);
+        // layer indicator is ½ at distance e_f from the surface
+        assert!((layer(&s, &Vector2::new(3.0_f64, -0.5), ad.e_f, ad.eps) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn gravity() {
+        let rho = 1.0e-9; // 1000 kg/m³
+        let g = 9.81e6;
+        let b = gravity_force(rho, g, 1.0, 1.0);
+        assert!((b.y + 9.81e-3).abs() < 1e-15 && b.x == 0.0);
+        assert!((gravity_force(rho, g, 0.5, -1.0).y - 0.5 * 9.81e-3).abs() < 1e-17);
+    }
+
+    #[test]
+    fn parameter_validation() {
+        assert!(Contact::default().validate().is_ok());
+        assert!(Adhesion::default().validate().is_ok());
+        assert!(
+            Contact {
+                eps: 0.0,
+                ..Contact::default()
+            }
+            .validate()
+            .is_err()
+        );
+        assert!(
+            Adhesion {
+                mu_as_max: 0.0,
+                ..Adhesion::default()
+            }
+            .validate()
+            .is_err()
+        );
+        assert!(
+            Adhesion {
+                e_f: f64::NAN,
+                ..Adhesion::default()
+            }
+            .validate()
+            .is_err()
+        );
+    }
+}

@@ -1,0 +1,871 @@
+//! Constitutive laws (MODEL.md §3): compressible Yeoh solid with a Mooney term and active
+//! strain, plus Kelvin–Voigt Newtonian viscosity, in plane strain.
+//!
+//! Plane strain: `F` is the 2×2 in-plane block, `F₃₃ = 1`, so `C = FᵀF` has `C₃₃ = 1` and
+//! no out-of-plane shear; all invariants are the 3-D ones:
+//! `I₁ = tr C₂ + 1`, `I₂ = det C₂ + tr C₂`, `I₃ = det C₂` (C₂ the in-plane block).
+//! Stresses returned are the in-plane blocks (the out-of-plane normal stress exists but
+//! does no work in plane strain).
+//!
+//! Admissibility: every function here assumes `det F > 0` and `det F_e = det F / det F_a > 0`
+//! (check with [`admissible`] before calling); it does not check, for speed.
+
+#![allow(non_snake_case)]
+
+use super::{PhysicsError, Real, cbrt, check, ln};
+use nalgebra::{Matrix2, Matrix4};
+use num_dual::DualSVec64;
+use serde::{Deserialize, Serialize};
+
+/// Compressible Yeoh solid with a Mooney term (MODEL.md §3):
+///
+/// `W(C_e) = α₁X + α₂X² + α₃X³ + β(I₂ − 3I₃^{2/3}) + (λ_Y/2)(ln J_e)²`,
+/// `X = I₁ − 3I₃^{1/3}`, invariants of `C_e`; `W` is per unit intermediate (relaxed) volume.
+///
+/// Units: all coefficients in Pa = pN/µm².
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Yeoh {
+    /// `α₁ = μ_e/2 − β` [Pa].
+    pub alpha1: f64,
+    /// `α₂ = −γα₁` [Pa].
+    pub alpha2: f64,
+    /// `α₃ = γα₁` [Pa].
+    pub alpha3: f64,
+    /// Mooney coefficient `β = f_β μ_e/2` (`f_β = 0.2` in MODEL.md) [Pa].
+    pub beta: f64,
+    /// Volumetric coefficient `λ_Y = λ_e + (2/3)μ_e` (the bulk modulus) [Pa].
+    pub lambda_y: f64,
+}
+
+impl Yeoh {
+    /// Coefficients from Young's modulus `e` [Pa], Poisson's ratio `nu`, the stiffening
+    /// ratio `gamma` and the Mooney fraction `beta_fraction` (MODEL.md: 0.2):
+    ///
+    /// `μ_e = E/(2(1+ν))`, `λ_e = Eν/((1+ν)(1−2ν))`, `β = f_β μ_e/2`, `α₁ = μ_e/2 − β`,
+    /// `α₂ = −γα₁`, `α₃ = γα₁`, `λ_Y = λ_e + (2/3)μ_e`.
+    ///
+    /// The small-strain limit is then linear elasticity with `(E, ν)`.
+    /// Rejects `E ≤ 0`, `ν ∉ (−1, ½)`, `γ ∉ [0, 3)` (`dW/dX = α₁(1 − 2γX + 3γX²) > 0`
+    /// for all `X` needs `0 ≤ γ < 3`), `f_β ∉ [0, 1)` (`α₁ > 0`), and non-finite values.
+    pub fn from_engineering(
+        e: f64,
+        nu: f64,
+        gamma: f64,
+        beta_fraction: f64,
+    ) -> Result<Self, PhysicsError> {
+        check(e.is_finite() && e > 0.0, "E", e, "must be finite and > 0")?;
+        check(
+            nu.is_finite() && nu > -1.0 && nu < 0.5,
+            "nu",
+            nu,
+            "must lie in (-1, 0.5)",
+        )?;
+        check(
+            gamma.is_finite() && (0.0..3.0).contains(&gamma),
+            "gamma",
+            gamma,
+            "must lie in [0, 3) for a monotone stiffening",
+        )?;
+        check(
+            beta_fraction.is_finite() && (0.0..1.0).contains(&beta_fraction),
+            "beta_fraction",
+            beta_fraction,
+            "must lie in [0, 1) so that alpha1 > 0",
+        )?;
+        let mu = e / (2.0 * (1.0 + nu));
+        let lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        let beta = beta_fraction * mu / 2.0;
+        let alpha1 = mu / 2.0 - beta;
+        Ok(Self {
+            alpha1,
+            alpha2: -gamma * alpha1,
+            alpha3: gamma * alpha1,
+            beta,
+            lambda_y: lambda + 2.0 / 3.0 * mu,
+        })
+    }
+
+    /// Strain energy `W(C_e)` per unit intermediate volume [Pa], from the in-plane block of
+    /// the symmetric `C_e` (`C_e,33 = 1`).
+    pub fn strain_energy<T: Real>(&self, Ce: &Matrix2<T>) -> T {
+        self.strain_energy_sym(Sym::from_upper(Ce))
+    }
+
+    fn strain_energy_sym<T: Real>(&self, Ce: Sym<T>) -> T {
+        let tr = Ce.tr();
+        let I3 = Ce.det();
+        let I1 = tr + 1.0;
+        let I2 = I3 + tr;
+        let I3_13 = cbrt(I3);
+        let X = I1 - I3_13 * 3.0;
+        let lnJ = ln(I3) * 0.5;
+        X * (X * (X * self.alpha3 + self.alpha2) + self.alpha1)
+            + (I2 - I3_13 * I3_13 * 3.0) * self.beta
+            + lnJ * lnJ * (0.5 * self.lambda_y)
+    }
+
+    /// Energy per unit reference volume `Ψ(F) = J_a W(C_e)`, `C_e = F_a⁻ᵀ C F_a⁻¹`,
+    /// `C = FᵀF` [Pa].
+    pub fn energy<T: Real>(&self, F: &Matrix2<T>, Fa: &Matrix2<f64>) -> T {
+        let (Ce, _, Ja) = elastic_right_cauchy_green(F, Fa);
+        self.strain_energy_sym(Ce) * Ja
+    }
+
+    /// Second Piola–Kirchhoff stress of the intermediate configuration, in-plane block
+    /// [Pa], from the symmetric `C_e`:
+    ///
+    /// `S_e = 2∂W/∂C_e = 2(α₁ + 2α₂X + 3α₃X²)(I − I₃^{1/3}C_e⁻¹)
+    ///       + 2β(I₁I − C_e − 2I₃^{2/3}C_e⁻¹) + λ_Y ln J_e C_e⁻¹`.
+    pub fn pk2_elastic<T: Real>(&self, Ce: &Matrix2<T>) -> Matrix2<T> {
+        self.pk2_elastic_sym(Sym::from_upper(Ce)).to_matrix()
+    }
+
+    fn pk2_elastic_sym<T: Real>(&self, Ce: Sym<T>) -> Sym<T> {
+        let I3 = Ce.det();
+        let I1 = Ce.tr() + 1.0;
+        let I3_13 = cbrt(I3);
+        let X = I1 - I3_13 * 3.0;
+        let A = X * (X * (self.alpha3 * 3.0) + self.alpha2 * 2.0) + self.alpha1;
+        let lnJ = ln(I3) * 0.5;
+        // S = a I + b adj(C) + c C, with C⁻¹ = adj(C)/I₃, adj(C) = (yy, −xy, xx)
+        let a = (A + I1 * self.beta) * 2.0;
+        let b = (lnJ * self.lambda_y - A * I3_13 * 2.0 - I3_13 * I3_13 * (4.0 * self.beta)) / I3;
+        let c = -2.0 * self.beta;
+        Sym {
+            xx: a + b * Ce.yy + Ce.xx * c,
+            xy: (-b + c) * Ce.xy,
+            yy: a + b * Ce.xx + Ce.yy * c,
+        }
+    }
+
+    /// Solid second Piola–Kirchhoff stress, symmetric.
+    fn pk2_solid_sym<T: Real>(&self, F: &Matrix2<T>, Fa: &Matrix2<f64>) -> Sym<T> {
+        let (Ce, Fa_inv, Ja) = elastic_right_cauchy_green(F, Fa);
+        let Se = self.pk2_elastic_sym(Ce);
+        match Fa_inv {
+            None => Se,
+            Some(G) => Se.push(&(G * Ja.sqrt())),
+        }
+    }
+
+    /// Second Piola–Kirchhoff stress of the solid phase in the reference configuration,
+    /// `S_s = J_a F_a⁻¹ S_e F_a⁻ᵀ` [Pa].
+    pub fn pk2_solid<T: Real>(&self, F: &Matrix2<T>, Fa: &Matrix2<f64>) -> Matrix2<T> {
+        self.pk2_solid_sym(F, Fa).to_matrix()
+    }
+
+    /// First Piola–Kirchhoff stress of the solid phase, `P_s = F J_a F_a⁻¹ S_e F_a⁻ᵀ` [Pa];
+    /// it equals `∂Ψ/∂F`.
+    pub fn piola_solid<T: Real>(&self, F: &Matrix2<T>, Fa: &Matrix2<f64>) -> Matrix2<T> {
+        self.pk2_solid_sym(F, Fa).left_mul(F)
+    }
+}
+
+/// A symmetric 2×2 tensor by its three entries; the stress computations use it to skip
+/// the redundant half of every product (this matters for dual numbers).
+#[derive(Debug, Clone, Copy)]
+struct Sym<T> {
+    xx: T,
+    xy: T,
+    yy: T,
+}
+
+impl<T: Real> Sym<T> {
+    /// From the diagonal and the upper off-diagonal entry of `M` (assumed symmetric).
+    fn from_upper(M: &Matrix2<T>) -> Self {
+        Self {
+            xx: M[(0, 0)],
+            xy: M[(0, 1)],
+            yy: M[(1, 1)],
+        }
+    }
+
+    fn to_matrix(self) -> Matrix2<T> {
+        Matrix2::new(self.xx, self.xy, self.xy, self.yy)
+    }
+
+    fn tr(self) -> T {
+        self.xx + self.yy
+    }
+
+    fn det(self) -> T {
+        self.xx * self.yy - self.xy * self.xy
+    }
+
+    fn add(self, o: Self) -> Self {
+        Self {
+            xx: self.xx + o.xx,
+            xy: self.xy + o.xy,
+            yy: self.yy + o.yy,
+        }
+    }
+
+    fn scale(self, s: T) -> Self {
+        Self {
+            xx: self.xx * s,
+            xy: self.xy * s,
+            yy: self.yy * s,
+        }
+    }
+
+    /// `S : T` (double contraction).
+    fn dot(self, o: Self) -> T {
+        self.xx * o.xx + self.xy * o.xy * 2.0 + self.yy * o.yy
+    }
+
+    /// `Gᵀ S G` for a constant `G`.
+    fn pull(self, G: &Matrix2<f64>) -> Self {
+        // (SG)_kj, then Σ_k G_ki (SG)_kj
+        let sg00 = self.xx * G[(0, 0)] + self.xy * G[(1, 0)];
+        let sg01 = self.xx * G[(0, 1)] + self.xy * G[(1, 1)];
+        let sg10 = self.xy * G[(0, 0)] + self.yy * G[(1, 0)];
+        let sg11 = self.xy * G[(0, 1)] + self.yy * G[(1, 1)];
+        Self {
+            xx: sg00 * G[(0, 0)] + sg10 * G[(1, 0)],
+            xy: sg01 * G[(0, 0)] + sg11 * G[(1, 0)],
+            yy: sg01 * G[(0, 1)] + sg11 * G[(1, 1)],
+        }
+    }
+
+    /// `G S Gᵀ` for a constant `G`.
+    fn push(self, G: &Matrix2<f64>) -> Self {
+        self.pull(&G.transpose())
+    }
+
+    /// `F S`.
+    fn left_mul(self, F: &Matrix2<T>) -> Matrix2<T> {
+        Matrix2::new(
+            F[(0, 0)] * self.xx + F[(0, 1)] * self.xy,
+            F[(0, 0)] * self.xy + F[(0, 1)] * self.yy,
+            F[(1, 0)] * self.xx + F[(1, 1)] * self.xy,
+            F[(1, 0)] * self.xy + F[(1, 1)] * self.yy,
+        )
+    }
+
+    /// `FᵀF`.
+    fn gram(F: &Matrix2<T>) -> Self {
+        Self {
+            xx: F[(0, 0)] * F[(0, 0)] + F[(1, 0)] * F[(1, 0)],
+            xy: F[(0, 0)] * F[(0, 1)] + F[(1, 0)] * F[(1, 1)],
+            yy: F[(0, 1)] * F[(0, 1)] + F[(1, 1)] * F[(1, 1)],
+        }
+    }
+}
+
+/// `(C_e, F_a⁻¹, J_a)` with `C_e = F_a⁻ᵀ FᵀF F_a⁻¹`; `F_a⁻¹` is `None` when `F_a = I`
+/// exactly (the common case, skipped for speed).
+fn elastic_right_cauchy_green<T: Real>(
+    F: &Matrix2<T>,
+    Fa: &Matrix2<f64>,
+) -> (Sym<T>, Option<Matrix2<f64>>, f64) {
+    let C = Sym::gram(F);
+    if *Fa == Matrix2::identity() {
+        return (C, None, 1.0);
+    }
+    let Ja = Fa.determinant();
+    let G = Matrix2::new(Fa[(1, 1)], -Fa[(0, 1)], -Fa[(1, 0)], Fa[(0, 0)]) / Ja;
+    (C.pull(&G), Some(G), Ja)
+}
+
+/// Kelvin–Voigt Newtonian viscosity of the fluid phase (MODEL.md §3):
+///
+/// `S_f = (J λ_f/2) tr(C⁻¹Ċ) C⁻¹ + J μ_f C⁻¹ĊC⁻¹`, `Ċ = ḞᵀF + FᵀḞ`,
+///
+/// i.e. the Cauchy stress `σ = λ_f tr(d) I + 2μ_f d`, `d = sym(ḞF⁻¹)`, pulled back.
+/// Units: Pa·s = pN·s/µm².
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Viscosity {
+    /// Volumetric viscosity `λ_f` [Pa·s] (MODEL.md: 1000).
+    pub lambda_f: f64,
+    /// Shear viscosity `μ_f` [Pa·s] (MODEL.md: 2e-3).
+    pub mu_f: f64,
+}
+
+impl Default for Viscosity {
+    /// MODEL.md values: `λ_f = 1000 Pa·s`, `μ_f = 2e-3 Pa·s`.
+    fn default() -> Self {
+        Self {
+            lambda_f: 1.0e3,
+            mu_f: 2.0e-3,
+        }
+    }
+}
+
+impl Viscosity {
+    /// Checks `λ_f ≥ 0`, `μ_f ≥ 0`, finite.
+    pub fn validate(&self) -> Result<(), PhysicsError> {
+        check(
+            self.lambda_f.is_finite() && self.lambda_f >= 0.0,
+            "lambda_f",
+            self.lambda_f,
+            "must be finite and >= 0",
+        )?;
+        check(
+            self.mu_f.is_finite() && self.mu_f >= 0.0,
+            "mu_f",
+            self.mu_f,
+            "must be finite and >= 0",
+        )
+    }
+
+    /// Viscous second Piola–Kirchhoff stress `S_f` (in-plane block) [Pa].
+    pub fn pk2_viscous<T: Real>(&self, F: &Matrix2<T>, Fdot: &Matrix2<T>) -> Matrix2<T> {
+        self.pk2_viscous_sym(F, Fdot).to_matrix()
+    }
+
+    fn pk2_viscous_sym<T: Real>(&self, F: &Matrix2<T>, Fdot: &Matrix2<T>) -> Sym<T> {
+        let J = F[(0, 0)] * F[(1, 1)] - F[(0, 1)] * F[(1, 0)];
+        let C = Sym::gram(F);
+        // C⁻¹ = adj(C)/det C, det C = J²
+        let inv_J2 = (J * J).recip();
+        let Ci = Sym {
+            xx: C.yy * inv_J2,
+            xy: -C.xy * inv_J2,
+            yy: C.xx * inv_J2,
+        };
+        // Ċ = A + Aᵀ, A = FᵀḞ
+        let a = |i: usize, j: usize| F[(0, i)] * Fdot[(0, j)] + F[(1, i)] * Fdot[(1, j)];
+        let Cd = Sym {
+            xx: a(0, 0) * 2.0,
+            xy: a(0, 1) + a(1, 0),
+            yy: a(1, 1) * 2.0,
+        };
+        let tr = Ci.dot(Cd);
+        // K = C⁻¹ Ċ C⁻¹ via N = C⁻¹Ċ
+        let n00 = Ci.xx * Cd.xx + Ci.xy * Cd.xy;
+        let n01 = Ci.xx * Cd.xy + Ci.xy * Cd.yy;
+        let n10 = Ci.xy * Cd.xx + Ci.yy * Cd.xy;
+        let n11 = Ci.xy * Cd.xy + Ci.yy * Cd.yy;
+        let K = Sym {
+            xx: n00 * Ci.xx + n01 * Ci.xy,
+            xy: n00 * Ci.xy + n01 * Ci.yy,
+            yy: n10 * Ci.xy + n11 * Ci.yy,
+        };
+        Ci.scale(J * tr * (0.5 * self.lambda_f))
+            .add(K.scale(J * self.mu_f))
+    }
+
+    /// Viscous first Piola–Kirchhoff stress `P_f = F S_f` [Pa]; linear in `Ḟ`, zero for
+    /// rigid motions `Ḟ = WF`, `W` skew.
+    pub fn piola_viscous<T: Real>(&self, F: &Matrix2<T>, Fdot: &Matrix2<T>) -> Matrix2<T> {
+        self.pk2_viscous_sym(F, Fdot).left_mul(F)
+    }
+}
+
+/// Total first Piola–Kirchhoff stress `P = F(S_s + S_f)` [Pa] (solid with active strain
+/// `F_a`, plus viscosity). Generic: `f64` for residuals.
+pub fn piola_total<T: Real>(
+    yeoh: &Yeoh,
+    visc: &Viscosity,
+    F: &Matrix2<T>,
+    Fdot: &Matrix2<T>,
+    Fa: &Matrix2<f64>,
+) -> Matrix2<T> {
+    yeoh.pk2_solid_sym(F, Fa)
+        .add(visc.pk2_viscous_sym(F, Fdot))
+        .left_mul(F)
+}
+
+/// `true` when `F` is finite with `det F > 0` (then `det F_e = det F / det F_a > 0` for
+/// any admissible active strain, `det F_a > 0`). The stress functions assume it.
+pub fn admissible(F: &Matrix2<f64>) -> bool {
+    F.iter().all(|v| v.is_finite()) && F.determinant() > 0.0
+}
+
+/// Stress and exact tangents at one material point (MODEL.md §3), for assembly.
+///
+/// Flattening: row `2i + J` for `P_iJ`, column `2k + L` for `F_kL` (or `Ḟ_kL`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MaterialPoint {
+    /// Total first Piola–Kirchhoff stress `P` [Pa].
+    pub P: Matrix2<f64>,
+    /// `∂P_iJ/∂F_kL` [Pa].
+    pub dP_dF: Matrix4<f64>,
+    /// `∂P_iJ/∂Ḟ_kL` [Pa·s] (viscous part only).
+    pub dP_dFdot: Matrix4<f64>,
+}
+
+/// `P` and its exact tangents `∂P/∂F`, `∂P/∂Ḟ` at one material point.
+///
+/// `∂P/∂F` by forward-mode dual numbers, one `DualSVec64<4>` pass over `F` (solid and
+/// viscous, `Ḟ` fixed). `∂P/∂Ḟ` needs no derivatives: the solid does not depend on `Ḟ`
+/// and `P_f` is linear in it, so column `2k + L` is `P_f(F, E_kL)` (`E_kL` the unit
+/// matrix). Measured ≈ 0.3–0.45 µs per call (release, 2-core machine under load) against
+/// ≈ 1.1–1.5 µs for a single `DualSVec64<8>` pass over `(F, Ḟ)` and ≈ 0.08 µs for the
+/// residual-only [`piola_total`] in `f64`.
+///
+/// Assumes [`admissible`]`(F)` and `det F_a > 0`.
+pub fn material_point(
+    yeoh: &Yeoh,
+    visc: &Viscosity,
+    F: &Matrix2<f64>,
+    Fdot: &Matrix2<f64>,
+    Fa: &Matrix2<f64>,
+) -> MaterialPoint {
+    type D4 = DualSVec64<4>;
+    // Seed: variable 2k + L is entry (k, L).
+    let seed = |M: &Matrix2<f64>| -> Matrix2<D4> {
+        Matrix2::from_fn(|k, l| D4::from_re(M[(k, l)]).derivative(2 * k + l))
+    };
+    let constant = |M: &Matrix2<f64>| -> Matrix2<D4> { M.map(D4::from_re) };
+
+    let Fd = seed(F);
+    let P1 = piola_total(yeoh, visc, &Fd, &constant(Fdot), Fa);
+
+    let mut P = Matrix2::zeros();
+    let mut dP_dF = Matrix4::zeros();
+    let mut dP_dFdot = Matrix4::zeros();
+    for i in 0..2 {
+        for j in 0..2 {
+            let row = 2 * i + j;
+            P[(i, j)] = P1[(i, j)].re;
+            let g1 = P1[(i, j)].eps.unwrap_generic(nalgebra::U4, nalgebra::U1);
+            for c in 0..4 {
+                dP_dF[(row, c)] = g1[c];
+            }
+        }
+    }
+    // P_f is linear in Ḟ: column 2k + L of ∂P/∂Ḟ is P_f(F, E_kL), exactly.
+    for k in 0..2 {
+        for l in 0..2 {
+            let mut E = Matrix2::zeros();
+            E[(k, l)] = 1.0;
+            let col = visc.piola_viscous(F, &E);
+            for i in 0..2 {
+                for j in 0..2 {
+                    dP_dFdot[(2 * i + j, 2 * k + l)] = col[(i, j)];
+                }
+            }
+        }
+    }
+    MaterialPoint { P, dP_dF, dP_dFdot }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deterministic pseudo-random numbers in [0, 1) (64-bit LCG, high bits).
+    pub(crate) struct Lcg(pub u64);
+    impl Lcg {
+        pub fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+        /// Uniform in [a, b).
+        pub fn uniform(&mut self, a: f64, b: f64) -> f64 {
+            a + (b - a) * self.next()
+        }
+        /// A random F with entries I + U(−s, s), det F ≥ 0.3.
+        pub fn deformation(&mut self, s: f64) -> Matrix2<f64> {
+            loop {
+                let F = Matrix2::new(
+                    1.0 + self.uniform(-s, s),
+                    self.uniform(-s, s),
+                    self.uniform(-s, s),
+                    1.0 + self.uniform(-s, s),
+                );
+                if F.determinant() >= 0.3 {
+                    return F;
+                }
+            }
+        }
+    }
+
+    fn cytoplasm() -> Yeoh {
+        Yeoh::from_engineering(100.0, 0.485, 0.1, 0.2).unwrap()
+    }
+
+    /// A symmetric active strain I − a T⊗T − b N⊗N like the model's.
+    fn active(a: f64, b: f64, phi: f64) -> Matrix2<f64> {
+        let n = nalgebra::Vector2::new(phi.cos(), phi.sin());
+        let t = nalgebra::Vector2::new(-n.y, n.x);
+        Matrix2::identity() - t * t.transpose() * a - n * n.transpose() * b
+    }
+
+    fn rel(a: &Matrix2<f64>, b: &Matrix2<f64>) -> f64 {
+        (a - b).norm() / b.norm()
+    }
+
+    #[test]
+    fn parameters_from_engineering_constants() {
+        let m = cytoplasm();
+        let mu = 100.0 / (2.0 * 1.485);
+        let lam = 100.0 * 0.485 / (1.485 * 0.03);
+        assert!((m.beta - 0.1 * mu).abs() < 1e-12);
+        assert!((m.alpha1 - 0.4 * mu).abs() < 1e-12);
+        assert!((m.alpha2 + 0.04 * mu).abs() < 1e-12);
+        assert!((m.alpha3 - 0.04 * mu).abs() < 1e-12);
+        assert!((m.lambda_y - (lam + 2.0 / 3.0 * mu)).abs() < 1e-9);
+        assert!(Yeoh::from_engineering(100.0, 0.485, 3.0, 0.2).is_err());
+        assert!(Yeoh::from_engineering(100.0, 0.485, -0.1, 0.2).is_err());
+        assert!(Yeoh::from_engineering(100.0, 0.5, 0.1, 0.2).is_err());
+        assert!(Yeoh::from_engineering(100.0, -1.0, 0.1, 0.2).is_err());
+        assert!(Yeoh::from_engineering(0.0, 0.3, 0.1, 0.2).is_err());
+        assert!(Yeoh::from_engineering(f64::NAN, 0.3, 0.1, 0.2).is_err());
+        assert!(Yeoh::from_engineering(100.0, 0.3, 0.1, 1.0).is_err());
+        assert!(Yeoh::from_engineering(100.0, 0.3, 2.99, 0.0).is_ok());
+    }
+
+    #[test]
+    fn stress_is_the_derivative_of_the_energy() {
+        // Central differences of Ψ(F) = J_a W(C_e) against the closed-form P_s.
+        // Step h = 1e-5: truncation ~h²|Ψ'''| ≈ 1e-10·E, round-off ~1e-16·Ψ/h ≈ 1e-11·E.
+        let mut rng = Lcg(7);
+        let h = 1e-5;
+        for mat in [
+            cytoplasm(),
+            Yeoh::from_engineering(500.0, 0.3, 1.5, 0.2).unwrap(),
+        ] {
+            for case in 0..20 {
+                let F = rng.deformation(0.5);
+                let Fa = if case % 2 == 0 {
+                    Matrix2::identity()
+                } else {
+                    active(
+                        rng.uniform(0.0, 0.7),
+                        rng.uniform(0.0, 0.7),
+                        rng.uniform(-3.0, 3.0),
+                    )
+                };
+                let P = mat.piola_solid(&F, &Fa);
+                let mut Pfd = Matrix2::zeros();
+                for k in 0..2 {
+                    for l in 0..2 {
+                        let mut Fp = F;
+                        let mut Fm = F;
+                        Fp[(k, l)] += h;
+                        Fm[(k, l)] -= h;
+                        Pfd[(k, l)] = (mat.energy(&Fp, &Fa) - mat.energy(&Fm, &Fa)) / (2.0 * h);
+                    }
+                }
+                let e = rel(&Pfd, &P);
+                assert!(
+                    e < 1e-8,
+                    "case {case}: rel. error {e:e}\nP = {P}\nPfd = {Pfd}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn tangents_equal_finite_differences_of_the_stress() {
+        let mut rng = Lcg(11);
+        let h = 1e-6;
+        // Two viscosities: the model's (λ_f ≫ μ_f) and one where the shear part matters.
+        for visc in [
+            Viscosity::default(),
+            Viscosity {
+                lambda_f: 3.0,
+                mu_f: 2.0,
+            },
+        ] {
+            let mat = cytoplasm();
+            for case in 0..20 {
+                let F = rng.deformation(0.5);
+                let Fdot = Matrix2::from_fn(|_, _| rng.uniform(-1.0, 1.0));
+                let Fa = if case % 2 == 0 {
+                    Matrix2::identity()
+                } else {
+                    active(
+                        rng.uniform(0.0, 0.7),
+                        rng.uniform(0.0, 0.7),
+                        rng.uniform(-3.0, 3.0),
+                    )
+                };
+                let mp = material_point(&mat, &visc, &F, &Fdot, &Fa);
+                let P = piola_total(&mat, &visc, &F, &Fdot, &Fa);
+                assert!(rel(&mp.P, &P) < 1e-14);
+                let mut fd_F = Matrix4::zeros();
+                let mut fd_Fdot = Matrix4::zeros();
+                for k in 0..2 {
+                    for l in 0..2 {
+                        let col = 2 * k + l;
+                        let (mut Fp, mut Fm) = (F, F);
+                        Fp[(k, l)] += h;
+                        Fm[(k, l)] -= h;
+                        let dP = (piola_total(&mat, &visc, &Fp, &Fdot, &Fa)
+                            - piola_total(&mat, &visc, &Fm, &Fdot, &Fa))
+                            / (2.0 * h);
+                        // P is linear in Ḟ: a large step has no truncation error and
+                        // less round-off.
+                        let hv = 1e-2;
+                        let (mut Gp, mut Gm) = (Fdot, Fdot);
+                        Gp[(k, l)] += hv;
+                        Gm[(k, l)] -= hv;
+                        let dPv = (piola_total(&mat, &visc, &F, &Gp, &Fa)
+                            - piola_total(&mat, &visc, &F, &Gm, &Fa))
+                            / (2.0 * hv);
+                        for i in 0..2 {
+                            for j in 0..2 {
+                                fd_F[(2 * i + j, col)] = dP[(i, j)];
+                                fd_Fdot[(2 * i + j, col)] = dPv[(i, j)];
+                            }
+                        }
+                    }
+                }
+                let eF = (fd_F - mp.dP_dF).norm() / mp.dP_dF.norm();
+                let eV = (fd_Fdot - mp.dP_dFdot).norm() / mp.dP_dFdot.norm();
+                assert!(eF < 1e-7, "dP/dF case {case}: {eF:e}");
+                assert!(eV < 1e-9, "dP/dFdot case {case}: {eV:e}");
+            }
+        }
+    }
+
+    #[test]
+    fn tangent_matches_a_single_8_variable_pass() {
+        // Independent derivation of the same tangents: one DualSVec64<8> pass over (F, Ḟ).
+        type D8 = DualSVec64<8>;
+        let mut rng = Lcg(3);
+        let mat = cytoplasm();
+        let visc = Viscosity {
+            lambda_f: 5.0,
+            mu_f: 1.0,
+        };
+        for _ in 0..5 {
+            let F = rng.deformation(0.4);
+            let Fdot = Matrix2::from_fn(|_, _| rng.uniform(-1.0, 1.0));
+            let Fa = active(0.5, 0.2, 0.3);
+            let Fd = Matrix2::from_fn(|k, l| D8::from_re(F[(k, l)]).derivative(2 * k + l));
+            let Gd = Matrix2::from_fn(|k, l| D8::from_re(Fdot[(k, l)]).derivative(4 + 2 * k + l));
+            let P8 = piola_total(&mat, &visc, &Fd, &Gd, &Fa);
+            let mp = material_point(&mat, &visc, &F, &Fdot, &Fa);
+            for i in 0..2 {
+                for j in 0..2 {
+                    let g = P8[(i, j)].eps.unwrap_generic(nalgebra::U8, nalgebra::U1);
+                    for c in 0..4 {
+                        assert!((g[c] - mp.dP_dF[(2 * i + j, c)]).abs() < 1e-12 * mp.dP_dF.norm());
+                        assert!(
+                            (g[4 + c] - mp.dP_dFdot[(2 * i + j, c)]).abs()
+                                < 1e-12 * mp.dP_dFdot.norm()
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn reference_and_pure_active_states_are_stress_free() {
+        let mat = cytoplasm();
+        let visc = Viscosity::default();
+        let I = Matrix2::identity();
+        let P = piola_total(&mat, &visc, &I, &Matrix2::zeros(), &I);
+        assert!(P.norm() < 1e-13, "P(I) = {P}");
+        assert!(mat.energy(&I, &I).abs() < 1e-13);
+        // F = F_a: F_e = I, no elastic stress, for several active strains.
+        for (a, b, phi) in [(0.7, 0.0, 0.3), (0.0, 0.7, -1.2), (0.4, 0.3, 2.0)] {
+            let Fa = active(a, b, phi);
+            let P = mat.piola_solid(&Fa, &Fa);
+            assert!(P.norm() < 1e-12, "P(F_a) = {P}");
+            // and a rotated one, F = R F_a
+            let R = nalgebra::Rotation2::new(0.8).into_inner();
+            let P = mat.piola_solid(&(R * Fa), &Fa);
+            assert!(P.norm() < 1e-12, "P(R F_a) = {P}");
+        }
+        // But F = I with a non-trivial F_a is stressed (the active strain does something).
+        let P = mat.piola_solid(&I, &active(0.5, 0.0, 0.0));
+        assert!(P.norm() > 1.0);
+    }
+
+    #[test]
+    fn small_strain_limit_is_linear_elasticity() {
+        // P(I + εH)/ε → λ tr(H) I + μ(H + Hᵀ) (plane strain), error O(ε).
+        let (e, nu) = (100.0, 0.485);
+        let mat = Yeoh::from_engineering(e, nu, 0.1, 0.2).unwrap();
+        let mu = e / (2.0 * (1.0 + nu));
+        let lam = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+        let mut rng = Lcg(5);
+        for _ in 0..5 {
+            let H = Matrix2::from_fn(|_, _| rng.uniform(-1.0, 1.0));
+            let lin = Matrix2::identity() * (lam * H.trace()) + (H + H.transpose()) * mu;
+            let err = |eps: f64| {
+                let P = mat.piola_solid(&(Matrix2::identity() + H * eps), &Matrix2::identity());
+                rel(&(P / eps), &lin)
+            };
+            let (e5, e6) = (err(1e-5), err(1e-6));
+            // measured ≈ 1e-6 relative at ε = 1e-6
+            assert!(e6 < 1e-5, "error at ε = 1e-6: {e6:e}");
+            // first order in ε: a tenfold smaller ε gives a tenfold smaller error
+            let ratio = e5 / e6;
+            assert!((5.0..20.0).contains(&ratio), "ratio {ratio}");
+        }
+    }
+
+    #[test]
+    fn uniaxial_plane_strain_stretch_closed_form() {
+        // F = diag(λ, 1), F₃₃ = 1: C = diag(λ², 1, 1), I₁ = λ² + 2, I₂ = 2λ² + 1, I₃ = λ²,
+        // X = λ² + 2 − 3λ^{2/3}, J = λ, so
+        //   W(λ) = α₁X + α₂X² + α₃X³ + β(2λ² + 1 − 3λ^{4/3}) + (λ_Y/2)(ln λ)².
+        // P₁₁ = dW/dλ = A·(2λ − 2λ^{−1/3}) + β(4λ − 4λ^{1/3}) + λ_Y ln λ / λ,
+        //   A = α₁ + 2α₂X + 3α₃X².
+        // P₂₂ from F = diag(λ, μ) at μ = 1: I₁ = λ² + μ² + 1, I₂ = λ²μ² + λ² + μ²,
+        //   I₃ = λ²μ², dX/dμ = 2 − 2λ^{2/3}, dI₂/dμ = 2λ² + 2, d(3I₃^{2/3})/dμ = 4λ^{4/3},
+        //   d((λ_Y/2)(ln λμ)²)/dμ = λ_Y ln λ, so
+        //   P₂₂ = A(2 − 2λ^{2/3}) + β(2λ² + 2 − 4λ^{4/3}) + λ_Y ln λ.
+        // P₁₂ = P₂₁ = 0 by symmetry.
+        let m = Yeoh::from_engineering(500.0, 0.485, 0.1, 0.2).unwrap();
+        for l in [0.5_f64, 0.9, 1.0, 1.05, 1.3, 2.0, 3.0] {
+            let X = l * l + 2.0 - 3.0 * l.powf(2.0 / 3.0);
+            let A = m.alpha1 + 2.0 * m.alpha2 * X + 3.0 * m.alpha3 * X * X;
+            let p11 = A * (2.0 * l - 2.0 * l.powf(-1.0 / 3.0))
+                + m.beta * (4.0 * l - 4.0 * l.powf(1.0 / 3.0))
+                + m.lambda_y * l.ln() / l;
+            let p22 = A * (2.0 - 2.0 * l.powf(2.0 / 3.0))
+                + m.beta * (2.0 * l * l + 2.0 - 4.0 * l.powf(4.0 / 3.0))
+                + m.lambda_y * l.ln();
+            let P = m.piola_solid(&Matrix2::new(l, 0.0, 0.0, 1.0), &Matrix2::identity());
+            let scale = 1.0 + p11.abs() + p22.abs();
+            assert!(
+                (P[(0, 0)] - p11).abs() < 1e-12 * scale,
+                "λ = {l}: {} vs {p11}",
+                P[(0, 0)]
+            );
+            assert!(
+                (P[(1, 1)] - p22).abs() < 1e-12 * scale,
+                "λ = {l}: {} vs {p22}",
+                P[(1, 1)]
+            );
+            assert!(P[(0, 1)].abs() < 1e-12 * scale && P[(1, 0)].abs() < 1e-12 * scale);
+        }
+    }
+
+    #[test]
+    fn solid_stress_is_frame_indifferent() {
+        // P(QF) = Q P(F) for rotations Q (with and without F_a).
+        let mat = cytoplasm();
+        let mut rng = Lcg(9);
+        for case in 0..10 {
+            let F = rng.deformation(0.5);
+            let Fa = if case % 2 == 0 {
+                Matrix2::identity()
+            } else {
+                active(0.6, 0.3, rng.uniform(-3.0, 3.0))
+            };
+            let Q = nalgebra::Rotation2::new(rng.uniform(-3.0, 3.0)).into_inner();
+            let P = mat.piola_solid(&F, &Fa);
+            assert!(rel(&mat.piola_solid(&(Q * F), &Fa), &(Q * P)) < 1e-12);
+        }
+    }
+
+    #[test]
+    fn viscous_stress_vanishes_for_rigid_rotation_rates() {
+        let mut rng = Lcg(13);
+        for visc in [
+            Viscosity::default(),
+            Viscosity {
+                lambda_f: 1.0,
+                mu_f: 1.0,
+            },
+        ] {
+            for _ in 0..10 {
+                let F = rng.deformation(0.5);
+                let w = rng.uniform(-2.0, 2.0);
+                let W = Matrix2::new(0.0, -w, w, 0.0);
+                let Fdot = W * F;
+                let P = visc.piola_viscous(&F, &Fdot);
+                // scale of a generic rate of the same size
+                let scale = (visc.lambda_f + visc.mu_f) * Fdot.norm();
+                assert!(P.norm() < 1e-13 * scale, "P = {P}");
+                // while a stretching rate of the same size is resisted
+                let D = Matrix2::new(w, 0.0, 0.0, 0.0) * F;
+                assert!(visc.piola_viscous(&F, &D).norm() > 1e-3 * scale);
+            }
+        }
+    }
+
+    #[test]
+    fn viscous_stress_is_linear_in_the_rate_and_newtonian_at_rest() {
+        let visc = Viscosity {
+            lambda_f: 3.0,
+            mu_f: 2.0,
+        };
+        let mut rng = Lcg(17);
+        for _ in 0..10 {
+            let F = rng.deformation(0.5);
+            let G1 = Matrix2::from_fn(|_, _| rng.uniform(-1.0, 1.0));
+            let G2 = Matrix2::from_fn(|_, _| rng.uniform(-1.0, 1.0));
+            let (a, b) = (rng.uniform(-2.0, 2.0), rng.uniform(-2.0, 2.0));
+            let lhs = visc.piola_viscous(&F, &(G1 * a + G2 * b));
+            let rhs = visc.piola_viscous(&F, &G1) * a + visc.piola_viscous(&F, &G2) * b;
+            assert!(rel(&lhs, &rhs) < 1e-13);
+        }
+        // At F = I: P = σ = λ_f tr(d) I + 2μ_f d, d = sym(Ḟ).
+        let G = Matrix2::new(0.3, -0.7, 0.2, -0.1);
+        let d = (G + G.transpose()) * 0.5;
+        let sigma = Matrix2::identity() * (3.0 * d.trace()) + d * 4.0;
+        assert!(rel(&visc.piola_viscous(&Matrix2::identity(), &G), &sigma) < 1e-14);
+        // Current-configuration form for a general F: F S_f Fᵀ / J = σ(d), d = sym(Ḟ F⁻¹).
+        let F = Matrix2::new(1.3, 0.2, -0.4, 0.8);
+        let Finv = F.try_inverse().unwrap();
+        let d = (G * Finv + (G * Finv).transpose()) * 0.5;
+        let sigma = Matrix2::identity() * (3.0 * d.trace()) + d * 4.0;
+        let P = visc.piola_viscous(&F, &G);
+        let from_P = P * F.transpose() / F.determinant();
+        assert!(rel(&from_P, &sigma) < 1e-13);
+    }
+
+    /// Ad-hoc timing (run with `--ignored --nocapture`, release): cost per call of the
+    /// residual stress, of `material_point` and of the alternative single 8-variable
+    /// dual pass.
+    #[test]
+    #[ignore]
+    fn timing_material_point() {
+        use std::hint::black_box;
+        use std::time::Instant;
+        type D8 = DualSVec64<8>;
+        let mat = cytoplasm();
+        let visc = Viscosity::default();
+        let mut rng = Lcg(21);
+        let n = 1000;
+        let inputs: Vec<_> = (0..n)
+            .map(|i| {
+                let F = rng.deformation(0.4);
+                let Fdot = Matrix2::from_fn(|_, _| rng.uniform(-1.0, 1.0));
+                let Fa = if i % 2 == 0 {
+                    Matrix2::identity()
+                } else {
+                    active(0.5, 0.3, 0.4)
+                };
+                (F, Fdot, Fa)
+            })
+            .collect();
+        let reps = 2000;
+        type Kernel<'a> = &'a dyn Fn(&Matrix2<f64>, &Matrix2<f64>, &Matrix2<f64>) -> f64;
+        let time = |name: &str, f: Kernel| {
+            let t0 = Instant::now();
+            let mut acc = 0.0;
+            for _ in 0..reps {
+                for (F, Fdot, Fa) in &inputs {
+                    acc += f(black_box(F), black_box(Fdot), black_box(Fa));
+                }
+            }
+            let ns = t0.elapsed().as_nanos() as f64 / (reps * n) as f64;
+            println!("{name:40} {ns:8.1} ns/call  (checksum {acc:e})");
+        };
+        time("piola_total f64", &|F, G, Fa| {
+            piola_total(&mat, &visc, F, G, Fa)[(0, 0)]
+        });
+        time("material_point (DualSVec64<4> + linear)", &|F, G, Fa| {
+            let m = material_point(&mat, &visc, F, G, Fa);
+            m.dP_dF[(0, 0)] + m.dP_dFdot[(3, 3)]
+        });
+        time("single DualSVec64<8> pass", &|F, G, Fa| {
+            let Fd = Matrix2::from_fn(|k, l| D8::from_re(F[(k, l)]).derivative(2 * k + l));
+            let Gd = Matrix2::from_fn(|k, l| D8::from_re(G[(k, l)]).derivative(4 + 2 * k + l));
+            let P = piola_total(&mat, &visc, &Fd, &Gd, Fa);
+            P[(0, 0)].re + P[(1, 1)].eps.unwrap_generic(nalgebra::U8, nalgebra::U1)[7]
+        });
+    }
+
+    #[test]
+    fn admissibility() {
+        assert!(admissible(&Matrix2::identity()));
+        assert!(!admissible(&Matrix2::new(1.0, 0.0, 0.0, -0.1)));
+        assert!(!admissible(&Matrix2::new(1.0, 2.0, 0.5, 1.0)));
+        assert!(!admissible(&Matrix2::new(f64::NAN, 0.0, 0.0, 1.0)));
+    }
+}

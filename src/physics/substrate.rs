@@ -1,0 +1,578 @@
+//! The rigid substrate (MODEL.md §5): signed penetration depth `d(x)` (> 0 inside the
+//! substrate) and outward unit normal `n(x)` at a current position `x`.
+//!
+//! Flat: `d = y_s − y`, `n = e_y`.
+//!
+//! Micropillars: pillars of width `w`, spacing `s`, height `h`, axes at
+//! `x_k = first_center + k(w + s)` for every integer `k`, tops at `y_top`, floor at
+//! `y_top − h`. Each pillar is the superellipse `|x̃/(w/2)|^q + |ỹ/(h/2)|^q ≤ 1`, `x̃` the
+//! offset to the nearest axis, `ỹ = y − (y_top − h/2)`.
+//!
+//! **Level set.** MODEL.md allows the first-order distance `−l/|∇l|` of "its level set".
+//! We take the level set homogeneous of degree one,
+//! `l = (|u|^q + |v|^q)^{1/q} − 1`, `u = x̃/(w/2)`, `v = ỹ/(h/2)`,
+//! rather than the polynomial `|u|^q + |v|^q − 1`. Both have the same zero set and normal,
+//! but the homogeneous one gives the exact distance along the flat faces at any offset,
+//! while the polynomial one (for q = 4) overestimates depth-from-outside by a factor that
+//! makes the 1.5 µm fibronectin band `d > −e_f` about 2.7 µm thick above the pillar tops
+//! instead of 1.5 µm. Near the rounded corners the homogeneous distance is still only
+//! first-order (within a factor `2^{1/2 − 1/q}` for a square superellipse).
+//!
+//! **Pillar and floor.** `d = max(d_pillar, d_floor)` with the normal of the deeper one.
+//! This is not smooth where `d_pillar = d_floor`, i.e. along a curve in the concave corner
+//! between a pillar's side and the floor (and under the pillar's rounded bottom, which
+//! meets the floor in one point, leaving a thin undercut); the contact band meets it only
+//! if material reaches within `ε` of the floor next to a pillar foot. `d_pillar` is also
+//! not smooth mid-way between two pillars (`x̃ = ±(w + s)/2`, where the nearest axis
+//! changes: `d` is continuous there by symmetry but `n` flips); there `d_pillar ≈ −s/2`
+//! (−4 µm by default), far outside every band unless `s/2 < e_f + ε`.
+
+#![allow(non_snake_case)]
+
+use super::{PhysicsError, Real, abs, check, cst, powf, powi, re, sqrt};
+use nalgebra::Vector2;
+use serde::{Deserialize, Serialize};
+
+/// Micropillar geometry. Lengths in µm.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Pillars {
+    /// Pillar width `w` [µm] (MODEL.md: 8).
+    pub width: f64,
+    /// Spacing between pillars `s` [µm] (MODEL.md: 8); period `w + s`.
+    pub spacing: f64,
+    /// Pillar height `h` [µm] (MODEL.md: 8); the floor is at `y_top − h`.
+    pub height: f64,
+    /// Abscissa of the axis of pillar `k = 0` [µm] (MODEL.md: 8).
+    pub first_center: f64,
+    /// Superellipse exponent `q ≥ 2` (MODEL.md: 4); integers use exact integer powers.
+    pub q: f64,
+    /// Height of the pillar tops `y_top` [µm] (MODEL.md: placed by [`Pillars::y_top_for_gap`],
+    /// ≈ −0.3 for the default cell).
+    pub y_top: f64,
+}
+
+impl Default for Pillars {
+    /// MODEL.md geometry: w = s = h = 8 µm, first axis at x = 8 µm, q = 4, and `y_top`
+    /// placed for a 0.5 µm smallest gap below the default cell (centre (0, 8.5), radius 10).
+    fn default() -> Self {
+        let mut p = Self {
+            width: 8.0,
+            spacing: 8.0,
+            height: 8.0,
+            first_center: 8.0,
+            q: 4.0,
+            y_top: 0.0,
+        };
+        // The geometry above is valid, so this cannot fail; keep a sane value regardless.
+        p.y_top = p.y_top_for_gap(0.5, [0.0, 8.5], 10.0).unwrap_or(-0.3);
+        p
+    }
+}
+
+/// The substrate: a flat half-plane or a periodic row of pillars on a floor.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Substrate {
+    /// Half-plane `y < y_s` [µm] (MODEL.md: `y_s = −2`).
+    Flat {
+        /// Surface height `y_s` [µm].
+        y_s: f64,
+    },
+    /// Micropillars on a floor.
+    Pillars(Pillars),
+}
+
+impl Default for Substrate {
+    /// The flat substrate at `y_s = −2 µm`.
+    fn default() -> Self {
+        Substrate::Flat { y_s: -2.0 }
+    }
+}
+
+/// `(|u|^q, |u|^{q−1} sgn u)`, exact integer powers for integer `q` (derivatives are then
+/// exact at `u = 0` too); for non-integer `q > 1` both vanish with their derivatives at 0.
+#[inline]
+fn abs_pow<T: Real>(u: T, q: f64) -> (T, T) {
+    if q.fract() == 0.0 && q <= 64.0 {
+        let n = q as i32;
+        if n % 2 == 0 {
+            (powi(u, n), powi(u, n - 1))
+        } else {
+            let au = abs(u);
+            (au * powi(u, n - 1), au * powi(u, n - 2))
+        }
+    } else {
+        let au = abs(u);
+        if re(au) == 0.0 {
+            (cst(0.0), cst(0.0))
+        } else {
+            let g = powf(au, q - 1.0);
+            let g = if re(u) < 0.0 { -g } else { g };
+            (powf(au, q), g)
+        }
+    }
+}
+
+impl Pillars {
+    /// Checks `w, h > 0`, `s ≥ 0`, `q ≥ 2` (so the normal is C¹), all finite.
+    pub fn validate(&self) -> Result<(), PhysicsError> {
+        check(
+            self.width.is_finite() && self.width > 0.0,
+            "pillars.width",
+            self.width,
+            "must be finite and > 0",
+        )?;
+        check(
+            self.spacing.is_finite() && self.spacing >= 0.0,
+            "pillars.spacing",
+            self.spacing,
+            "must be finite and >= 0",
+        )?;
+        check(
+            self.height.is_finite() && self.height > 0.0,
+            "pillars.height",
+            self.height,
+            "must be finite and > 0",
+        )?;
+        check(
+            self.q.is_finite() && self.q >= 2.0,
+            "pillars.q",
+            self.q,
+            "must be finite and >= 2",
+        )?;
+        check(
+            self.first_center.is_finite(),
+            "pillars.first_center",
+            self.first_center,
+            "must be finite",
+        )?;
+        check(
+            self.y_top.is_finite(),
+            "pillars.y_top",
+            self.y_top,
+            "must be finite",
+        )
+    }
+
+    /// Period `w + s` [µm].
+    pub fn period(&self) -> f64 {
+        self.width + self.spacing
+    }
+
+    /// Axis of the pillar nearest to abscissa `x` [µm].
+    pub fn nearest_axis(&self, x: f64) -> f64 {
+        let k = ((x - self.first_center) / self.period()).round();
+        self.first_center + k * self.period()
+    }
+
+    /// Penetration depth and outward normal of the pillar nearest to `x` alone (no floor):
+    /// `d = −l/|∇l|`, `n = ∇l/|∇l|`, `l = (|u|^q + |v|^q)^{1/q} − 1`.
+    /// With `ρ = |u|^q + |v|^q`, `r = ρ^{1/q}`, `g = (|u|^{q−1}sgn u/(w/2), |v|^{q−1}sgn v/(h/2))`:
+    /// `∇l = r^{1−q} g`, so `d = (1 − r) ρ/(r|g|)`, `n = g/|g|`.
+    pub fn eval_pillar<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
+        let a = 0.5 * self.width;
+        let b = 0.5 * self.height;
+        let xt = x.x - self.nearest_axis(re(x.x));
+        let yt = x.y - (self.y_top - b);
+        let (pu, gu) = abs_pow(xt / a, self.q);
+        let (pv, gv) = abs_pow(yt / b, self.q);
+        let rho = pu + pv;
+        if re(rho) <= 0.0 {
+            // The pillar's centre, a·b deep inside: no direction; never reached in practice.
+            return (cst(a.min(b)), Vector2::new(cst(0.0), cst(1.0)));
+        }
+        let r = powf(rho, 1.0 / self.q);
+        let gx = gu / a;
+        let gy = gv / b;
+        let g = sqrt(gx * gx + gy * gy);
+        let d = (-r + 1.0) * rho / (r * g);
+        (d, Vector2::new(gx / g, gy / g))
+    }
+
+    /// Height `y` of the substrate surface (pillar top or floor) at abscissa `x` [µm]:
+    /// `y_top − h/2 + (h/2)(1 − |x̃/(w/2)|^q)^{1/q}` over a pillar, else `y_top − h`.
+    pub fn surface_height(&self, x: f64) -> f64 {
+        let a = 0.5 * self.width;
+        let b = 0.5 * self.height;
+        let u = ((x - self.nearest_axis(x)) / a).abs();
+        let floor = self.y_top - self.height;
+        if u >= 1.0 {
+            floor
+        } else {
+            (self.y_top - b + b * (1.0 - u.powf(self.q)).powf(1.0 / self.q)).max(floor)
+        }
+    }
+
+    /// `y_top` such that the smallest vertical gap between the reference circle
+    /// (centre `cell_center`, radius `r_c`) and the substrate surface below it is `gap`
+    /// [µm] (MODEL.md §5 [choice]). Only the geometry `w, s, h, first_center, q` of `self`
+    /// is used.
+    ///
+    /// The gap at abscissa `x` is `c_y − √(r_c² − (x − c_x)²) − y_surf(x)` and `y_surf`
+    /// is `y_top` plus a function of `x`, so `y_top = min_x(c_y − √(…) − (y_surf − y_top)) −
+    /// gap`; the minimum is found by dense sampling of `[c_x − r_c, c_x + r_c]` and a
+    /// golden-section refinement.
+    pub fn y_top_for_gap(
+        &self,
+        gap: f64,
+        cell_center: [f64; 2],
+        r_c: f64,
+    ) -> Result<f64, PhysicsError> {
+        self.validate()?;
+        check(gap.is_finite(), "gap", gap, "must be finite")?;
+        check(
+            r_c.is_finite() && r_c > 0.0,
+            "r_c",
+            r_c,
+            "must be finite and > 0",
+        )?;
+        check(
+            cell_center.iter().all(|v| v.is_finite()),
+            "cell_center",
+            cell_center[0] + cell_center[1],
+            "must be finite",
+        )?;
+        let (_, clearance) = self.lowest_clearance(cell_center, r_c);
+        Ok(clearance - gap)
+    }
+
+    /// `(x*, G(x*))` minimising `G(x) = circle bottom(x) − (y_surf(x) − y_top)` over the
+    /// circle's span: the abscissa of the smallest vertical gap and `y_top + gap` there.
+    pub fn lowest_clearance(&self, cell_center: [f64; 2], r_c: f64) -> (f64, f64) {
+        let [cx, cy] = cell_center;
+        let g = |x: f64| {
+            let dx = (x - cx).clamp(-r_c, r_c);
+            cy - (r_c * r_c - dx * dx).max(0.0).sqrt() - (self.surface_height(x) - self.y_top)
+        };
+        let n = 8000;
+        let step = 2.0 * r_c / n as f64;
+        let (mut i_best, mut g_best) = (0, f64::INFINITY);
+        for i in 0..=n {
+            let v = g(cx - r_c + i as f64 * step);
+            if v < g_best {
+                (i_best, g_best) = (i, v);
+            }
+        }
+        // golden section on [x_{i−1}, x_{i+1}]
+        let mut lo = cx - r_c + (i_best.max(1) - 1) as f64 * step;
+        let mut hi = (lo + 2.0 * step).min(cx + r_c);
+        let phi = 0.5 * (5f64.sqrt() - 1.0);
+        let mut x1 = hi - phi * (hi - lo);
+        let mut x2 = lo + phi * (hi - lo);
+        let (mut g1, mut g2) = (g(x1), g(x2));
+        for _ in 0..80 {
+            if g1 < g2 {
+                hi = x2;
+                (x2, g2) = (x1, g1);
+                x1 = hi - phi * (hi - lo);
+                g1 = g(x1);
+            } else {
+                lo = x1;
+                (x1, g1) = (x2, g2);
+                x2 = lo + phi * (hi - lo);
+                g2 = g(x2);
+            }
+        }
+        let (xm, gm) = if g1 < g2 { (x1, g1) } else { (x2, g2) };
+        if gm < g_best {
+            (xm, gm)
+        } else {
+            (cx - r_c + i_best as f64 * step, g_best)
+        }
+    }
+}
+
+impl Substrate {
+    /// Checks the parameters (finite `y_s`; see [`Pillars::validate`]).
+    pub fn validate(&self) -> Result<(), PhysicsError> {
+        match self {
+            Substrate::Flat { y_s } => check(y_s.is_finite(), "y_s", *y_s, "must be finite"),
+            Substrate::Pillars(p) => p.validate(),
+        }
+    }
+
+    /// Signed penetration depth `d(x)` [µm] (> 0 inside the substrate) and outward unit
+    /// normal `n(x)` at the current position `x` [µm]. Generic, for exact tangents.
+    ///
+    /// Flat: `d = y_s − y`, `n = e_y`. Pillars: the deeper of pillar and floor,
+    /// `d = max(d_pillar, y_top − h − y)` (see the module notes on where this is not smooth).
+    pub fn eval<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
+        let up = Vector2::new(cst(0.0), cst(1.0));
+        match self {
+            Substrate::Flat { y_s } => (-x.y + *y_s, up),
+            Substrate::Pillars(p) => {
+                let d_floor = -x.y + (p.y_top - p.height);
+                let (d_p, n_p) = p.eval_pillar(x);
+                if re(d_floor) > re(d_p) {
+                    (d_floor, up)
+                } else {
+                    (d_p, n_p)
+                }
+            }
+        }
+    }
+
+    /// The substrate surface as a polyline for plotting, over `[x_min, x_max]` [µm].
+    ///
+    /// Flat: the two end points. Pillars: the floor, and at each pillar axis the full
+    /// superellipse traced from its bottom point clockwise (left side, top, right side)
+    /// with `n` points (at least 8); pillars overlapping the interval are drawn whole.
+    pub fn outline(&self, x_min: f64, x_max: f64, n: usize) -> Vec<[f64; 2]> {
+        match self {
+            Substrate::Flat { y_s } => vec![[x_min, *y_s], [x_max, *y_s]],
+            Substrate::Pillars(p) => {
+                let n = n.max(8);
+                let a = 0.5 * p.width;
+                let b = 0.5 * p.height;
+                let yc = p.y_top - b;
+                let floor = p.y_top - p.height;
+                let per = p.period();
+                let k0 = ((x_min - a - p.first_center) / per).ceil() as i64;
+                let k1 = ((x_max + a - p.first_center) / per).floor() as i64;
+                let mut pts = vec![[x_min, floor]];
+                for k in k0..=k1 {
+                    let axis = p.first_center + k as f64 * per;
+                    for j in 0..=n {
+                        let t = 1.5 * std::f64::consts::PI
+                            - 2.0 * std::f64::consts::PI * j as f64 / n as f64;
+                        let (s, c) = t.sin_cos();
+                        let u = c.signum() * c.abs().powf(2.0 / p.q);
+                        let v = s.signum() * s.abs().powf(2.0 / p.q);
+                        pts.push([axis + a * u, yc + b * v]);
+                    }
+                }
+                pts.push([x_max, floor]);
+                pts
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use num_dual::DualSVec64;
+
+    type D2 = DualSVec64<2>;
+
+    fn dual_point(x: f64, y: f64) -> Vector2<D2> {
+        Vector2::new(D2::from_re(x).derivative(0), D2::from_re(y).derivative(1))
+    }
+
+    fn grad(v: &D2) -> [f64; 2] {
+        let g = v.eps.unwrap_generic(nalgebra::U2, nalgebra::U1);
+        [g[0], g[1]]
+    }
+
+    /// A point on the boundary of the superellipse of the pillar with axis `axis`,
+    /// parameter `t`: `u = sgn(cos t)|cos t|^{2/q}`, `v = sgn(sin t)|sin t|^{2/q}`.
+    fn on_pillar(p: &Pillars, axis: f64, t: f64) -> Vector2<f64> {
+        let (s, c) = t.sin_cos();
+        let u = c.signum() * c.abs().powf(2.0 / p.q);
+        let v = s.signum() * s.abs().powf(2.0 / p.q);
+        Vector2::new(
+            axis + 0.5 * p.width * u,
+            p.y_top - 0.5 * p.height + 0.5 * p.height * v,
+        )
+    }
+
+    #[test]
+    fn flat_is_exact() {
+        let s = Substrate::Flat { y_s: -2.0 };
+        for (x, y) in [(0.0, -1.5), (3.0, -2.0), (-7.0, -2.3)] {
+            let (d, n) = s.eval(&Vector2::new(x, y));
+            assert_eq!(d, -2.0 - y);
+            assert_eq!(n, Vector2::new(0.0, 1.0));
+        }
+        let (d, n) = s.eval(&dual_point(1.0, -1.9));
+        assert_eq!(grad(&d), [0.0, -1.0]);
+        assert_eq!(grad(&n.x), [0.0, 0.0]);
+        assert_eq!(grad(&n.y), [0.0, 0.0]);
+    }
+
+    #[test]
+    fn pillar_surface_has_zero_depth_and_unit_normal() {
+        let p = Pillars::default();
+        let s = Substrate::Pillars(p);
+        for axis in [8.0, 24.0, -8.0, -40.0] {
+            // upper half of the boundary (the lower half is below the floor level only at
+            // its bottom point; it is part of the pillar surface too)
+            for i in 1..40 {
+                let t = std::f64::consts::PI * i as f64 / 40.0 - 0.5;
+                let X = on_pillar(&p, axis, t);
+                let (d, n) = s.eval(&X);
+                assert!(d.abs() < 1e-13, "d = {d} at {X:?}");
+                assert!((n.norm() - 1.0).abs() < 1e-14);
+                // the normal points out: a step along it leaves the substrate
+                let (d_out, _) = s.eval(&(X + n * 1e-3));
+                assert!(d_out < 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn pillar_distance_is_exact_on_flat_faces_and_first_order_near_corners() {
+        let p = Pillars::default();
+        let s = Substrate::Pillars(p);
+        // above the middle of a top: exact
+        for dy in [-0.7, -0.1, 0.0, 0.05, 0.5, 1.5, 3.0] {
+            let (d, n) = s.eval(&Vector2::new(8.0, p.y_top + dy));
+            assert!((d + dy).abs() < 1e-13, "dy = {dy}: d = {d}");
+            assert!((n - Vector2::new(0.0, 1.0)).norm() < 1e-14);
+        }
+        // beside the middle of a side (mid-height): exact
+        for dx in [0.3, 1.5] {
+            let (d, n) = s.eval(&Vector2::new(8.0 + 4.0 + dx, p.y_top - 4.0));
+            assert!((d + dx).abs() < 1e-13);
+            assert!((n - Vector2::new(1.0, 0.0)).norm() < 1e-14);
+        }
+        // along the normal at a rounded corner: d = −δ + O(δ²)
+        let X0 = on_pillar(&p, 8.0, 0.6);
+        let (_, n0) = s.eval(&X0);
+        for delta in [1e-2, 1e-3] {
+            let (d, _) = s.eval(&(X0 + n0 * delta));
+            assert!(
+                (d + delta).abs() < 2.0 * delta * delta,
+                "δ = {delta}: d = {d}"
+            );
+        }
+    }
+
+    #[test]
+    fn pillar_floor_and_periodicity() {
+        let p = Pillars::default();
+        let s = Substrate::Pillars(p);
+        // mid-gap above the floor: the floor is nearer (gap half-width 4 µm)
+        let floor = p.y_top - p.height;
+        let (d, n) = s.eval(&Vector2::new(0.0, floor + 0.2));
+        assert!((d + 0.2).abs() < 1e-14);
+        assert_eq!(n, Vector2::new(0.0, 1.0));
+        // periodic with period w + s, including negative pillar indices
+        for (x, y) in [
+            (5.0_f64, -0.2_f64),
+            (9.3, -0.6),
+            (11.9, -3.0),
+            (2.0, -7.9),
+            (13.0, -1.0),
+        ] {
+            let (d0, n0) = s.eval(&Vector2::new(x, y));
+            for k in [-3.0, -1.0, 1.0, 2.0] {
+                let (d1, n1) = s.eval(&Vector2::new(x + 16.0 * k, y));
+                assert!((d1 - d0).abs() < 1e-12 && (n1 - n0).norm() < 1e-12);
+            }
+            // and symmetric about x = 0 for the default layout
+            let (d2, n2) = s.eval(&Vector2::new(-x, y));
+            assert!((d2 - d0).abs() < 1e-12);
+            assert!((n2 - Vector2::new(-n0.x, n0.y)).norm() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn dual_derivatives_of_depth_and_normal_match_finite_differences() {
+        let h = 1e-6;
+        let subs = [
+            Substrate::Pillars(Pillars::default()),
+            Substrate::Pillars(Pillars {
+                q: 3.0,
+                ..Pillars::default()
+            }),
+            Substrate::Pillars(Pillars {
+                q: 4.5,
+                ..Pillars::default()
+            }),
+        ];
+        // points near the top, the rounded corners, and the sides (away from the
+        // non-smooth pillar/floor switch and the mid-gap line)
+        let pts = [
+            (8.0, -0.25),
+            (8.3, 0.4),
+            (5.0, -0.2),
+            (4.6, -1.1),
+            (11.2, -0.9),
+            (3.7, -3.5),
+            (12.5, -4.6),
+            (-4.8, -0.5),
+            (7.0, -2.0),
+        ];
+        for s in &subs {
+            for &(x, y) in &pts {
+                let (d, n) = s.eval(&dual_point(x, y));
+                let gd = grad(&d);
+                let gnx = grad(&n.x);
+                let gny = grad(&n.y);
+                for k in 0..2 {
+                    let e = if k == 0 {
+                        Vector2::new(h, 0.0)
+                    } else {
+                        Vector2::new(0.0, h)
+                    };
+                    let X = Vector2::new(x, y);
+                    let (dp, np) = s.eval(&(X + e));
+                    let (dm, nm) = s.eval(&(X - e));
+                    let fd = (dp - dm) / (2.0 * h);
+                    let fn_ = (np - nm) / (2.0 * h);
+                    assert!(
+                        (fd - gd[k]).abs() < 1e-7,
+                        "∂d at ({x},{y}): {fd} vs {}",
+                        gd[k]
+                    );
+                    assert!((fn_.x - gnx[k]).abs() < 1e-7, "∂n_x at ({x},{y})");
+                    assert!((fn_.y - gny[k]).abs() < 1e-7, "∂n_y at ({x},{y})");
+                }
+                // same value up to round-off (the dual powers are evaluated differently)
+                let d64 = s.eval(&Vector2::new(x, y)).0;
+                assert!((re(d) - d64).abs() < 1e-14 * (1.0 + d64.abs()));
+            }
+        }
+    }
+
+    #[test]
+    fn y_top_for_gap_gives_the_requested_gap() {
+        let p = Pillars::default();
+        let c = [0.0, 8.5];
+        // MODEL.md: y_top ≈ −0.3 µm for a 0.5 µm gap, smallest gap near x ≈ 5 µm
+        let y_top = p.y_top_for_gap(0.5, c, 10.0).unwrap();
+        assert!((y_top + 0.3).abs() < 0.02, "y_top = {y_top}");
+        let placed = Pillars { y_top, ..p };
+        let (x_star, _) = placed.lowest_clearance(c, 10.0);
+        assert!((x_star.abs() - 5.0).abs() < 0.5, "x* = {x_star}");
+        // Independent check: brute-force vertical gap on a fine grid of the circle.
+        let mut min_gap = f64::INFINITY;
+        let n = 200_000;
+        for i in 0..=n {
+            let x = -10.0 + 20.0 * i as f64 / n as f64;
+            let y_circle = 8.5 - (100.0 - x * x).max(0.0).sqrt();
+            min_gap = min_gap.min(y_circle - placed.surface_height(x));
+        }
+        assert!((min_gap - 0.5).abs() < 1e-6, "min gap {min_gap}");
+        // The circle point there lies outside the pillar, 0.5 µm above it vertically (its
+        // distance along the normal of the rounded top is a little less).
+        let y_c = 8.5 - (100.0 - x_star * x_star).sqrt();
+        assert!(
+            Substrate::Pillars(placed)
+                .eval(&Vector2::new(x_star, y_c))
+                .0
+                < -0.3
+        );
+        // other gaps shift y_top rigidly
+        let y2 = p.y_top_for_gap(1.0, c, 10.0).unwrap();
+        assert!((y_top - y2 - 0.5).abs() < 1e-9);
+        assert!(p.y_top_for_gap(0.5, c, 0.0).is_err());
+    }
+
+    #[test]
+    fn outline_runs_along_the_surface() {
+        let p = Pillars::default();
+        let s = Substrate::Pillars(p);
+        let pts = s.outline(0.0, 20.0, 64);
+        // pillars at 8 and 24 (24 − 4 = 20 ≤ x_max): two closed curves of 65 points + ends
+        assert_eq!(pts.len(), 2 + 2 * 65);
+        for q in &pts {
+            let (d, _) = s.eval(&Vector2::new(q[0], q[1]));
+            assert!(d.abs() < 1e-9, "outline point {q:?} has d = {d}");
+        }
+        assert_eq!(
+            Substrate::Flat { y_s: -2.0 }.outline(-1.0, 1.0, 10),
+            vec![[-1.0, -2.0], [1.0, -2.0]]
+        );
+    }
+}
