@@ -11,3 +11,4 @@ pub mod dae;
 pub mod fem;
 pub mod physics;
 pub mod sundials;
+pub mod model;

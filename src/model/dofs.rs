@@ -1,0 +1,100 @@
+//! Numbering of the unknowns y = (u, v, μ_as): one block after the other.
+//!
+//! - u: two displacement components per node, except u_x on the symmetry line x = 0,
+//!   which is eliminated (u_x = v_x = 0 there);
+//! - v: the same layout again when inertia is modelled (offset `n_u`);
+//! - μ_as: one value per node of the membrane elements, when adhesion is modelled.
+//!
+//! Blocks make the iteration matrix `[cj·I, −I; K, cj·M + C]` visible, so the velocity can
+//! be condensed out of the linear solve.
+
+use crate::fem::{Domain, Mesh};
+
+/// Marker for an eliminated (or absent) unknown.
+pub const NONE: usize = usize::MAX;
+
+/// Where each nodal unknown lives in y.
+#[derive(Debug, Clone)]
+pub struct DofMap {
+    /// Displacement unknowns per node ([`NONE`] where eliminated).
+    pub u: Vec<[usize; 2]>,
+    /// Velocity unknowns per node (all [`NONE`] without inertia).
+    pub v: Vec<[usize; 2]>,
+    /// Adhesion-coefficient unknown per node ([`NONE`] off the membrane or without adhesion).
+    pub mu: Vec<usize>,
+    /// The node of each μ_as unknown, in order.
+    pub mu_nodes: Vec<usize>,
+    /// Number of displacement unknowns.
+    pub n_u: usize,
+    /// Whether the v block exists.
+    pub inertia: bool,
+    /// Total number of unknowns.
+    pub n: usize,
+}
+
+impl DofMap {
+    /// Numbers the unknowns of `mesh`: u (x eliminated on the symmetry line), then v if
+    /// `inertia`, then μ_as at the membrane nodes if `adhesion`.
+    pub fn new(mesh: &Mesh, inertia: bool, adhesion: bool) -> Self {
+        let nn = mesh.nodes.len();
+        let mut on_axis = vec![false; nn];
+        for &i in &mesh.symmetry_nodes {
+            on_axis[i] = true;
+        }
+        let mut u = vec![[NONE; 2]; nn];
+        let mut k = 0;
+        for (i, ui) in u.iter_mut().enumerate() {
+            if !on_axis[i] {
+                ui[0] = k;
+                k += 1;
+            }
+            ui[1] = k;
+            k += 1;
+        }
+        let n_u = k;
+        let v = if inertia {
+            u.iter().map(|d| d.map(|x| if x == NONE { NONE } else { x + n_u })).collect()
+        } else {
+            vec![[NONE; 2]; nn]
+        };
+        let mut next = if inertia { 2 * n_u } else { n_u };
+        let mut mu = vec![NONE; nn];
+        let mut mu_nodes = Vec::new();
+        if adhesion {
+            let on_membrane = mesh.nodes_of_domain(Domain::Membrane);
+            for (i, &m) in on_membrane.iter().enumerate() {
+                if m {
+                    mu[i] = next;
+                    mu_nodes.push(i);
+                    next += 1;
+                }
+            }
+        }
+        Self { u, v, mu, mu_nodes, n_u, inertia, n: next }
+    }
+
+    /// Offset of the μ_as block.
+    pub fn mu_offset(&self) -> usize {
+        if self.inertia { 2 * self.n_u } else { self.n_u }
+    }
+
+    /// Number of μ_as unknowns.
+    pub fn n_mu(&self) -> usize {
+        self.mu_nodes.len()
+    }
+
+    /// Displacement of node `i` read from y (0 for eliminated components).
+    pub fn node_u(&self, y: &[f64], i: usize) -> [f64; 2] {
+        self.u[i].map(|d| if d == NONE { 0.0 } else { y[d] })
+    }
+
+    /// The rows of the momentum balance of node `i`: the v rows with inertia, else the u rows.
+    pub fn momentum_rows(&self, i: usize) -> [usize; 2] {
+        if self.inertia { self.v[i] } else { self.u[i] }
+    }
+
+    /// The unknowns whose time derivative is the velocity used in Ḟ: v with inertia, u̇ without.
+    pub fn velocity_cols(&self, i: usize) -> [usize; 2] {
+        if self.inertia { self.v[i] } else { self.u[i] }
+    }
+}
