@@ -1,1 +1,12 @@
 //! Mesh, P2 elements, quadrature.
+//!
+//! - [`quadrature`]: Gauss–Legendre on [0, 1], triangle rules exact to a given degree,
+//!   sub-divided rules for thin bands, edge rules.
+//! - [`p2`]: the six-node isoparametric triangle and the three-node edge, with
+//!   tabulation at quadrature points.
+
+pub mod p2;
+pub mod quadrature;
+
+pub use p2::{EdgeTabulation, ElementGeometry, P2Error, P2Tabulation};
+pub use quadrature::{EdgeRule, TriangleRule, gauss_legendre};
