@@ -4,9 +4,13 @@
 //!   sub-divided rules for thin bands, edge rules.
 //! - [`p2`]: the six-node isoparametric triangle and the three-node edge, with
 //!   tabulation at quadrature points.
+//! - [`mesh`]: the conforming mesh of the reference half cell (nucleus, cytoplasm,
+//!   membrane), graded from the cell bottom to the nucleus, with curved P2 interfaces.
 
+pub mod mesh;
 pub mod p2;
 pub mod quadrature;
 
+pub use mesh::{Domain, Mesh, MeshError, MeshParams, MeshQuality, NamedPoints};
 pub use p2::{EdgeTabulation, ElementGeometry, P2Error, P2Tabulation};
 pub use quadrature::{EdgeRule, TriangleRule, gauss_legendre};
