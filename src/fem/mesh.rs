@@ -121,6 +121,11 @@ pub const MAX_ELEMENTS: f64 = 4.0e6;
 /// units of the local size h (see the module documentation, step 4).
 const LATTICE_CLEARANCE: f64 = 0.6;
 
+/// Fewest segments on a half circle: arcs of at most π/8 (22.5°) keep the curved P2
+/// elements of very coarse meshes valid (the mid-node's offset from the chord is
+/// r(1 − cos(φ/2)) ≈ chord · φ/8, under 5 % of the chord).
+const MIN_CIRCLE_SEGMENTS: usize = 8;
+
 /// Largest tangential spacing in the membrane, in units of the layer thickness.
 const MEMBRANE_ASPECT: f64 = 2.0;
 
@@ -443,6 +448,74 @@ fn graded_division(length: f64, h: impl Fn(f64) -> f64, min_segments: usize) -> 
     out
 }
 
+/// Constrained Delaunay triangulation of `input` with `constraints`, refined by spade to
+/// the angle limit without splitting constraint edges. Returns all vertices (the input
+/// ones first, in order, then the Steiner points) and the triangles (counter-clockwise).
+/// A panic inside spade (it asserts on precision loss) is turned into an error.
+#[allow(clippy::type_complexity)]
+fn triangulate(
+    input: &[[f64; 2]],
+    constraints: &[[usize; 2]],
+    min_angle_deg: f64,
+) -> Result<(Vec<[f64; 2]>, Vec<[usize; 3]>), MeshError> {
+    let run = || -> Result<(Vec<[f64; 2]>, Vec<[usize; 3]>), MeshError> {
+        let pts: Vec<Point2<f64>> = input.iter().map(|p| Point2::new(p[0], p[1])).collect();
+        let mut conflicts = 0usize;
+        let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::try_bulk_load_cdt(
+            pts,
+            constraints.to_vec(),
+            |_| conflicts += 1,
+        )
+        .map_err(|e| MeshError::Triangulation(e.to_string()))?;
+        if conflicts > 0 || cdt.num_vertices() != input.len() {
+            return Err(MeshError::Inconsistent(format!(
+                "{conflicts} conflicting constraints, {} of {} vertices kept",
+                cdt.num_vertices(),
+                input.len()
+            )));
+        }
+        // The half disk is convex, so every face of the triangulation is inside the cell.
+        // (spade's `exclude_outer_faces` is not wanted: it decides inside/outside by the
+        // parity of constraint loops crossed, which would drop the nested sub-domains.)
+        let result = cdt.refine(
+            RefinementParameters::<f64>::new()
+                .with_angle_limit(AngleLimit::from_deg(min_angle_deg))
+                .keep_constraint_edges(),
+        );
+        if !result.refinement_complete {
+            return Err(MeshError::RefinementIncomplete {
+                vertices: cdt.num_vertices(),
+            });
+        }
+        let verts: Vec<[f64; 2]> = cdt
+            .vertices()
+            .map(|v| {
+                let p = v.position();
+                [p.x, p.y]
+            })
+            .collect();
+        // spade keeps the input order; refinement appends Steiner points.
+        if verts[..input.len()] != input[..] {
+            return Err(MeshError::Inconsistent(
+                "vertex order not preserved by the triangulation".into(),
+            ));
+        }
+        let tris = cdt
+            .inner_faces()
+            .map(|f| f.vertices().map(|v| v.fix().index()))
+            .collect();
+        Ok((verts, tris))
+    };
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(run)).unwrap_or_else(|payload| {
+        let msg = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown panic".into());
+        Err(MeshError::Triangulation(format!("spade panicked: {msg}")))
+    })
+}
+
 /// Builder state for the vertex set and the constraint edges.
 struct Builder {
     verts: Vec<[f64; 2]>,
@@ -495,7 +568,11 @@ impl Mesh {
         let l_cap = MEMBRANE_ASPECT * t_layer;
         let base = to_angles(
             r_mid,
-            graded_division(PI * r_mid, |s| h(arc_y(r_mid, s)).min(l_cap), 4),
+            graded_division(
+                PI * r_mid,
+                |s| h(arc_y(r_mid, s)).min(l_cap),
+                MIN_CIRCLE_SEGMENTS,
+            ),
         );
         let staggered = {
             let mut a = vec![-FRAC_PI_2];
@@ -508,7 +585,10 @@ impl Mesh {
             .enumerate()
             .map(|(k, &(r, _))| {
                 if k == 0 {
-                    to_angles(r, graded_division(PI * r, |s| h(arc_y(r, s)), 4))
+                    to_angles(
+                        r,
+                        graded_division(PI * r, |s| h(arc_y(r, s)), MIN_CIRCLE_SEGMENTS),
+                    )
                 } else if (layers - (k - 1)) % 2 == 0 {
                     base.clone()
                 } else {
@@ -603,52 +683,7 @@ impl Mesh {
         }
 
         // 5. Constrained Delaunay triangulation and refinement.
-        let n_input = b.verts.len();
-        let pts: Vec<Point2<f64>> = b.verts.iter().map(|p| Point2::new(p[0], p[1])).collect();
-        let mut conflicts = 0usize;
-        let mut cdt = ConstrainedDelaunayTriangulation::<Point2<f64>>::try_bulk_load_cdt(
-            pts,
-            b.constraints.clone(),
-            |_| conflicts += 1,
-        )
-        .map_err(|e| MeshError::Triangulation(e.to_string()))?;
-        if conflicts > 0 || cdt.num_vertices() != n_input {
-            return Err(MeshError::Inconsistent(format!(
-                "{conflicts} conflicting constraints, {} of {n_input} vertices kept",
-                cdt.num_vertices()
-            )));
-        }
-        // The half disk is convex, so every face of the triangulation is inside the cell.
-        // (spade's `exclude_outer_faces` is not wanted: it decides inside/outside by the
-        // parity of constraint loops crossed, which would drop the nested sub-domains.)
-        let result = cdt.refine(
-            RefinementParameters::<f64>::new()
-                .with_angle_limit(AngleLimit::from_deg(prm.min_angle_deg))
-                .keep_constraint_edges(),
-        );
-        if !result.refinement_complete {
-            return Err(MeshError::RefinementIncomplete {
-                vertices: cdt.num_vertices(),
-            });
-        }
-        let mut verts: Vec<[f64; 2]> = cdt
-            .vertices()
-            .map(|v| {
-                let p = v.position();
-                [p.x, p.y]
-            })
-            .collect();
-        // spade keeps the input order; refinement appends Steiner points.
-        if verts[..n_input] != b.verts[..] {
-            return Err(MeshError::Inconsistent(
-                "vertex order not preserved by the triangulation".into(),
-            ));
-        }
-        let mut tris: Vec<[usize; 3]> = Vec::new();
-        for face in cdt.inner_faces() {
-            let v = face.vertices().map(|v| v.fix().index());
-            tris.push(v);
-        }
+        let (mut verts, tris) = triangulate(&b.verts, &b.constraints, prm.min_angle_deg)?;
 
         // 6. Domains.
         let (nuc_ring, cp_ring) = (&rings[0], &rings[1]);
@@ -1444,6 +1479,84 @@ mod tests {
         let t = 0.5 * PI * 49.0;
         assert!((a - t).abs() < 1e-4 * t, "{a} vs {t}");
         assert!(m.quality().min_angle_deg >= 23.0);
+    }
+
+    /// Unusual but valid parameters mesh without error, with positive Jacobians, exact
+    /// P2 areas and sane angles (a thin band between nucleus and membrane limits the
+    /// angles, so the bound here is 15°).
+    #[test]
+    fn unusual_parameters_give_valid_meshes() {
+        let d = MeshParams::default();
+        let cases = [
+            MeshParams {
+                refine: 0.1,
+                ..d.clone()
+            },
+            MeshParams {
+                refine: 1.5,
+                ..d.clone()
+            },
+            MeshParams {
+                refine: 3.0,
+                ..d.clone()
+            },
+            MeshParams {
+                min_angle_deg: 5.0,
+                ..d.clone()
+            },
+            MeshParams {
+                min_angle_deg: 33.0,
+                ..d.clone()
+            },
+            MeshParams {
+                h_bottom: 1.0,
+                h_nucleus: 0.3,
+                ..d.clone()
+            },
+            MeshParams {
+                h_bottom: 5.0,
+                h_nucleus: 20.0,
+                ..d.clone()
+            },
+            MeshParams {
+                r_cp: 6.0,
+                ..d.clone()
+            },
+            MeshParams {
+                r_n: 9.5,
+                ..d.clone()
+            },
+            MeshParams {
+                r_n: 0.5,
+                ..d.clone()
+            },
+            MeshParams {
+                center: [0.0, 1.0e4],
+                ..d.clone()
+            },
+            MeshParams {
+                center: [0.0, 0.0],
+                r_n: 5e-3,
+                r_cp: 9.75e-3,
+                r_c: 1e-2,
+                h_bottom: 3e-4,
+                h_nucleus: 1e-3,
+                ..d.clone()
+            },
+        ];
+        for p in cases {
+            let m = Mesh::generate(&p).unwrap_or_else(|e| panic!("{p:?}: {e}"));
+            assert!(m.check_jacobians().is_ok());
+            let q = m.quality();
+            assert!(q.min_angle_deg > 15.0, "{p:?}: {q}");
+            assert!(q.elements_through_membrane >= 1, "{p:?}: {q}");
+            let t = 0.5 * PI * p.r_c * p.r_c;
+            let a = m.area(None);
+            assert!((a - t).abs() < 1e-3 * t, "{p:?}: area {a} vs {t}");
+            for n in m.symmetry_nodes {
+                assert_eq!(m.nodes[n][0], p.center[0]);
+            }
+        }
     }
 
     #[test]
