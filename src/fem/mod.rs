@@ -6,7 +6,9 @@
 //!   tabulation at quadrature points.
 //! - [`mesh`]: the conforming mesh of the reference half cell (nucleus, cytoplasm,
 //!   membrane), graded from the cell bottom to the nucleus, with curved P2 interfaces.
+//! - [`gmsh`]: reading and writing such meshes as gmsh 4.1 ASCII files.
 
+pub mod gmsh;
 pub mod mesh;
 pub mod p2;
 pub mod quadrature;
