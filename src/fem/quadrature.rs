@@ -97,7 +97,9 @@ impl TriangleRule {
             },
             2 => Self::from_orbits(&[], &[(1.0 / 6.0, 1.0 / 6.0)]),
             3 | 4 => {
-                let [a1, a2, w1, w2] = degree4_orbits();
+                // Solved once per process.
+                static ORBITS: std::sync::OnceLock<[f64; 4]> = std::sync::OnceLock::new();
+                let [a1, a2, w1, w2] = *ORBITS.get_or_init(degree4_orbits);
                 Self::from_orbits(&[], &[(a1, w1), (a2, w2)])
             }
             5 => {
