@@ -1,1 +1,18 @@
 //! Mesh, P2 elements, quadrature.
+//!
+//! - [`quadrature`]: Gauss–Legendre on [0, 1], triangle rules exact to a given degree,
+//!   sub-divided rules for thin bands, edge rules.
+//! - [`p2`]: the six-node isoparametric triangle and the three-node edge, with
+//!   tabulation at quadrature points.
+//! - [`mesh`]: the conforming mesh of the reference half cell (nucleus, cytoplasm,
+//!   membrane), graded from the cell bottom to the nucleus, with curved P2 interfaces.
+//! - [`gmsh`]: reading and writing such meshes as gmsh 4.1 ASCII files.
+
+pub mod gmsh;
+pub mod mesh;
+pub mod p2;
+pub mod quadrature;
+
+pub use mesh::{Domain, Mesh, MeshError, MeshParams, MeshQuality, NamedPoints};
+pub use p2::{EdgeTabulation, ElementGeometry, P2Error, P2Tabulation};
+pub use quadrature::{EdgeRule, TriangleRule, gauss_legendre};

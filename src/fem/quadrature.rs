@@ -1,0 +1,481 @@
+//! Quadrature rules: Gauss–Legendre on [0, 1], rules on the reference triangle
+//! (0,0), (1,0), (0,1), their sub-divided versions, and 1-D rules on an element edge.
+//!
+//! Every rule here has positive weights and points strictly inside its domain. Rules are
+//! generated (Newton iterations on Legendre polynomials or on moment equations), not
+//! copied from tables; the tests check exactness on every monomial of the claimed degree.
+
+use nalgebra::{Matrix4, Vector4};
+
+/// Gauss–Legendre nodes and weights on [0, 1] with `n` points, exact for polynomials of
+/// degree ≤ 2n − 1. The weights sum to 1.
+///
+/// The nodes are the roots of the Legendre polynomial Pₙ, found by Newton's method from
+/// the asymptotic guess cos(π(i − ¼)/(n + ½)) on [−1, 1], then mapped by x ↦ (x + 1)/2;
+/// the weight of a root x is 2/((1 − x²) Pₙ′(x)²), halved for [0, 1].
+/// `n = 0` gives empty vectors (an integral of zero).
+pub fn gauss_legendre(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut points = vec![0.0; n];
+    let mut weights = vec![0.0; n];
+    // Roots come in ± pairs: compute the m = ⌈n/2⌉ non-negative ones.
+    let m = n.div_ceil(2);
+    for i in 0..m {
+        let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut dp = 1.0;
+        for _ in 0..100 {
+            let (p, d) = legendre_and_derivative(n, x);
+            dp = d;
+            let dx = p / d;
+            x -= dx;
+            if dx.abs() <= 1e-16 * x.abs().max(1.0) {
+                let (_, d) = legendre_and_derivative(n, x);
+                dp = d;
+                break;
+            }
+        }
+        let w = 2.0 / ((1.0 - x * x) * dp * dp);
+        // Store on [0, 1]: the root +x and its mirror −x.
+        points[i] = 0.5 * (1.0 - x);
+        points[n - 1 - i] = 0.5 * (1.0 + x);
+        weights[i] = 0.5 * w;
+        weights[n - 1 - i] = 0.5 * w;
+    }
+    if n % 2 == 1 {
+        // The middle root is exactly 0 on [−1, 1].
+        points[m - 1] = 0.5;
+    }
+    (points, weights)
+}
+
+/// Legendre polynomial Pₙ(x) and its derivative, by the three-term recurrence
+/// (k + 1) P_{k+1} = (2k + 1) x P_k − k P_{k−1}, and Pₙ′ = n (x Pₙ − P_{n−1}) / (x² − 1).
+fn legendre_and_derivative(n: usize, x: f64) -> (f64, f64) {
+    let mut p0 = 1.0;
+    let mut p1 = x;
+    if n == 0 {
+        return (1.0, 0.0);
+    }
+    for k in 1..n {
+        let k = k as f64;
+        let p2 = ((2.0 * k + 1.0) * x * p1 - k * p0) / (k + 1.0);
+        p0 = p1;
+        p1 = p2;
+    }
+    let d = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+    (p1, d)
+}
+
+/// A quadrature rule on the reference triangle with vertices (0,0), (1,0), (0,1):
+/// ∫_T̂ f dξ ≈ Σ_q w_q f(ξ_q). The weights sum to the triangle's area ½.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TriangleRule {
+    /// Points ξ_q = (ξ, η) in reference coordinates, all strictly inside the triangle.
+    pub points: Vec<[f64; 2]>,
+    /// Weights w_q > 0, summing to ½.
+    pub weights: Vec<f64>,
+}
+
+impl TriangleRule {
+    /// A rule exact for every polynomial of total degree ≤ `d`.
+    ///
+    /// | d | rule | points |
+    /// |---|---|---|
+    /// | 0, 1 | centroid | 1 |
+    /// | 2 | symmetric, at barycentric (⅔, ⅙, ⅙) and permutations | 3 |
+    /// | 3, 4 | symmetric, two 3-point orbits (a, a, 1 − 2a); coefficients solved from the moment equations by Newton | 6 |
+    /// | 5 | Radon's 7-point rule, closed form with √15 | 7 |
+    /// | ≥ 6 | collapsed (Duffy) Gauss–Legendre product, ⌈(d + 2)/2⌉ × ⌈(d + 1)/2⌉ | e.g. 36 for d = 10 |
+    ///
+    /// The collapsed rule maps the unit square onto the triangle by (u, v) ↦ (u, v(1 − u))
+    /// with Jacobian (1 − u); the extra factor raises the degree in u by one, hence one more
+    /// Gauss point in that direction.
+    pub fn degree(d: usize) -> Self {
+        match d {
+            0 | 1 => Self {
+                points: vec![[1.0 / 3.0, 1.0 / 3.0]],
+                weights: vec![0.5],
+            },
+            2 => Self::from_orbits(&[], &[(1.0 / 6.0, 1.0 / 6.0)]),
+            3 | 4 => {
+                // Solved once per process.
+                static ORBITS: std::sync::OnceLock<[f64; 4]> = std::sync::OnceLock::new();
+                let [a1, a2, w1, w2] = *ORBITS.get_or_init(degree4_orbits);
+                Self::from_orbits(&[], &[(a1, w1), (a2, w2)])
+            }
+            5 => {
+                let s = 15f64.sqrt();
+                let a1 = (6.0 - s) / 21.0;
+                let a2 = (6.0 + s) / 21.0;
+                // Area-normalised weights 9/40, (155 ∓ √15)/1200, times the area ½.
+                let w1 = (155.0 - s) / 2400.0;
+                let w2 = (155.0 + s) / 2400.0;
+                Self::from_orbits(&[9.0 / 80.0], &[(a1, w1), (a2, w2)])
+            }
+            _ => Self::collapsed_gauss(d.div_ceil(2) + 1, (d + 1).div_ceil(2)),
+        }
+    }
+
+    /// Builds a fully symmetric rule from a centroid weight (if any) and orbits
+    /// S₂₁(a) = {(a, a, 1 − 2a) and its permutations}, each orbit point with weight w.
+    fn from_orbits(centroid: &[f64], orbits: &[(f64, f64)]) -> Self {
+        let mut points = Vec::new();
+        let mut weights = Vec::new();
+        for &w in centroid {
+            points.push([1.0 / 3.0, 1.0 / 3.0]);
+            weights.push(w);
+        }
+        for &(a, w) in orbits {
+            let b = 1.0 - 2.0 * a;
+            // Barycentric (λ₀, λ₁, λ₂) with ξ = λ₁, η = λ₂.
+            for p in [[a, a], [b, a], [a, b]] {
+                points.push(p);
+                weights.push(w);
+            }
+        }
+        Self { points, weights }
+    }
+
+    /// The collapsed (conical-product) Gauss rule with `nu` points in u and `nv` in v:
+    /// ξ = u, η = v(1 − u), weight w_u w_v (1 − u). Exact for degree ≤ min(2nu − 2, 2nv − 1).
+    pub fn collapsed_gauss(nu: usize, nv: usize) -> Self {
+        let (pu, wu) = gauss_legendre(nu);
+        let (pv, wv) = gauss_legendre(nv);
+        let mut points = Vec::with_capacity(nu * nv);
+        let mut weights = Vec::with_capacity(nu * nv);
+        for (u, a) in pu.iter().zip(&wu) {
+            for (v, b) in pv.iter().zip(&wv) {
+                points.push([*u, v * (1.0 - u)]);
+                weights.push(a * b * (1.0 - u));
+            }
+        }
+        Self { points, weights }
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True if the rule has no points.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// This rule applied on each of the 4^`levels` congruent sub-triangles obtained by
+    /// halving every edge `levels` times (m = 2^levels sub-intervals per edge): m(m+1)/2
+    /// "upright" and m(m−1)/2 "inverted" triangles, each of area 1/(2m²). Same degree of
+    /// exactness, with points spread over the whole element: use it where an integrand is
+    /// only piecewise smooth, e.g. a thin contact band crossing an element (MODEL.md §9).
+    pub fn subdivided(&self, levels: u32) -> Self {
+        let m = 1usize << levels;
+        let h = 1.0 / m as f64;
+        let scale = h * h;
+        let mut points = Vec::with_capacity(self.len() * m * m);
+        let mut weights = Vec::with_capacity(self.len() * m * m);
+        let mut push = |o: [f64; 2], e1: [f64; 2], e2: [f64; 2]| {
+            for (p, w) in self.points.iter().zip(&self.weights) {
+                points.push([
+                    o[0] + p[0] * e1[0] + p[1] * e2[0],
+                    o[1] + p[0] * e1[1] + p[1] * e2[1],
+                ]);
+                weights.push(w * scale);
+            }
+        };
+        for j in 0..m {
+            for i in 0..m - j {
+                let (x, y) = (i as f64 * h, j as f64 * h);
+                push([x, y], [h, 0.0], [0.0, h]);
+                if i + j + 1 < m {
+                    // Inverted triangle with its right angle at (x + h, y + h).
+                    push([x + h, y + h], [-h, 0.0], [0.0, -h]);
+                }
+            }
+        }
+        Self { points, weights }
+    }
+}
+
+/// Orbit parameters (a₁, a₂) and point weights (w₁, w₂) of the 6-point symmetric degree-4
+/// rule, solved from the moment equations.
+///
+/// Every symmetric polynomial of degree ≤ 4 in the barycentric coordinates λᵢ is a
+/// combination of the power sums p_k = Σᵢ λᵢᵏ, k = 0, 2, 3, 4 (p₀ = 3, p₁ = 1). On an orbit
+/// S₂₁(a) = {(a, a, 1 − 2a) and permutations}, p_k takes the single value
+/// p_k(a) = 2aᵏ + (1 − 2a)ᵏ, and ∫_T̂ λ₁ᵏ = k!/(k + 2)!, so the rule is exact to degree 4 iff
+///
+///   3 w₁ p_k(a₁) + 3 w₂ p_k(a₂) = 3 k!/(k + 2)!,  i.e.  w₁ p_k(a₁) + w₂ p_k(a₂) = 1/((k + 1)(k + 2)),
+///
+/// for k = 0, 2, 3, 4. Newton from a rough guess converges in a few steps.
+fn degree4_orbits() -> [f64; 4] {
+    // Unknowns z = (a₁, a₂, w₁, w₂).
+    let mut z = Vector4::new(0.45, 0.09, 0.11, 0.055);
+    let pk = |a: f64, k: i32| 2.0 * a.powi(k) + (1.0 - 2.0 * a).powi(k);
+    let dpk = |a: f64, k: i32| {
+        if k == 0 {
+            0.0
+        } else {
+            2.0 * f64::from(k) * (a.powi(k - 1) - (1.0 - 2.0 * a).powi(k - 1))
+        }
+    };
+    for _ in 0..50 {
+        let mut r = Vector4::zeros();
+        let mut jac = Matrix4::zeros();
+        for (row, k) in [0, 2, 3, 4].into_iter().enumerate() {
+            r[row] = z[2] * pk(z[0], k) + z[3] * pk(z[1], k) - 1.0 / f64::from((k + 1) * (k + 2));
+            jac[(row, 0)] = z[2] * dpk(z[0], k);
+            jac[(row, 1)] = z[3] * dpk(z[1], k);
+            jac[(row, 2)] = pk(z[0], k);
+            jac[(row, 3)] = pk(z[1], k);
+        }
+        let Some(dz) = jac.lu().solve(&r) else {
+            break;
+        };
+        z -= dz;
+        if dz.amax() < 1e-16 {
+            break;
+        }
+    }
+    [z[0], z[1], z[2], z[3]]
+}
+
+/// A quadrature rule on the unit interval [0, 1] for integrals along an element edge
+/// parametrised by s ∈ [0, 1] from its first to its last vertex.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EdgeRule {
+    /// Points s_q ∈ (0, 1).
+    pub points: Vec<f64>,
+    /// Weights w_q > 0, summing to 1.
+    pub weights: Vec<f64>,
+}
+
+impl EdgeRule {
+    /// Gauss–Legendre rule exact for polynomials of degree ≤ `d` (⌈(d + 1)/2⌉ points, at
+    /// least one).
+    pub fn degree(d: usize) -> Self {
+        let (points, weights) = gauss_legendre((d + 1).div_ceil(2).max(1));
+        Self { points, weights }
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True if the rule has no points.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// This rule applied on each of 2^`levels` equal sub-intervals.
+    pub fn subdivided(&self, levels: u32) -> Self {
+        let m = 1usize << levels;
+        let h = 1.0 / m as f64;
+        let mut points = Vec::with_capacity(self.len() * m);
+        let mut weights = Vec::with_capacity(self.len() * m);
+        for i in 0..m {
+            for (p, w) in self.points.iter().zip(&self.weights) {
+                points.push((i as f64 + p) * h);
+                weights.push(w * h);
+            }
+        }
+        Self { points, weights }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// ∫_T̂ ξ^i η^j = i! j! / (i + j + 2)!.
+    fn exact_monomial(i: u32, j: u32) -> f64 {
+        let f = |n: u32| (1..=n).map(f64::from).product::<f64>();
+        f(i) * f(j) / f(i + j + 2)
+    }
+
+    fn rule_error(rule: &TriangleRule, i: u32, j: u32) -> f64 {
+        let q: f64 = rule
+            .points
+            .iter()
+            .zip(&rule.weights)
+            .map(|(p, w)| w * p[0].powi(i as i32) * p[1].powi(j as i32))
+            .sum();
+        let e = exact_monomial(i, j);
+        (q - e).abs() / e
+    }
+
+    /// Largest relative error over all monomials of total degree exactly `d`.
+    fn max_error_at_degree(rule: &TriangleRule, d: u32) -> f64 {
+        (0..=d)
+            .map(|i| rule_error(rule, i, d - i))
+            .fold(0.0, f64::max)
+    }
+
+    fn assert_positive_inside(rule: &TriangleRule) {
+        assert!(!rule.is_empty());
+        assert_eq!(rule.points.len(), rule.weights.len());
+        for (p, w) in rule.points.iter().zip(&rule.weights) {
+            assert!(*w > 0.0, "non-positive weight {w}");
+            assert!(
+                p[0] > 0.0 && p[1] > 0.0 && p[0] + p[1] < 1.0,
+                "point {p:?} not strictly inside"
+            );
+        }
+        let s: f64 = rule.weights.iter().sum();
+        assert!((s - 0.5).abs() < 1e-14, "weights sum {s}");
+    }
+
+    #[test]
+    fn gauss_legendre_exact_to_2n_minus_1_and_not_beyond() {
+        for n in 1..=20usize {
+            let (x, w) = gauss_legendre(n);
+            assert_eq!(x.len(), n);
+            for k in 0..2 * n {
+                let q: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(k as i32)).sum();
+                let e = 1.0 / (k as f64 + 1.0);
+                assert!((q - e).abs() < 1e-14, "n={n} k={k}: {q} vs {e}");
+            }
+            // Degree 2n is not integrated exactly: the error of x^{2n} is the Gauss remainder
+            // (n!)⁴ / ((2n + 1) ((2n)!)²) on [0, 1]; check it wherever it exceeds round-off.
+            let k = 2 * n as i32;
+            let q: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(k)).sum();
+            let fact = |m: usize| (1..=m).map(|i| i as f64).product::<f64>();
+            let remainder = fact(n).powi(4) / ((2 * n + 1) as f64 * fact(2 * n).powi(2));
+            if remainder > 1e-12 {
+                let err = 1.0 / (k as f64 + 1.0) - q;
+                assert!(
+                    (err - remainder).abs() < 1e-6 * remainder + 1e-15,
+                    "n={n}: error {err:e}, expected {remainder:e}"
+                );
+            }
+            for (xi, wi) in x.iter().zip(&w) {
+                assert!(*xi > 0.0 && *xi < 1.0 && *wi > 0.0);
+            }
+            for i in 1..n {
+                assert!(x[i] > x[i - 1], "nodes not increasing");
+            }
+        }
+        assert!(gauss_legendre(0).0.is_empty());
+    }
+
+    #[test]
+    fn triangle_rules_exact_to_claimed_degree() {
+        for d in 0..=20usize {
+            let rule = TriangleRule::degree(d);
+            assert_positive_inside(&rule);
+            for k in 0..=d as u32 {
+                let e = max_error_at_degree(&rule, k);
+                assert!(e < 1e-13, "degree {d} rule, monomials of degree {k}: {e}");
+            }
+        }
+    }
+
+    #[test]
+    fn low_order_rules_have_the_cheap_point_counts() {
+        assert_eq!(TriangleRule::degree(1).len(), 1);
+        assert_eq!(TriangleRule::degree(2).len(), 3);
+        assert_eq!(TriangleRule::degree(4).len(), 6);
+        assert_eq!(TriangleRule::degree(5).len(), 7);
+        assert_eq!(TriangleRule::degree(10).len(), 36);
+    }
+
+    #[test]
+    fn rules_fail_one_degree_above() {
+        // Each rule's degree is sharp: some monomial of degree d + 1 is not integrated.
+        // (d = 3 uses the degree-4 rule, so its sharp degree is 4.)
+        for (d, sharp) in [
+            (1, 1),
+            (2, 2),
+            (3, 4),
+            (4, 4),
+            (5, 5),
+            (6, 6),
+            (10, 10),
+            (15, 15),
+        ] {
+            let rule = TriangleRule::degree(d);
+            let e = max_error_at_degree(&rule, sharp + 1);
+            assert!(
+                e > 1e-11,
+                "degree {d} rule integrates degree {} exactly",
+                sharp + 1
+            );
+        }
+    }
+
+    #[test]
+    fn degree4_coefficients_match_the_published_values() {
+        // Dunavant (1985), degree 4, area-normalised weights 0.223381589678011 and
+        // 0.109951743655322 at a = 0.445948490915965 and 0.091576213509771.
+        let [a1, a2, w1, w2] = degree4_orbits();
+        assert!((a1 - 0.445948490915965).abs() < 1e-14);
+        assert!((a2 - 0.091576213509771).abs() < 1e-14);
+        assert!((2.0 * w1 - 0.223381589678011).abs() < 1e-14);
+        assert!((2.0 * w2 - 0.109951743655322).abs() < 1e-14);
+    }
+
+    #[test]
+    fn subdivided_rules_exact_and_inside() {
+        for (d, levels) in [(2usize, 1u32), (4, 2), (5, 3), (10, 2)] {
+            let base = TriangleRule::degree(d);
+            let rule = base.subdivided(levels);
+            assert_eq!(rule.len(), base.len() * 4usize.pow(levels));
+            assert_positive_inside(&rule);
+            for k in 0..=d as u32 {
+                let e = max_error_at_degree(&rule, k);
+                assert!(e < 1e-13, "d={d} levels={levels} k={k}: {e}");
+            }
+            assert!(max_error_at_degree(&rule, d as u32 + 2) > 1e-10);
+        }
+        assert_eq!(
+            TriangleRule::degree(4).subdivided(0),
+            TriangleRule::degree(4)
+        );
+    }
+
+    #[test]
+    fn subdivided_rule_integrates_a_kink_better() {
+        // f = |ξ − 0.3| has a kink; sub-division must converge to ∫ = known value.
+        // ∫_T̂ |ξ − a| = ∫_0^1 |ξ − a| (1 − ξ) dξ.
+        let a: f64 = 0.3;
+        let exact = {
+            // ∫_0^a (a − ξ)(1 − ξ) + ∫_a^1 (ξ − a)(1 − ξ)
+            let f1 = a * a / 2.0 - a * a * a / 6.0;
+            let b = 1.0 - a;
+            let f2 = b * b * b / 6.0;
+            f1 + f2
+        };
+        let err = |r: &TriangleRule| {
+            let q: f64 = r
+                .points
+                .iter()
+                .zip(&r.weights)
+                .map(|(p, w)| w * (p[0] - a).abs())
+                .sum();
+            (q - exact).abs()
+        };
+        let base = TriangleRule::degree(4);
+        let e0 = err(&base);
+        let e3 = err(&base.subdivided(3));
+        assert!(e3 < e0 / 20.0, "{e0} → {e3}");
+    }
+
+    #[test]
+    fn edge_rules_exact() {
+        for d in 0..=15usize {
+            for levels in [0u32, 2] {
+                let r = EdgeRule::degree(d).subdivided(levels);
+                let s: f64 = r.weights.iter().sum();
+                assert!((s - 1.0).abs() < 1e-14);
+                for k in 0..=d {
+                    let q: f64 = r
+                        .points
+                        .iter()
+                        .zip(&r.weights)
+                        .map(|(x, w)| w * x.powi(k as i32))
+                        .sum();
+                    assert!((q - 1.0 / (k as f64 + 1.0)).abs() < 1e-14, "d={d} k={k}");
+                }
+            }
+        }
+    }
+}
