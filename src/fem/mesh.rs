@@ -58,31 +58,8 @@ use thiserror::Error;
 use super::p2::{self, EDGES, P2Tabulation, REFERENCE_NODES};
 use super::quadrature::TriangleRule;
 
-/// The three material sub-domains of the cell.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum Domain {
-    /// |p − c| < r_n.
-    Nucleus,
-    /// r_n < |p − c| < r_cp.
-    Cytoplasm,
-    /// r_cp < |p − c| < r_c.
-    Membrane,
-}
-
-impl Domain {
-    /// All domains, inside out.
-    pub const ALL: [Domain; 3] = [Domain::Nucleus, Domain::Cytoplasm, Domain::Membrane];
-}
-
-impl fmt::Display for Domain {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Domain::Nucleus => "nucleus",
-            Domain::Cytoplasm => "cytoplasm",
-            Domain::Membrane => "membrane",
-        })
-    }
-}
+/// The three material sub-domains of the cell (defined with the physics it selects).
+pub use crate::physics::Domain;
 
 /// Geometry and mesh-size parameters of the half cell (µm). The defaults are the paper's
 /// cell and mesh (MODEL.md §2, §9).

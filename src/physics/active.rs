@@ -27,6 +27,21 @@ pub enum Domain {
     Membrane,
 }
 
+impl Domain {
+    /// All domains, inside out.
+    pub const ALL: [Domain; 3] = [Domain::Nucleus, Domain::Cytoplasm, Domain::Membrane];
+}
+
+impl std::fmt::Display for Domain {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Domain::Nucleus => "nucleus",
+            Domain::Cytoplasm => "cytoplasm",
+            Domain::Membrane => "membrane",
+        })
+    }
+}
+
 /// Perinuclear actin cap ("push"): tangential contraction in the cytoplasm between two
 /// ellipses centred at `c`, for `θ ≥ θ_PAC`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
