@@ -1,1 +1,0 @@
-//! The case file (RON) schema, its defaults and validation.
