@@ -44,7 +44,7 @@ fn main() {
     );
     let mut tout = 0.01;
     for _ in 0..11 {
-        if let Err(e) = ida.advance_to(tout, &mut |_, _| {}) {
+        if let Err(e) = ida.advance_to(tout, &mut |_, _| true) {
             eprintln!("heat2d: {e}");
             std::process::exit(1);
         }

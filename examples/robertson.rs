@@ -39,7 +39,7 @@ fn main() {
     println!("{rule}\n  t             y1           y2           y3      | nst  k      h\n{rule}");
     let mut tout = 0.4;
     for _ in 0..12 {
-        if let Err(e) = ida.advance_to(tout, &mut |_, _| {}) {
+        if let Err(e) = ida.advance_to(tout, &mut |_, _| true) {
             eprintln!("robertson: {e}");
             std::process::exit(1);
         }

@@ -12,3 +12,5 @@ pub mod fem;
 pub mod physics;
 pub mod sundials;
 pub mod model;
+pub mod run;
+pub mod scene;

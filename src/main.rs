@@ -1,3 +1,207 @@
-fn main() {
-    println!("cellsim: the command-line interface is not built yet");
+//! The `cellsim` command line: load a case → build the model → integrate → write outputs.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+use cellsim::case::{self, Case};
+use cellsim::dae::LinearSolverKind;
+use cellsim::fem::Mesh;
+use cellsim::run::{self, Progress, RunOptions, RunSettings};
+use cellsim::scene;
+
+/// Finite-element simulation of a cell settling, spreading and contracting on a flat or
+/// micropillared substrate (Mondésert-Deveraux, Aubry & Allena 2019), integrated with
+/// SUNDIALS IDA or a fixed-step BDF2.
+#[derive(Parser)]
+#[command(name = "cellsim", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum IntegratorArg {
+    /// SUNDIALS IDA (variable-order BDF).
+    Ida,
+    /// Fixed-step BDF2.
+    Bdf2,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run one scene: writes timeseries.csv, summary.json, mesh.json and state_<phase>.json.
+    Run {
+        /// The case file (RON), e.g. cases/flat.ron.
+        case: PathBuf,
+        /// Output directory [default: runs/<case name>].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Integrator [default: the case's].
+        #[arg(long, value_enum)]
+        integrator: Option<IntegratorArg>,
+        /// Relative tolerance [default: the case's].
+        #[arg(long)]
+        rtol: Option<f64>,
+        /// Absolute tolerance on displacements, µm [default: the case's].
+        #[arg(long)]
+        atol: Option<f64>,
+        /// BDF2 time step, s [default: the case's].
+        #[arg(long)]
+        dt: Option<f64>,
+        /// Sparse LU [default: the case's].
+        #[arg(long, value_enum)]
+        linear_solver: Option<LinearSolverKind>,
+        /// No progress line.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Generate the mesh of a case and print its quality report.
+    Mesh {
+        /// The case file (RON).
+        case: PathBuf,
+        /// Also draw it as SVG.
+        #[arg(long)]
+        svg: Option<PathBuf>,
+    },
+    /// Check a case file and print it with every default filled in.
+    Check {
+        /// The case file (RON).
+        case: PathBuf,
+    },
+}
+
+/// Loads a case; a bad case prints its located error and exits with status 2.
+fn load_case(path: &Path) -> Result<Case, ExitCode> {
+    Case::load(path).map_err(|e| {
+        eprintln!("error: {e}");
+        ExitCode::from(2)
+    })
+}
+
+fn check_positive(name: &str, v: Option<f64>, upper: Option<f64>) -> Result<(), ExitCode> {
+    if let Some(x) = v {
+        let ok = x.is_finite() && x > 0.0 && upper.is_none_or(|u| x < u);
+        if !ok {
+            let range = match upper {
+                Some(u) => format!("0 < {name} < {u}"),
+                None => format!("{name} > 0"),
+            };
+            eprintln!("error: --{name} = {x} is out of range (must satisfy {range})");
+            return Err(ExitCode::from(2));
+        }
+    }
+    Ok(())
+}
+
+fn interrupt_flag() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let f = flag.clone();
+    // A second Ctrl-C while stopping falls through to the default (exit).
+    let _ = ctrlc::set_handler(move || {
+        if f.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupted: finishing the current step and writing the summary (Ctrl-C again to quit now)");
+    });
+    flag
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Run { case: path, out, integrator, rtol, atol, dt, linear_solver, quiet } => {
+            let case = match load_case(&path) {
+                Ok(c) => c,
+                Err(code) => return code,
+            };
+            for (name, v, upper) in [("rtol", rtol, Some(1.0)), ("atol", atol, None), ("dt", dt, None)] {
+                if let Err(code) = check_positive(name, v, upper) {
+                    return code;
+                }
+            }
+            let mut settings = RunSettings::from_case(&case);
+            if let Some(i) = integrator {
+                settings.integrator = match i {
+                    IntegratorArg::Ida => case::Integrator::Ida,
+                    IntegratorArg::Bdf2 => case::Integrator::Bdf2,
+                };
+            }
+            settings.rtol = rtol.unwrap_or(settings.rtol);
+            settings.atol = atol.unwrap_or(settings.atol);
+            settings.dt = dt.unwrap_or(settings.dt);
+            settings.linear_solver = linear_solver.unwrap_or(settings.linear_solver);
+            let out = out.unwrap_or_else(|| PathBuf::from("runs").join(&case.name));
+            let visible = !quiet && std::io::stderr().is_terminal();
+            let opts = RunOptions {
+                out: out.clone(),
+                settings,
+                progress: Progress::Bar(run::progress_bar(&case, visible)),
+                interrupt: interrupt_flag(),
+            };
+            match run::run(&case, &path.display().to_string(), &opts) {
+                Ok(s) => {
+                    let f = s.final_values.unwrap_or_default();
+                    println!(
+                        "{}: finished t = {} s in {:.1} s wall ({} steps, {} Jacobians, {} unknowns); contact radius {:.3} µm, uy(p_t) {:.4} µm, mean |E| nucleus {:.1} %, cytoplasm {:.1} %; outputs in {}",
+                        s.case,
+                        f.t,
+                        s.wall_seconds,
+                        s.stats.steps,
+                        s.stats.jacobian_evals,
+                        s.unknowns.total,
+                        f.contact_radius,
+                        f.uy_top,
+                        100.0 * f.strain_nucleus,
+                        100.0 * f.strain_cytoplasm,
+                        out.display()
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    if matches!(e, run::RunError::Scene(_)) { ExitCode::from(2) } else { ExitCode::FAILURE }
+                }
+            }
+        }
+        Command::Mesh { case: path, svg } => {
+            let case = match load_case(&path) {
+                Ok(c) => c,
+                Err(code) => return code,
+            };
+            match Mesh::generate(&scene::mesh_params(&case)) {
+                Ok(mesh) => {
+                    println!("{}", mesh.quality());
+                    if let Some(p) = svg {
+                        if let Err(e) = mesh.write_svg(&p) {
+                            eprintln!("error: {e}");
+                            return ExitCode::FAILURE;
+                        }
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {}: mesh: {e}", path.display());
+                    ExitCode::from(2)
+                }
+            }
+        }
+        Command::Check { case: path } => match load_case(&path) {
+            Ok(c) => match c.to_ron() {
+                Ok(text) => {
+                    println!("{text}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            },
+            Err(code) => code,
+        },
+    }
 }

@@ -7,7 +7,7 @@ use cellsim::dae::{Atol, Dae, DaeError, Integrator, LinearSolverKind, Pattern, S
 use cellsim::sundials::{CalcIc, Ida, IdaOptions};
 
 fn run_to(integ: &mut dyn Integrator, t: f64) {
-    integ.advance_to(t, &mut |_, _| {}).unwrap_or_else(|e| panic!("integration to {t} failed: {e}"));
+    integ.advance_to(t, &mut |_, _| true).unwrap_or_else(|e| panic!("integration to {t} failed: {e}"));
 }
 
 fn robertson(kind: LinearSolverKind) -> Ida<Robertson> {
@@ -303,12 +303,18 @@ fn integrators_land_exactly_on_breakpoints() {
     w.breakpoints = bps.clone();
     let mut ida = Ida::new(w, IdaOptions { rtol: 1e-3, atol: Atol::Scalar(1e-6), ..Default::default() }).unwrap();
     let mut times = Vec::new();
-    ida.advance_to(1.0, &mut |t, _| times.push(t)).unwrap();
+    ida.advance_to(1.0, &mut |t, _| {
+        times.push(t);
+        true
+    }).unwrap();
     let mut w = Wrapped::new(Analytic::new(10.0));
     w.breakpoints = bps.clone();
     let mut bdf = Bdf2::new(w, Bdf2Options { dt: 0.07, ..Default::default() }).unwrap();
     let mut btimes = Vec::new();
-    bdf.advance_to(1.0, &mut |t, _| btimes.push(t)).unwrap();
+    bdf.advance_to(1.0, &mut |t, _| {
+        btimes.push(t);
+        true
+    }).unwrap();
     for b in &bps {
         assert!(times.iter().any(|t| t == b), "IDA did not stop at {b}: {times:?}");
         assert!(btimes.iter().any(|t| (t - b).abs() < 1e-15), "BDF2 did not stop at {b}: {btimes:?}");
@@ -326,5 +332,5 @@ fn ida_reports_bad_input_as_errors() {
     assert!(Ida::new(Robertson::new(), opts).is_err());
     let mut ida = Ida::new(Robertson::new(), IdaOptions::default()).unwrap();
     run_to(&mut ida, 1.0);
-    assert!(ida.advance_to(0.5, &mut |_, _| {}).is_err());
+    assert!(ida.advance_to(0.5, &mut |_, _| true).is_err());
 }

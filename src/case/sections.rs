@@ -405,56 +405,23 @@ impl Pillars {
         self.width + self.spacing
     }
 
-    /// Height of the substrate's upper surface at abscissa x (µm) for pillar tops at
-    /// `y_top`: the superellipse's upper half over a pillar, the floor y_top − h between.
-    pub fn surface_y(&self, x: f64, y_top: f64) -> f64 {
-        let p = self.period();
-        // Offset to the nearest pillar axis.
-        let xt = x - self.first_center - p * ((x - self.first_center) / p).round();
-        let half_w = 0.5 * self.width;
-        let half_h = 0.5 * self.height;
-        let r = (xt.abs() / half_w).powf(self.q);
-        if r < 1.0 {
-            y_top - half_h + half_h * (1.0 - r).powf(1.0 / self.q)
-        } else {
-            y_top - self.height
+    /// The pillar geometry in the physics module's terms, with tops at `y_top` (µm).
+    pub fn at_height(&self, y_top: f64) -> crate::physics::Pillars {
+        crate::physics::Pillars {
+            width: self.width,
+            spacing: self.spacing,
+            height: self.height,
+            first_center: self.first_center,
+            q: self.q,
+            y_top,
         }
     }
 
     /// Smallest vertical distance between the lower half of the undeformed cell and the
     /// substrate surface for pillar tops at `y_top` (µm); negative if they overlap.
-    ///
-    /// Samples x ∈ [0, r_c] finely (every r_c/20 000), then refines the best sample by
-    /// golden-section search; the result is accurate to far below a nanometre.
     pub fn smallest_gap(&self, geometry: &Geometry, y_top: f64) -> f64 {
-        let r_c = geometry.r_c;
-        let gap = |x: f64| {
-            let cell = geometry.centre_y - (r_c * r_c - x * x).max(0.0).sqrt();
-            cell - self.surface_y(x, y_top)
-        };
-        const N: usize = 20_000;
-        let dx = r_c / N as f64;
-        let (mut best_x, mut best) = (0.0, gap(0.0));
-        for i in 1..=N {
-            let x = i as f64 * dx;
-            let g = gap(x);
-            if g < best {
-                best = g;
-                best_x = x;
-            }
-        }
-        let (mut a, mut b) = ((best_x - dx).max(0.0), (best_x + dx).min(r_c));
-        let phi = 0.5 * (5f64.sqrt() - 1.0);
-        for _ in 0..60 {
-            let x1 = b - phi * (b - a);
-            let x2 = a + phi * (b - a);
-            if gap(x1) < gap(x2) {
-                b = x2;
-            } else {
-                a = x1;
-            }
-        }
-        best.min(gap(0.5 * (a + b)))
+        let (_, clearance) = self.at_height(y_top).lowest_clearance(geometry.centre(), geometry.r_c);
+        clearance - y_top
     }
 
     /// Height of the pillar tops (µm): `y_top` if given, otherwise placed so that the
@@ -850,7 +817,7 @@ pub struct Solver {
     /// Maximum number of internal steps between two output times (IDA's mxstep).
     /// Default 5000. Valid: ≥ 1.
     pub max_steps: u64,
-    /// `Faer` or `Klu`. Default `Klu`.
+    /// `Faer` or `Klu`. Default `Faer` (measured faster on these matrices).
     pub linear_solver: LinearSolver,
     /// First step size tried by IDA (s). Default none (IDA's estimate). Valid: > 0.
     pub initial_step: Option<f64>,
@@ -865,7 +832,7 @@ impl Default for Solver {
             bdf2_dt: 1.0,
             max_order: 5,
             max_steps: 5000,
-            linear_solver: LinearSolver::Klu,
+            linear_solver: LinearSolver::Faer,
             initial_step: None,
         }
     }

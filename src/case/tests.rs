@@ -230,9 +230,9 @@ fn case_pillar_tops_are_placed_by_the_gap() {
         cell - top
     );
     // Far from the pillars the surface is the floor.
-    assert_eq!(p.surface_y(0.0, y_top), y_top - 8.0);
-    assert!((p.surface_y(8.0, y_top) - y_top).abs() < 1e-12);
-    assert!((p.surface_y(24.0, y_top) - y_top).abs() < 1e-12);
+    assert_eq!(p.at_height(y_top).surface_height(0.0), y_top - 8.0);
+    assert!((p.at_height(y_top).surface_height(8.0) - y_top).abs() < 1e-12);
+    assert!((p.at_height(y_top).surface_height(24.0) - y_top).abs() < 1e-12);
     // An explicit y_top wins.
     let q = Pillars {
         y_top: Some(-1.0),

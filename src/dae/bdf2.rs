@@ -350,7 +350,7 @@ impl<D: Dae> Bdf2<D> {
 }
 
 impl<D: Dae> Integrator for Bdf2<D> {
-    fn advance_to(&mut self, tout: f64, on_step: &mut dyn FnMut(f64, &Stats)) -> Result<(), IntegratorError> {
+    fn advance_to(&mut self, tout: f64, on_step: &mut dyn FnMut(f64, &Stats) -> bool) -> Result<(), IntegratorError> {
         if !(tout >= self.t_out) {
             return Err(IntegratorError::Input(format!(
                 "output time {tout} is before the current time {}",
@@ -381,7 +381,9 @@ impl<D: Dae> Integrator for Bdf2<D> {
                 }
             }
             let stats = self.stats.clone();
-            on_step(self.t, &stats);
+            if !on_step(self.t, &stats) {
+                return Err(IntegratorError::Interrupted { t: self.t });
+            }
         }
         if (self.t - tout).abs() <= eps {
             self.y_out.copy_from_slice(&self.y);

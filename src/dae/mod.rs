@@ -186,6 +186,12 @@ pub enum IntegratorError {
         /// The message.
         message: String,
     },
+    /// The driver asked to stop (e.g. Ctrl-C).
+    #[error("interrupted at t = {t:.6e}")]
+    Interrupted {
+        /// Time of the last accepted step.
+        t: f64,
+    },
     /// Invalid options or input.
     #[error("invalid input: {0}")]
     Input(String),
@@ -195,12 +201,9 @@ pub enum IntegratorError {
 pub trait Integrator {
     /// Advances the solution to `tout` (never past the next breakpoint without stopping
     /// there) and returns the state at `tout`. `on_step` is called after every internal
-    /// step with (t, stats) so a driver can show progress.
-    fn advance_to(
-        &mut self,
-        tout: f64,
-        on_step: &mut dyn FnMut(f64, &Stats),
-    ) -> Result<(), IntegratorError>;
+    /// step with (t, stats) so a driver can show progress; returning `false` stops the
+    /// integration with [`IntegratorError::Interrupted`].
+    fn advance_to(&mut self, tout: f64, on_step: &mut dyn FnMut(f64, &Stats) -> bool) -> Result<(), IntegratorError>;
     /// Current output time (the last `tout` reached).
     fn t(&self) -> f64;
     /// y at the current output time.
@@ -209,4 +212,72 @@ pub trait Integrator {
     fn yp(&self) -> &[f64];
     /// Statistics so far.
     fn stats(&self) -> Stats;
+}
+
+/// Consistent initial values for a restart: solves F(t, y, ẏ) = 0 by Newton's method for
+/// y in the components where `solve_for_y` is true and for ẏ in the others (the scheme of
+/// IDACalcIC, with the split chosen by the caller instead of by the id vector). The
+/// iteration matrix has columns ∂F/∂y (J at cj = 0) for the first kind and ∂F/∂ẏ
+/// (J at cj = 1 minus J at cj = 0) for the second.
+///
+/// Used when a system is restarted from a state that satisfies a different system: with
+/// inertia switched off while the cell still moves, its rigid vertical mode becomes
+/// algebraic and must jump to equilibrium (solve for u with u̇ = v given), while the μ_as
+/// ODEs keep μ_as and get a consistent μ̇_as. Converged when the weighted RMS norm of the
+/// update is below 1e-3 (weights from `rtol`, `atol`); returns the iterations taken.
+#[allow(clippy::too_many_arguments)]
+pub fn consistent_init(
+    dae: &mut dyn Dae,
+    t: f64,
+    y: &mut [f64],
+    yp: &mut [f64],
+    solve_for_y: &[bool],
+    kind: LinearSolverKind,
+    rtol: f64,
+    atol: &Atol,
+) -> Result<u32, IntegratorError> {
+    const MAX_ITERS: u32 = 30;
+    let n = dae.size();
+    let pattern = dae.pattern().clone();
+    let mut solver = kind.build();
+    solver.analyse(&pattern).map_err(|e| IntegratorError::Linear(e.to_string()))?;
+    let nnz = pattern.compute_nnz();
+    let (mut j0, mut j1) = (vec![0.0; nnz], vec![0.0; nnz]);
+    let (mut r, mut w) = (vec![0.0; n], vec![0.0; n]);
+    error_weights(y, rtol, atol, &mut w);
+    let problem = |e: DaeError| IntegratorError::Problem { t, message: format!("consistent initial values: {e}") };
+    let linear = |e: linsolve::LinearSolverError| IntegratorError::Linear(format!("consistent initial values: {e}"));
+    for it in 1..=MAX_ITERS {
+        dae.residual(t, y, yp, &mut r).map_err(problem)?;
+        dae.jacobian(t, y, yp, 0.0, &mut j0).map_err(problem)?;
+        dae.jacobian(t, y, yp, 1.0, &mut j1).map_err(problem)?;
+        for (c, &for_y) in solve_for_y.iter().enumerate() {
+            if !for_y {
+                for k in pattern.col_ptr()[c]..pattern.col_ptr()[c + 1] {
+                    j0[k] = j1[k] - j0[k];
+                }
+            }
+        }
+        solver.factorize(&j0).map_err(linear)?;
+        for v in r.iter_mut() {
+            *v = -*v;
+        }
+        solver.solve_in_place(&mut r).map_err(linear)?;
+        for (i, d) in r.iter().enumerate() {
+            if solve_for_y[i] {
+                y[i] += d;
+            } else {
+                yp[i] += d;
+            }
+        }
+        if wrms_norm(&r, &w) <= 1e-3 {
+            return Ok(it);
+        }
+    }
+    Err(IntegratorError::NewtonFailed {
+        t,
+        step: 0,
+        h: 0.0,
+        reason: format!("consistent initial values: no convergence in {MAX_ITERS} Newton iterations"),
+    })
 }

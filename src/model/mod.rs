@@ -147,8 +147,8 @@ pub struct CellModel {
     pos_kin: Vec<[usize; 2]>,
     /// Adhesion rows: positions of (μ_k, μ_k), (μ_k, u_x), (μ_k, u_y) of its node.
     pos_ads: Vec<[usize; 3]>,
-    /// Which elements were within reach of the substrate at the last residual evaluation.
-    pub near: Vec<bool>,
+    /// Initial state (t₀, y₀, ẏ₀) when not the rest state at t = 0 (restarts).
+    initial_state: Option<(f64, Vec<f64>, Vec<f64>)>,
 }
 
 type D7 = DualSVec64<7>;
@@ -334,7 +334,6 @@ impl CellModel {
                 [pos(row, row), pos(row, dofs.u[i][0]), pos(row, dofs.u[i][1])]
             })
             .collect();
-        let n_el = built.len();
         Ok(Self {
             params,
             mesh,
@@ -344,8 +343,43 @@ impl CellModel {
             pattern,
             pos_kin,
             pos_ads,
-            near: vec![false; n_el],
+            initial_state: None,
         })
+    }
+
+    /// Starts the integration from (t₀, y₀, ẏ₀) instead of the rest state at t = 0.
+    pub fn set_initial(&mut self, t0: f64, y0: Vec<f64>, yp0: Vec<f64>) {
+        self.initial_state = Some((t0, y0, yp0));
+    }
+
+    /// The state of this model (with inertia) mapped to the same model without inertia:
+    /// u and μ_as carried over, u̇ = v, μ̇_as kept. Returns (y, ẏ) of the smaller system.
+    pub fn drop_inertia_state(&self, y: &[f64], yp: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let n_u = self.dofs.n_u;
+        let n_mu = self.dofs.n_mu();
+        let off = self.dofs.mu_offset();
+        let mut y2 = Vec::with_capacity(n_u + n_mu);
+        let mut yp2 = Vec::with_capacity(n_u + n_mu);
+        y2.extend_from_slice(&y[..n_u]);
+        if self.dofs.inertia {
+            yp2.extend_from_slice(&y[n_u..2 * n_u]);
+        } else {
+            yp2.extend_from_slice(&yp[..n_u]);
+        }
+        y2.extend_from_slice(&y[off..off + n_mu]);
+        yp2.extend_from_slice(&yp[off..off + n_mu]);
+        (y2, yp2)
+    }
+
+    /// Per-component absolute tolerances: `atol` [µm] on displacements, `atol`/s on
+    /// velocities, `atol` · μ_as,max/µm on the adhesion coefficient (so each block is
+    /// measured against its own scale).
+    pub fn atol_vector(&self, atol: f64) -> Vec<f64> {
+        let (nu, nv, nm) = self.block_sizes();
+        let mu_scale = self.params.adhesion.map(|a| a.mu_as_max).unwrap_or(1.0);
+        let mut v = vec![atol; nu + nv];
+        v.extend(std::iter::repeat_n(atol * mu_scale, nm));
+        v
     }
 
     /// Number of unknowns by block: (u, v, μ_as).
@@ -435,7 +469,6 @@ impl Dae for CellModel {
             }
         }
         let mu_off = self.dofs.mu_offset();
-        let mut near = std::mem::take(&mut self.near);
         for (e, el) in self.elements.iter().enumerate() {
             let (ue, ve, ae) = self.gather(el, y, yp);
             let mut fe = [[0.0f64; 2]; 6];
@@ -471,8 +504,7 @@ impl Dae for CellModel {
                     }
                 }
             }
-            near[e] = self.in_reach(el, &ue);
-            if near[e] {
+            if self.in_reach(el, &ue) {
                 let with_mu = !el.pos_mm.is_empty();
                 for q in 0..el.cgeo.jxw.len() {
                     let g = &el.cgeo.grads[q];
@@ -510,7 +542,6 @@ impl Dae for CellModel {
                 }
             }
         }
-        self.near = near;
         if let Some(ad) = &p.adhesion {
             for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
                 let row = mu_off + k;
@@ -712,7 +743,10 @@ impl Dae for CellModel {
     }
 
     fn initial(&self) -> (f64, Vec<f64>, Vec<f64>) {
-        (0.0, vec![0.0; self.dofs.n], vec![0.0; self.dofs.n])
+        match &self.initial_state {
+            Some(s) => s.clone(),
+            None => (0.0, vec![0.0; self.dofs.n], vec![0.0; self.dofs.n]),
+        }
     }
 
     fn breakpoints(&self) -> Vec<f64> {

@@ -336,7 +336,7 @@ impl<D: Dae> Ida<D> {
 }
 
 impl<D: Dae> Integrator for Ida<D> {
-    fn advance_to(&mut self, tout: f64, on_step: &mut dyn FnMut(f64, &Stats)) -> Result<(), IntegratorError> {
+    fn advance_to(&mut self, tout: f64, on_step: &mut dyn FnMut(f64, &Stats) -> bool) -> Result<(), IntegratorError> {
         if !(tout >= self.t_out) {
             return Err(IntegratorError::Input(format!(
                 "output time {tout} is before the current time {}",
@@ -365,7 +365,9 @@ impl<D: Dae> Integrator for Ida<D> {
                 self.tstop = None;
             }
             let stats = self.stats();
-            on_step(tret, &stats);
+            if !on_step(tret, &stats) {
+                return Err(IntegratorError::Interrupted { t: tret });
+            }
         }
         // SAFETY: tout lies in [tn - hu, tn], where IDAGetDky interpolates.
         unsafe {

@@ -1,0 +1,588 @@
+//! `cellsim run`: one scene from its case file to its outputs, written as the run goes.
+//!
+//! The driver reads as the algorithm: make the mesh → build the model → set up the
+//! integrator → loop over output times { advance; observe; write a CSV row and, at phase
+//! ends, the state } → write the summary. Every output is flushed when written, so a
+//! failure or an interruption keeps everything computed so far, and the summary is
+//! written in every case (with the reason, time and step when the run did not finish).
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
+
+use crate::case::{self, Case, InertiaMode};
+use crate::dae::bdf2::{Bdf2, Bdf2Options};
+use crate::dae::{Atol, Integrator, IntegratorError, LinearSolverKind, Stats, consistent_init};
+use crate::fem::{Domain, Mesh, MeshError};
+use crate::model::observe::Observables;
+use crate::model::{CellModel, ModelParams};
+use crate::physics::{ActiveStrain, Substrate};
+use crate::scene::{self, SceneError};
+use crate::sundials::{Ida, IdaOptions};
+
+/// Integration settings of one run: the case's `solver` section, possibly overridden on
+/// the command line.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunSettings {
+    /// "ida" or "bdf2".
+    pub integrator: case::Integrator,
+    /// Relative tolerance (IDA's error test; BDF2's Newton weights).
+    pub rtol: f64,
+    /// Absolute tolerance on displacements [µm] (scaled per block, see
+    /// [`CellModel::atol_vector`]).
+    pub atol: f64,
+    /// BDF2 step [s].
+    pub dt: f64,
+    /// Sparse LU.
+    pub linear_solver: LinearSolverKind,
+    /// IDA's maximum order.
+    pub max_order: u32,
+    /// IDA's step limit between outputs.
+    pub max_steps: u64,
+    /// IDA's first step [s].
+    pub initial_step: Option<f64>,
+}
+
+impl RunSettings {
+    /// The case's own settings.
+    pub fn from_case(case: &Case) -> Self {
+        let s = &case.solver;
+        Self {
+            integrator: s.integrator,
+            rtol: s.rtol,
+            atol: s.atol,
+            dt: s.bdf2_dt,
+            linear_solver: match s.linear_solver {
+                case::LinearSolver::Faer => LinearSolverKind::Faer,
+                case::LinearSolver::Klu => LinearSolverKind::Klu,
+            },
+            max_order: s.max_order,
+            max_steps: s.max_steps,
+            initial_step: s.initial_step,
+        }
+    }
+}
+
+/// How a run reports progress.
+#[derive(Clone, Default)]
+pub enum Progress {
+    /// Nothing (not a terminal, or `--quiet`).
+    #[default]
+    Hidden,
+    /// A progress line.
+    Bar(ProgressBar),
+}
+
+/// Options of one run.
+#[derive(Clone)]
+pub struct RunOptions {
+    /// Output directory.
+    pub out: PathBuf,
+    /// Integration settings.
+    pub settings: RunSettings,
+    /// Progress display.
+    pub progress: Progress,
+    /// Set to stop the run cleanly (Ctrl-C).
+    pub interrupt: Arc<AtomicBool>,
+}
+
+/// Unknown counts of the system.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Unknowns {
+    /// All unknowns.
+    pub total: usize,
+    /// Displacements.
+    pub u: usize,
+    /// Velocities (0 without inertia).
+    pub v: usize,
+    /// Adhesion coefficients.
+    pub mu_as: usize,
+}
+
+/// Why a run stopped early.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Failure {
+    /// What happened.
+    pub reason: String,
+    /// Simulated time of the last output written [s].
+    pub t_last_output: f64,
+    /// Steps taken.
+    pub step: u64,
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// Case name.
+    pub case: String,
+    /// Case file.
+    pub case_file: String,
+    /// Integration settings used.
+    pub settings: RunSettings,
+    /// Inertia mode of the case.
+    pub inertia: String,
+    /// Unknown counts (of the system at the start).
+    pub unknowns: Unknowns,
+    /// Elements and nodes of the mesh.
+    pub mesh_elements: usize,
+    /// Nodes of the mesh.
+    pub mesh_nodes: usize,
+    /// Wall-clock seconds of the integration (mesh and set-up excluded).
+    pub wall_seconds: f64,
+    /// Wall-clock seconds of mesh generation and model set-up.
+    pub setup_seconds: f64,
+    /// Integrator statistics (summed over both systems when inertia is switched off).
+    pub stats: Stats,
+    /// Whether the run reached its end time.
+    pub finished: bool,
+    /// Why not, if it did not.
+    pub failure: Option<Failure>,
+    /// The last output row.
+    pub final_values: Option<Observables>,
+    /// Output rows written (including t = 0).
+    pub outputs: usize,
+    /// Time at which inertia was switched off, if it was.
+    pub inertia_switched_off_at: Option<f64>,
+    /// State files written (phase ends).
+    pub states: Vec<String>,
+    /// cellsim version.
+    pub cellsim_version: String,
+    /// SUNDIALS version linked.
+    pub sundials_version: String,
+}
+
+/// What the mesh file records: enough to redraw the deformed cell from a state file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct MeshFile {
+    /// Reference node coordinates [µm].
+    pub nodes: Vec<[f64; 2]>,
+    /// Six-node elements.
+    pub elements: Vec<[usize; 6]>,
+    /// Domain of each element.
+    pub domains: Vec<Domain>,
+    /// Outer boundary edges (vertex, mid, vertex), bottom to top.
+    pub outer_edges: Vec<[usize; 3]>,
+    /// Nucleus interface edges.
+    pub nucleus_edges: Vec<[usize; 3]>,
+    /// Membrane inner interface edges.
+    pub membrane_inner_edges: Vec<[usize; 3]>,
+    /// The substrate.
+    pub substrate: Substrate,
+    /// Active strain regions, if any.
+    pub active: Option<ActiveStrain>,
+    /// Contact band half-width ε_ct [µm].
+    pub contact_eps: f64,
+    /// Fibronectin layer thickness e_f [µm], with adhesion.
+    pub layer_thickness: Option<f64>,
+    /// Cell centre [µm].
+    pub center: [f64; 2],
+    /// Phase end times T_g0, T_as0, T_a0 and the end time [s].
+    pub phase_times: [f64; 4],
+}
+
+/// A state written at a phase end.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct StateFile {
+    /// Phase name: "gravity", "spreading", "active" or "end".
+    pub phase: String,
+    /// Time [s].
+    pub t: f64,
+    /// Displacement of every node [µm].
+    pub u: Vec<[f64; 2]>,
+    /// μ_as per node [pN/µm³] (None off the membrane or without adhesion).
+    pub mu_as: Vec<Option<f64>>,
+    /// Per element: mean ‖E‖_F and mean det F.
+    pub element_strain: Vec<f64>,
+    /// Per element: mean det F.
+    pub element_jacobian: Vec<f64>,
+    /// The observables at this time.
+    pub observables: Observables,
+}
+
+/// A run that could not start or could not finish.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// The mesh could not be generated.
+    #[error("{file}: mesh: {source}")]
+    Mesh {
+        /// Case file.
+        file: String,
+        /// Cause.
+        source: MeshError,
+    },
+    /// The case has a problem the schema could not see.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The model could not be built.
+    #[error("{file}: model: {message}")]
+    Model {
+        /// Case file.
+        file: String,
+        /// Cause.
+        message: String,
+    },
+    /// An output could not be written.
+    #[error("cannot write {path}: {source}")]
+    Io {
+        /// File.
+        path: String,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The integration stopped; the summary (with the reason) was written.
+    #[error("{case}: integration stopped: {reason}")]
+    Integration {
+        /// Case name.
+        case: String,
+        /// Why.
+        reason: String,
+        /// The summary as written.
+        summary: Box<Summary>,
+    },
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
+    move |source| RunError::Io { path: path.display().to_string(), source }
+}
+
+fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), RunError> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| RunError::Io {
+        path: path.display().to_string(),
+        source: std::io::Error::other(e),
+    })?;
+    // Write then rename, so a reader never sees half a file.
+    let tmp = path.with_extension("json.tmp");
+    std::fs::write(&tmp, text).map_err(io_err(&tmp))?;
+    std::fs::rename(&tmp, path).map_err(io_err(path))
+}
+
+/// Output times: `n` equally spaced in (0, t_end], plus the phase ends and the inertia
+/// switch (so states are written exactly there), sorted.
+pub fn output_times(case: &Case) -> Vec<f64> {
+    let ph = &case.phases;
+    let n = case.output.n_times.max(1) as usize;
+    let mut t: Vec<f64> = (1..=n).map(|k| ph.t_end * k as f64 / n as f64).collect();
+    for extra in [ph.t_g0, ph.t_as0, ph.t_a0] {
+        if extra < ph.t_end {
+            t.push(extra);
+        }
+    }
+    if let InertiaMode::OffAfter(ts) = case.inertia.mode {
+        if ts < ph.t_end {
+            t.push(ts);
+        }
+    }
+    t.sort_by(f64::total_cmp);
+    t.dedup_by(|a, b| (*a - *b).abs() <= 1e-9 * ph.t_end);
+    t
+}
+
+/// The phase that ends at `t`, if any.
+fn phase_at(case: &Case, t: f64) -> Option<&'static str> {
+    let ph = &case.phases;
+    let close = |a: f64| (a - t).abs() <= 1e-9 * ph.t_end;
+    if close(ph.t_end) {
+        Some("end")
+    } else if close(ph.t_g0) {
+        Some("gravity")
+    } else if close(ph.t_as0) {
+        Some("spreading")
+    } else if close(ph.t_a0) {
+        Some("active")
+    } else {
+        None
+    }
+}
+
+/// Either integrator on the cell model.
+enum Solver {
+    Ida(Box<Ida<CellModel>>),
+    Bdf2(Box<Bdf2<CellModel>>),
+}
+
+impl Solver {
+    fn new(model: CellModel, s: &RunSettings) -> Result<Self, IntegratorError> {
+        let atol = Atol::Vector(model.atol_vector(s.atol));
+        Ok(match s.integrator {
+            case::Integrator::Ida => {
+                let opts = IdaOptions {
+                    rtol: s.rtol,
+                    atol,
+                    max_order: s.max_order,
+                    init_step: s.initial_step,
+                    max_steps: s.max_steps as i64,
+                    linear_solver: s.linear_solver,
+                    ..Default::default()
+                };
+                Solver::Ida(Box::new(Ida::new(model, opts)?))
+            }
+            case::Integrator::Bdf2 => {
+                let opts = Bdf2Options { dt: s.dt, rtol: s.rtol, atol, linear_solver: s.linear_solver, ..Default::default() };
+                Solver::Bdf2(Box::new(Bdf2::new(model, opts)?))
+            }
+        })
+    }
+
+    fn integ(&mut self) -> &mut dyn Integrator {
+        match self {
+            Solver::Ida(i) => i.as_mut(),
+            Solver::Bdf2(b) => b.as_mut(),
+        }
+    }
+
+    fn integ_ref(&self) -> &dyn Integrator {
+        match self {
+            Solver::Ida(i) => i.as_ref(),
+            Solver::Bdf2(b) => b.as_ref(),
+        }
+    }
+
+    fn model(&self) -> &CellModel {
+        match self {
+            Solver::Ida(i) => i.dae(),
+            Solver::Bdf2(b) => b.dae(),
+        }
+    }
+
+}
+
+fn add_stats(a: &Stats, b: &Stats) -> Stats {
+    Stats {
+        steps: a.steps + b.steps,
+        residual_evals: a.residual_evals + b.residual_evals,
+        jacobian_evals: a.jacobian_evals + b.jacobian_evals,
+        lu_factorizations: a.lu_factorizations + b.lu_factorizations,
+        newton_iters: a.newton_iters + b.newton_iters,
+        newton_failures: a.newton_failures + b.newton_failures,
+        error_test_failures: a.error_test_failures + b.error_test_failures,
+        last_order: b.last_order,
+        last_step: b.last_step,
+    }
+}
+
+/// A progress bar for a scene (hidden when `visible` is false).
+pub fn progress_bar(case: &Case, visible: bool) -> ProgressBar {
+    if !visible {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new((case.phases.t_end * 1000.0).round().max(1.0) as u64);
+    let style = ProgressStyle::with_template("{prefix:>18} [{bar:28}] {percent:>3}% {elapsed_precise} {msg}")
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> ");
+    pb.set_style(style);
+    pb.set_prefix(case.name.clone());
+    pb
+}
+
+/// Runs one scene; see the module documentation.
+pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunError> {
+    let setup_start = Instant::now();
+    let out = &opts.out;
+    std::fs::create_dir_all(out).map_err(io_err(out))?;
+    let mesh = Mesh::generate(&scene::mesh_params(case)).map_err(|source| RunError::Mesh { file: file.into(), source })?;
+    let inertia0 = scene::starts_with_inertia(case);
+    let params = scene::model_params(case, file, inertia0)?;
+    let model = CellModel::new(params.clone(), mesh.clone()).map_err(|message| RunError::Model { file: file.into(), message })?;
+    let (nu, nv, nm) = model.block_sizes();
+    let bar = match &opts.progress {
+        Progress::Bar(b) => b.clone(),
+        Progress::Hidden => ProgressBar::hidden(),
+    };
+
+    let ph = &case.phases;
+    let mesh_file = MeshFile {
+        nodes: mesh.nodes.clone(),
+        elements: mesh.elements.clone(),
+        domains: mesh.domains.clone(),
+        outer_edges: mesh.outer_edges.clone(),
+        nucleus_edges: mesh.nucleus_edges.clone(),
+        membrane_inner_edges: mesh.membrane_inner_edges.clone(),
+        substrate: params.substrate,
+        active: params.active,
+        contact_eps: params.contact.eps,
+        layer_thickness: params.adhesion.map(|a| a.e_f),
+        center: params.center,
+        phase_times: [ph.t_g0, ph.t_as0, ph.t_a0, ph.t_end],
+    };
+    write_json(&out.join("mesh.json"), &mesh_file)?;
+
+    let mut summary = Summary {
+        case: case.name.clone(),
+        case_file: file.to_string(),
+        settings: opts.settings.clone(),
+        inertia: format!("{:?}", case.inertia.mode),
+        unknowns: Unknowns { total: nu + nv + nm, u: nu, v: nv, mu_as: nm },
+        mesh_elements: mesh.elements.len(),
+        mesh_nodes: mesh.nodes.len(),
+        wall_seconds: 0.0,
+        setup_seconds: 0.0,
+        stats: Stats::default(),
+        finished: false,
+        failure: None,
+        final_values: None,
+        outputs: 0,
+        inertia_switched_off_at: None,
+        states: Vec::new(),
+        cellsim_version: env!("CARGO_PKG_VERSION").to_string(),
+        sundials_version: crate::sundials::SUNDIALS_VERSION.to_string(),
+    };
+    let csv_path = out.join("timeseries.csv");
+    let mut csv = BufWriter::new(File::create(&csv_path).map_err(io_err(&csv_path))?);
+    let write_row = |csv: &mut BufWriter<File>, o: &Observables| -> Result<(), RunError> {
+        writeln!(csv, "{}", o.csv_row()).and_then(|_| csv.flush()).map_err(io_err(&csv_path))
+    };
+    writeln!(csv, "{}", Observables::CSV_HEADER).map_err(io_err(&csv_path))?;
+    let first = model.observe(0.0, &vec![0.0; model.dofs.n]);
+    write_row(&mut csv, &first)?;
+    summary.outputs = 1;
+    summary.final_values = Some(first);
+
+
+    let mut solver = match Solver::new(model, &opts.settings) {
+        Ok(s) => s,
+        Err(e) => return Err(RunError::Model { file: file.into(), message: e.to_string() }),
+    };
+    summary.setup_seconds = setup_start.elapsed().as_secs_f64();
+    let switch_time = match case.inertia.mode {
+        InertiaMode::OffAfter(t) if t < ph.t_end => Some(t),
+        _ => None,
+    };
+    let mut stats_before = Stats::default();
+    let start = Instant::now();
+    let interrupt = opts.interrupt.clone();
+    let mut failure: Option<String> = None;
+
+    for tout in output_times(case) {
+        let base = stats_before.clone();
+        let bar_ref = &bar;
+        let stop = &interrupt;
+        let mut on_step = |t: f64, s: &Stats| {
+            bar_ref.set_position((t * 1000.0).round().max(0.0) as u64);
+            bar_ref.set_message(format!("t = {t:>9.3e} s  step {:>6}  order {}  h = {:.2e}", base.steps + s.steps, s.last_order, s.last_step));
+            !stop.load(Ordering::Relaxed)
+        };
+        if let Err(e) = solver.integ().advance_to(tout, &mut on_step) {
+            failure = Some(e.to_string());
+            break;
+        }
+        let y = solver.integ_ref().y().to_vec();
+        let model = solver.model();
+        let obs = model.observe(tout, &y);
+        write_row(&mut csv, &obs)?;
+        summary.outputs += 1;
+        summary.final_values = Some(obs);
+        summary.stats = add_stats(&stats_before, &solver.integ_ref().stats());
+        if let Some(phase) = phase_at(case, tout) {
+            if case.output.phase_states {
+                let name = format!("state_{phase}.json");
+                write_json(&out.join(&name), &state_file(model, phase, tout, &y, obs))?;
+                summary.states.push(name);
+            }
+        }
+        if Some(tout) == switch_time {
+            let mut probe_step = |_: f64, _: &Stats| !interrupt.load(Ordering::Relaxed);
+            match switch_off_inertia(&mut solver, &opts.settings, &mut probe_step) {
+                Ok((new_solver, t_switch)) => {
+                    stats_before = add_stats(&stats_before, &solver.integ_ref().stats());
+                    summary.stats = stats_before.clone();
+                    solver = new_solver;
+                    summary.inertia_switched_off_at = Some(t_switch);
+                }
+                Err(e) => {
+                    failure = Some(e);
+                    break;
+                }
+            }
+        }
+        write_json(&out.join("summary.json"), &summary)?;
+    }
+    summary.wall_seconds = start.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    match failure {
+        None => {
+            summary.finished = true;
+            write_json(&out.join("summary.json"), &summary)?;
+            Ok(summary)
+        }
+        Some(reason) => {
+            summary.failure = Some(Failure {
+                reason: reason.clone(),
+                t_last_output: summary.final_values.map(|o| o.t).unwrap_or(0.0),
+                step: summary.stats.steps,
+            });
+            write_json(&out.join("summary.json"), &summary)?;
+            Err(RunError::Integration { case: case.name.clone(), reason, summary: Box::new(summary) })
+        }
+    }
+}
+
+/// Longest stretch probed with inertia, after the requested switch time, for the moment
+/// the contact carries the cell [s], and the probe interval.
+const SWITCH_PROBE_LIMIT: f64 = 50.0;
+const SWITCH_PROBE_DT: f64 = 0.01;
+
+/// Switches inertia off: the same model on (u, μ_as), restarted from the current state with
+/// u̇ = v. Without inertia the rigid vertical mode has no damping and only the contact's
+/// stiffness, so the switch is made at a moment the contact carries the cell's current
+/// weight (probing forward with inertia in 0.01 s steps if the cell is in the air, e.g.
+/// between bounces), and y is first made consistent with u̇ = v (the rigid mode jumps to
+/// equilibrium). Returns the new integrator and the switch time.
+fn switch_off_inertia(
+    solver: &mut Solver,
+    settings: &RunSettings,
+    on_step: &mut dyn FnMut(f64, &Stats) -> bool,
+) -> Result<(Solver, f64), String> {
+    let t_request = solver.integ_ref().t();
+    loop {
+        let t = solver.integ_ref().t();
+        let (y, yp) = (solver.integ_ref().y().to_vec(), solver.integ_ref().yp().to_vec());
+        let model = solver.model();
+        let ph = &model.params.phases;
+        let load = model.weight() * ph.t_g(t) * ph.gravity_sign(t);
+        let support = model.contact_force_total(&y).y;
+        if load > 0.0 && support >= load {
+            let (mut y2, mut yp2) = model.drop_inertia_state(&y, &yp);
+            let mut p2: ModelParams = model.params.clone();
+            p2.inertia = false;
+            let mut m2 = CellModel::new(p2, model.mesh.clone())?;
+            let atol = Atol::Vector(m2.atol_vector(settings.atol));
+            let for_y: Vec<bool> = (0..m2.dofs.n).map(|i| i < m2.dofs.n_u).collect();
+            consistent_init(&mut m2, t, &mut y2, &mut yp2, &for_y, settings.linear_solver, settings.rtol, &atol)
+                .map_err(|e| format!("switching inertia off at t = {t}: {e}"))?;
+            m2.set_initial(t, y2, yp2);
+            let new = Solver::new(m2, settings).map_err(|e| format!("restart without inertia at t = {t}: {e}"))?;
+            return Ok((new, t));
+        }
+        if t - t_request > SWITCH_PROBE_LIMIT {
+            return Err(format!(
+                "cannot switch inertia off: from t = {t_request} s to {t} s the contact never carried the cell's weight (support {support:.3e} of {load:.3e} pN/µm)"
+            ));
+        }
+        solver.integ().advance_to(t + SWITCH_PROBE_DT, on_step).map_err(|e| e.to_string())?;
+    }
+}
+
+fn state_file(model: &CellModel, phase: &str, t: f64, y: &[f64], observables: Observables) -> StateFile {
+    let n = model.mesh.nodes.len();
+    let per_el = model.element_strain_and_jacobian(y);
+    StateFile {
+        phase: phase.to_string(),
+        t,
+        u: (0..n).map(|i| model.dofs.node_u(y, i)).collect(),
+        mu_as: (0..n)
+            .map(|i| {
+                let d = model.dofs.mu[i];
+                (d != crate::model::dofs::NONE).then(|| y[d])
+            })
+            .collect(),
+        element_strain: per_el.iter().map(|p| p.0).collect(),
+        element_jacobian: per_el.iter().map(|p| p.1).collect(),
+        observables,
+    }
+}
