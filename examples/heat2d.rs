@@ -19,12 +19,20 @@ fn arg(name: &str, default: f64) -> f64 {
 
 fn main() {
     let klu = std::env::args().any(|a| a == "--klu");
-    let (atol, bval, m) = (arg("--atol", 1e-8), arg("--boundary", 0.0), arg("--grid", 10.0) as usize);
+    let (atol, bval, m) = (
+        arg("--atol", 1e-8),
+        arg("--boundary", 0.0),
+        arg("--grid", 10.0) as usize,
+    );
     let dae = Heat2D::new(m, bval);
     let opts = IdaOptions {
         rtol: 0.0,
         atol: Atol::Scalar(atol),
-        linear_solver: if klu { LinearSolverKind::Klu } else { LinearSolverKind::Faer },
+        linear_solver: if klu {
+            LinearSolverKind::Klu
+        } else {
+            LinearSolverKind::Faer
+        },
         calc_ic: Some(CalcIc::AlgebraicAndDerivatives { tout1: 0.01 }),
         constraints: Some(dae.constraints()),
         ..Default::default()
@@ -33,8 +41,17 @@ fn main() {
         eprintln!("heat2d: {e}");
         std::process::exit(1)
     });
-    println!("\nidaHeat2D: Heat equation, {m} x {m} grid, rtol = 0, atol = {atol}, boundary guesses = {bval}");
-    println!("Linear solver: {}\n", if klu { "KLU (SUNDIALS)" } else { "faer sparse LU" });
+    println!(
+        "\nidaHeat2D: Heat equation, {m} x {m} grid, rtol = 0, atol = {atol}, boundary guesses = {bval}"
+    );
+    println!(
+        "Linear solver: {}\n",
+        if klu {
+            "KLU (SUNDIALS)"
+        } else {
+            "faer sparse LU"
+        }
+    );
     println!("  time       umax     k  nst  nni  nje   nre     h       ");
     let s = ida.stats();
     let umax = ida.y().iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -57,5 +74,8 @@ fn main() {
         tout *= 2.0;
     }
     let s = ida.stats();
-    println!("\n netf = {},   ncfn = {} ", s.error_test_failures, s.newton_failures);
+    println!(
+        "\n netf = {},   ncfn = {} ",
+        s.error_test_failures, s.newton_failures
+    );
 }

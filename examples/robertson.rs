@@ -13,7 +13,11 @@ fn main() {
     let opts = IdaOptions {
         rtol,
         atol: Atol::Vector(atol.to_vec()),
-        linear_solver: if klu { LinearSolverKind::Klu } else { LinearSolverKind::Faer },
+        linear_solver: if klu {
+            LinearSolverKind::Klu
+        } else {
+            LinearSolverKind::Faer
+        },
         ..Default::default()
     };
     let mut ida = match Ida::new(Robertson::new(), opts) {
@@ -27,7 +31,11 @@ fn main() {
     println!("         Three equation chemical kinetics problem.\n");
     println!(
         "Linear solver: {}, with user-supplied Jacobian.",
-        if klu { "KLU (SUNDIALS)" } else { "faer sparse LU" }
+        if klu {
+            "KLU (SUNDIALS)"
+        } else {
+            "faer sparse LU"
+        }
     );
     println!(
         "Tolerance parameters:  rtol = {rtol}   atol = {} {} {} ",
@@ -61,9 +69,15 @@ fn main() {
     println!("Number of steps                    = {}", s.steps);
     println!("Number of residual evaluations     = {}", s.residual_evals);
     println!("Number of Jacobian evaluations     = {}", s.jacobian_evals);
-    println!("Number of LU factorizations        = {}", s.lu_factorizations);
+    println!(
+        "Number of LU factorizations        = {}",
+        s.lu_factorizations
+    );
     println!("Number of nonlinear iterations     = {}", s.newton_iters);
-    println!("Number of error test failures      = {}", s.error_test_failures);
+    println!(
+        "Number of error test failures      = {}",
+        s.error_test_failures
+    );
     println!("Number of nonlinear conv. failures = {}", s.newton_failures);
 }
 

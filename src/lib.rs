@@ -5,12 +5,15 @@
 //! integrated by SUNDIALS IDA (variable-order BDF, [`sundials`]) or by a fixed-step BDF2
 //! that verifies it ([`dae::bdf2`]).
 #![deny(unsafe_code)]
+// Index loops are the clearest way to write element kernels; `!(x > 0.0)` is meant to
+// catch NaN as well.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod case;
 pub mod dae;
 pub mod fem;
-pub mod physics;
-pub mod sundials;
 pub mod model;
+pub mod physics;
 pub mod run;
 pub mod scene;
+pub mod sundials;

@@ -106,7 +106,9 @@ fn interrupt_flag() -> Arc<AtomicBool> {
         if f.swap(true, Ordering::SeqCst) {
             std::process::exit(130);
         }
-        eprintln!("\ninterrupted: finishing the current step and writing the summary (Ctrl-C again to quit now)");
+        eprintln!(
+            "\ninterrupted: finishing the current step and writing the summary (Ctrl-C again to quit now)"
+        );
     });
     flag
 }
@@ -114,12 +116,25 @@ fn interrupt_flag() -> Arc<AtomicBool> {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Run { case: path, out, integrator, rtol, atol, dt, linear_solver, quiet } => {
+        Command::Run {
+            case: path,
+            out,
+            integrator,
+            rtol,
+            atol,
+            dt,
+            linear_solver,
+            quiet,
+        } => {
             let case = match load_case(&path) {
                 Ok(c) => c,
                 Err(code) => return code,
             };
-            for (name, v, upper) in [("rtol", rtol, Some(1.0)), ("atol", atol, None), ("dt", dt, None)] {
+            for (name, v, upper) in [
+                ("rtol", rtol, Some(1.0)),
+                ("atol", atol, None),
+                ("dt", dt, None),
+            ] {
                 if let Err(code) = check_positive(name, v, upper) {
                     return code;
                 }
@@ -164,7 +179,11 @@ fn main() -> ExitCode {
                 }
                 Err(e) => {
                     eprintln!("error: {e}");
-                    if matches!(e, run::RunError::Scene(_)) { ExitCode::from(2) } else { ExitCode::FAILURE }
+                    if matches!(e, run::RunError::Scene(_)) {
+                        ExitCode::from(2)
+                    } else {
+                        ExitCode::FAILURE
+                    }
                 }
             }
         }

@@ -248,7 +248,10 @@ pub enum RunError {
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
-    move |source| RunError::Io { path: path.display().to_string(), source }
+    move |source| RunError::Io {
+        path: path.display().to_string(),
+        source,
+    }
 }
 
 fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), RunError> {
@@ -323,7 +326,13 @@ impl Solver {
                 Solver::Ida(Box::new(Ida::new(model, opts)?))
             }
             case::Integrator::Bdf2 => {
-                let opts = Bdf2Options { dt: s.dt, rtol: s.rtol, atol, linear_solver: s.linear_solver, ..Default::default() };
+                let opts = Bdf2Options {
+                    dt: s.dt,
+                    rtol: s.rtol,
+                    atol,
+                    linear_solver: s.linear_solver,
+                    ..Default::default()
+                };
                 Solver::Bdf2(Box::new(Bdf2::new(model, opts)?))
             }
         })
@@ -349,7 +358,6 @@ impl Solver {
             Solver::Bdf2(b) => b.dae(),
         }
     }
-
 }
 
 fn add_stats(a: &Stats, b: &Stats) -> Stats {
@@ -372,9 +380,11 @@ pub fn progress_bar(case: &Case, visible: bool) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let pb = ProgressBar::new((case.phases.t_end * 1000.0).round().max(1.0) as u64);
-    let style = ProgressStyle::with_template("{prefix:>18} [{bar:28}] {percent:>3}% {elapsed_precise} {msg}")
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
+    let style = ProgressStyle::with_template(
+        "{prefix:>18} [{bar:28}] {percent:>3}% {elapsed_precise} {msg}",
+    )
+    .unwrap_or_else(|_| ProgressStyle::default_bar())
+    .progress_chars("=> ");
     pb.set_style(style);
     pb.set_prefix(case.name.clone());
     pb
@@ -385,10 +395,17 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
     let setup_start = Instant::now();
     let out = &opts.out;
     std::fs::create_dir_all(out).map_err(io_err(out))?;
-    let mesh = Mesh::generate(&scene::mesh_params(case)).map_err(|source| RunError::Mesh { file: file.into(), source })?;
+    let mesh = Mesh::generate(&scene::mesh_params(case)).map_err(|source| RunError::Mesh {
+        file: file.into(),
+        source,
+    })?;
     let inertia0 = scene::starts_with_inertia(case);
     let params = scene::model_params(case, file, inertia0)?;
-    let model = CellModel::new(params.clone(), mesh.clone()).map_err(|message| RunError::Model { file: file.into(), message })?;
+    let model =
+        CellModel::new(params.clone(), mesh.clone()).map_err(|message| RunError::Model {
+            file: file.into(),
+            message,
+        })?;
     let (nu, nv, nm) = model.block_sizes();
     let bar = match &opts.progress {
         Progress::Bar(b) => b.clone(),
@@ -417,7 +434,12 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
         case_file: file.to_string(),
         settings: opts.settings.clone(),
         inertia: format!("{:?}", case.inertia.mode),
-        unknowns: Unknowns { total: nu + nv + nm, u: nu, v: nv, mu_as: nm },
+        unknowns: Unknowns {
+            total: nu + nv + nm,
+            u: nu,
+            v: nv,
+            mu_as: nm,
+        },
         mesh_elements: mesh.elements.len(),
         mesh_nodes: mesh.nodes.len(),
         wall_seconds: 0.0,
@@ -435,7 +457,9 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
     let csv_path = out.join("timeseries.csv");
     let mut csv = BufWriter::new(File::create(&csv_path).map_err(io_err(&csv_path))?);
     let write_row = |csv: &mut BufWriter<File>, o: &Observables| -> Result<(), RunError> {
-        writeln!(csv, "{}", o.csv_row()).and_then(|_| csv.flush()).map_err(io_err(&csv_path))
+        writeln!(csv, "{}", o.csv_row())
+            .and_then(|_| csv.flush())
+            .map_err(io_err(&csv_path))
     };
     writeln!(csv, "{}", Observables::CSV_HEADER).map_err(io_err(&csv_path))?;
     let first = model.observe(0.0, &vec![0.0; model.dofs.n]);
@@ -443,10 +467,14 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
     summary.outputs = 1;
     summary.final_values = Some(first);
 
-
     let mut solver = match Solver::new(model, &opts.settings) {
         Ok(s) => s,
-        Err(e) => return Err(RunError::Model { file: file.into(), message: e.to_string() }),
+        Err(e) => {
+            return Err(RunError::Model {
+                file: file.into(),
+                message: e.to_string(),
+            });
+        }
     };
     summary.setup_seconds = setup_start.elapsed().as_secs_f64();
     let switch_time = match case.inertia.mode {
@@ -464,7 +492,12 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
         let stop = &interrupt;
         let mut on_step = |t: f64, s: &Stats| {
             bar_ref.set_position((t * 1000.0).round().max(0.0) as u64);
-            bar_ref.set_message(format!("t = {t:>9.3e} s  step {:>6}  order {}  h = {:.2e}", base.steps + s.steps, s.last_order, s.last_step));
+            bar_ref.set_message(format!(
+                "t = {t:>9.3e} s  step {:>6}  order {}  h = {:.2e}",
+                base.steps + s.steps,
+                s.last_order,
+                s.last_step
+            ));
             !stop.load(Ordering::Relaxed)
         };
         if let Err(e) = solver.integ().advance_to(tout, &mut on_step) {
@@ -517,7 +550,11 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
                 step: summary.stats.steps,
             });
             write_json(&out.join("summary.json"), &summary)?;
-            Err(RunError::Integration { case: case.name.clone(), reason, summary: Box::new(summary) })
+            Err(RunError::Integration {
+                case: case.name.clone(),
+                reason,
+                summary: Box::new(summary),
+            })
         }
     }
 }
@@ -541,7 +578,10 @@ fn switch_off_inertia(
     let t_request = solver.integ_ref().t();
     loop {
         let t = solver.integ_ref().t();
-        let (y, yp) = (solver.integ_ref().y().to_vec(), solver.integ_ref().yp().to_vec());
+        let (y, yp) = (
+            solver.integ_ref().y().to_vec(),
+            solver.integ_ref().yp().to_vec(),
+        );
         let model = solver.model();
         let ph = &model.params.phases;
         let load = model.weight() * ph.t_g(t) * ph.gravity_sign(t);
@@ -553,10 +593,20 @@ fn switch_off_inertia(
             let mut m2 = CellModel::new(p2, model.mesh.clone())?;
             let atol = Atol::Vector(m2.atol_vector(settings.atol));
             let for_y: Vec<bool> = (0..m2.dofs.n).map(|i| i < m2.dofs.n_u).collect();
-            consistent_init(&mut m2, t, &mut y2, &mut yp2, &for_y, settings.linear_solver, settings.rtol, &atol)
-                .map_err(|e| format!("switching inertia off at t = {t}: {e}"))?;
+            consistent_init(
+                &mut m2,
+                t,
+                &mut y2,
+                &mut yp2,
+                &for_y,
+                settings.linear_solver,
+                settings.rtol,
+                &atol,
+            )
+            .map_err(|e| format!("switching inertia off at t = {t}: {e}"))?;
             m2.set_initial(t, y2, yp2);
-            let new = Solver::new(m2, settings).map_err(|e| format!("restart without inertia at t = {t}: {e}"))?;
+            let new = Solver::new(m2, settings)
+                .map_err(|e| format!("restart without inertia at t = {t}: {e}"))?;
             return Ok((new, t));
         }
         if t - t_request > SWITCH_PROBE_LIMIT {
@@ -564,11 +614,20 @@ fn switch_off_inertia(
                 "cannot switch inertia off: from t = {t_request} s to {t} s the contact never carried the cell's weight (support {support:.3e} of {load:.3e} pN/µm)"
             ));
         }
-        solver.integ().advance_to(t + SWITCH_PROBE_DT, on_step).map_err(|e| e.to_string())?;
+        solver
+            .integ()
+            .advance_to(t + SWITCH_PROBE_DT, on_step)
+            .map_err(|e| e.to_string())?;
     }
 }
 
-fn state_file(model: &CellModel, phase: &str, t: f64, y: &[f64], observables: Observables) -> StateFile {
+fn state_file(
+    model: &CellModel,
+    phase: &str,
+    t: f64,
+    y: &[f64],
+    observables: Observables,
+) -> StateFile {
     let n = model.mesh.nodes.len();
     let per_el = model.element_strain_and_jacobian(y);
     StateFile {

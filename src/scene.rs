@@ -36,7 +36,9 @@ pub fn mesh_params(case: &Case) -> MeshParams {
 pub fn substrate(case: &Case) -> Substrate {
     match &case.substrate {
         case::Substrate::Flat(f) => Substrate::Flat { y_s: f.y_s },
-        case::Substrate::Pillars(p) => Substrate::Pillars(p.at_height(p.resolved_y_top(&case.geometry))),
+        case::Substrate::Pillars(p) => {
+            Substrate::Pillars(p.at_height(p.resolved_y_top(&case.geometry)))
+        }
     }
 }
 
@@ -48,16 +50,27 @@ pub fn starts_with_inertia(case: &Case) -> bool {
 /// Physical parameters of a case in solver units; `inertia` selects the (u, v, μ_as) or
 /// (u, μ_as) system.
 pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParams, SceneError> {
-    let err = |e: physics::PhysicsError| SceneError { file: file.to_string(), message: e.to_string() };
+    let err = |e: physics::PhysicsError| SceneError {
+        file: file.to_string(),
+        message: e.to_string(),
+    };
     let m = &case.materials;
-    let solid = |mat: &case::Material| Yeoh::from_engineering(mat.e, mat.nu, m.gamma, m.beta_fraction);
-    let solids = [solid(&m.nucleus).map_err(err)?, solid(&m.cytoplasm).map_err(err)?, solid(&m.membrane).map_err(err)?];
+    let solid =
+        |mat: &case::Material| Yeoh::from_engineering(mat.e, mat.nu, m.gamma, m.beta_fraction);
+    let solids = [
+        solid(&m.nucleus).map_err(err)?,
+        solid(&m.cytoplasm).map_err(err)?,
+        solid(&m.membrane).map_err(err)?,
+    ];
     let ph = &case.phases;
     let phases = Phases {
         t_g0: ph.t_g0,
         t_as0: ph.t_as0,
         t_a0: ph.t_a0,
-        flip: case.gravity.upside_down.then_some(Flip { start: ph.t_a0, duration: case.gravity.flip_duration }),
+        flip: case.gravity.upside_down.then_some(Flip {
+            start: ph.t_a0,
+            duration: case.gravity.flip_duration,
+        }),
     };
     let active = ActiveStrain {
         pac: case.active.pac.as_ref().map(|p| physics::Pac {
@@ -66,7 +79,10 @@ pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParam
             inner_axes: [p.inner_semi_axes.0, p.inner_semi_axes.1],
             outer_axes: [p.outer_semi_axes.0, p.outer_semi_axes.1],
         }),
-        bottom: case.active.bottom.as_ref().map(|b| physics::Bottom { e: b.e, theta_deg: b.theta_deg }),
+        bottom: case.active.bottom.as_ref().map(|b| physics::Bottom {
+            e: b.e,
+            theta_deg: b.theta_deg,
+        }),
         eps: case.active.eps_a,
         center: case.geometry.centre(),
     };
@@ -81,11 +97,17 @@ pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParam
         center: case.geometry.centre(),
         solids,
         densities: [m.nucleus.rho(), m.cytoplasm.rho(), m.membrane.rho()],
-        viscosity: Viscosity { lambda_f: case.viscosity.lambda_f, mu_f: case.viscosity.mu_f },
+        viscosity: Viscosity {
+            lambda_f: case.viscosity.lambda_f,
+            mu_f: case.viscosity.mu_f,
+        },
         gravity: case.gravity.g(),
         phases,
         substrate: substrate(case),
-        contact: physics::Contact { mu_ct: case.contact.mu_ct(), eps: case.contact.eps_ct },
+        contact: physics::Contact {
+            mu_ct: case.contact.mu_ct(),
+            eps: case.contact.eps_ct,
+        },
         adhesion,
         active: has_active.then_some(active),
         inertia,

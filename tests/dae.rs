@@ -7,7 +7,9 @@ use cellsim::dae::{Atol, Dae, DaeError, Integrator, LinearSolverKind, Pattern, S
 use cellsim::sundials::{CalcIc, Ida, IdaOptions};
 
 fn run_to(integ: &mut dyn Integrator, t: f64) {
-    integ.advance_to(t, &mut |_, _| true).unwrap_or_else(|e| panic!("integration to {t} failed: {e}"));
+    integ
+        .advance_to(t, &mut |_, _| true)
+        .unwrap_or_else(|e| panic!("integration to {t} failed: {e}"));
 }
 
 fn robertson(kind: LinearSolverKind) -> Ida<Robertson> {
@@ -55,18 +57,28 @@ fn robertson_follows_sundials_published_table() {
         // the counters must be within 10 % of one of the published runs.
         run_to(&mut ida, 4e10);
         let y = ida.y();
-        let reference = [5.2083474251394888e-08, 2.0833390772616859e-13, 9.9999994791631752e-01];
+        let reference = [
+            5.208_347_425_139_489e-8,
+            2.083_339_077_261_686e-13,
+            9.999_999_479_163_175e-1,
+        ];
         let atol = [1e-8, 1e-6, 1e-6];
         let err: f64 = (0..3)
             .map(|i| ((y[i] - reference[i]) / (1e-4 * reference[i].abs() + 10.0 * atol[i])).powi(2))
             .sum::<f64>()
             / 3.0;
-        assert!(err.sqrt() < 1.0, "{kind:?}: WRMS error {} against the reference", err.sqrt());
+        assert!(
+            err.sqrt() < 1.0,
+            "{kind:?}: WRMS error {} against the reference",
+            err.sqrt()
+        );
         let s = ida.stats();
         let published = [(362, 537, 60), (375, 529, 54)];
         let close = |a: u64, b: u64| (a as f64 - b as f64).abs() <= 0.1 * b as f64;
         assert!(
-            published.iter().any(|&(st, re, je)| close(s.steps, st) && close(s.residual_evals, re) && close(s.jacobian_evals, je)),
+            published.iter().any(|&(st, re, je)| close(s.steps, st)
+                && close(s.residual_evals, re)
+                && close(s.jacobian_evals, je)),
             "{kind:?}: counters {s:?} not within 10 % of SUNDIALS' published runs"
         );
     }
@@ -79,12 +91,18 @@ fn robertson_klu_reproduces_sundials_klu_output_exactly() {
     run_to(&mut ida, 4e10);
     assert_eq!(printed(ida.y()[0]), "5.1251e-8");
     let s = ida.stats();
-    assert_eq!((s.steps, s.residual_evals, s.jacobian_evals), (375, 529, 54));
+    assert_eq!(
+        (s.steps, s.residual_evals, s.jacobian_evals),
+        (375, 529, 54)
+    );
     assert_eq!((s.error_test_failures, s.newton_failures), (10, 4));
 }
 
 /// idaHeat2D: output times 0.01·2^k, k = 0..10; (umax, k, nst, nni, nje, nre) per row.
-fn heat2d_table(kind: LinearSolverKind, atol: f64, boundary: f64) -> (Vec<(f64, u32, u64, u64, u64, u64)>, Stats) {
+/// (umax, order, steps, Newton iterations, Jacobians, residuals) at one output time.
+type HeatRow = (f64, u32, u64, u64, u64, u64);
+
+fn heat2d_table(kind: LinearSolverKind, atol: f64, boundary: f64) -> (Vec<HeatRow>, Stats) {
     let dae = Heat2D::new(10, boundary);
     let opts = IdaOptions {
         rtol: 0.0,
@@ -101,7 +119,14 @@ fn heat2d_table(kind: LinearSolverKind, atol: f64, boundary: f64) -> (Vec<(f64, 
         run_to(&mut ida, tout);
         let s = ida.stats();
         let umax = ida.y().iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        rows.push((umax, s.last_order, s.steps, s.newton_iters, s.jacobian_evals, s.residual_evals));
+        rows.push((
+            umax,
+            s.last_order,
+            s.steps,
+            s.newton_iters,
+            s.jacobian_evals,
+            s.residual_evals,
+        ));
         tout *= 2.0;
     }
     (rows, ida.stats())
@@ -124,11 +149,17 @@ fn heat2d_bnd_reproduces_sundials_counters() {
     let (rows, _) = heat2d_table(LinearSolverKind::Faer, 1e-3, 0.1);
     for (got, want) in rows.iter().zip(&published) {
         assert_eq!(format!("{:.5e}", got.0), format!("{:.5e}", want.0));
-        assert_eq!((got.1, got.2, got.3, got.4, got.5), (want.1, want.2, want.3, want.4, want.5));
+        assert_eq!(
+            (got.1, got.2, got.3, got.4, got.5),
+            (want.1, want.2, want.3, want.4, want.5)
+        );
     }
     // Later rows: umax is round-off (1e-18 and below); the counters still match.
     let last = rows[10];
-    assert_eq!((last.1, last.2, last.3, last.4, last.5), (1, 44, 57, 20, 59));
+    assert_eq!(
+        (last.1, last.2, last.3, last.4, last.5),
+        (1, 44, 57, 20, 59)
+    );
 }
 
 #[test]
@@ -146,11 +177,23 @@ fn heat2d_klu_reproduces_sundials_counters() {
     for kind in [LinearSolverKind::Klu, LinearSolverKind::Faer] {
         let (rows, _) = heat2d_table(kind, 1e-8, 0.0);
         for (got, want) in rows.iter().zip(&published) {
-            assert_eq!(format!("{:.5e}", got.0), format!("{:.5e}", want.0), "{kind:?}");
-            assert_eq!((got.1, got.2, got.3, got.4, got.5), (want.1, want.2, want.3, want.4, want.5), "{kind:?}");
+            assert_eq!(
+                format!("{:.5e}", got.0),
+                format!("{:.5e}", want.0),
+                "{kind:?}"
+            );
+            assert_eq!(
+                (got.1, got.2, got.3, got.4, got.5),
+                (want.1, want.2, want.3, want.4, want.5),
+                "{kind:?}"
+            );
         }
         let last = rows[10];
-        assert_eq!((last.2, last.3, last.4, last.5), (232, 260, 39, 262), "{kind:?}");
+        assert_eq!(
+            (last.2, last.3, last.4, last.5),
+            (232, 260, 39, 262),
+            "{kind:?}"
+        );
     }
 }
 
@@ -165,7 +208,12 @@ struct Wrapped<D> {
 
 impl<D: Dae> Wrapped<D> {
     fn new(inner: D) -> Self {
-        Self { inner, breakpoints: Vec::new(), fail_call: None, calls: 0 }
+        Self {
+            inner,
+            breakpoints: Vec::new(),
+            fail_call: None,
+            calls: 0,
+        }
     }
 }
 
@@ -176,14 +224,24 @@ impl<D: Dae> Dae for Wrapped<D> {
     fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
         self.calls += 1;
         if Some(self.calls) == self.fail_call {
-            return Err(DaeError::Inadmissible(format!("test: call {} at t = {t}", self.calls)));
+            return Err(DaeError::Inadmissible(format!(
+                "test: call {} at t = {t}",
+                self.calls
+            )));
         }
         self.inner.residual(t, y, yp, r)
     }
     fn pattern(&self) -> &Pattern {
         self.inner.pattern()
     }
-    fn jacobian(&mut self, t: f64, y: &[f64], yp: &[f64], cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        cj: f64,
+        v: &mut [f64],
+    ) -> Result<(), DaeError> {
         self.inner.jacobian(t, y, yp, cj, v)
     }
     fn differential(&self) -> Vec<bool> {
@@ -199,11 +257,18 @@ impl<D: Dae> Dae for Wrapped<D> {
 
 fn analytic_error(y: &[f64], t: f64) -> f64 {
     let (exact, _) = Analytic::exact(t);
-    (0..2).map(|i| ((y[i] - exact[i]) / exact[i]).abs()).fold(0.0, f64::max)
+    (0..2)
+        .map(|i| ((y[i] - exact[i]) / exact[i]).abs())
+        .fold(0.0, f64::max)
 }
 
 fn bdf2_analytic(dt: f64) -> (f64, Stats) {
-    let opts = Bdf2Options { dt, rtol: 1e-12, atol: Atol::Scalar(1e-12), ..Default::default() };
+    let opts = Bdf2Options {
+        dt,
+        rtol: 1e-12,
+        atol: Atol::Scalar(1e-12),
+        ..Default::default()
+    };
     let mut b = Bdf2::new(Analytic::new(10.0), opts).unwrap();
     run_to(&mut b, 1.0);
     (analytic_error(b.y(), 1.0), b.stats())
@@ -225,11 +290,17 @@ fn bdf2_converges_with_order_two_on_a_closed_form_dae() {
     let dts = [0.1, 0.05, 0.025, 0.0125, 0.00625];
     let errs: Vec<f64> = dts.iter().map(|&dt| bdf2_analytic(dt).0).collect();
     let order = fitted_order(&dts, &errs);
-    assert!((order - 2.0).abs() <= 0.1, "fitted BDF2 order {order:.3} (errors {errs:?})");
+    assert!(
+        (order - 2.0).abs() <= 0.1,
+        "fitted BDF2 order {order:.3} (errors {errs:?})"
+    );
     // Each halving divides the error by about 4.
     for w in errs.windows(2) {
         let ratio = w[0] / w[1];
-        assert!((3.5..4.6).contains(&ratio), "error ratio {ratio:.2} on halving dt ({errs:?})");
+        assert!(
+            (3.5..4.6).contains(&ratio),
+            "error ratio {ratio:.2} on halving dt ({errs:?})"
+        );
     }
 }
 
@@ -237,14 +308,24 @@ fn bdf2_converges_with_order_two_on_a_closed_form_dae() {
 fn ida_error_shrinks_with_rtol_on_a_closed_form_dae() {
     let mut last = f64::INFINITY;
     for rtol in [1e-3, 1e-5, 1e-7, 1e-9] {
-        let opts = IdaOptions { rtol, atol: Atol::Scalar(rtol * 1e-3), ..Default::default() };
+        let opts = IdaOptions {
+            rtol,
+            atol: Atol::Scalar(rtol * 1e-3),
+            ..Default::default()
+        };
         let mut ida = Ida::new(Analytic::new(10.0), opts).unwrap();
         for k in 1..=10 {
             run_to(&mut ida, 0.1 * k as f64);
         }
         let err = analytic_error(ida.y(), 1.0);
-        assert!(err < last / 5.0, "rtol {rtol}: error {err:.3e} did not shrink from {last:.3e}");
-        assert!(err < 20.0 * rtol, "rtol {rtol}: error {err:.3e} far above the tolerance");
+        assert!(
+            err < last / 5.0,
+            "rtol {rtol}: error {err:.3e} did not shrink from {last:.3e}"
+        );
+        assert!(
+            err < 20.0 * rtol,
+            "rtol {rtol}: error {err:.3e} far above the tolerance"
+        );
         last = err;
     }
 }
@@ -260,21 +341,35 @@ fn faer_and_klu_give_the_same_answers() {
     for (x, y) in a.iter().zip(&b).take(7) {
         assert!((x - y).abs() <= 1e-10 * x.abs(), "faer {x} vs KLU {y}");
     }
-    assert_eq!((sa.steps, sa.newton_iters, sa.jacobian_evals), (sb.steps, sb.newton_iters, sb.jacobian_evals));
+    assert_eq!(
+        (sa.steps, sa.newton_iters, sa.jacobian_evals),
+        (sb.steps, sb.newton_iters, sb.jacobian_evals)
+    );
     // And on BDF2 (same Newton path up to round-off).
     let solve = |kind| {
-        let opts = Bdf2Options { dt: 0.01, linear_solver: kind, ..Default::default() };
+        let opts = Bdf2Options {
+            dt: 0.01,
+            linear_solver: kind,
+            ..Default::default()
+        };
         let mut b = Bdf2::new(Analytic::new(10.0), opts).unwrap();
         run_to(&mut b, 1.0);
         b.y().to_vec()
     };
     let (p, q) = (solve(LinearSolverKind::Faer), solve(LinearSolverKind::Klu));
-    assert!((p[0] - q[0]).abs() < 1e-13 && (p[1] - q[1]).abs() < 1e-13, "{p:?} vs {q:?}");
+    assert!(
+        (p[0] - q[0]).abs() < 1e-13 && (p[1] - q[1]).abs() < 1e-13,
+        "{p:?} vs {q:?}"
+    );
 }
 
 #[test]
 fn ida_recovers_from_an_inadmissible_state() {
-    let opts = || IdaOptions { rtol: 1e-6, atol: Atol::Scalar(1e-9), ..Default::default() };
+    let opts = || IdaOptions {
+        rtol: 1e-6,
+        atol: Atol::Scalar(1e-9),
+        ..Default::default()
+    };
     let mut clean = Ida::new(Wrapped::new(Analytic::new(10.0)), opts()).unwrap();
     run_to(&mut clean, 1.0);
     let mut w = Wrapped::new(Analytic::new(10.0));
@@ -282,15 +377,28 @@ fn ida_recovers_from_an_inadmissible_state() {
     let mut flaky = Ida::new(w, opts()).unwrap();
     run_to(&mut flaky, 1.0);
     let (sc, sf) = (clean.stats(), flaky.stats());
-    assert!(sf.newton_failures > sc.newton_failures, "the failure was not seen: {sf:?}");
-    assert!(analytic_error(flaky.y(), 1.0) < 1e-4, "inaccurate after recovery");
+    assert!(
+        sf.newton_failures > sc.newton_failures,
+        "the failure was not seen: {sf:?}"
+    );
+    assert!(
+        analytic_error(flaky.y(), 1.0) < 1e-4,
+        "inaccurate after recovery"
+    );
 }
 
 #[test]
 fn bdf2_cuts_its_step_on_an_inadmissible_state() {
     let mut w = Wrapped::new(Analytic::new(10.0));
     w.fail_call = Some(25);
-    let mut b = Bdf2::new(w, Bdf2Options { dt: 0.01, ..Default::default() }).unwrap();
+    let mut b = Bdf2::new(
+        w,
+        Bdf2Options {
+            dt: 0.01,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     run_to(&mut b, 1.0);
     assert_eq!(b.cuts, 1);
     assert!(analytic_error(b.y(), 1.0) < 1e-3);
@@ -301,34 +409,68 @@ fn integrators_land_exactly_on_breakpoints() {
     let bps = vec![0.3, 0.55];
     let mut w = Wrapped::new(Analytic::new(10.0));
     w.breakpoints = bps.clone();
-    let mut ida = Ida::new(w, IdaOptions { rtol: 1e-3, atol: Atol::Scalar(1e-6), ..Default::default() }).unwrap();
+    let mut ida = Ida::new(
+        w,
+        IdaOptions {
+            rtol: 1e-3,
+            atol: Atol::Scalar(1e-6),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let mut times = Vec::new();
     ida.advance_to(1.0, &mut |t, _| {
         times.push(t);
         true
-    }).unwrap();
+    })
+    .unwrap();
     let mut w = Wrapped::new(Analytic::new(10.0));
     w.breakpoints = bps.clone();
-    let mut bdf = Bdf2::new(w, Bdf2Options { dt: 0.07, ..Default::default() }).unwrap();
+    let mut bdf = Bdf2::new(
+        w,
+        Bdf2Options {
+            dt: 0.07,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let mut btimes = Vec::new();
     bdf.advance_to(1.0, &mut |t, _| {
         btimes.push(t);
         true
-    }).unwrap();
+    })
+    .unwrap();
     for b in &bps {
-        assert!(times.iter().any(|t| t == b), "IDA did not stop at {b}: {times:?}");
-        assert!(btimes.iter().any(|t| (t - b).abs() < 1e-15), "BDF2 did not stop at {b}: {btimes:?}");
+        assert!(
+            times.iter().any(|t| t == b),
+            "IDA did not stop at {b}: {times:?}"
+        );
+        assert!(
+            btimes.iter().any(|t| (t - b).abs() < 1e-15),
+            "BDF2 did not stop at {b}: {btimes:?}"
+        );
     }
     // BDF2 splits each segment into equal steps no longer than dt.
-    let steps: Vec<f64> = std::iter::once(0.0).chain(btimes.iter().copied()).collect::<Vec<_>>().windows(2).map(|w| w[1] - w[0]).collect();
+    let steps: Vec<f64> = std::iter::once(0.0)
+        .chain(btimes.iter().copied())
+        .collect::<Vec<_>>()
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .collect();
     assert!(steps.iter().all(|h| *h <= 0.07 + 1e-15), "{steps:?}");
 }
 
 #[test]
 fn ida_reports_bad_input_as_errors() {
-    let opts = IdaOptions { atol: Atol::Vector(vec![1e-6]), ..Default::default() };
+    let opts = IdaOptions {
+        atol: Atol::Vector(vec![1e-6]),
+        ..Default::default()
+    };
     assert!(Ida::new(Robertson::new(), opts).is_err());
-    let opts = IdaOptions { max_order: 7, ..Default::default() };
+    let opts = IdaOptions {
+        max_order: 7,
+        ..Default::default()
+    };
     assert!(Ida::new(Robertson::new(), opts).is_err());
     let mut ida = Ida::new(Robertson::new(), IdaOptions::default()).unwrap();
     run_to(&mut ida, 1.0);

@@ -1,4 +1,5 @@
 //! The integration tests: one binary, one module per concern.
+#![allow(clippy::needless_range_loop)]
 
 mod dae;
 mod model;

@@ -9,13 +9,20 @@ use cellsim::physics::{ActiveStrain, Bottom, Pac, Pillars, Substrate};
 struct Lcg(u64);
 impl Lcg {
     fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 
 fn coarse_mesh() -> Mesh {
-    Mesh::generate(&MeshParams { refine: 0.5, ..Default::default() }).unwrap()
+    Mesh::generate(&MeshParams {
+        refine: 0.5,
+        ..Default::default()
+    })
+    .unwrap()
 }
 
 /// A deformed state where the cell bottom has sunk into the contact and adhesion bands:
@@ -54,7 +61,14 @@ fn deformed_state(m: &CellModel, sink: f64, seed: u64) -> (Vec<f64>, Vec<f64>) {
 
 /// Compares the assembled J = ∂F/∂y + cj ∂F/∂ẏ with central differences of the residual,
 /// column by column, on `cols`; returns the worst relative column error.
-fn jacobian_fd_error(m: &mut CellModel, t: f64, y: &[f64], yp: &[f64], cj: f64, cols: &[usize]) -> f64 {
+fn jacobian_fd_error(
+    m: &mut CellModel,
+    t: f64,
+    y: &[f64],
+    yp: &[f64],
+    cj: f64,
+    cols: &[usize],
+) -> f64 {
     let n = m.size();
     let nnz = m.pattern().compute_nnz();
     let mut vals = vec![0.0; nnz];
@@ -66,7 +80,11 @@ fn jacobian_fd_error(m: &mut CellModel, t: f64, y: &[f64], yp: &[f64], cj: f64, 
         // Richardson-extrapolated central differences (error O(h⁴)), so the steps can be
         // large enough to keep round-off far below the tolerance: relative 1e-4 for u and
         // v, 1e-2 absolute for μ_as (~1e3).
-        let h = if j >= m.dofs.mu_offset() { 1e-2 } else { 1e-4 * y[j].abs().max(0.1) };
+        let h = if j >= m.dofs.mu_offset() {
+            1e-2
+        } else {
+            1e-4 * y[j].abs().max(0.1)
+        };
         let mut central = |h: f64| -> Vec<f64> {
             let (mut y1, mut yp1) = (y.to_vec(), yp.to_vec());
             y1[j] += h;
@@ -75,20 +93,35 @@ fn jacobian_fd_error(m: &mut CellModel, t: f64, y: &[f64], yp: &[f64], cj: f64, 
             y1[j] -= 2.0 * h;
             yp1[j] -= 2.0 * cj * h;
             m.residual(t, &y1, &yp1, &mut rm).unwrap();
-            rp.iter().zip(&rm).map(|(a, b)| (a - b) / (2.0 * h)).collect()
+            rp.iter()
+                .zip(&rm)
+                .map(|(a, b)| (a - b) / (2.0 * h))
+                .collect()
         };
         let (d1, d2) = (central(h), central(h / 2.0));
-        let fd: Vec<f64> = d1.iter().zip(&d2).map(|(a, b)| (4.0 * b - a) / 3.0).collect();
+        let fd: Vec<f64> = d1
+            .iter()
+            .zip(&d2)
+            .map(|(a, b)| (4.0 * b - a) / 3.0)
+            .collect();
         let mut col = vec![0.0; n];
         for k in pat.col_ptr()[j]..pat.col_ptr()[j + 1] {
             col[pat.row_idx()[k]] = vals[k];
         }
         let norm = col.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let diff = col.iter().zip(&fd).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
+        let diff = col
+            .iter()
+            .zip(&fd)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+            .sqrt();
         // A column may vanish (e.g. μ_as of a node out of the layer with cj = 0): then the
         // finite differences must vanish too.
         if norm == 0.0 {
-            assert!(diff < 1e-9, "column {j}: J is zero there, finite differences give {diff:.2e}");
+            assert!(
+                diff < 1e-9,
+                "column {j}: J is zero there, finite differences give {diff:.2e}"
+            );
         } else {
             worst = worst.max(diff / norm);
         }
@@ -100,8 +133,16 @@ fn active_pillars_params(inertia: bool) -> ModelParams {
     let mut p = ModelParams::defaults();
     p.substrate = Substrate::Pillars(Pillars::default());
     p.active = Some(ActiveStrain {
-        pac: Some(Pac { e: 0.7, theta_deg: -18.0, inner_axes: [5.0, 4.5], outer_axes: [7.5, 7.0] }),
-        bottom: Some(Bottom { e: 0.7, theta_deg: -35.0 }),
+        pac: Some(Pac {
+            e: 0.7,
+            theta_deg: -18.0,
+            inner_axes: [5.0, 4.5],
+            outer_axes: [7.5, 7.0],
+        }),
+        bottom: Some(Bottom {
+            e: 0.7,
+            theta_deg: -35.0,
+        }),
         ..Default::default()
     });
     p.inertia = inertia;
@@ -130,7 +171,12 @@ fn global_jacobian_matches_finite_differences() {
         // All unknowns of the lowest nodes (in contact) and some μ_as columns.
         for (i, x) in m.mesh.nodes.iter().enumerate() {
             if x[1] < -1.0 {
-                cols.extend(m.dofs.u[i].iter().chain(m.dofs.v[i].iter()).filter(|&&d| d != usize::MAX));
+                cols.extend(
+                    m.dofs.u[i]
+                        .iter()
+                        .chain(m.dofs.v[i].iter())
+                        .filter(|&&d| d != usize::MAX),
+                );
                 if m.dofs.mu[i] != usize::MAX {
                     cols.push(m.dofs.mu[i]);
                 }
@@ -138,7 +184,10 @@ fn global_jacobian_matches_finite_differences() {
         }
         for cj in [0.0, 37.0] {
             let err = jacobian_fd_error(&mut m, t, &y, &yp, cj, &cols);
-            assert!(err < 1e-6, "inertia {inertia}, cj {cj}: relative column error {err:.2e}");
+            assert!(
+                err < 1e-6,
+                "inertia {inertia}, cj {cj}: relative column error {err:.2e}"
+            );
         }
     }
 }

@@ -420,7 +420,9 @@ impl Pillars {
     /// Smallest vertical distance between the lower half of the undeformed cell and the
     /// substrate surface for pillar tops at `y_top` (µm); negative if they overlap.
     pub fn smallest_gap(&self, geometry: &Geometry, y_top: f64) -> f64 {
-        let (_, clearance) = self.at_height(y_top).lowest_clearance(geometry.centre(), geometry.r_c);
+        let (_, clearance) = self
+            .at_height(y_top)
+            .lowest_clearance(geometry.centre(), geometry.r_c);
         clearance - y_top
     }
 

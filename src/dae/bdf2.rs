@@ -72,10 +72,10 @@ pub struct Bdf2<D: Dae> {
     /// cj of the current factorization (None: no valid factorization).
     factor_cj: Option<f64>,
     breakpoints: Vec<f64>,
-    // Last two accepted points: (t_prev, y_prev, yp_prev) and (t, y, yp).
-    t: f64,
-    y: Vec<f64>,
-    yp: Vec<f64>,
+    // Last two accepted points: (t_prev, y_prev, yp_prev) and (tn, yn, ypn).
+    tn: f64,
+    yn: Vec<f64>,
+    ypn: Vec<f64>,
     t_prev: f64,
     y_prev: Vec<f64>,
     yp_prev: Vec<f64>,
@@ -121,11 +121,16 @@ impl<D: Dae> Bdf2<D> {
         }
         if let Atol::Vector(v) = &opts.atol {
             if v.len() != n {
-                return Err(IntegratorError::Input(format!("{} absolute tolerances for {n} unknowns", v.len())));
+                return Err(IntegratorError::Input(format!(
+                    "{} absolute tolerances for {n} unknowns",
+                    v.len()
+                )));
             }
         }
         let mut solver = opts.linear_solver.build();
-        solver.analyse(dae.pattern()).map_err(|e| IntegratorError::Linear(e.to_string()))?;
+        solver
+            .analyse(dae.pattern())
+            .map_err(|e| IntegratorError::Linear(e.to_string()))?;
         let nnz = dae.pattern().compute_nnz();
         let mut breakpoints: Vec<f64> = dae.breakpoints().into_iter().filter(|b| *b > t0).collect();
         breakpoints.sort_by(f64::total_cmp);
@@ -137,9 +142,9 @@ impl<D: Dae> Bdf2<D> {
             values: vec![0.0; nnz],
             factor_cj: None,
             breakpoints,
-            t: t0,
-            y: y0.clone(),
-            yp: yp0.clone(),
+            tn: t0,
+            yn: y0.clone(),
+            ypn: yp0.clone(),
             t_prev: t0,
             y_prev: y0.clone(),
             yp_prev: yp0.clone(),
@@ -168,17 +173,21 @@ impl<D: Dae> Bdf2<D> {
 
     /// Time of the last accepted step.
     pub fn t_internal(&self) -> f64 {
-        self.t
+        self.tn
     }
 
     /// The nominal step for the segment ending at the next breakpoint (or `limit`): equal
     /// steps no longer than dt that land exactly on it.
     fn planned_step(&self) -> f64 {
-        let eps = 8.0 * f64::EPSILON * self.t.abs().max(1.0);
-        let end = self.breakpoints.iter().copied().find(|&b| b > self.t + eps);
+        let eps = 8.0 * f64::EPSILON * self.tn.abs().max(1.0);
+        let end = self
+            .breakpoints
+            .iter()
+            .copied()
+            .find(|&b| b > self.tn + eps);
         match end {
             Some(b) => {
-                let remaining = b - self.t;
+                let remaining = b - self.tn;
                 let k = (remaining / self.opts.dt * (1.0 - 1e-12)).ceil().max(1.0);
                 remaining / k
             }
@@ -188,15 +197,15 @@ impl<D: Dae> Bdf2<D> {
 
     /// One attempt at a step of size h; on success the history is shifted.
     fn try_step(&mut self, h: f64) -> Result<(), StepFailure> {
-        let n = self.y.len();
-        let t_new = self.t + h;
+        let n = self.yn.len();
+        let t_new = self.tn + h;
         // BDF coefficients: ẏ_new = cj y_new + β.
         let cj;
         match self.h_prev {
             None => {
                 cj = 1.0 / h;
                 for i in 0..n {
-                    self.beta[i] = -self.y[i] / h;
+                    self.beta[i] = -self.yn[i] / h;
                 }
             }
             Some(hp) => {
@@ -205,18 +214,18 @@ impl<D: Dae> Bdf2<D> {
                 let a1 = -(1.0 + om) / h;
                 let a2 = om * om / ((1.0 + om) * h);
                 for i in 0..n {
-                    self.beta[i] = a1 * self.y[i] + a2 * self.y_prev[i];
+                    self.beta[i] = a1 * self.yn[i] + a2 * self.y_prev[i];
                 }
             }
         }
-        error_weights(&self.y, self.opts.rtol, &self.opts.atol, &mut self.w);
+        error_weights(&self.yn, self.opts.rtol, &self.opts.atol, &mut self.w);
         // The first attempt may reuse a stale factorization; a failure then retries once
         // with a fresh Jacobian. A failure with a fresh Jacobian fails the step.
         for attempt in 0..2 {
             let fresh = attempt == 1 || self.factor_cj != Some(cj);
             // Predictor: y_new = y + h ẏ.
             for i in 0..n {
-                self.y_new[i] = self.y[i] + h * self.yp[i];
+                self.y_new[i] = self.yn[i] + h * self.ypn[i];
             }
             if fresh {
                 self.refresh_jacobian(t_new, cj)?;
@@ -224,14 +233,14 @@ impl<D: Dae> Bdf2<D> {
             match self.newton(t_new, cj) {
                 Ok(()) => {
                     // Accept: shift history.
-                    std::mem::swap(&mut self.y_prev, &mut self.y);
-                    std::mem::swap(&mut self.yp_prev, &mut self.yp);
-                    self.t_prev = self.t;
-                    self.y.copy_from_slice(&self.y_new);
+                    std::mem::swap(&mut self.y_prev, &mut self.yn);
+                    std::mem::swap(&mut self.yp_prev, &mut self.ypn);
+                    self.t_prev = self.tn;
+                    self.yn.copy_from_slice(&self.y_new);
                     for i in 0..n {
-                        self.yp[i] = cj * self.y[i] + self.beta[i];
+                        self.ypn[i] = cj * self.yn[i] + self.beta[i];
                     }
-                    self.t = t_new;
+                    self.tn = t_new;
                     self.h_prev = Some(h);
                     self.stats.steps += 1;
                     self.stats.last_step = h;
@@ -254,13 +263,25 @@ impl<D: Dae> Bdf2<D> {
     /// Evaluates J at the predicted point and factorizes it.
     fn refresh_jacobian(&mut self, t_new: f64, cj: f64) -> Result<(), StepFailure> {
         self.factor_cj = None;
-        let n = self.y.len();
+        let n = self.yn.len();
         let yp_pred: Vec<f64> = (0..n).map(|i| cj * self.y_new[i] + self.beta[i]).collect();
         self.stats.jacobian_evals += 1;
-        match self.dae.jacobian(t_new, &self.y_new, &yp_pred, cj, &mut self.values) {
+        match self
+            .dae
+            .jacobian(t_new, &self.y_new, &yp_pred, cj, &mut self.values)
+        {
             Ok(()) => {}
-            Err(DaeError::Inadmissible(m)) => return Err(StepFailure::Newton(format!("Jacobian: inadmissible state: {m}"))),
-            Err(DaeError::Fatal(m)) => return Err(StepFailure::Fatal(IntegratorError::Problem { t: t_new, message: m })),
+            Err(DaeError::Inadmissible(m)) => {
+                return Err(StepFailure::Newton(format!(
+                    "Jacobian: inadmissible state: {m}"
+                )));
+            }
+            Err(DaeError::Fatal(m)) => {
+                return Err(StepFailure::Fatal(IntegratorError::Problem {
+                    t: t_new,
+                    message: m,
+                }));
+            }
         }
         match self.solver.factorize(&self.values) {
             Ok(()) => {
@@ -275,7 +296,7 @@ impl<D: Dae> Bdf2<D> {
 
     /// Modified Newton from the predictor in `y_new`.
     fn newton(&mut self, t_new: f64, cj: f64) -> Result<(), StepFailure> {
-        let n = self.y.len();
+        let n = self.yn.len();
         let mut yp_new = vec![0.0; n];
         let mut norm0 = 0.0;
         let tol = self.opts.newton_tol;
@@ -286,9 +307,14 @@ impl<D: Dae> Bdf2<D> {
             self.stats.residual_evals += 1;
             match self.dae.residual(t_new, &self.y_new, &yp_new, &mut self.r) {
                 Ok(()) => {}
-                Err(DaeError::Inadmissible(msg)) => return Err(StepFailure::Newton(format!("inadmissible state: {msg}"))),
+                Err(DaeError::Inadmissible(msg)) => {
+                    return Err(StepFailure::Newton(format!("inadmissible state: {msg}")));
+                }
                 Err(DaeError::Fatal(msg)) => {
-                    return Err(StepFailure::Fatal(IntegratorError::Problem { t: t_new, message: msg }));
+                    return Err(StepFailure::Fatal(IntegratorError::Problem {
+                        t: t_new,
+                        message: msg,
+                    }));
                 }
             }
             if self.r.iter().any(|v| !v.is_finite()) {
@@ -299,7 +325,9 @@ impl<D: Dae> Bdf2<D> {
             }
             match self.solver.solve_in_place(&mut self.r) {
                 Ok(()) => {}
-                Err(e @ LinearSolverError::Singular(_)) => return Err(StepFailure::Newton(e.to_string())),
+                Err(e @ LinearSolverError::Singular(_)) => {
+                    return Err(StepFailure::Newton(e.to_string()));
+                }
                 Err(e) => return Err(StepFailure::Fatal(IntegratorError::Linear(e.to_string()))),
             }
             self.stats.newton_iters += 1;
@@ -315,22 +343,27 @@ impl<D: Dae> Bdf2<D> {
             } else {
                 let rate = (norm / norm0).powf(1.0 / m as f64);
                 if rate > 0.9 {
-                    return Err(StepFailure::Newton(format!("Newton diverging (rate {rate:.2}, update norm {norm:.2e})")));
+                    return Err(StepFailure::Newton(format!(
+                        "Newton diverging (rate {rate:.2}, update norm {norm:.2e})"
+                    )));
                 }
                 if rate / (1.0 - rate) * norm <= tol {
                     return Ok(());
                 }
             }
         }
-        Err(StepFailure::Newton(format!("no convergence in {} Newton iterations", self.opts.max_newton_iters)))
+        Err(StepFailure::Newton(format!(
+            "no convergence in {} Newton iterations",
+            self.opts.max_newton_iters
+        )))
     }
 
     /// Cubic Hermite interpolation of the last step at time `t`.
     fn interpolate(&mut self, t: f64) {
-        let h = self.t - self.t_prev;
+        let h = self.tn - self.t_prev;
         if h <= 0.0 {
-            self.y_out.copy_from_slice(&self.y);
-            self.yp_out.copy_from_slice(&self.yp);
+            self.y_out.copy_from_slice(&self.yn);
+            self.yp_out.copy_from_slice(&self.ypn);
             return;
         }
         let s = (t - self.t_prev) / h;
@@ -340,9 +373,14 @@ impl<D: Dae> Bdf2<D> {
             -2.0 * s.powi(3) + 3.0 * s * s,
             s.powi(3) - s * s,
         );
-        let (d00, d10, d01, d11) = (6.0 * s * s - 6.0 * s, 3.0 * s * s - 4.0 * s + 1.0, -6.0 * s * s + 6.0 * s, 3.0 * s * s - 2.0 * s);
-        for i in 0..self.y.len() {
-            let (y0, y1, p0, p1) = (self.y_prev[i], self.y[i], self.yp_prev[i], self.yp[i]);
+        let (d00, d10, d01, d11) = (
+            6.0 * s * s - 6.0 * s,
+            3.0 * s * s - 4.0 * s + 1.0,
+            -6.0 * s * s + 6.0 * s,
+            3.0 * s * s - 2.0 * s,
+        );
+        for i in 0..self.yn.len() {
+            let (y0, y1, p0, p1) = (self.y_prev[i], self.yn[i], self.yp_prev[i], self.ypn[i]);
             self.y_out[i] = h00 * y0 + h10 * h * p0 + h01 * y1 + h11 * h * p1;
             self.yp_out[i] = (d00 * y0 + d01 * y1) / h + d10 * p0 + d11 * p1;
         }
@@ -350,7 +388,11 @@ impl<D: Dae> Bdf2<D> {
 }
 
 impl<D: Dae> Integrator for Bdf2<D> {
-    fn advance_to(&mut self, tout: f64, on_step: &mut dyn FnMut(f64, &Stats) -> bool) -> Result<(), IntegratorError> {
+    fn advance_to(
+        &mut self,
+        tout: f64,
+        on_step: &mut dyn FnMut(f64, &Stats) -> bool,
+    ) -> Result<(), IntegratorError> {
         if !(tout >= self.t_out) {
             return Err(IntegratorError::Input(format!(
                 "output time {tout} is before the current time {}",
@@ -358,7 +400,7 @@ impl<D: Dae> Integrator for Bdf2<D> {
             )));
         }
         let eps = 8.0 * f64::EPSILON * tout.abs().max(1.0);
-        while self.t < tout - eps {
+        while self.tn < tout - eps {
             let mut h = self.planned_step();
             let mut cuts = 0;
             loop {
@@ -370,10 +412,13 @@ impl<D: Dae> Integrator for Bdf2<D> {
                         self.cuts += 1;
                         if cuts > self.opts.max_cuts {
                             return Err(IntegratorError::NewtonFailed {
-                                t: self.t,
+                                t: self.tn,
                                 step: self.stats.steps + 1,
                                 h,
-                                reason: format!("{reason} (after {} step halvings)", self.opts.max_cuts),
+                                reason: format!(
+                                    "{reason} (after {} step halvings)",
+                                    self.opts.max_cuts
+                                ),
                             });
                         }
                         h *= 0.5;
@@ -381,13 +426,13 @@ impl<D: Dae> Integrator for Bdf2<D> {
                 }
             }
             let stats = self.stats.clone();
-            if !on_step(self.t, &stats) {
-                return Err(IntegratorError::Interrupted { t: self.t });
+            if !on_step(self.tn, &stats) {
+                return Err(IntegratorError::Interrupted { t: self.tn });
             }
         }
-        if (self.t - tout).abs() <= eps {
-            self.y_out.copy_from_slice(&self.y);
-            self.yp_out.copy_from_slice(&self.yp);
+        if (self.tn - tout).abs() <= eps {
+            self.y_out.copy_from_slice(&self.yn);
+            self.yp_out.copy_from_slice(&self.ypn);
         } else {
             self.interpolate(tout);
         }

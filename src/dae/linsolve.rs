@@ -10,9 +10,11 @@
 //! with AMD ordering ([`crate::sundials::KluLu`]).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::linalg::lu::{LuRef, LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu};
 use faer::sparse::SparseColMatRef;
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::lu::{
+    LuRef, LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu,
+};
 use faer::{Conj, MatMut, Par};
 use serde::{Deserialize, Serialize};
 
@@ -148,11 +150,18 @@ impl LinearSolver for FaerLu {
         let n = b.len();
         let lu = LuRef::new_unchecked(symbolic, &self.numeric);
         let stack = MemStack::new(&mut self.mem);
-        lu.solve_in_place_with_conj(Conj::No, MatMut::from_column_major_slice_mut(b, n, 1), self.par, stack);
+        lu.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(b, n, 1),
+            self.par,
+            stack,
+        );
         if b.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
-            Err(LinearSolverError::Singular("non-finite solution (zero pivot)".into()))
+            Err(LinearSolverError::Singular(
+                "non-finite solution (zero pivot)".into(),
+            ))
         }
     }
 
@@ -243,7 +252,11 @@ mod tests {
             s.solve_in_place(&mut b).unwrap();
             let r = matvec(&p, &vs, &b);
             let bb = matvec(&p, &vs, &x);
-            let res: f64 = r.iter().zip(&bb).map(|(a, c)| (a - c).abs()).fold(0.0, f64::max);
+            let res: f64 = r
+                .iter()
+                .zip(&bb)
+                .map(|(a, c)| (a - c).abs())
+                .fold(0.0, f64::max);
             assert!(res < 1e-12, "{}: residual {res}", s.name());
         }
     }
@@ -263,6 +276,9 @@ mod tests {
         let (p, _) = test_matrix(5);
         let mut s = FaerLu::new();
         s.analyse(&p).unwrap();
-        assert!(matches!(s.solve_in_place(&mut [0.0; 5]), Err(LinearSolverError::NotReady(_))));
+        assert!(matches!(
+            s.solve_in_place(&mut [0.0; 5]),
+            Err(LinearSolverError::NotReady(_))
+        ));
     }
 }

@@ -154,7 +154,9 @@ pub enum IntegratorError {
         t: f64,
     },
     /// The Newton iteration failed repeatedly (BDF2).
-    #[error("Newton iteration did not converge at t = {t:.6e} (step {step}, h = {h:.3e}): {reason}")]
+    #[error(
+        "Newton iteration did not converge at t = {t:.6e} (step {step}, h = {h:.3e}): {reason}"
+    )]
     NewtonFailed {
         /// Time at the start of the failing step.
         t: f64,
@@ -203,7 +205,11 @@ pub trait Integrator {
     /// there) and returns the state at `tout`. `on_step` is called after every internal
     /// step with (t, stats) so a driver can show progress; returning `false` stops the
     /// integration with [`IntegratorError::Interrupted`].
-    fn advance_to(&mut self, tout: f64, on_step: &mut dyn FnMut(f64, &Stats) -> bool) -> Result<(), IntegratorError>;
+    fn advance_to(
+        &mut self,
+        tout: f64,
+        on_step: &mut dyn FnMut(f64, &Stats) -> bool,
+    ) -> Result<(), IntegratorError>;
     /// Current output time (the last `tout` reached).
     fn t(&self) -> f64;
     /// y at the current output time.
@@ -240,13 +246,20 @@ pub fn consistent_init(
     let n = dae.size();
     let pattern = dae.pattern().clone();
     let mut solver = kind.build();
-    solver.analyse(&pattern).map_err(|e| IntegratorError::Linear(e.to_string()))?;
+    solver
+        .analyse(&pattern)
+        .map_err(|e| IntegratorError::Linear(e.to_string()))?;
     let nnz = pattern.compute_nnz();
     let (mut j0, mut j1) = (vec![0.0; nnz], vec![0.0; nnz]);
     let (mut r, mut w) = (vec![0.0; n], vec![0.0; n]);
     error_weights(y, rtol, atol, &mut w);
-    let problem = |e: DaeError| IntegratorError::Problem { t, message: format!("consistent initial values: {e}") };
-    let linear = |e: linsolve::LinearSolverError| IntegratorError::Linear(format!("consistent initial values: {e}"));
+    let problem = |e: DaeError| IntegratorError::Problem {
+        t,
+        message: format!("consistent initial values: {e}"),
+    };
+    let linear = |e: linsolve::LinearSolverError| {
+        IntegratorError::Linear(format!("consistent initial values: {e}"))
+    };
     for it in 1..=MAX_ITERS {
         dae.residual(t, y, yp, &mut r).map_err(problem)?;
         dae.jacobian(t, y, yp, 0.0, &mut j0).map_err(problem)?;
@@ -278,6 +291,8 @@ pub fn consistent_init(
         t,
         step: 0,
         h: 0.0,
-        reason: format!("consistent initial values: no convergence in {MAX_ITERS} Newton iterations"),
+        reason: format!(
+            "consistent initial values: no convergence in {MAX_ITERS} Newton iterations"
+        ),
     })
 }

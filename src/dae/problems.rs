@@ -26,7 +26,9 @@ impl Robertson {
     /// The problem with its dense 3×3 pattern.
     pub fn new() -> Self {
         let entries: Vec<_> = (0..3).flat_map(|c| (0..3).map(move |r| (r, c))).collect();
-        Self { pattern: pattern_from_entries(3, &entries) }
+        Self {
+            pattern: pattern_from_entries(3, &entries),
+        }
     }
 }
 
@@ -47,7 +49,14 @@ impl Dae for Robertson {
         &self.pattern
     }
 
-    fn jacobian(&mut self, _t: f64, y: &[f64], _yp: &[f64], cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+    fn jacobian(
+        &mut self,
+        _t: f64,
+        y: &[f64],
+        _yp: &[f64],
+        cj: f64,
+        v: &mut [f64],
+    ) -> Result<(), DaeError> {
         // Dense pattern, column-major: v[3c + r] = J[r][c].
         let j = [
             [-0.04 - cj, 1.0e4 * y[2], 1.0e4 * y[1]],
@@ -110,7 +119,13 @@ impl Heat2D {
                 }
             })
             .collect();
-        Self { m, coeff: 1.0 / (dx * dx), boundary_value, pattern, pos }
+        Self {
+            m,
+            coeff: 1.0 / (dx * dx),
+            boundary_value,
+            pattern,
+            pos,
+        }
     }
 
     fn is_boundary(m: usize, k: usize) -> bool {
@@ -136,7 +151,11 @@ impl Dae for Heat2D {
 
     fn residual(&mut self, _t: f64, u: &[f64], up: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
         for k in 0..self.size() {
-            r[k] = if Self::is_boundary(self.m, k) { u[k] } else { up[k] - self.laplacian(u, k) };
+            r[k] = if Self::is_boundary(self.m, k) {
+                u[k]
+            } else {
+                up[k] - self.laplacian(u, k)
+            };
         }
         Ok(())
     }
@@ -145,7 +164,14 @@ impl Dae for Heat2D {
         &self.pattern
     }
 
-    fn jacobian(&mut self, _t: f64, _u: &[f64], _up: &[f64], cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+    fn jacobian(
+        &mut self,
+        _t: f64,
+        _u: &[f64],
+        _up: &[f64],
+        cj: f64,
+        v: &mut [f64],
+    ) -> Result<(), DaeError> {
         v.fill(0.0);
         for k in 0..self.size() {
             let p = self.pos[k];
@@ -162,7 +188,9 @@ impl Dae for Heat2D {
     }
 
     fn differential(&self) -> Vec<bool> {
-        (0..self.size()).map(|k| !Self::is_boundary(self.m, k)).collect()
+        (0..self.size())
+            .map(|k| !Self::is_boundary(self.m, k))
+            .collect()
     }
 
     fn initial(&self) -> (f64, Vec<f64>, Vec<f64>) {
@@ -203,7 +231,10 @@ pub struct Analytic {
 impl Analytic {
     /// The problem with stiffness parameter α (SUNDIALS uses 10).
     pub fn new(alpha: f64) -> Self {
-        Self { alpha, pattern: pattern_from_entries(2, &[(0, 0), (1, 0), (0, 1)]) }
+        Self {
+            alpha,
+            pattern: pattern_from_entries(2, &[(0, 0), (1, 0), (0, 1)]),
+        }
     }
 
     /// Exact solution (x₁, x₂) and its derivative at t.
@@ -230,7 +261,14 @@ impl Dae for Analytic {
         &self.pattern
     }
 
-    fn jacobian(&mut self, t: f64, _y: &[f64], _yp: &[f64], cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+    fn jacobian(
+        &mut self,
+        t: f64,
+        _y: &[f64],
+        _yp: &[f64],
+        cj: f64,
+        v: &mut [f64],
+    ) -> Result<(), DaeError> {
         let a = self.alpha;
         // Column 0: rows 0, 1; column 1: row 0.
         v[0] = (1.0 - a) / (t - 2.0) - 1.0 - cj;

@@ -1237,6 +1237,7 @@ mod tests {
     fn conformity() {
         for refine in [0.5, 1.0, 2.0] {
             let m = mesh(refine);
+            #[allow(clippy::type_complexity)]
             let mut edges: HashMap<(usize, usize), Vec<(usize, usize, usize)>> = HashMap::new();
             for (e, el) in m.elements.iter().enumerate() {
                 for ed in EDGES {

@@ -53,7 +53,9 @@ impl DofMap {
         }
         let n_u = k;
         let v = if inertia {
-            u.iter().map(|d| d.map(|x| if x == NONE { NONE } else { x + n_u })).collect()
+            u.iter()
+                .map(|d| d.map(|x| if x == NONE { NONE } else { x + n_u }))
+                .collect()
         } else {
             vec![[NONE; 2]; nn]
         };
@@ -70,7 +72,15 @@ impl DofMap {
                 }
             }
         }
-        Self { u, v, mu, mu_nodes, n_u, inertia, n: next }
+        Self {
+            u,
+            v,
+            mu,
+            mu_nodes,
+            n_u,
+            inertia,
+            n: next,
+        }
     }
 
     /// Offset of the μ_as block.

@@ -32,8 +32,8 @@ use crate::fem::p2::{ElementGeometry, P2Tabulation};
 use crate::fem::quadrature::TriangleRule;
 use crate::fem::{Domain, Mesh};
 use crate::physics::{
-    ActiveStrain, Adhesion, Contact, Phases, Substrate, Viscosity, Yeoh, adhesion_force, adhesion_rate,
-    contact_force, material_point, piola_total,
+    ActiveStrain, Adhesion, Contact, Phases, Substrate, Viscosity, Yeoh, adhesion_force,
+    adhesion_rate, contact_force, material_point, piola_total,
 };
 use dofs::{DofMap, NONE};
 
@@ -76,7 +76,9 @@ impl ModelParams {
     /// MODEL.md's defaults: the paper's materials, flat substrate at y = −2 µm, adhesion,
     /// no active strain, inertia on, no drag, contact rule of degree 10.
     pub fn defaults() -> Self {
-        let yeoh = |e: f64| Yeoh::from_engineering(e, 0.485, 0.1, 0.2).expect("MODEL.md defaults are valid");
+        let yeoh = |e: f64| {
+            Yeoh::from_engineering(e, 0.485, 0.1, 0.2).expect("MODEL.md defaults are valid")
+        };
         Self {
             center: [0.0, 8.5],
             solids: [yeoh(500.0), yeoh(100.0), yeoh(100.0)],
@@ -153,6 +155,9 @@ pub struct CellModel {
 
 type D7 = DualSVec64<7>;
 
+/// A vector per node of an element.
+type Nodal = [[f64; 2]; 6];
+
 /// Deformation gradient F = I + Σ uₐ ⊗ ∇Nₐ.
 #[inline]
 fn deformation(ue: &[[f64; 2]; 6], grads: &[[f64; 2]; 6]) -> Matrix2<f64> {
@@ -186,10 +191,13 @@ impl CellModel {
         let adhesion = params.adhesion.is_some();
         let dofs = DofMap::new(&mesh, params.inertia, adhesion);
         let std_tab = P2Tabulation::new(&TriangleRule::degree(4));
-        let crule = TriangleRule::degree(params.contact_degree).subdivided(params.contact_subdivisions);
+        let crule =
+            TriangleRule::degree(params.contact_degree).subdivided(params.contact_subdivisions);
         let ctab = P2Tabulation::new(&crule);
         let mass_tab = std_tab.clone();
-        let active = params.active.filter(|a| a.pac.is_some() || a.bottom.is_some());
+        let active = params
+            .active
+            .filter(|a| a.pac.is_some() || a.bottom.is_some());
         let c = Vector2::new(params.center[0], params.center[1]);
 
         let mut elements = Vec::with_capacity(mesh.elements.len());
@@ -197,12 +205,18 @@ impl CellModel {
         for (e, &nodes) in mesh.elements.iter().enumerate() {
             let x = mesh.element_coords(e);
             let domain = mesh.domains[e];
-            let geo = std_tab.geometry(&x).map_err(|err| format!("element {e}: {err}"))?;
-            let cgeo = ctab.geometry(&x).map_err(|err| format!("element {e}: {err}"))?;
+            let geo = std_tab
+                .geometry(&x)
+                .map_err(|err| format!("element {e}: {err}"))?;
+            let cgeo = ctab
+                .geometry(&x)
+                .map_err(|err| format!("element {e}: {err}"))?;
             let solid = ModelParams::domain_index(domain);
             let rho = params.densities[solid];
             let mut mass1 = [[0.0; 6]; 6];
-            let mgeo = mass_tab.geometry(&x).map_err(|err| format!("element {e}: {err}"))?;
+            let mgeo = mass_tab
+                .geometry(&x)
+                .map_err(|err| format!("element {e}: {err}"))?;
             for q in 0..mass_tab.len() {
                 let n = &mass_tab.values[q];
                 for a in 0..6 {
@@ -217,14 +231,23 @@ impl CellModel {
                     let a: Vec<Matrix2<f64>> = geo
                         .x
                         .iter()
-                        .map(|p| Matrix2::identity() - act.fa(&Vector2::new(p[0], p[1]), domain, 1.0))
+                        .map(|p| {
+                            Matrix2::identity() - act.fa(&Vector2::new(p[0], p[1]), domain, 1.0)
+                        })
                         .collect();
-                    if a.iter().all(|m| m.abs().max() == 0.0) { Vec::new() } else { a }
+                    if a.iter().all(|m| m.abs().max() == 0.0) {
+                        Vec::new()
+                    } else {
+                        a
+                    }
                 }
                 None => Vec::new(),
             };
             let radial = if domain == Domain::Membrane {
-                cgeo.x.iter().map(|p| (Vector2::new(p[0], p[1]) - c).normalize()).collect()
+                cgeo.x
+                    .iter()
+                    .map(|p| (Vector2::new(p[0], p[1]) - c).normalize())
+                    .collect()
             } else {
                 Vec::new()
             };
@@ -301,16 +324,26 @@ impl CellModel {
         let pattern = pattern_from_entries(dofs.n, &entries);
         drop(entries);
         let pos = |r: usize, c: usize| -> usize {
-            if r == NONE || c == NONE { NONE } else { position(&pattern, r, c).unwrap_or(NONE) }
+            if r == NONE || c == NONE {
+                NONE
+            } else {
+                position(&pattern, r, c).unwrap_or(NONE)
+            }
         };
         let mut built = Vec::with_capacity(elements.len());
         for (mut el, ucols, vcols, mucols, with_mu) in elements {
-            el.pos_mu = (0..144).map(|k| pos(el.mrows[k / 12], ucols[k % 12])).collect();
+            el.pos_mu = (0..144)
+                .map(|k| pos(el.mrows[k / 12], ucols[k % 12]))
+                .collect();
             if params.inertia {
-                el.pos_mv = (0..144).map(|k| pos(el.mrows[k / 12], vcols[k % 12])).collect();
+                el.pos_mv = (0..144)
+                    .map(|k| pos(el.mrows[k / 12], vcols[k % 12]))
+                    .collect();
             }
             if with_mu {
-                el.pos_mm = (0..72).map(|k| pos(el.mrows[k / 6], mucols[k % 6])).collect();
+                el.pos_mm = (0..72)
+                    .map(|k| pos(el.mrows[k / 6], mucols[k % 6]))
+                    .collect();
             }
             built.push(el);
         }
@@ -331,7 +364,11 @@ impl CellModel {
             .enumerate()
             .map(|(k, &i)| {
                 let row = dofs.mu_offset() + k;
-                [pos(row, row), pos(row, dofs.u[i][0]), pos(row, dofs.u[i][1])]
+                [
+                    pos(row, row),
+                    pos(row, dofs.u[i][0]),
+                    pos(row, dofs.u[i][1]),
+                ]
             })
             .collect();
         Ok(Self {
@@ -389,7 +426,7 @@ impl CellModel {
     }
 
     /// Element displacements and velocities gathered from (y, ẏ).
-    fn gather(&self, el: &Element, y: &[f64], yp: &[f64]) -> ([[f64; 2]; 6], [[f64; 2]; 6], [[f64; 2]; 6]) {
+    fn gather(&self, el: &Element, y: &[f64], yp: &[f64]) -> (Nodal, Nodal, Nodal) {
         let mut ue = [[0.0; 2]; 6];
         let mut ve = [[0.0; 2]; 6];
         let mut ae = [[0.0; 2]; 6];
@@ -442,12 +479,18 @@ impl CellModel {
         if j > 0.0 && j.is_finite() {
             Ok(())
         } else {
-            Err(DaeError::Inadmissible(format!("element {e}, quadrature point {q}: det F = {j:.3e}")))
+            Err(DaeError::Inadmissible(format!(
+                "element {e}, quadrature point {q}: det F = {j:.3e}"
+            )))
         }
     }
 
     fn active_fa(el: &Element, q: usize, t_a: f64) -> Matrix2<f64> {
-        if el.active.is_empty() { Matrix2::identity() } else { Matrix2::identity() - el.active[q] * t_a }
+        if el.active.is_empty() {
+            Matrix2::identity()
+        } else {
+            Matrix2::identity() - el.active[q] * t_a
+        }
     }
 }
 
@@ -460,7 +503,12 @@ impl Dae for CellModel {
     fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
         r.fill(0.0);
         let p = &self.params;
-        let (t_g, t_as, t_a, s_g) = (p.phases.t_g(t), p.phases.t_as(t), p.phases.t_a(t), p.phases.gravity_sign(t));
+        let (t_g, t_as, t_a, s_g) = (
+            p.phases.t_g(t),
+            p.phases.t_as(t),
+            p.phases.t_a(t),
+            p.phases.gravity_sign(t),
+        );
         let inertia = self.dofs.inertia;
         if inertia {
             let n_u = self.dofs.n_u;
@@ -512,7 +560,9 @@ impl Dae for CellModel {
                     let F = deformation(&ue, g);
                     let J = F.determinant();
                     if !(J > 0.0) {
-                        return Err(DaeError::Inadmissible(format!("element {e}, contact point {q}: det F = {J:.3e}")));
+                        return Err(DaeError::Inadmissible(format!(
+                            "element {e}, contact point {q}: det F = {J:.3e}"
+                        )));
                     }
                     let mut x = Vector2::new(el.cgeo.x[q][0], el.cgeo.x[q][1]);
                     for a in 0..6 {
@@ -522,7 +572,8 @@ impl Dae for CellModel {
                     let mut b = contact_force(&p.substrate, &p.contact, &x, J);
                     if with_mu && t_as > 0.0 {
                         if let Some(ad) = &p.adhesion {
-                            let mu: f64 = (0..6).map(|a| nv[a] * y[self.dofs.mu[el.nodes[a]]]).sum();
+                            let mu: f64 =
+                                (0..6).map(|a| nv[a] * y[self.dofs.mu[el.nodes[a]]]).sum();
                             b += adhesion_force(&p.substrate, ad, &x, &F, &el.radial[q], mu, t_as);
                         }
                     }
@@ -562,7 +613,14 @@ impl Dae for CellModel {
     }
 
     #[allow(non_snake_case)]
-    fn jacobian(&mut self, t: f64, y: &[f64], yp: &[f64], cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        cj: f64,
+        v: &mut [f64],
+    ) -> Result<(), DaeError> {
         v.fill(0.0);
         let p = &self.params;
         let (t_as, t_a) = (p.phases.t_as(t), p.phases.t_a(t));
@@ -597,8 +655,12 @@ impl Dae for CellModel {
                         let mut ak = [0.0; 4];
                         let mut ck = [0.0; 4];
                         for (col, (akc, ckc)) in ak.iter_mut().zip(ck.iter_mut()).enumerate() {
-                            *akc = w * (mp.dP_dF[(2 * i, col)] * g[a][0] + mp.dP_dF[(2 * i + 1, col)] * g[a][1]);
-                            *ckc = w * (mp.dP_dFdot[(2 * i, col)] * g[a][0] + mp.dP_dFdot[(2 * i + 1, col)] * g[a][1]);
+                            *akc = w
+                                * (mp.dP_dF[(2 * i, col)] * g[a][0]
+                                    + mp.dP_dF[(2 * i + 1, col)] * g[a][1]);
+                            *ckc = w
+                                * (mp.dP_dFdot[(2 * i, col)] * g[a][0]
+                                    + mp.dP_dFdot[(2 * i + 1, col)] * g[a][1]);
                         }
                         let rr = 2 * a + i;
                         for b in 0..6 {
@@ -615,7 +677,8 @@ impl Dae for CellModel {
             // columns; without, the drag acts on u̇: cj c_d M₁ in the u columns.
             for a in 0..6 {
                 for b in 0..6 {
-                    let m = if inertia { cj * el.mass[a][b] } else { 0.0 } + p.drag * el.mass1[a][b];
+                    let m =
+                        if inertia { cj * el.mass[a][b] } else { 0.0 } + p.drag * el.mass1[a][b];
                     for i in 0..2 {
                         cmat[2 * a + i][2 * b + i] += m;
                     }
@@ -638,7 +701,10 @@ impl Dae for CellModel {
                         x.x += nv[a] * ue[a][0];
                         x.y += nv[a] * ue[a][1];
                     }
-                    let xd = Vector2::new(D7::from_re(x.x).derivative(0), D7::from_re(x.y).derivative(1));
+                    let xd = Vector2::new(
+                        D7::from_re(x.x).derivative(0),
+                        D7::from_re(x.y).derivative(1),
+                    );
                     let Fd = Matrix2::new(
                         D7::from_re(F[(0, 0)]).derivative(2),
                         D7::from_re(F[(0, 1)]).derivative(3),
@@ -649,9 +715,18 @@ impl Dae for CellModel {
                     let mut b = contact_force(&p.substrate, &p.contact, &xd, J);
                     if with_mu && t_as > 0.0 {
                         if let Some(ad) = &p.adhesion {
-                            let mu: f64 = (0..6).map(|a| nv[a] * y[self.dofs.mu[el.nodes[a]]]).sum();
+                            let mu: f64 =
+                                (0..6).map(|a| nv[a] * y[self.dofs.mu[el.nodes[a]]]).sum();
                             let mud = D7::from_re(mu).derivative(6);
-                            b += adhesion_force(&p.substrate, ad, &xd, &Fd, &el.radial[q], mud, t_as);
+                            b += adhesion_force(
+                                &p.substrate,
+                                ad,
+                                &xd,
+                                &Fd,
+                                &el.radial[q],
+                                mud,
+                                t_as,
+                            );
                         }
                     }
                     let w = el.cgeo.jxw[q];
@@ -665,7 +740,9 @@ impl Dae for CellModel {
                             for bb in 0..6 {
                                 for k in 0..2 {
                                     // ∂b_i/∂u_(bb,k) = ∂b_i/∂x_k N_bb + Σ_L ∂b_i/∂F_kL ∇N_bb_L
-                                    let d = db[k] * nv[bb] + db[2 + 2 * k] * g[bb][0] + db[3 + 2 * k] * g[bb][1];
+                                    let d = db[k] * nv[bb]
+                                        + db[2 + 2 * k] * g[bb][0]
+                                        + db[3 + 2 * k] * g[bb][1];
                                     kmat[2 * a + i][2 * bb + k] -= wa * d;
                                 }
                                 if with_mu {
@@ -718,7 +795,10 @@ impl Dae for CellModel {
                 let row = off + k;
                 let u = self.dofs.node_u(y, i);
                 let xn = self.mesh.nodes[i];
-                let x = Vector2::new(D3::from_re(xn[0] + u[0]).derivative(0), D3::from_re(xn[1] + u[1]).derivative(1));
+                let x = Vector2::new(
+                    D3::from_re(xn[0] + u[0]).derivative(0),
+                    D3::from_re(xn[1] + u[1]).derivative(1),
+                );
                 let rate = adhesion_rate(&p.substrate, ad, &x, D3::from_re(y[row]).derivative(2));
                 let d = rate.eps.unwrap_generic(nalgebra::U3, nalgebra::U1);
                 let [pmm, pux, puy] = self.pos_ads[k];

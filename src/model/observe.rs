@@ -30,7 +30,8 @@ pub struct Observables {
 
 impl Observables {
     /// The CSV header, exactly as the run writes it.
-    pub const CSV_HEADER: &'static str = "t,contact_radius,uy_top,uy_centre,uy_bottom,strain_nucleus,strain_cytoplasm";
+    pub const CSV_HEADER: &'static str =
+        "t,contact_radius,uy_top,uy_centre,uy_bottom,strain_nucleus,strain_cytoplasm";
 
     /// One CSV row (full precision).
     pub fn csv_row(&self) -> String {
@@ -161,7 +162,8 @@ impl CellModel {
                     x.x += nv[a] * ue[a][0];
                     x.y += nv[a] * ue[a][1];
                 }
-                total += contact_force(&p.substrate, &p.contact, &x, f.determinant()) * el.cgeo.jxw[q];
+                total +=
+                    contact_force(&p.substrate, &p.contact, &x, f.determinant()) * el.cgeo.jxw[q];
             }
         }
         total
@@ -169,7 +171,11 @@ impl CellModel {
 
     /// Weight of the half cell at full gravity [pN/µm]: g ∫ ρ dV.
     pub fn weight(&self) -> f64 {
-        self.elements.iter().map(|el| el.mass.iter().flatten().sum::<f64>()).sum::<f64>() * self.params.gravity
+        self.elements
+            .iter()
+            .map(|el| el.mass.iter().flatten().sum::<f64>())
+            .sum::<f64>()
+            * self.params.gravity
     }
 
     fn element_displacements(&self, el: &super::Element, y: &[f64]) -> [[f64; 2]; 6] {

@@ -142,7 +142,13 @@ impl<D: Dae> Drop for Ida<D> {
 }
 
 fn sundials_err(function: &'static str, flag: c_int, message: String, t: f64) -> IntegratorError {
-    IntegratorError::Sundials { function, flag, name: ida_flag_name(flag), message, t }
+    IntegratorError::Sundials {
+        function,
+        flag,
+        name: ida_flag_name(flag),
+        message,
+        t,
+    }
 }
 
 impl<D: Dae> Ida<D> {
@@ -169,14 +175,21 @@ impl<D: Dae> Ida<D> {
         let (yy, yp, out_y, out_yp) = (vector(&y0)?, vector(&yp0)?, vector(&y0)?, vector(&yp0)?);
 
         let mut solver = opts.linear_solver.build();
-        solver.analyse(dae.pattern()).map_err(|e| IntegratorError::Linear(e.to_string()))?;
+        solver
+            .analyse(dae.pattern())
+            .map_err(|e| IntegratorError::Linear(e.to_string()))?;
         let nnz = dae.pattern().compute_nnz();
         let mut breakpoints: Vec<f64> = dae.breakpoints().into_iter().filter(|b| *b > t0).collect();
         breakpoints.sort_by(f64::total_cmp);
         breakpoints.dedup();
         let user = Box::new(UserData {
             dae,
-            ls: LsState { solver, values: vec![0.0; nnz], factorizations: 0, last_error: None },
+            ls: LsState {
+                solver,
+                values: vec![0.0; nnz],
+                factorizations: 0,
+                last_error: None,
+            },
             callback_error: None,
             ida_message: String::new(),
         });
@@ -226,17 +239,37 @@ impl<D: Dae> Ida<D> {
             }
             let mem = self.mem;
             let user_ptr: *mut UserData<D> = &mut *self.user;
-            self.check("IDASetErrHandlerFn", sys::IDASetErrHandlerFn(mem, Some(err_handler::<D>), user_ptr.cast()))?;
-            self.check("IDAInit", sys::IDAInit(mem, Some(residual_trampoline::<D>), t0, self.yy.0, self.yp.0))?;
+            self.check(
+                "IDASetErrHandlerFn",
+                sys::IDASetErrHandlerFn(mem, Some(err_handler::<D>), user_ptr.cast()),
+            )?;
+            self.check(
+                "IDAInit",
+                sys::IDAInit(
+                    mem,
+                    Some(residual_trampoline::<D>),
+                    t0,
+                    self.yy.0,
+                    self.yp.0,
+                ),
+            )?;
             self.check("IDASetUserData", sys::IDASetUserData(mem, user_ptr.cast()))?;
             match &opts.atol {
-                Atol::Scalar(a) => self.check("IDASStolerances", sys::IDASStolerances(mem, opts.rtol, *a))?,
+                Atol::Scalar(a) => {
+                    self.check("IDASStolerances", sys::IDASStolerances(mem, opts.rtol, *a))?
+                }
                 Atol::Vector(v) => {
                     if v.len() != n {
-                        return Err(IntegratorError::Input(format!("{} absolute tolerances for {n} unknowns", v.len())));
+                        return Err(IntegratorError::Input(format!(
+                            "{} absolute tolerances for {n} unknowns",
+                            v.len()
+                        )));
                     }
                     let av = NVector::from_slice(v, &self.ctx).map_err(IntegratorError::Input)?;
-                    self.check("IDASVtolerances", sys::IDASVtolerances(mem, opts.rtol, av.0))?;
+                    self.check(
+                        "IDASVtolerances",
+                        sys::IDASVtolerances(mem, opts.rtol, av.0),
+                    )?;
                 }
             }
 
@@ -244,7 +277,12 @@ impl<D: Dae> Ida<D> {
             let ls_ptr: *mut LsState = &mut self.user.ls;
             self.mat = sys::SUNMatNewEmpty(self.ctx.0);
             if self.mat.is_null() {
-                return Err(sundials_err("SUNMatNewEmpty", -1, "NULL returned".into(), t0));
+                return Err(sundials_err(
+                    "SUNMatNewEmpty",
+                    -1,
+                    "NULL returned".into(),
+                    t0,
+                ));
             }
             (*self.mat).content = ls_ptr.cast();
             let mops = &mut *(*self.mat).ops;
@@ -254,7 +292,12 @@ impl<D: Dae> Ida<D> {
 
             self.ls = sys::SUNLinSolNewEmpty(self.ctx.0);
             if self.ls.is_null() {
-                return Err(sundials_err("SUNLinSolNewEmpty", -1, "NULL returned".into(), t0));
+                return Err(sundials_err(
+                    "SUNLinSolNewEmpty",
+                    -1,
+                    "NULL returned".into(),
+                    t0,
+                ));
             }
             (*self.ls).content = ls_ptr.cast();
             let lops = &mut *(*self.ls).ops;
@@ -264,10 +307,22 @@ impl<D: Dae> Ida<D> {
             lops.solve = Some(ls_solve);
             lops.free = Some(ls_free);
 
-            self.check("IDASetLinearSolver", sys::IDASetLinearSolver(mem, self.ls, self.mat))?;
-            self.check("IDASetJacFn", sys::IDASetJacFn(mem, Some(jacobian_trampoline::<D>)))?;
-            self.check("IDASetMaxOrd", sys::IDASetMaxOrd(mem, opts.max_order as c_int))?;
-            self.check("IDASetMaxNumSteps", sys::IDASetMaxNumSteps(mem, opts.max_steps as c_long))?;
+            self.check(
+                "IDASetLinearSolver",
+                sys::IDASetLinearSolver(mem, self.ls, self.mat),
+            )?;
+            self.check(
+                "IDASetJacFn",
+                sys::IDASetJacFn(mem, Some(jacobian_trampoline::<D>)),
+            )?;
+            self.check(
+                "IDASetMaxOrd",
+                sys::IDASetMaxOrd(mem, opts.max_order as c_int),
+            )?;
+            self.check(
+                "IDASetMaxNumSteps",
+                sys::IDASetMaxNumSteps(mem, opts.max_steps as c_long),
+            )?;
             if let Some(h) = opts.init_step {
                 self.check("IDASetInitStep", sys::IDASetInitStep(mem, h))?;
             }
@@ -284,17 +339,32 @@ impl<D: Dae> Ida<D> {
                 self.check("IDASetMaxErrTestFails", sys::IDASetMaxErrTestFails(mem, m))?;
             }
             if opts.suppress_alg || opts.calc_ic.is_some() {
-                let id: Vec<f64> = self.user.dae.differential().iter().map(|&d| if d { 1.0 } else { 0.0 }).collect();
+                let id: Vec<f64> = self
+                    .user
+                    .dae
+                    .differential()
+                    .iter()
+                    .map(|&d| if d { 1.0 } else { 0.0 })
+                    .collect();
                 if id.len() != n {
-                    return Err(IntegratorError::Input(format!("differential() has {} entries for {n} unknowns", id.len())));
+                    return Err(IntegratorError::Input(format!(
+                        "differential() has {} entries for {n} unknowns",
+                        id.len()
+                    )));
                 }
                 let idv = NVector::from_slice(&id, &self.ctx).map_err(IntegratorError::Input)?;
                 self.check("IDASetId", sys::IDASetId(mem, idv.0))?;
-                self.check("IDASetSuppressAlg", sys::IDASetSuppressAlg(mem, opts.suppress_alg as c_int))?;
+                self.check(
+                    "IDASetSuppressAlg",
+                    sys::IDASetSuppressAlg(mem, opts.suppress_alg as c_int),
+                )?;
             }
             if let Some(c) = &opts.constraints {
                 if c.len() != n {
-                    return Err(IntegratorError::Input(format!("{} constraints for {n} unknowns", c.len())));
+                    return Err(IntegratorError::Input(format!(
+                        "{} constraints for {n} unknowns",
+                        c.len()
+                    )));
                 }
                 let cv = NVector::from_slice(c, &self.ctx).map_err(IntegratorError::Input)?;
                 self.check("IDASetConstraints", sys::IDASetConstraints(mem, cv.0))?;
@@ -305,7 +375,10 @@ impl<D: Dae> Ida<D> {
                     CalcIc::AllOfY { tout1 } => (sys::IDA_Y_INIT, tout1),
                 };
                 self.check("IDACalcIC", sys::IDACalcIC(mem, icopt, tout1))?;
-                self.check("IDAGetConsistentIC", sys::IDAGetConsistentIC(mem, self.out_y.0, self.out_yp.0))?;
+                self.check(
+                    "IDAGetConsistentIC",
+                    sys::IDAGetConsistentIC(mem, self.out_y.0, self.out_yp.0),
+                )?;
             }
         }
         Ok(())
@@ -326,7 +399,11 @@ impl<D: Dae> Ida<D> {
         self.t_internal
     }
 
-    fn getter(&self, function: &'static str, f: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int) -> u64 {
+    fn getter(
+        &self,
+        function: &'static str,
+        f: unsafe extern "C" fn(*mut c_void, *mut c_long) -> c_int,
+    ) -> u64 {
         let mut v: c_long = 0;
         // SAFETY: valid IDA memory and an out-pointer to a local.
         let flag = unsafe { f(self.mem, &mut v) };
@@ -336,7 +413,11 @@ impl<D: Dae> Ida<D> {
 }
 
 impl<D: Dae> Integrator for Ida<D> {
-    fn advance_to(&mut self, tout: f64, on_step: &mut dyn FnMut(f64, &Stats) -> bool) -> Result<(), IntegratorError> {
+    fn advance_to(
+        &mut self,
+        tout: f64,
+        on_step: &mut dyn FnMut(f64, &Stats) -> bool,
+    ) -> Result<(), IntegratorError> {
         if !(tout >= self.t_out) {
             return Err(IntegratorError::Input(format!(
                 "output time {tout} is before the current time {}",
@@ -346,7 +427,11 @@ impl<D: Dae> Integrator for Ida<D> {
         let mut tret = self.t_internal;
         while self.t_internal < tout {
             let eps = 8.0 * f64::EPSILON * tout.abs().max(1.0);
-            let next = self.breakpoints.iter().copied().find(|&b| b > self.t_internal + eps);
+            let next = self
+                .breakpoints
+                .iter()
+                .copied()
+                .find(|&b| b > self.t_internal + eps);
             if next != self.tstop {
                 if let Some(b) = next {
                     // SAFETY: valid IDA memory.
@@ -357,7 +442,16 @@ impl<D: Dae> Integrator for Ida<D> {
             }
             self.user.callback_error = None;
             // SAFETY: valid IDA memory and vectors of the right length.
-            let flag = unsafe { sys::IDASolve(self.mem, tout, &mut tret, self.yy.0, self.yp.0, sys::IDA_ONE_STEP) };
+            let flag = unsafe {
+                sys::IDASolve(
+                    self.mem,
+                    tout,
+                    &mut tret,
+                    self.yy.0,
+                    self.yp.0,
+                    sys::IDA_ONE_STEP,
+                )
+            };
             self.check("IDASolve", flag)?;
             self.t_internal = tret;
             if flag == sys::IDA_TSTOP_RETURN {
@@ -406,7 +500,10 @@ impl<D: Dae> Integrator for Ida<D> {
             jacobian_evals: self.getter("IDAGetNumJacEvals", sys::IDAGetNumJacEvals),
             lu_factorizations: self.user.ls.factorizations,
             newton_iters: self.getter("IDAGetNumNonlinSolvIters", sys::IDAGetNumNonlinSolvIters),
-            newton_failures: self.getter("IDAGetNumNonlinSolvConvFails", sys::IDAGetNumNonlinSolvConvFails),
+            newton_failures: self.getter(
+                "IDAGetNumNonlinSolvConvFails",
+                sys::IDAGetNumNonlinSolvConvFails,
+            ),
             error_test_failures: self.getter("IDAGetNumErrTestFails", sys::IDAGetNumErrTestFails),
             last_order: order.max(0) as u32,
             last_step: h,
@@ -417,7 +514,11 @@ impl<D: Dae> Integrator for Ida<D> {
 // ---------------------------------------------------------------------------------------
 // Callbacks. None may unwind into C: each runs its Rust body under `guard` (catch_unwind).
 
-fn dae_code<D>(user: &mut UserData<D>, r: Result<Result<(), DaeError>, String>, what: &str) -> c_int {
+fn dae_code<D>(
+    user: &mut UserData<D>,
+    r: Result<Result<(), DaeError>, String>,
+    what: &str,
+) -> c_int {
     match r {
         Ok(Ok(())) => 0,
         Ok(Err(DaeError::Inadmissible(m))) => {
@@ -486,7 +587,11 @@ unsafe extern "C" fn err_handler<D>(
         // SAFETY: IDA passes NUL-terminated strings and our boxed UserData.
         unsafe {
             let s = |p: *const c_char| {
-                if p.is_null() { String::new() } else { std::ffi::CStr::from_ptr(p).to_string_lossy().into_owned() }
+                if p.is_null() {
+                    String::new()
+                } else {
+                    std::ffi::CStr::from_ptr(p).to_string_lossy().into_owned()
+                }
             };
             let user = &mut *(user_data as *mut UserData<D>);
             user.ida_message = format!("[{} {} {error_code}] {}", s(module), s(function), s(msg));

@@ -85,7 +85,13 @@ impl LinearSolver for KluLu {
                 sys::SUNMatDestroy(a);
                 return Err(err("SUNLinSol_KLU"));
             }
-            let state = KluState { ls, a, x, b, _ctx: ctx };
+            let state = KluState {
+                ls,
+                a,
+                x,
+                b,
+                _ctx: ctx,
+            };
             if sys::SUNLinSol_KLUSetOrdering(ls, KLU_ORDERING_AMD) != 0 {
                 return Err(err("SUNLinSol_KLUSetOrdering"));
             }
@@ -100,7 +106,10 @@ impl LinearSolver for KluLu {
     }
 
     fn factorize(&mut self, values: &[f64]) -> Result<(), LinearSolverError> {
-        let st = self.state.as_mut().ok_or(LinearSolverError::NotReady("analyse"))?;
+        let st = self
+            .state
+            .as_mut()
+            .ok_or(LinearSolverError::NotReady("analyse"))?;
         if values.len() != self.nnz {
             return Err(LinearSolverError::Other(format!(
                 "KLU: {} values for a pattern of {} entries",
@@ -111,18 +120,24 @@ impl LinearSolver for KluLu {
         self.factorized = false;
         // SAFETY: the data array holds nnz values (allocated in analyse).
         let flag = unsafe {
-            std::slice::from_raw_parts_mut(sys::SUNSparseMatrix_Data(st.a), self.nnz).copy_from_slice(values);
+            std::slice::from_raw_parts_mut(sys::SUNSparseMatrix_Data(st.a), self.nnz)
+                .copy_from_slice(values);
             sys::SUNLinSolSetup(st.ls, st.a)
         };
         if flag != 0 {
-            return Err(LinearSolverError::Singular(format!("KLU setup returned {flag}")));
+            return Err(LinearSolverError::Singular(format!(
+                "KLU setup returned {flag}"
+            )));
         }
         self.factorized = true;
         Ok(())
     }
 
     fn solve_in_place(&mut self, b: &mut [f64]) -> Result<(), LinearSolverError> {
-        let st = self.state.as_mut().ok_or(LinearSolverError::NotReady("analyse"))?;
+        let st = self
+            .state
+            .as_mut()
+            .ok_or(LinearSolverError::NotReady("analyse"))?;
         if !self.factorized {
             return Err(LinearSolverError::NotReady("factorize"));
         }
@@ -130,7 +145,9 @@ impl LinearSolver for KluLu {
         // SAFETY: all handles valid; x and b are distinct serial vectors of length n.
         let flag = unsafe { sys::SUNLinSolSolve(st.ls, st.a, st.x.0, st.b.0, 0.0) };
         if flag != 0 {
-            return Err(LinearSolverError::Singular(format!("KLU solve returned {flag}")));
+            return Err(LinearSolverError::Singular(format!(
+                "KLU solve returned {flag}"
+            )));
         }
         b.copy_from_slice(st.x.as_slice());
         if b.iter().all(|v| v.is_finite()) {

@@ -103,7 +103,11 @@ unsafe fn view<'a>(v: sys::N_Vector) -> &'a [f64] {
     unsafe {
         let n = sys::N_VGetLength(v) as usize;
         let p = sys::N_VGetArrayPointer(v);
-        if n == 0 || p.is_null() { &[] } else { std::slice::from_raw_parts(p, n) }
+        if n == 0 || p.is_null() {
+            &[]
+        } else {
+            std::slice::from_raw_parts(p, n)
+        }
     }
 }
 
@@ -115,7 +119,11 @@ unsafe fn view_mut<'a>(v: sys::N_Vector) -> &'a mut [f64] {
     unsafe {
         let n = sys::N_VGetLength(v) as usize;
         let p = sys::N_VGetArrayPointer(v);
-        if n == 0 || p.is_null() { &mut [] } else { std::slice::from_raw_parts_mut(p, n) }
+        if n == 0 || p.is_null() {
+            &mut []
+        } else {
+            std::slice::from_raw_parts_mut(p, n)
+        }
     }
 }
 
@@ -127,7 +135,9 @@ pub(crate) fn ida_flag_name(flag: c_int) -> String {
         if p.is_null() {
             return format!("flag {flag}");
         }
-        let s = CStr::from_ptr(p as *const c_char).to_string_lossy().into_owned();
+        let s = CStr::from_ptr(p as *const c_char)
+            .to_string_lossy()
+            .into_owned();
         free(p as *mut c_void);
         s
     }
