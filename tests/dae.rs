@@ -197,13 +197,13 @@ fn heat2d_klu_reproduces_sundials_counters() {
     }
 }
 
-/// A wrapper that adds breakpoints and can make one residual call report an inadmissible
-/// state (as an inverted element would).
+/// A wrapper that adds breakpoints and can make residual calls report an inadmissible
+/// state (as an inverted element would): the first `fail_count` calls at t ≥ `fail_after`.
 struct Wrapped<D> {
     inner: D,
     breakpoints: Vec<f64>,
-    fail_call: Option<u64>,
-    calls: u64,
+    fail_after: f64,
+    fail_count: u64,
 }
 
 impl<D: Dae> Wrapped<D> {
@@ -211,8 +211,8 @@ impl<D: Dae> Wrapped<D> {
         Self {
             inner,
             breakpoints: Vec::new(),
-            fail_call: None,
-            calls: 0,
+            fail_after: f64::INFINITY,
+            fail_count: 0,
         }
     }
 }
@@ -222,11 +222,10 @@ impl<D: Dae> Dae for Wrapped<D> {
         self.inner.size()
     }
     fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
-        self.calls += 1;
-        if Some(self.calls) == self.fail_call {
+        if t >= self.fail_after && self.fail_count > 0 {
+            self.fail_count -= 1;
             return Err(DaeError::Inadmissible(format!(
-                "test: call {} at t = {t}",
-                self.calls
+                "test: inadmissible at t = {t}"
             )));
         }
         self.inner.residual(t, y, yp, r)
@@ -304,30 +303,63 @@ fn bdf2_converges_with_order_two_on_a_closed_form_dae() {
     }
 }
 
+/// IDA on the closed-form DAE to t = 1; relative errors of (x₁, x₂) and the steps taken.
+fn ida_analytic(rtol: f64, suppress_alg: bool) -> ([f64; 2], u64) {
+    let opts = IdaOptions {
+        rtol,
+        atol: Atol::Scalar(rtol * 1e-3),
+        suppress_alg,
+        ..Default::default()
+    };
+    let mut ida = Ida::new(Analytic::new(10.0), opts).unwrap();
+    for k in 1..=10 {
+        run_to(&mut ida, 0.1 * k as f64);
+    }
+    let (exact, _) = Analytic::exact(1.0);
+    let err = [0, 1].map(|i| ((ida.y()[i] - exact[i]) / exact[i]).abs());
+    (err, ida.stats().steps)
+}
+
 #[test]
 fn ida_error_shrinks_with_rtol_on_a_closed_form_dae() {
+    // With x₂ (algebraic) in the error test both components converge with rtol, at a
+    // price: 338 steps and 222 error-test failures at rtol 1e-4 (SUNDIALS' own published
+    // run of this example: 343 and 232).
+    let (e3, _) = ida_analytic(1e-3, false);
+    let (e5, _) = ida_analytic(1e-5, false);
+    for i in 0..2 {
+        assert!(
+            e5[i] < e3[i] / 10.0 && e5[i] < 10.0 * 1e-5,
+            "x{}: errors {:.2e} → {:.2e}",
+            i + 1,
+            e3[i],
+            e5[i]
+        );
+    }
+    // Excluded from the error test (IDASetSuppressAlg) the steps drop tenfold and x₁ keeps
+    // converging; x₂ is then only as good as IDA's interpolation of an uncontrolled
+    // component (its error stalls near 3e-6), which this test records as well.
     let mut last = f64::INFINITY;
     for rtol in [1e-3, 1e-5, 1e-7, 1e-9] {
-        let opts = IdaOptions {
-            rtol,
-            atol: Atol::Scalar(rtol * 1e-3),
-            ..Default::default()
-        };
-        let mut ida = Ida::new(Analytic::new(10.0), opts).unwrap();
-        for k in 1..=10 {
-            run_to(&mut ida, 0.1 * k as f64);
+        let (err, steps) = ida_analytic(rtol, true);
+        assert!(
+            err[0] < last / 10.0 && err[0] < 10.0 * rtol,
+            "rtol {rtol}: x1 error {:.2e} (previous {last:.2e})",
+            err[0]
+        );
+        assert!(err[1] < 1e-2, "rtol {rtol}: x2 error {:.2e}", err[1]);
+        if rtol == 1e-5 {
+            assert!(
+                steps < ida_steps_without_suppression(1e-5) / 5,
+                "suppressing x2 did not save steps"
+            );
         }
-        let err = analytic_error(ida.y(), 1.0);
-        assert!(
-            err < last / 5.0,
-            "rtol {rtol}: error {err:.3e} did not shrink from {last:.3e}"
-        );
-        assert!(
-            err < 20.0 * rtol,
-            "rtol {rtol}: error {err:.3e} far above the tolerance"
-        );
-        last = err;
+        last = err[0];
     }
+}
+
+fn ida_steps_without_suppression(rtol: f64) -> u64 {
+    ida_analytic(rtol, false).1
 }
 
 #[test]
@@ -368,18 +400,20 @@ fn ida_recovers_from_an_inadmissible_state() {
     let opts = || IdaOptions {
         rtol: 1e-6,
         atol: Atol::Scalar(1e-9),
+        suppress_alg: true,
         ..Default::default()
     };
     let mut clean = Ida::new(Wrapped::new(Analytic::new(10.0)), opts()).unwrap();
     run_to(&mut clean, 1.0);
     let mut w = Wrapped::new(Analytic::new(10.0));
-    w.fail_call = Some(40);
+    (w.fail_after, w.fail_count) = (0.5, 2);
     let mut flaky = Ida::new(w, opts()).unwrap();
     run_to(&mut flaky, 1.0);
     let (sc, sf) = (clean.stats(), flaky.stats());
+    assert_eq!(flaky.dae().fail_count, 0, "the failures were not triggered");
     assert!(
-        sf.newton_failures > sc.newton_failures,
-        "the failure was not seen: {sf:?}"
+        sf.newton_failures >= sc.newton_failures + 2,
+        "the failures were not seen as recoverable: {sf:?}"
     );
     assert!(
         analytic_error(flaky.y(), 1.0) < 1e-4,
@@ -389,8 +423,10 @@ fn ida_recovers_from_an_inadmissible_state() {
 
 #[test]
 fn bdf2_cuts_its_step_on_an_inadmissible_state() {
+    // Two failing calls: the attempt with the stored factorization, then the one with a
+    // fresh Jacobian, so the step must be halved once.
     let mut w = Wrapped::new(Analytic::new(10.0));
-    w.fail_call = Some(25);
+    (w.fail_after, w.fail_count) = (0.5, 2);
     let mut b = Bdf2::new(
         w,
         Bdf2Options {

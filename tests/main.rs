@@ -1,5 +1,7 @@
 //! The integration tests: one binary, one module per concern.
 #![allow(clippy::needless_range_loop)]
 
+mod cli;
 mod dae;
 mod model;
+mod scenes;

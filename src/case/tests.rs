@@ -60,7 +60,7 @@ fn case_every_scene_file_loads_and_validates() {
 fn case_scenes_match_model_section_7() {
     let all_with_adhesion_and_inertia = |c: &Case| {
         assert_eq!(c.adhesion, Some(Adhesion::default()), "{}", c.name);
-        assert_eq!(c.inertia.mode, InertiaMode::On, "{}", c.name);
+        assert_eq!(c.inertia.mode, InertiaMode::OffAfter(9.0), "{}", c.name);
         assert_eq!(c.phases.t_g0, 10_000.0);
         assert_eq!(c.phases.t_as0, 40_000.0);
         assert_eq!(c.phases.t_a0, 50_000.0);
@@ -115,8 +115,12 @@ fn case_scenes_match_model_section_7() {
     assert_eq!(short.phases.t_end, 600.0);
     let gravity = load("fast/flat-gravity.ron");
     assert_eq!((gravity.mesh.refine, gravity.phases.t_end), (0.5, 200.0));
-    let off = load("fast/push-pull-short-inertia-off.ron");
-    assert_eq!(off.inertia.mode, InertiaMode::OffAfter(100.0));
+    assert_eq!(short.inertia.mode, InertiaMode::OffAfter(0.5));
+    let drag = load("fast/push-pull-short-drag.ron");
+    assert_eq!(
+        (drag.inertia.mode, drag.inertia.drag),
+        (InertiaMode::Off, 4.5e-5)
+    );
 }
 
 #[test]

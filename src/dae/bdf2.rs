@@ -21,8 +21,10 @@
 //! ρ = (‖δₘ‖/‖δ₀‖)^{1/m} the rate, the iteration has converged when ‖δ₀‖ ≤ 10⁻⁴·tol or
 //! ρ/(1−ρ)·‖δₘ‖ ≤ tol (tol = `newton_tol`, default 0.33 as in IDA); it fails when ρ > 0.9
 //! or after `max_newton_iters`. A failure with a stale Jacobian re-evaluates it and retries;
-//! a failure with a fresh one (or an inadmissible state) halves the step, at most
-//! `max_cuts` times in a row, then stops with an error naming the time, step and reason.
+//! a failure with a fresh one retries with full Newton (the Jacobian re-evaluated at every
+//! iterate, for nonlinearities such as contact onset within one step); a failure of that
+//! (or an inadmissible state) halves the step, at most `max_cuts` times in a row, then
+//! stops with an error naming the time, step and reason.
 //!
 //! **Output.** Values between steps come from the cubic Hermite interpolant of
 //! (yₙ, ẏₙ, yₙ₊₁, ẏₙ₊₁), which is more accurate than the method, so outputs keep order 2.
@@ -219,18 +221,24 @@ impl<D: Dae> Bdf2<D> {
             }
         }
         error_weights(&self.yn, self.opts.rtol, &self.opts.atol, &mut self.w);
-        // The first attempt may reuse a stale factorization; a failure then retries once
-        // with a fresh Jacobian. A failure with a fresh Jacobian fails the step.
-        for attempt in 0..2 {
-            let fresh = attempt == 1 || self.factor_cj != Some(cj);
+        // Attempts: (0) modified Newton with the stored factorization, if its cj matches;
+        // (1) modified Newton with a fresh Jacobian at the predictor; (2) full Newton, the
+        // Jacobian re-evaluated at every iterate (contact onset changes the stiffness within
+        // one step). All failing fails the step.
+        let stale_ok = self.factor_cj == Some(cj);
+        let mut last = String::new();
+        for attempt in 0..3 {
+            if attempt == 0 && !stale_ok {
+                continue;
+            }
             // Predictor: y_new = y + h ẏ.
             for i in 0..n {
                 self.y_new[i] = self.yn[i] + h * self.ypn[i];
             }
-            if fresh {
+            if attempt >= 1 {
                 self.refresh_jacobian(t_new, cj)?;
             }
-            match self.newton(t_new, cj) {
+            match self.newton(t_new, cj, attempt == 2) {
                 Ok(()) => {
                     // Accept: shift history.
                     std::mem::swap(&mut self.y_prev, &mut self.yn);
@@ -249,15 +257,12 @@ impl<D: Dae> Bdf2<D> {
                 }
                 Err(StepFailure::Newton(m)) => {
                     self.stats.newton_failures += 1;
-                    if fresh {
-                        return Err(StepFailure::Newton(m));
-                    }
-                    self.factor_cj = None;
+                    last = m;
                 }
                 Err(e) => return Err(e),
             }
         }
-        unreachable!("the second attempt always uses a fresh Jacobian")
+        Err(StepFailure::Newton(last))
     }
 
     /// Evaluates J at the predicted point and factorizes it.
@@ -295,12 +300,22 @@ impl<D: Dae> Bdf2<D> {
     }
 
     /// Modified Newton from the predictor in `y_new`.
-    fn newton(&mut self, t_new: f64, cj: f64) -> Result<(), StepFailure> {
+    /// Newton from the predictor in `y_new`: modified (the stored factorization) or, with
+    /// `full`, re-evaluating the Jacobian at every iterate after the first.
+    fn newton(&mut self, t_new: f64, cj: f64, full: bool) -> Result<(), StepFailure> {
         let n = self.yn.len();
         let mut yp_new = vec![0.0; n];
         let mut norm0 = 0.0;
         let tol = self.opts.newton_tol;
-        for m in 0..self.opts.max_newton_iters {
+        let iters = if full {
+            2 * self.opts.max_newton_iters
+        } else {
+            self.opts.max_newton_iters
+        };
+        for m in 0..iters {
+            if full && m > 0 {
+                self.refresh_jacobian(t_new, cj)?;
+            }
             for i in 0..n {
                 yp_new[i] = cj * self.y_new[i] + self.beta[i];
             }
@@ -353,8 +368,7 @@ impl<D: Dae> Bdf2<D> {
             }
         }
         Err(StepFailure::Newton(format!(
-            "no convergence in {} Newton iterations",
-            self.opts.max_newton_iters
+            "no convergence in {iters} Newton iterations"
         )))
     }
 

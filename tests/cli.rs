@@ -1,0 +1,117 @@
+//! The `cellsim` binary: exit statuses, error messages, output files.
+
+use std::process::Command;
+
+use crate::scenes::read_csv;
+
+fn cellsim(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_cellsim"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run cellsim")
+}
+
+#[test]
+fn every_bad_case_exits_with_status_2_and_names_its_field() {
+    let dir = format!("{}/cases/bad", env!("CARGO_MANIFEST_DIR"));
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let expect = |key: &str| {
+            text.lines()
+                .find_map(|l| l.strip_prefix(&format!("// {key}: ")).map(str::to_string))
+                .unwrap_or_else(|| panic!("{} has no `{key}` comment", path.display()))
+        };
+        let (field, message) = (expect("expect-field"), expect("expect-error"));
+        let rel = format!("cases/bad/{}", path.file_name().unwrap().to_string_lossy());
+        let out = cellsim(&[
+            "run",
+            &rel,
+            "--quiet",
+            "--out",
+            &format!("{}/bad", env!("CARGO_TARGET_TMPDIR")),
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{rel}: {stderr}");
+        assert!(
+            stderr.contains(&field),
+            "{rel}: `{field}` not named in: {stderr}"
+        );
+        assert!(
+            stderr.contains(&message),
+            "{rel}: expected `{message}`, got: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{rel}: panic: {stderr}");
+        seen += 1;
+    }
+    assert!(seen >= 6, "only {seen} bad cases");
+}
+
+#[test]
+fn bad_command_line_values_and_missing_files_exit_with_status_2() {
+    for (args, needle) in [
+        (
+            vec!["run", "cases/fast/flat-gravity.ron", "--rtol", "2"],
+            "--rtol = 2 is out of range",
+        ),
+        (
+            vec!["run", "cases/fast/flat-gravity.ron", "--dt=-1"],
+            "--dt = -1 is out of range",
+        ),
+        (
+            vec!["run", "cases/does-not-exist.ron"],
+            "does-not-exist.ron",
+        ),
+        (
+            vec!["check", "cases/bad/nu-half.ron"],
+            "materials.nucleus.nu",
+        ),
+    ] {
+        let out = cellsim(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn run_writes_its_time_series_summary_and_states() {
+    let out = format!("{}/cli-run", env!("CARGO_TARGET_TMPDIR"));
+    let _ = std::fs::remove_dir_all(&out);
+    let res = cellsim(&[
+        "run",
+        "cases/fast/flat-gravity.ron",
+        "--out",
+        &out,
+        "--quiet",
+    ]);
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    let rows = read_csv(&std::path::Path::new(&out).join("timeseries.csv"));
+    assert!(rows.len() >= 201, "{} rows", rows.len());
+    assert!(rows.iter().all(|r| r.iter().all(|v| v.is_finite())));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{out}/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["finished"], true);
+    assert_eq!(summary["case"], "flat-gravity");
+    assert!(summary["stats"]["steps"].as_u64().unwrap() > 10);
+    let last = rows.last().unwrap();
+    assert_eq!(summary["final_values"]["t"].as_f64(), Some(last[0]));
+    // The cell has landed: in contact, sunk by about the 0.4 µm gap to the band.
+    assert!(
+        last[1] > 0.3 && last[2] < -0.39 && last[2] > -0.45,
+        "{last:?}"
+    );
+    assert!(std::path::Path::new(&format!("{out}/mesh.json")).exists());
+    assert_eq!(
+        summary["states"].as_array().unwrap().len(),
+        1,
+        "state at t_end"
+    );
+}
