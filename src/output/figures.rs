@@ -19,7 +19,7 @@ use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
 use super::OutputError;
-use super::geometry::{Bounds, CellShape, Pt, substrate_floor, surface_profile};
+use super::geometry::{Backdrop, Bounds, CellShape, Pt, Rect, substrate_floor};
 use super::read::RunData;
 use crate::fem::Domain;
 use crate::model::observe::Observables;
@@ -111,6 +111,9 @@ pub struct Marks {
     pub points: Vec<(f64, f64)>,
     /// Colour.
     pub color: RGBColor,
+    /// Circle radius [px] (concentric circles keep coinciding values of several runs
+    /// visible).
+    pub radius: i32,
 }
 
 /// A time plot: curves, reported values and the phases.
@@ -189,13 +192,15 @@ pub fn draw_time_plot<DB: DrawingBackend>(
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let (lo, hi) = value_range(plot);
     let t_max = if plot.t_max > 0.0 { plot.t_max } else { 1.0 };
+    // 3 % of room after the end, so marks at the end time are not cut.
+    let t_axis_end = 1.03 * t_max;
     let mut chart = ChartBuilder::on(area)
         .caption(&plot.title, (FONT, 28))
         .margin(18)
         .margin_right(44)
         .x_label_area_size(60)
         .y_label_area_size(90)
-        .build_cartesian_2d(0.0..t_max, lo..hi)
+        .build_cartesian_2d(0.0..t_axis_end, lo..hi)
         .map_err(e)?;
     let fmt_t = |v: &f64| group_thousands(*v);
     chart
@@ -279,7 +284,7 @@ pub fn draw_time_plot<DB: DrawingBackend>(
             .draw_series(
                 m.points
                     .iter()
-                    .map(|&p| Circle::new(p, 8, color.stroke_width(3))),
+                    .map(|&p| Circle::new(p, m.radius, color.stroke_width(3))),
             )
             .map_err(e)?;
         if !m.label.is_empty() {
@@ -365,6 +370,7 @@ pub fn contact_radius_figure(
             label: reported_label.to_string(),
             points: reported.to_vec(),
             color: BLACK,
+            radius: 8,
         }]
     };
     let plot = TimePlot {
@@ -382,7 +388,8 @@ pub fn contact_radius_figure(
 
 /// Vertical displacement of p_t (solid) and c (dashed) against time for `runs` (the
 /// paper's Fig. 9 kind of curve), with reported displacements of p_t per run (t [s],
-/// u_y [µm]) as hollow circles in the run's colour.
+/// u_y [µm]) as hollow circles in the run's colour, concentric (one radius per run) so
+/// values shared by several runs stay visible.
 pub fn displacement_figure(
     path: &Path,
     runs: &[&RunData],
@@ -411,6 +418,7 @@ pub fn displacement_figure(
                     label: String::new(),
                     points: rep.clone(),
                     color,
+                    radius: 7 + 4 * k as i32,
                 });
             }
         }
@@ -420,6 +428,7 @@ pub fn displacement_figure(
             label: reported_label.to_string(),
             points: vec![],
             color: BLACK,
+            radius: 8,
         });
     }
     let plot = TimePlot {
@@ -515,6 +524,7 @@ pub fn upside_down_figure(
             label: format!("paper: |difference| = {d} µm at the end (Sect. 3.3)"),
             points: vec![(t_max, d), (t_max, -d)],
             color: BLACK,
+            radius: 8,
         });
     }
     let bottom = TimePlot {
@@ -744,13 +754,15 @@ pub struct ShapeStyleOptions {
 
 /// Draws the deformed full cell of `mesh` displaced by `u` into `area` over `view`, with
 /// equal aspect: the view is widened along one axis so 1 µm has the same length in
-/// pixels on both.
+/// pixels on both. `backdrop` caches the substrate drawing between calls with the same
+/// view (pass `&mut None` for a single drawing).
 pub fn draw_shape<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     mesh: &MeshFile,
     u: &[[f64; 2]],
     view: Bounds,
     opts: &ShapeStyleOptions,
+    backdrop: &mut Option<Backdrop>,
 ) -> Result<ShapeScale, String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     if u.len() != mesh.nodes.len() {
@@ -802,30 +814,23 @@ pub fn draw_shape<DB: DrawingBackend>(
         .draw()
         .map_err(e)?;
 
-    // Substrate and fibronectin layer: filled profiles closed at the bottom of the view.
-    let n_prof = ((x1 - x0) / 0.02).ceil().max(2.0) as usize;
-    let closed = |prof: &[Pt]| -> Vec<(f64, f64)> {
-        let mut v: Vec<(f64, f64)> = prof.iter().map(|p| (p[0], p[1])).collect();
-        v.push((x1, y0));
-        v.push((x0, y0));
-        v
+    // Substrate and fibronectin layer, one strip per pixel column (computed once per
+    // view: a movie reuses it for every frame).
+    let key = [x0, x1, y0, y1];
+    let back = match backdrop.take() {
+        Some(b) if b.view == key => b,
+        _ => Backdrop::new(&mesh.substrate, mesh.layer_thickness, key, pw as usize),
     };
-    let surface = surface_profile(&mesh.substrate, 0.0, x0, x1, n_prof);
-    let layer = mesh
-        .layer_thickness
-        .map(|ef| surface_profile(&mesh.substrate, ef, x0, x1, n_prof));
-    if let Some(l) = &layer {
+    let rect = |r: &Rect, c: RGBColor| Rectangle::new([(r[0], r[3]), (r[1], r[2])], c.filled());
+    if mesh.layer_thickness.is_some() {
         chart
-            .draw_series(std::iter::once(Polygon::new(closed(l), LAYER.filled())))
+            .draw_series(back.layer.iter().map(|r| rect(r, LAYER)))
             .map_err(e)?
             .label("fibronectin layer")
             .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], LAYER.filled()));
     }
     chart
-        .draw_series(std::iter::once(Polygon::new(
-            closed(&surface),
-            SUBSTRATE.filled(),
-        )))
+        .draw_series(back.substrate.iter().map(|r| rect(r, SUBSTRATE)))
         .map_err(e)?
         .label("substrate")
         .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], SUBSTRATE.filled()));
@@ -897,23 +902,24 @@ pub fn draw_shape<DB: DrawingBackend>(
                 PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
             });
     }
-    // Substrate surface and layer edge on top, as the paper's black lines.
-    if let Some(l) = &layer {
-        chart
-            .draw_series(std::iter::once(DashedPathElement::new(
-                l.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>(),
-                8,
-                5,
-                LAYER_EDGE.stroke_width(2),
-            )))
-            .map_err(e)?;
-    }
+    // Layer edge and substrate surface on top, as the paper's black lines.
     chart
-        .draw_series(std::iter::once(PathElement::new(
-            surface.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>(),
-            BLACK.stroke_width(2),
-        )))
+        .draw_series(back.layer_edge.iter().map(|sg| {
+            PathElement::new(
+                vec![(sg[0][0], sg[0][1]), (sg[1][0], sg[1][1])],
+                LAYER_EDGE.stroke_width(2),
+            )
+        }))
         .map_err(e)?;
+    chart
+        .draw_series(back.surface.iter().map(|l| {
+            PathElement::new(
+                l.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>(),
+                BLACK.stroke_width(2),
+            )
+        }))
+        .map_err(e)?;
+    *backdrop = Some(back);
     chart
         .draw_series(
             shape
@@ -976,8 +982,8 @@ pub fn shape_figure(
         font: 28,
         mesh_lines: true,
     };
-    let scale =
-        draw_shape(&root, mesh, &state.u, view, &opts).map_err(|x| OutputError::draw(path, x))?;
+    let scale = draw_shape(&root, mesh, &state.u, view, &opts, &mut None)
+        .map_err(|x| OutputError::draw(path, x))?;
     root.present().map_err(|x| OutputError::draw(path, x))?;
     Ok(scale)
 }

@@ -351,53 +351,201 @@ impl Bounds {
     }
 }
 
-/// Step of the downward scan for the surface height [µm].
+/// Step of the vertical scans and of the contouring grid [µm].
 const SCAN_STEP: f64 = 0.05;
 
-/// The top of the region `{d_sub ≥ −offset}` along the vertical through each of `n`
-/// equally spaced abscissae in `[x0, x1]`: the substrate surface for `offset = 0`, the
-/// upper edge of the fibronectin layer (MODEL.md §5) for `offset = e_f`.
-///
-/// Flat: the line `y = y_s + offset`. Pillars: a downward scan from above the pillar tops
-/// (step 0.05 µm, then bisection to 1e-9 µm) to the first point with `d ≥ −offset`,
-/// which exists at the latest at `floor + offset`. Under the rounded pillar corners the
-/// region is not a graph over x (a thin undercut by each pillar foot); the profile
-/// follows its upper edge.
-pub fn surface_profile(sub: &Substrate, offset: f64, x0: f64, x1: f64, n: usize) -> Vec<Pt> {
-    match sub {
-        Substrate::Flat { y_s } => vec![[x0, y_s + offset], [x1, y_s + offset]],
-        Substrate::Pillars(p) => {
-            let n = n.max(2);
-            let d = |x: f64, y: f64| sub.eval(&Vector2::new(x, y)).0 + offset;
-            let floor = p.y_top - p.height + offset;
-            let top = p.y_top + offset + 2.0 * SCAN_STEP;
-            (0..n)
-                .map(|k| {
-                    let x = x0 + (x1 - x0) * k as f64 / (n - 1) as f64;
-                    let mut y = top;
-                    while y > floor && d(x, y) < 0.0 {
-                        y -= SCAN_STEP;
-                    }
-                    if y <= floor {
-                        return [x, floor];
-                    }
-                    // d(x, y) ≥ 0 > d(x, y + step) (or y = top): bisect.
-                    let (mut lo, mut hi) = (y, (y + SCAN_STEP).min(top));
-                    if d(x, hi) >= 0.0 {
-                        return [x, hi];
-                    }
-                    for _ in 0..40 {
-                        let mid = 0.5 * (lo + hi);
-                        if d(x, mid) >= 0.0 {
-                            lo = mid;
-                        } else {
-                            hi = mid;
-                        }
-                    }
-                    [x, lo]
+/// Points per pillar outline in [`Backdrop`].
+const OUTLINE_POINTS: usize = 400;
+
+/// A rectangle (x_a, x_b, y_lo, y_hi) [µm].
+pub type Rect = [f64; 4];
+
+/// The intervals of `[y0, y1]` where `f(y) ≥ 0`, found by a downward scan in steps of
+/// [`SCAN_STEP`] with each sign change bisected to 1e-9 µm.
+fn intervals(f: impl Fn(f64) -> f64, y0: f64, y1: f64) -> Vec<[f64; 2]> {
+    let bisect = |mut inside: f64, mut outside: f64| {
+        for _ in 0..40 {
+            let mid = 0.5 * (inside + outside);
+            if f(mid) >= 0.0 {
+                inside = mid;
+            } else {
+                outside = mid;
+            }
+        }
+        0.5 * (inside + outside)
+    };
+    let mut out = Vec::new();
+    let mut y = y1;
+    let mut top = (f(y) >= 0.0).then_some(y1);
+    while y > y0 {
+        let next = (y - SCAN_STEP).max(y0);
+        let (a, b) = (f(y) >= 0.0, f(next) >= 0.0);
+        match (a, b) {
+            (false, true) => top = Some(bisect(next, y)),
+            (true, false) => {
+                if let Some(t) = top.take() {
+                    out.push([bisect(y, next), t]);
+                }
+            }
+            _ => {}
+        }
+        y = next;
+    }
+    if let Some(t) = top {
+        out.push([y0, t]);
+    }
+    out
+}
+
+/// The pieces of a polyline with x inside `[x0, x1]`, cut where it leaves.
+fn clip_x(line: &[Pt], x0: f64, x1: f64) -> Vec<Vec<Pt>> {
+    let inside = |p: &Pt| p[0] >= x0 && p[0] <= x1;
+    let mut pieces = Vec::new();
+    let mut cur: Vec<Pt> = Vec::new();
+    for w in line.windows(2) {
+        let (p, q) = (w[0], w[1]);
+        let cut = |xc: f64| {
+            let s = (xc - p[0]) / (q[0] - p[0]);
+            [xc, p[1] + s * (q[1] - p[1])]
+        };
+        match (inside(&p), inside(&q)) {
+            (true, true) => {
+                if cur.is_empty() {
+                    cur.push(p);
+                }
+                cur.push(q);
+            }
+            (true, false) => {
+                if cur.is_empty() {
+                    cur.push(p);
+                }
+                cur.push(cut(if q[0] > x1 { x1 } else { x0 }));
+                pieces.push(std::mem::take(&mut cur));
+            }
+            (false, true) => {
+                cur = vec![cut(if p[0] > x1 { x1 } else { x0 }), q];
+            }
+            (false, false) => {}
+        }
+    }
+    if cur.len() > 1 {
+        pieces.push(cur);
+    }
+    pieces
+}
+
+/// Segments of the zero level of `f` over the box, by marching squares on a grid of
+/// spacing about `h` (linear interpolation on the cell edges; saddles split by the cell
+/// centre's value).
+fn contour(f: impl Fn(f64, f64) -> f64, b: [f64; 4], h: f64) -> Vec<[Pt; 2]> {
+    let [x0, x1, y0, y1] = b;
+    let nx = ((x1 - x0) / h).ceil().max(1.0) as usize;
+    let ny = ((y1 - y0) / h).ceil().max(1.0) as usize;
+    let (hx, hy) = ((x1 - x0) / nx as f64, (y1 - y0) / ny as f64);
+    let pt = |i: usize, j: usize| [x0 + i as f64 * hx, y0 + j as f64 * hy];
+    let vals: Vec<Vec<f64>> = (0..=nx)
+        .map(|i| {
+            (0..=ny)
+                .map(|j| {
+                    let p = pt(i, j);
+                    f(p[0], p[1])
                 })
                 .collect()
+        })
+        .collect();
+    let mut segs = Vec::new();
+    for i in 0..nx {
+        for j in 0..ny {
+            // Corners counter-clockwise from the lower left.
+            let c = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
+            let v = c.map(|(a, b)| vals[a][b]);
+            let p = c.map(|(a, b)| pt(a, b));
+            let mut cuts = Vec::with_capacity(4);
+            for k in 0..4 {
+                let l = (k + 1) % 4;
+                if (v[k] >= 0.0) != (v[l] >= 0.0) {
+                    cuts.push(crossing(p[k], v[k], p[l], v[l]));
+                }
+            }
+            match cuts.len() {
+                2 => segs.push([cuts[0], cuts[1]]),
+                4 => {
+                    let centre = 0.25 * (v[0] + v[1] + v[2] + v[3]);
+                    // Cuts are on edges 0-1, 1-2, 2-3, 3-0; pair them so the centre's side
+                    // stays connected.
+                    if (centre >= 0.0) == (v[0] >= 0.0) {
+                        segs.push([cuts[0], cuts[1]]);
+                        segs.push([cuts[2], cuts[3]]);
+                    } else {
+                        segs.push([cuts[3], cuts[0]]);
+                        segs.push([cuts[1], cuts[2]]);
+                    }
+                }
+                _ => {}
+            }
         }
+    }
+    segs
+}
+
+/// The substrate and the fibronectin layer over a view, ready to draw.
+#[derive(Debug, Clone, Default)]
+pub struct Backdrop {
+    /// The view (x0, x1, y0, y1) it was computed for [µm].
+    pub view: [f64; 4],
+    /// The fibronectin layer `{d_sub ≥ −e_f}` as thin column rectangles.
+    pub layer: Vec<Rect>,
+    /// The substrate `{d_sub ≥ 0}` as thin column rectangles.
+    pub substrate: Vec<Rect>,
+    /// The layer's upper edge `d_sub = −e_f` (segments).
+    pub layer_edge: Vec<[Pt; 2]>,
+    /// The substrate's surface, exact (polylines, clipped to the view).
+    pub surface: Vec<Vec<Pt>>,
+}
+
+impl Backdrop {
+    /// The substrate `sub` and, with `e_f`, its fibronectin layer (MODEL.md §5) over the
+    /// view `[x0, x1, y0, y1]`, filled by `columns` vertical strips (one per pixel gives
+    /// an exact picture: undercuts by the pillars' rounded feet stay open).
+    pub fn new(sub: &Substrate, e_f: Option<f64>, view: [f64; 4], columns: usize) -> Self {
+        let [x0, x1, y0, y1] = view;
+        let mut b = Backdrop {
+            view,
+            ..Default::default()
+        };
+        match sub {
+            Substrate::Flat { y_s } => {
+                b.substrate.push([x0, x1, y0, y_s.min(y1)]);
+                b.surface.push(vec![[x0, *y_s], [x1, *y_s]]);
+                if let Some(e) = e_f {
+                    b.layer.push([x0, x1, y0, (y_s + e).min(y1)]);
+                    b.layer_edge.push([[x0, y_s + e], [x1, y_s + e]]);
+                }
+            }
+            Substrate::Pillars(_) => {
+                let n = columns.max(2);
+                let dx = (x1 - x0) / n as f64;
+                let depth = |x: f64, y: f64| sub.eval(&Vector2::new(x, y)).0;
+                for k in 0..n {
+                    let (xa, xb) = (x0 + k as f64 * dx, x0 + (k + 1) as f64 * dx);
+                    let xm = 0.5 * (xa + xb);
+                    for [lo, hi] in intervals(|y| depth(xm, y), y0, y1) {
+                        b.substrate.push([xa, xb, lo, hi]);
+                    }
+                    if let Some(e) = e_f {
+                        for [lo, hi] in intervals(|y| depth(xm, y) + e, y0, y1) {
+                            b.layer.push([xa, xb, lo, hi]);
+                        }
+                    }
+                }
+                let outline = sub.outline(x0, x1, OUTLINE_POINTS);
+                b.surface = clip_x(&outline, x0, x1);
+                if let Some(e) = e_f {
+                    b.layer_edge = contour(|x, y| depth(x, y) + e, view, SCAN_STEP);
+                }
+            }
+        }
+        b
     }
 }
 

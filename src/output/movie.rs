@@ -11,7 +11,7 @@ use plotters::prelude::*;
 
 use super::OutputError;
 use super::figures::{ShapeStyleOptions, draw_shape};
-use super::geometry::{Bounds, substrate_floor};
+use super::geometry::{Backdrop, Bounds, substrate_floor};
 use super::snapshot::Snapshot;
 use crate::run::MeshFile;
 
@@ -36,6 +36,7 @@ pub struct Movie {
     offered: usize,
     frames: usize,
     skipped: Option<Snapshot>,
+    backdrop: Option<Backdrop>,
 }
 
 /// The frame of a movie: the reference cell widened to 2.1 cell radii on each side of
@@ -89,6 +90,7 @@ impl Movie {
             offered: 0,
             frames: 0,
             skipped: None,
+            backdrop: None,
         })
     }
 
@@ -123,8 +125,15 @@ impl Movie {
                 font: 20,
                 mesh_lines: false,
             };
-            draw_shape(&area, &self.mesh, &s.u, self.view, &opts)
-                .map_err(|e| OutputError::draw(&path, e))?;
+            draw_shape(
+                &area,
+                &self.mesh,
+                &s.u,
+                self.view,
+                &opts,
+                &mut self.backdrop,
+            )
+            .map_err(|e| OutputError::draw(&path, e))?;
             area.present().map_err(|e| OutputError::draw(&path, e))?;
         }
         let mut frame = gif::Frame::from_rgb_speed(w as u16, h as u16, &rgb, QUANT_SPEED);

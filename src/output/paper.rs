@@ -255,7 +255,7 @@ impl Quantity {
             Quantity::StrainNucleus => "mean ‖E‖ of the nucleus at the end (%)".into(),
             Quantity::StrainCytoplasm => "mean ‖E‖ of the cytoplasm at the end (%)".into(),
             Quantity::UpsideDownDifference => {
-                "|u_y(p_t)| upside down − control at the end (µm)".into()
+                "difference of u_y(p_t), upside down − control, at the end, absolute (µm)".into()
             }
         }
     }
@@ -617,7 +617,7 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
                 &p,
                 &pillars,
                 &marks,
-                "paper (Sect. 3.2), colour of its scene",
+                "paper (Sect. 3.2): circles in each scene's colour",
             )
             .map(|_| p),
             &mut report,
@@ -775,7 +775,8 @@ pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) ->
         "\nDefinitions. *Contact radius*: deformed length of the half cell's boundary within \
          ε_ct of the substrate. *Downward displacement of p_t*: −u_y of the nucleus top; at \
          the end, its largest value over the run (the paper's \"maximum displacement of the \
-         nucleus\"). *Mean ‖E‖*: reference-area mean of the Frobenius norm of the \
+         nucleus\"); it counts from the suspended start, so it includes the fall onto \
+         the pillars (the cell starts 0.5 µm above them, MODEL.md §5). *Mean ‖E‖*: reference-area mean of the Frobenius norm of the \
          Green-Lagrange strain over the domain. *Upside down − control*: the control \
          (`{CONTROL}`) is the push-pull scene continued to the upside-down scene's end time \
          with gravity unchanged, the paper's Fig. 9 control; both are compared at that \
