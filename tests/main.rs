@@ -3,3 +3,4 @@
 
 mod dae;
 mod model;
+mod plots;
