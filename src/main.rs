@@ -263,7 +263,7 @@ fn main() -> ExitCode {
                     }
                     for r in &report.runs {
                         if let Err(e) = &r.result {
-                            eprintln!("error: {}: {e}", r.name);
+                            eprintln!("error: {e}");
                         }
                     }
                     println!(

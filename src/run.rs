@@ -382,10 +382,24 @@ fn add_stats(a: &Stats, b: &Stats) -> Stats {
 
 /// A progress bar for a scene (hidden when `visible` is false).
 pub fn progress_bar(case: &Case, visible: bool) -> ProgressBar {
+    progress_bar_in(case, visible, None)
+}
+
+/// As [`progress_bar`], as one line of `multi` when given (several scenes at once).
+pub fn progress_bar_in(
+    case: &Case,
+    visible: bool,
+    multi: Option<&indicatif::MultiProgress>,
+) -> ProgressBar {
     if !visible {
         return ProgressBar::hidden();
     }
     let pb = ProgressBar::new((case.phases.t_end * 1000.0).round().max(1.0) as u64);
+    // Joined to `multi` before styling, so nothing is drawn outside it.
+    let pb = match multi {
+        Some(m) => m.add(pb),
+        None => pb,
+    };
     let style = ProgressStyle::with_template(
         "{prefix:>18} [{bar:28}] {percent:>3}% {elapsed_precise} {msg}",
     )

@@ -593,7 +593,7 @@ fn comparison_uses_the_reported_table() {
     // A partial run has no final value, and says why.
     let partial = RunData::load(interrupted_copy("partial-values")).expect("partial");
     let e = paper::our_value(Quantity::StrainNucleus, &partial, None).expect_err("no end");
-    assert!(e.contains("stopped"), "{e}");
+    assert!(e.contains("stopped at t = "), "{e}");
 
     let runs = vec![SceneOutcome {
         name: "pillars-push-pull".into(),
@@ -615,7 +615,7 @@ fn comparison_uses_the_reported_table() {
     assert!(final_row.contains(&format!("{disp:.3}")), "{final_row}");
     let rel = 100.0 * (disp - 9.65) / 9.65;
     assert!(final_row.contains(&format!("{rel:+.1} %")), "{final_row}");
-    assert!(md.contains("| flat | contact radius at the end (µm) | 8.800 | n/a (no run)"));
+    assert!(md.contains("| flat | contact radius at the end (µm) | 8.800 | n/a: no run |"));
     assert!(md.contains("| pillars-push-pull | finished |"), "{md}");
 }
 

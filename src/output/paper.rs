@@ -273,8 +273,9 @@ pub fn our_value(q: Quantity, run: &RunData, control: Option<&RunData>) -> Resul
     let at = |t: f64| {
         run.at(t).ok_or_else(|| {
             format!(
-                "not reached (run stopped at t = {} s)",
-                fmt_num(run.t_last(), 0)
+                "the run stopped at t = {} s, before t = {} s",
+                fmt_num(run.t_last(), 0),
+                fmt_num(t, 0)
             )
         })
     };
@@ -459,7 +460,7 @@ pub fn run_cases(cases: &[(Case, String)], opts: &PaperOptions) -> Vec<SceneOutc
             r.unwrap_or_else(|| SceneOutcome {
                 name: c.name.clone(),
                 dir: runs_dir.join(&c.name),
-                result: Err("not run".into()),
+                result: Err(format!("{}: not run", c.name)),
             })
         })
         .collect()
@@ -492,12 +493,12 @@ fn run_one(
     }
     if opts.interrupt.load(Ordering::Relaxed) {
         return SceneOutcome {
+            result: Err(format!("{name}: interrupted before it started")),
             name,
             dir: dir.to_path_buf(),
-            result: Err("interrupted before it started".into()),
         };
     }
-    let bar = mp.add(run::progress_bar(case, visible));
+    let bar = run::progress_bar_in(case, visible, Some(mp));
     let ropts = RunOptions {
         out: dir.to_path_buf(),
         settings: RunSettings::from_case(case),
@@ -555,6 +556,9 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
     let mut report = PaperReport::default();
     let mut data: Vec<(String, RunData)> = Vec::new();
     for r in runs {
+        if r.result.is_err() && !r.dir.exists() {
+            continue; // never started: its error is reported with the runs
+        }
         match RunData::load(&r.dir) {
             Ok(d) => data.push((r.name.clone(), d)),
             Err(e) => report.problems.push(e.to_string()),
@@ -727,7 +731,7 @@ pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) ->
                 fmt_value(v, pct),
                 format!("{:+.1} %", 100.0 * (v - r.value) / r.value),
             ),
-            Err(why) => (format!("n/a ({why})"), "–".into()),
+            Err(why) => (format!("n/a: {why}"), "–".into()),
         };
         let _ = writeln!(
             s,
@@ -749,7 +753,7 @@ pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) ->
         let status = match (&o.result, d.map(|d| d.finished())) {
             (Ok(true), _) => "finished".to_string(),
             (Ok(false), _) => "finished (reused)".to_string(),
-            (Err(e), _) => format!("stopped: {}", e.replace('|', "/")),
+            (Err(e), _) => format!("did not finish ({})", e.replace('|', "/")),
         };
         let sm = d.and_then(|d| d.summary.as_ref());
         let _ = writeln!(
