@@ -27,7 +27,7 @@ build: deps
 
 # The main job: the paper's scenes, plots written to plots/.
 paper: deps
-	$(CARGO) run --release --example robertson
+	$(CARGO) run --release -- paper --out plots
 
 # All tests (release mode: the finite-element tests are numeric).
 test: deps

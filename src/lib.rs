@@ -13,6 +13,7 @@ pub mod case;
 pub mod dae;
 pub mod fem;
 pub mod model;
+pub mod output;
 pub mod physics;
 pub mod run;
 pub mod scene;

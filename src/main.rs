@@ -11,6 +11,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use cellsim::case::{self, Case};
 use cellsim::dae::LinearSolverKind;
 use cellsim::fem::Mesh;
+use cellsim::output::{self, RunData, SnapshotOptions, paper};
 use cellsim::run::{self, Progress, RunOptions, RunSettings};
 use cellsim::scene;
 
@@ -59,6 +60,47 @@ enum Command {
         /// No progress line.
         #[arg(long)]
         quiet: bool,
+        /// Also write a ParaView file per output time (vtu/<case>_NNNNN.vtu) and their
+        /// collection <case>.pvd.
+        #[arg(long)]
+        vtu: bool,
+        /// Also write the deformation as an animated GIF (<case>.gif).
+        #[arg(long)]
+        gif: bool,
+    },
+    /// Run the five paper scenes (and the upside-down control) and write the paper's
+    /// figures and comparison.md.
+    Paper {
+        /// Output directory: figures, comparison.md and runs/<scene>/.
+        #[arg(long, default_value = "plots")]
+        out: PathBuf,
+        /// Runs at once [default: the number of cores].
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Read the scene files from this directory instead of the copies of cases/
+        /// compiled into cellsim.
+        #[arg(long)]
+        cases: Option<PathBuf>,
+        /// Keep the runs in <out>/runs that finished; run only the others.
+        #[arg(long)]
+        reuse: bool,
+        /// Also write each run's VTU files (see `run --vtu`).
+        #[arg(long)]
+        vtu: bool,
+        /// Also write each run's animated GIF (see `run --gif`).
+        #[arg(long)]
+        gif: bool,
+        /// No progress lines.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Redraw one run's figures from its files (works on a run that stopped early).
+    Plot {
+        /// The run directory (as written by `cellsim run`).
+        run_dir: PathBuf,
+        /// Where to write the figures [default: <run_dir>/plots].
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// Generate the mesh of a case and print its quality report.
     Mesh {
@@ -125,6 +167,8 @@ fn main() -> ExitCode {
             dt,
             linear_solver,
             quiet,
+            vtu,
+            gif,
         } => {
             let case = match load_case(&path) {
                 Ok(c) => c,
@@ -157,6 +201,7 @@ fn main() -> ExitCode {
                 settings,
                 progress: Progress::Bar(run::progress_bar(&case, visible)),
                 interrupt: interrupt_flag(),
+                snapshots: SnapshotOptions { vtu, gif },
             };
             match run::run(&case, &path.display().to_string(), &opts) {
                 Ok(s) => {
@@ -184,6 +229,83 @@ fn main() -> ExitCode {
                     } else {
                         ExitCode::FAILURE
                     }
+                }
+            }
+        }
+        Command::Paper {
+            out,
+            jobs,
+            cases,
+            reuse,
+            vtu,
+            gif,
+            quiet,
+        } => {
+            let jobs =
+                jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+            if jobs == 0 {
+                eprintln!("error: --jobs must be at least 1");
+                return ExitCode::from(2);
+            }
+            let opts = paper::PaperOptions {
+                out: out.clone(),
+                jobs,
+                cases,
+                reuse,
+                snapshots: SnapshotOptions { vtu, gif },
+                progress: !quiet,
+                interrupt: interrupt_flag(),
+            };
+            match paper::run_paper(&opts) {
+                Ok(report) => {
+                    for p in &report.problems {
+                        eprintln!("error: {p}");
+                    }
+                    for r in &report.runs {
+                        if let Err(e) = &r.result {
+                            eprintln!("error: {e}");
+                        }
+                    }
+                    println!(
+                        "{} files written in {} (comparison table: {})",
+                        report.written.len(),
+                        out.display(),
+                        out.join("comparison.md").display()
+                    );
+                    if report.ok() {
+                        ExitCode::SUCCESS
+                    } else {
+                        ExitCode::FAILURE
+                    }
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            }
+        }
+        Command::Plot { run_dir, out } => {
+            let run = match RunData::load(&run_dir) {
+                Ok(r) => r,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            for n in &run.notes {
+                eprintln!("note: {n}");
+            }
+            let out = out.unwrap_or_else(|| run_dir.join("plots"));
+            match output::figures::plot_run(&run, &out) {
+                Ok(files) => {
+                    for f in files {
+                        println!("{}", f.display());
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
                 }
             }
         }

@@ -22,6 +22,7 @@ use crate::dae::{Atol, Integrator, IntegratorError, LinearSolverKind, Stats, con
 use crate::fem::{Domain, Mesh, MeshError};
 use crate::model::observe::Observables;
 use crate::model::{CellModel, ModelParams};
+use crate::output::{Snapshot, SnapshotOptions, SnapshotWriter};
 use crate::physics::{ActiveStrain, Substrate};
 use crate::scene::{self, SceneError};
 use crate::sundials::{Ida, IdaOptions};
@@ -90,6 +91,8 @@ pub struct RunOptions {
     pub progress: Progress,
     /// Set to stop the run cleanly (Ctrl-C).
     pub interrupt: Arc<AtomicBool>,
+    /// Per-output-time files besides the CSV row (`--vtu`, `--gif`).
+    pub snapshots: SnapshotOptions,
 }
 
 /// Unknown counts of the system.
@@ -235,6 +238,9 @@ pub enum RunError {
         /// Cause.
         source: std::io::Error,
     },
+    /// A VTU or GIF output could not be written.
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
     /// The integration stopped; the summary (with the reason) was written.
     #[error("{case}: integration stopped: {reason}")]
     Integration {
@@ -376,10 +382,24 @@ fn add_stats(a: &Stats, b: &Stats) -> Stats {
 
 /// A progress bar for a scene (hidden when `visible` is false).
 pub fn progress_bar(case: &Case, visible: bool) -> ProgressBar {
+    progress_bar_in(case, visible, None)
+}
+
+/// As [`progress_bar`], as one line of `multi` when given (several scenes at once).
+pub fn progress_bar_in(
+    case: &Case,
+    visible: bool,
+    multi: Option<&indicatif::MultiProgress>,
+) -> ProgressBar {
     if !visible {
         return ProgressBar::hidden();
     }
     let pb = ProgressBar::new((case.phases.t_end * 1000.0).round().max(1.0) as u64);
+    // Joined to `multi` before styling, so nothing is drawn outside it.
+    let pb = match multi {
+        Some(m) => m.add(pb),
+        None => pb,
+    };
     let style = ProgressStyle::with_template(
         "{prefix:>18} [{bar:28}] {percent:>3}% {elapsed_precise} {msg}",
     )
@@ -428,6 +448,8 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
         phase_times: [ph.t_g0, ph.t_as0, ph.t_a0, ph.t_end],
     };
     write_json(&out.join("mesh.json"), &mesh_file)?;
+    let n_outputs = output_times(case).len() + 1;
+    let mut frames = SnapshotWriter::new(out, &case.name, &mesh_file, opts.snapshots, n_outputs)?;
 
     let mut summary = Summary {
         case: case.name.clone(),
@@ -462,8 +484,12 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
             .map_err(io_err(&csv_path))
     };
     writeln!(csv, "{}", Observables::CSV_HEADER).map_err(io_err(&csv_path))?;
-    let first = model.observe(0.0, &vec![0.0; model.dofs.n]);
+    let y0 = vec![0.0; model.dofs.n];
+    let first = model.observe(0.0, &y0);
     write_row(&mut csv, &first)?;
+    if frames.is_active() {
+        frames.write(&snapshot(&model, 0.0, &y0, &y0))?;
+    }
     summary.outputs = 1;
     summary.final_values = Some(first);
 
@@ -508,6 +534,10 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
         let model = solver.model();
         let obs = model.observe(tout, &y);
         write_row(&mut csv, &obs)?;
+        if frames.is_active() {
+            let yp = solver.integ_ref().yp();
+            frames.write(&snapshot(model, tout, &y, yp))?;
+        }
         summary.outputs += 1;
         summary.final_values = Some(obs);
         summary.stats = add_stats(&stats_before, &solver.integ_ref().stats());
@@ -537,6 +567,9 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
     }
     summary.wall_seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
+    if let Err(e) = frames.finish() {
+        failure.get_or_insert(format!("writing the VTU/GIF output: {e}"));
+    }
     match failure {
         None => {
             summary.finished = true;
@@ -618,6 +651,34 @@ fn switch_off_inertia(
             .integ()
             .advance_to(t + SWITCH_PROBE_DT, on_step)
             .map_err(|e| e.to_string())?;
+    }
+}
+
+/// The state at one output time for the VTU and GIF writers: velocities are the v
+/// unknowns with inertia, u̇ (from `yp`) without.
+fn snapshot(model: &CellModel, t: f64, y: &[f64], yp: &[f64]) -> Snapshot {
+    let n = model.mesh.nodes.len();
+    let per_el = model.element_strain_and_jacobian(y);
+    let d = &model.dofs;
+    let velocity = |i: usize| {
+        let (src, cols) = if d.inertia { (y, d.v[i]) } else { (yp, d.u[i]) };
+        cols.map(|k| {
+            if k == crate::model::dofs::NONE {
+                0.0
+            } else {
+                src[k]
+            }
+        })
+    };
+    Snapshot {
+        t,
+        u: (0..n).map(|i| d.node_u(y, i)).collect(),
+        v: (0..n).map(velocity).collect(),
+        mu_as: (0..n)
+            .map(|i| (d.mu[i] != crate::model::dofs::NONE).then(|| y[d.mu[i]]))
+            .collect(),
+        element_strain: per_el.iter().map(|p| p.0).collect(),
+        element_jacobian: per_el.iter().map(|p| p.1).collect(),
     }
 }
 

@@ -4,4 +4,5 @@
 mod cli;
 mod dae;
 mod model;
+mod plots;
 mod scenes;

@@ -1,0 +1,109 @@
+//! Everything drawn or exported from what a run wrote: figures (PNG), the paper's
+//! comparison, ParaView files and animations.
+//!
+//! The rule of this module: **plotting reads only files a run wrote** (`timeseries.csv`,
+//! `mesh.json`, `state_<phase>.json`, `summary.json`, see [`crate::run`]), never the
+//! solver's memory, so every figure can be redrawn from a finished or an interrupted run.
+//! The per-output-time writers ([`snapshot`]: VTU and GIF) are handed a [`Snapshot`], the
+//! same kind of plain data a state file holds, by the run loop.
+//!
+//! Module map:
+//! - [`read`]: loading a run directory ([`RunData`]), tolerant of partial files;
+//! - [`geometry`]: the deformed cell as polygons (curved P2 edges), active-region outlines,
+//!   substrate and fibronectin-layer profiles — pure geometry, no drawing;
+//! - [`figures`]: the PNG figures (time series, strain bars, shapes);
+//! - [`vtu`]: `.vtu` files (quadratic triangles) and the `.pvd` collection;
+//! - [`movie`]: the deformation as an animated GIF;
+//! - [`snapshot`]: what the run loop hands over at each output time, and the writer that
+//!   feeds [`vtu`] and [`movie`];
+//! - [`paper`]: `cellsim paper` — the five scenes, the paper's reported values and the
+//!   comparison table.
+
+pub mod figures;
+pub mod geometry;
+pub mod movie;
+pub mod paper;
+pub mod read;
+pub mod snapshot;
+pub mod vtu;
+
+pub use read::RunData;
+pub use snapshot::{Snapshot, SnapshotOptions, SnapshotWriter};
+
+use std::path::Path;
+
+/// Why an output could not be read, drawn or written. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// A file could not be read (missing, unreadable).
+    #[error("cannot read {path}: {source}")]
+    Read {
+        /// The file.
+        path: String,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// A file was read but its content is not what a run writes.
+    #[error("{path}: {message}")]
+    Malformed {
+        /// The file.
+        path: String,
+        /// What is wrong, with the line or field where known.
+        message: String,
+    },
+    /// A file could not be written.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// The file.
+        path: String,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// Drawing a figure failed (backend or font error).
+    #[error("cannot draw {path}: {message}")]
+    Draw {
+        /// The figure file.
+        path: String,
+        /// The backend's message.
+        message: String,
+    },
+    /// Writing or reading a VTK file failed.
+    #[error("VTK file {path}: {message}")]
+    Vtk {
+        /// The file.
+        path: String,
+        /// vtkio's message.
+        message: String,
+    },
+}
+
+impl OutputError {
+    /// A [`OutputError::Malformed`] for `path`.
+    pub fn malformed(path: &Path, message: impl Into<String>) -> Self {
+        OutputError::Malformed {
+            path: path.display().to_string(),
+            message: message.into(),
+        }
+    }
+
+    /// A [`OutputError::Write`] for `path`.
+    pub fn write(path: &Path, source: std::io::Error) -> Self {
+        OutputError::Write {
+            path: path.display().to_string(),
+            source,
+        }
+    }
+
+    /// A [`OutputError::Draw`] for `path` from any displayable backend error.
+    pub fn draw(path: &Path, e: impl std::fmt::Display) -> Self {
+        OutputError::Draw {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        }
+    }
+}
+
+/// Creates `dir` (and its parents) if needed.
+pub fn create_dir(dir: &Path) -> Result<(), OutputError> {
+    std::fs::create_dir_all(dir).map_err(|e| OutputError::write(dir, e))
+}

@@ -1,0 +1,790 @@
+//! `cellsim paper`: the five scenes of MODEL.md §7, run in parallel, then the paper's
+//! figures and the comparison with what the paper reports.
+//!
+//! The scenes are the case files of `cases/`, compiled into the binary (so the command
+//! works from any directory; `--cases DIR` reads them from a directory instead). Beside
+//! them runs a **control**: the push-pull scene continued to the upside-down scene's end
+//! time with gravity unchanged, the "control" curve of the paper's Fig. 9 — the paper's
+//! 0.006 µm is the difference between the two at the same time.
+//!
+//! Each run writes into `DIR/runs/<scene>/`; the figures and `comparison.md` are then
+//! drawn from those files only (see [`super::read`]), so they can be redrawn from runs
+//! that stopped early.
+
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use indicatif::MultiProgress;
+
+use super::OutputError;
+use super::figures::{
+    StrainBars, contact_radius_figure, displacement_figure, shape_figure, shape_view,
+    strain_bars_figure, strain_time_figure, upside_down_figure,
+};
+use super::read::RunData;
+use super::snapshot::SnapshotOptions;
+use crate::case::Case;
+use crate::run::{self, Progress, RunOptions, RunSettings, StateFile};
+
+/// One of the paper's scenes: its name and case file.
+#[derive(Debug, Clone, Copy)]
+pub struct Scene {
+    /// Scene name (= the case's `name` and its run directory).
+    pub name: &'static str,
+    /// Case file, relative to the repository root.
+    pub file: &'static str,
+    /// The case file's text as compiled in.
+    pub text: &'static str,
+}
+
+/// The five scenes of MODEL.md §7, in the paper's order.
+pub const SCENES: [Scene; 5] = [
+    Scene {
+        name: "flat",
+        file: "cases/flat.ron",
+        text: include_str!("../../cases/flat.ron"),
+    },
+    Scene {
+        name: "pillars-push",
+        file: "cases/pillars-push.ron",
+        text: include_str!("../../cases/pillars-push.ron"),
+    },
+    Scene {
+        name: "pillars-pull",
+        file: "cases/pillars-pull.ron",
+        text: include_str!("../../cases/pillars-pull.ron"),
+    },
+    Scene {
+        name: "pillars-push-pull",
+        file: "cases/pillars-push-pull.ron",
+        text: include_str!("../../cases/pillars-push-pull.ron"),
+    },
+    Scene {
+        name: "upside-down",
+        file: "cases/upside-down.ron",
+        text: include_str!("../../cases/upside-down.ron"),
+    },
+];
+
+/// Name of the control run of the upside-down comparison.
+pub const CONTROL: &str = "push-pull-control";
+
+/// When a reported value applies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum When {
+    /// At T_g0, the end of the gravity ramp.
+    GravityEnd,
+    /// At T_as0, the end of the adhesion ramp.
+    SpreadingEnd,
+    /// At the scene's end time.
+    End,
+}
+
+/// A quantity the paper reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    /// Contact radius [µm].
+    ContactRadius(When),
+    /// Downward displacement of the nucleus top p_t, −u_y(p_t) [µm]; at the end, its
+    /// largest value over the run (the paper's "maximum displacement of the nucleus").
+    NucleusDisplacement(When),
+    /// Mean ‖E‖ over the nucleus at the end (fraction).
+    StrainNucleus,
+    /// Mean ‖E‖ over the cytoplasm at the end (fraction).
+    StrainCytoplasm,
+    /// |u_y(p_t)| difference between the upside-down run and the control at the end [µm].
+    UpsideDownDifference,
+}
+
+/// One value the paper reports, with where it says so.
+#[derive(Debug, Clone, Copy)]
+pub struct Reported {
+    /// Scene.
+    pub scene: &'static str,
+    /// Quantity.
+    pub quantity: Quantity,
+    /// The paper's value (µm, or a fraction for strains).
+    pub value: f64,
+    /// Where in the paper (Mondésert-Deveraux, Aubry & Allena 2019).
+    pub source: &'static str,
+}
+
+/// Everything the paper reports that a run can be compared with (MODEL.md §7, which
+/// quotes the paper's Sect. 3): the single table the figures and `comparison.md` use.
+pub const REPORTED: [Reported; 18] = {
+    use Quantity::*;
+    use When::*;
+    const S32: &str = "Sect. 3.2";
+    [
+        Reported {
+            scene: "flat",
+            quantity: ContactRadius(GravityEnd),
+            value: 1.0,
+            source: "Sect. 3.1, Fig. 6b (\"up to 1 µm\")",
+        },
+        Reported {
+            scene: "flat",
+            quantity: ContactRadius(End),
+            value: 8.8,
+            source: "Sect. 3.1, Fig. 6b",
+        },
+        Reported {
+            scene: "pillars-push",
+            quantity: NucleusDisplacement(GravityEnd),
+            value: 0.1,
+            source: S32,
+        },
+        Reported {
+            scene: "pillars-push",
+            quantity: NucleusDisplacement(SpreadingEnd),
+            value: 5.0,
+            source: S32,
+        },
+        Reported {
+            scene: "pillars-push",
+            quantity: NucleusDisplacement(End),
+            value: 5.4,
+            source: "Sect. 3.2, Fig. 8a-c",
+        },
+        Reported {
+            scene: "pillars-push",
+            quantity: StrainNucleus,
+            value: 0.13,
+            source: "Sect. 3.2, Fig. 7a",
+        },
+        Reported {
+            scene: "pillars-push",
+            quantity: StrainCytoplasm,
+            value: 0.56,
+            source: "Sect. 3.2, Fig. 7d",
+        },
+        Reported {
+            scene: "pillars-pull",
+            quantity: NucleusDisplacement(GravityEnd),
+            value: 0.1,
+            source: S32,
+        },
+        Reported {
+            scene: "pillars-pull",
+            quantity: NucleusDisplacement(SpreadingEnd),
+            value: 5.0,
+            source: S32,
+        },
+        Reported {
+            scene: "pillars-pull",
+            quantity: NucleusDisplacement(End),
+            value: 9.63,
+            source: "Sect. 3.2, Fig. 8d-f",
+        },
+        Reported {
+            scene: "pillars-pull",
+            quantity: StrainNucleus,
+            value: 0.37,
+            source: "Sect. 3.2, Fig. 7b",
+        },
+        Reported {
+            scene: "pillars-pull",
+            quantity: StrainCytoplasm,
+            value: 0.59,
+            source: "Sect. 3.2, Fig. 7e",
+        },
+        Reported {
+            scene: "pillars-push-pull",
+            quantity: NucleusDisplacement(GravityEnd),
+            value: 0.1,
+            source: S32,
+        },
+        Reported {
+            scene: "pillars-push-pull",
+            quantity: NucleusDisplacement(SpreadingEnd),
+            value: 5.0,
+            source: S32,
+        },
+        Reported {
+            scene: "pillars-push-pull",
+            quantity: NucleusDisplacement(End),
+            value: 9.65,
+            source: "Sect. 3.2, Fig. 8g-i",
+        },
+        Reported {
+            scene: "pillars-push-pull",
+            quantity: StrainNucleus,
+            value: 0.37,
+            source: "Sect. 3.2, Fig. 7c",
+        },
+        Reported {
+            scene: "pillars-push-pull",
+            quantity: StrainCytoplasm,
+            value: 0.69,
+            source: "Sect. 3.2, Fig. 7f",
+        },
+        Reported {
+            scene: "upside-down",
+            quantity: UpsideDownDifference,
+            value: 0.006,
+            source: "Sect. 3.3, Fig. 9",
+        },
+    ]
+};
+
+/// The reported values of one scene.
+pub fn reported_for(scene: &str) -> impl Iterator<Item = &'static Reported> + '_ {
+    REPORTED.iter().filter(move |r| r.scene == scene)
+}
+
+impl Quantity {
+    /// Description with units, for the table.
+    pub fn describe(&self) -> String {
+        let when = |w: &When| match w {
+            When::GravityEnd => "at T_g0 = end of gravity ramp",
+            When::SpreadingEnd => "at T_as0 = end of adhesion ramp",
+            When::End => "at the end",
+        };
+        match self {
+            Quantity::ContactRadius(w) => format!("contact radius {} (µm)", when(w)),
+            Quantity::NucleusDisplacement(When::End) => {
+                "largest downward displacement of p_t (µm)".into()
+            }
+            Quantity::NucleusDisplacement(w) => {
+                format!("downward displacement of p_t {} (µm)", when(w))
+            }
+            Quantity::StrainNucleus => "mean ‖E‖ of the nucleus at the end (%)".into(),
+            Quantity::StrainCytoplasm => "mean ‖E‖ of the cytoplasm at the end (%)".into(),
+            Quantity::UpsideDownDifference => {
+                "difference of u_y(p_t), upside down − control, at the end, absolute (µm)".into()
+            }
+        }
+    }
+
+    /// Whether values are fractions shown as %.
+    fn percent(&self) -> bool {
+        matches!(self, Quantity::StrainNucleus | Quantity::StrainCytoplasm)
+    }
+}
+
+/// Our value of `q` from a run's files, or why there is none. `control` is needed for
+/// [`Quantity::UpsideDownDifference`].
+pub fn our_value(q: Quantity, run: &RunData, control: Option<&RunData>) -> Result<f64, String> {
+    let [tg, tas, _, t_end] = run.mesh.phase_times;
+    let at = |t: f64| {
+        run.at(t).ok_or_else(|| {
+            format!(
+                "the run stopped at t = {} s, before t = {} s",
+                fmt_num(run.t_last(), 0),
+                fmt_num(t, 0)
+            )
+        })
+    };
+    let time = |w: When| match w {
+        When::GravityEnd => tg,
+        When::SpreadingEnd => tas,
+        When::End => t_end,
+    };
+    match q {
+        Quantity::ContactRadius(w) => Ok(at(time(w))?.contact_radius),
+        Quantity::NucleusDisplacement(When::End) => {
+            at(t_end)?;
+            Ok(run
+                .series
+                .iter()
+                .map(|o| -o.uy_top)
+                .fold(f64::NEG_INFINITY, f64::max))
+        }
+        Quantity::NucleusDisplacement(w) => Ok(-at(time(w))?.uy_top),
+        Quantity::StrainNucleus => Ok(at(t_end)?.strain_nucleus),
+        Quantity::StrainCytoplasm => Ok(at(t_end)?.strain_cytoplasm),
+        Quantity::UpsideDownDifference => {
+            let c = control.ok_or("no control run")?;
+            let mine = at(t_end)?;
+            let theirs = c
+                .at(t_end)
+                .ok_or_else(|| format!("control did not reach t = {} s", fmt_num(t_end, 0)))?;
+            Ok((mine.uy_top - theirs.uy_top).abs())
+        }
+    }
+}
+
+fn fmt_num(v: f64, digits: usize) -> String {
+    format!("{v:.digits$}")
+}
+
+/// Significant-looking formatting of a table value.
+fn fmt_value(v: f64, percent: bool) -> String {
+    if percent {
+        return format!("{:.1}", 100.0 * v);
+    }
+    let a = v.abs();
+    if a >= 100.0 {
+        format!("{v:.1}")
+    } else if a >= 1.0 {
+        format!("{v:.3}")
+    } else {
+        format!("{v:.4}")
+    }
+}
+
+/// Options of [`run_paper`].
+#[derive(Debug, Clone)]
+pub struct PaperOptions {
+    /// Output directory (figures, `comparison.md`, `runs/`).
+    pub out: PathBuf,
+    /// Runs at once.
+    pub jobs: usize,
+    /// Read the case files from this directory instead of the compiled-in copies.
+    pub cases: Option<PathBuf>,
+    /// Do not rerun a scene whose run directory holds a finished run.
+    pub reuse: bool,
+    /// Per-output-time files of each run (`--vtu`, `--gif`).
+    pub snapshots: SnapshotOptions,
+    /// Show progress lines.
+    pub progress: bool,
+    /// Set to stop every run cleanly.
+    pub interrupt: Arc<AtomicBool>,
+}
+
+/// How one scene's run went.
+#[derive(Debug, Clone)]
+pub struct SceneOutcome {
+    /// Scene name.
+    pub name: String,
+    /// Run directory.
+    pub dir: PathBuf,
+    /// `Ok(true)` ran and finished, `Ok(false)` reused, `Err` why it did not finish.
+    pub result: Result<bool, String>,
+}
+
+/// What `cellsim paper` produced.
+#[derive(Debug, Clone, Default)]
+pub struct PaperReport {
+    /// How each run went.
+    pub runs: Vec<SceneOutcome>,
+    /// Files written.
+    pub written: Vec<PathBuf>,
+    /// Problems met while drawing (each names its file).
+    pub problems: Vec<String>,
+}
+
+impl PaperReport {
+    /// Whether every run finished and every file was written.
+    pub fn ok(&self) -> bool {
+        self.problems.is_empty() && self.runs.iter().all(|r| r.result.is_ok())
+    }
+}
+
+/// The cases to run: the five scenes and the control, each with its label for messages.
+pub fn paper_cases(cases_dir: Option<&Path>) -> Result<Vec<(Case, String)>, String> {
+    let mut out = Vec::new();
+    for s in SCENES {
+        let (case, label) = match cases_dir {
+            Some(d) => {
+                let p = d.join(Path::new(s.file).file_name().unwrap_or_default());
+                (
+                    Case::load(&p).map_err(|e| e.to_string())?,
+                    p.display().to_string(),
+                )
+            }
+            None => (
+                Case::from_str(s.text, s.file).map_err(|e| e.to_string())?,
+                s.file.to_string(),
+            ),
+        };
+        if case.name != s.name {
+            return Err(format!(
+                "{label}: case name `{}`, expected `{}`",
+                case.name, s.name
+            ));
+        }
+        out.push((case, label));
+    }
+    let push_pull = out.iter().find(|(c, _)| c.name == "pillars-push-pull");
+    let upside = out.iter().find(|(c, _)| c.name == "upside-down");
+    if let (Some((pp, label)), Some((ud, _))) = (push_pull, upside) {
+        let mut control = pp.clone();
+        control.name = CONTROL.to_string();
+        control.description = Some(
+            "Control of the upside-down scene: push-pull continued to its end time, gravity unchanged"
+                .into(),
+        );
+        control.phases.t_end = ud.phases.t_end;
+        control.output = ud.output.clone();
+        let label = format!("{label} (continued to t = {} s)", ud.phases.t_end);
+        out.push((control, label));
+    }
+    Ok(out)
+}
+
+/// Runs `cases` into `out/runs/<name>/`, `jobs` at a time, one progress line each.
+pub fn run_cases(cases: &[(Case, String)], opts: &PaperOptions) -> Vec<SceneOutcome> {
+    let runs_dir = opts.out.join("runs");
+    let visible = opts.progress && std::io::stderr().is_terminal();
+    let mp = MultiProgress::new();
+    if !visible {
+        mp.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let say = |msg: String| {
+        if visible {
+            let _ = mp.println(&msg);
+        } else if opts.progress {
+            eprintln!("{msg}");
+        }
+    };
+    let queue: Mutex<Vec<usize>> = Mutex::new((0..cases.len()).rev().collect());
+    let results: Mutex<Vec<Option<SceneOutcome>>> = Mutex::new(vec![None; cases.len()]);
+    let jobs = opts.jobs.clamp(1, cases.len().max(1));
+    std::thread::scope(|scope| {
+        for _ in 0..jobs {
+            scope.spawn(|| {
+                loop {
+                    let next = queue.lock().ok().and_then(|mut q| q.pop());
+                    let Some(k) = next else { break };
+                    let (case, label) = &cases[k];
+                    let dir = runs_dir.join(&case.name);
+                    let outcome = run_one(case, label, &dir, opts, &mp, visible, &say);
+                    if let Ok(mut r) = results.lock() {
+                        r[k] = Some(outcome);
+                    }
+                }
+            });
+        }
+    });
+    results
+        .into_inner()
+        .unwrap_or_default()
+        .into_iter()
+        .zip(cases)
+        .map(|(r, (c, _))| {
+            r.unwrap_or_else(|| SceneOutcome {
+                name: c.name.clone(),
+                dir: runs_dir.join(&c.name),
+                result: Err(format!("{}: not run", c.name)),
+            })
+        })
+        .collect()
+}
+
+fn run_one(
+    case: &Case,
+    label: &str,
+    dir: &Path,
+    opts: &PaperOptions,
+    mp: &MultiProgress,
+    visible: bool,
+    say: &(dyn Fn(String) + Sync),
+) -> SceneOutcome {
+    let name = case.name.clone();
+    if opts.reuse {
+        if let Ok(r) = RunData::load(dir) {
+            if r.finished() {
+                say(format!(
+                    "{name}: reusing the finished run in {}",
+                    dir.display()
+                ));
+                return SceneOutcome {
+                    name,
+                    dir: dir.to_path_buf(),
+                    result: Ok(false),
+                };
+            }
+        }
+    }
+    if opts.interrupt.load(Ordering::Relaxed) {
+        return SceneOutcome {
+            result: Err(format!("{name}: interrupted before it started")),
+            name,
+            dir: dir.to_path_buf(),
+        };
+    }
+    let bar = run::progress_bar_in(case, visible, Some(mp));
+    let ropts = RunOptions {
+        out: dir.to_path_buf(),
+        settings: RunSettings::from_case(case),
+        progress: Progress::Bar(bar),
+        interrupt: opts.interrupt.clone(),
+        snapshots: opts.snapshots,
+    };
+    let start = Instant::now();
+    let result = match run::run(case, label, &ropts) {
+        Ok(s) => {
+            say(format!(
+                "{name}: finished t = {} s in {:.1} s wall ({} steps)",
+                s.final_values.map(|o| o.t).unwrap_or(0.0),
+                s.wall_seconds,
+                s.stats.steps
+            ));
+            Ok(true)
+        }
+        Err(e) => {
+            say(format!(
+                "{name}: stopped after {:.1} s: {e}",
+                start.elapsed().as_secs_f64()
+            ));
+            Err(e.to_string())
+        }
+    };
+    SceneOutcome {
+        name,
+        dir: dir.to_path_buf(),
+        result,
+    }
+}
+
+/// `cellsim paper`: runs the scenes (unless reused), then writes the figures and
+/// `comparison.md` into `opts.out`.
+pub fn run_paper(opts: &PaperOptions) -> Result<PaperReport, OutputError> {
+    super::create_dir(&opts.out)?;
+    let cases = paper_cases(opts.cases.as_deref()).map_err(|m| OutputError::Malformed {
+        path: opts
+            .cases
+            .as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|| "cases (compiled in)".into()),
+        message: m,
+    })?;
+    let runs = run_cases(&cases, opts);
+    let mut report = draw_paper(&opts.out, &runs);
+    report.runs = runs;
+    Ok(report)
+}
+
+/// Draws the paper's figures and `comparison.md` into `out` from the run directories of
+/// `runs` (as written by [`run_cases`]; any of them may be partial or missing).
+pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
+    let mut report = PaperReport::default();
+    let mut data: Vec<(String, RunData)> = Vec::new();
+    for r in runs {
+        if r.result.is_err() && !r.dir.exists() {
+            continue; // never started: its error is reported with the runs
+        }
+        match RunData::load(&r.dir) {
+            Ok(d) => data.push((r.name.clone(), d)),
+            Err(e) => report.problems.push(e.to_string()),
+        }
+    }
+    let get = |name: &str| data.iter().find(|(n, _)| n == name).map(|(_, d)| d);
+    let record = |res: Result<PathBuf, OutputError>, report: &mut PaperReport| match res {
+        Ok(p) => report.written.push(p),
+        Err(e) => report.problems.push(e.to_string()),
+    };
+    let reported = |scene: &str, q: Quantity| {
+        reported_for(scene)
+            .find(|r| r.quantity == q)
+            .map(|r| r.value)
+    };
+
+    // Contact radius on the flat substrate (Fig. 6b).
+    if let Some(flat) = get("flat") {
+        let [tg, _, _, t_end] = flat.mesh.phase_times;
+        let pts: Vec<(f64, f64)> = [
+            (
+                tg,
+                reported("flat", Quantity::ContactRadius(When::GravityEnd)),
+            ),
+            (t_end, reported("flat", Quantity::ContactRadius(When::End))),
+        ]
+        .into_iter()
+        .filter_map(|(t, v)| v.map(|v| (t, v)))
+        .collect();
+        let p = out.join("contact-radius.png");
+        record(
+            contact_radius_figure(&p, &[flat], &pts, "paper (Sect. 3.1, Fig. 6b)").map(|_| p),
+            &mut report,
+        );
+    }
+
+    // Nucleus displacement for push, pull, push-pull (Fig. 9's kind of curve).
+    let pillar_names = ["pillars-push", "pillars-pull", "pillars-push-pull"];
+    let pillars: Vec<&RunData> = pillar_names.iter().filter_map(|n| get(n)).collect();
+    if !pillars.is_empty() {
+        let marks: Vec<Vec<(f64, f64)>> = pillars
+            .iter()
+            .map(|r| {
+                let [tg, tas, _, t_end] = r.mesh.phase_times;
+                [
+                    (tg, When::GravityEnd),
+                    (tas, When::SpreadingEnd),
+                    (t_end, When::End),
+                ]
+                .into_iter()
+                .filter_map(|(t, w)| {
+                    reported(&r.name, Quantity::NucleusDisplacement(w)).map(|v| (t, -v))
+                })
+                .collect()
+            })
+            .collect();
+        let p = out.join("nucleus-displacement.png");
+        record(
+            displacement_figure(
+                &p,
+                &pillars,
+                &marks,
+                "paper (Sect. 3.2): circles in each scene's colour",
+            )
+            .map(|_| p),
+            &mut report,
+        );
+        let p = out.join("strain-time.png");
+        record(strain_time_figure(&p, &pillars).map(|_| p), &mut report);
+    }
+
+    // Strain norms (Fig. 7).
+    let bars: Vec<StrainBars> = pillar_names
+        .iter()
+        .map(|n| {
+            let ours = |q| get(n).and_then(|r| our_value(q, r, None).ok());
+            StrainBars {
+                scene: n.trim_start_matches("pillars-").to_string(),
+                paper_nucleus: reported(n, Quantity::StrainNucleus),
+                ours_nucleus: ours(Quantity::StrainNucleus),
+                paper_cytoplasm: reported(n, Quantity::StrainCytoplasm),
+                ours_cytoplasm: ours(Quantity::StrainCytoplasm),
+            }
+        })
+        .collect();
+    let p = out.join("strain-norms.png");
+    record(
+        strain_bars_figure(&p, &bars, "cellsim", "paper (Sect. 3.2, Fig. 7)").map(|_| p),
+        &mut report,
+    );
+
+    // Upside down against the control (Fig. 9).
+    if let (Some(c), Some(u)) = (get(CONTROL), get("upside-down")) {
+        let p = out.join("upside-down.png");
+        let d = reported("upside-down", Quantity::UpsideDownDifference);
+        record(upside_down_figure(&p, c, u, d).map(|_| p), &mut report);
+    }
+
+    // Shapes at each phase end (Figs. 5, 6a, 8); the pillar scenes share one frame.
+    let pillar_scenes = [
+        "pillars-push",
+        "pillars-pull",
+        "pillars-push-pull",
+        "upside-down",
+    ];
+    let mut shared = None;
+    for n in pillar_scenes {
+        if let Some(r) = get(n) {
+            let states: Vec<&StateFile> = r.states.iter().collect();
+            let v = shape_view(&r.mesh, &states);
+            shared = Some(match shared {
+                None => v,
+                Some(s) => v.union(s),
+            });
+        }
+    }
+    for s in SCENES {
+        let Some(r) = get(s.name) else { continue };
+        let view = if pillar_scenes.contains(&s.name) {
+            shared
+        } else {
+            None
+        }
+        .unwrap_or_else(|| shape_view(&r.mesh, &r.states.iter().collect::<Vec<_>>()));
+        for st in &r.states {
+            let p = out.join(format!("shape-{}-{}.png", s.name, st.phase));
+            record(
+                shape_figure(&p, s.name, &r.mesh, st, view).map(|_| p),
+                &mut report,
+            );
+        }
+    }
+
+    let p = out.join("comparison.md");
+    let text = comparison_markdown(runs, &data);
+    record(
+        std::fs::write(&p, text)
+            .map(|_| p.clone())
+            .map_err(|e| OutputError::write(&p, e)),
+        &mut report,
+    );
+    report
+}
+
+/// The text of `comparison.md`: every reported value against ours, then the cost of
+/// each run.
+pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) -> String {
+    let get = |name: &str| data.iter().find(|(n, _)| n == name).map(|(_, d)| d);
+    let mut s = String::new();
+    let _ = writeln!(s, "# cellsim against the paper\n");
+    let _ = writeln!(
+        s,
+        "Written by `cellsim paper` (cellsim {}). Paper: Mondésert-Deveraux, Aubry & Allena, \
+         *Biomech Model Mechanobiol* 18:1281–1295 (2019); its values are those MODEL.md §7 \
+         quotes. Difference = (cellsim − paper) / paper.\n",
+        env!("CARGO_PKG_VERSION")
+    );
+    let _ = writeln!(
+        s,
+        "| scene | quantity | paper | cellsim | difference | paper's source |\n|---|---|---:|---:|---:|---|"
+    );
+    for r in REPORTED.iter() {
+        let pct = r.quantity.percent();
+        let ours = match get(r.scene) {
+            Some(run) => our_value(r.quantity, run, get(CONTROL)),
+            None => Err("no run".into()),
+        };
+        let (ours_s, diff_s) = match ours {
+            Ok(v) => (
+                fmt_value(v, pct),
+                format!("{:+.1} %", 100.0 * (v - r.value) / r.value),
+            ),
+            Err(why) => (format!("n/a: {why}"), "–".into()),
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} |",
+            r.scene,
+            r.quantity.describe(),
+            fmt_value(r.value, pct),
+            ours_s,
+            diff_s,
+            r.source
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n## Runs\n\n| run | status | t reached (s) | wall (s) | steps | Jacobians | error-test failures | unknowns | run directory |\n|---|---|---:|---:|---:|---:|---:|---:|---|"
+    );
+    for o in runs {
+        let d = get(&o.name);
+        let status = match (&o.result, d.map(|d| d.finished())) {
+            (Ok(true), _) => "finished".to_string(),
+            (Ok(false), _) => "finished (reused)".to_string(),
+            (Err(e), _) => format!("did not finish ({})", e.replace('|', "/")),
+        };
+        let sm = d.and_then(|d| d.summary.as_ref());
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {} | {} | {} | {} | `{}` |",
+            o.name,
+            status,
+            d.map(|d| fmt_num(d.t_last(), 0)).unwrap_or("–".into()),
+            sm.map(|x| format!("{:.1}", x.wall_seconds))
+                .unwrap_or("–".into()),
+            sm.map(|x| x.stats.steps.to_string()).unwrap_or("–".into()),
+            sm.map(|x| x.stats.jacobian_evals.to_string())
+                .unwrap_or("–".into()),
+            sm.map(|x| x.stats.error_test_failures.to_string())
+                .unwrap_or("–".into()),
+            sm.map(|x| x.unknowns.total.to_string())
+                .unwrap_or("–".into()),
+            o.dir.display()
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nDefinitions. *Contact radius*: deformed length of the half cell's boundary within \
+         ε_ct of the substrate. *Downward displacement of p_t*: −u_y of the nucleus top; at \
+         the end, its largest value over the run (the paper's \"maximum displacement of the \
+         nucleus\"); it counts from the suspended start, so it includes the fall onto \
+         the pillars (the cell starts 0.5 µm above them, MODEL.md §5). *Mean ‖E‖*: reference-area mean of the Frobenius norm of the \
+         Green-Lagrange strain over the domain. *Upside down − control*: the control \
+         (`{CONTROL}`) is the push-pull scene continued to the upside-down scene's end time \
+         with gravity unchanged, the paper's Fig. 9 control; both are compared at that \
+         time. Wall time is the integration only (mesh and set-up excluded)."
+    );
+    s
+}

@@ -1,0 +1,315 @@
+//! Loading a run directory: what `cellsim run` wrote, complete or not.
+//!
+//! A run writes `mesh.json` first, then `timeseries.csv` row by row (flushed), a
+//! `state_<phase>.json` at each phase end and `summary.json` after every row (see
+//! [`crate::run`]). An interrupted or failed run therefore leaves a CSV with fewer rows,
+//! fewer states, and a summary with `finished = false`; a run killed mid-write may leave
+//! a last CSV line cut short. All of these load: what is missing is recorded in
+//! [`RunData::notes`]. What cannot be loaded is an absent or malformed `mesh.json` or
+//! `timeseries.csv` (without them there is nothing to draw), or a state or summary file
+//! that exists but is not what a run writes; the error names the file.
+
+use std::path::{Path, PathBuf};
+
+use serde::de::DeserializeOwned;
+
+use super::OutputError;
+use crate::model::observe::Observables;
+use crate::run::{MeshFile, StateFile, Summary};
+
+/// The phases whose end a state file records, in time order (`state_<phase>.json`).
+pub const PHASES: [&str; 4] = ["gravity", "spreading", "active", "end"];
+
+/// Everything a run directory holds, as read back from its files.
+#[derive(Debug, Clone)]
+pub struct RunData {
+    /// The run directory.
+    pub dir: PathBuf,
+    /// Name of the run: the summary's case name, else the directory's name.
+    pub name: String,
+    /// `mesh.json`: reference mesh, substrate, active regions, phase times.
+    pub mesh: MeshFile,
+    /// `timeseries.csv`: one row per output time written, in time order.
+    pub series: Vec<Observables>,
+    /// The state files present, in phase order.
+    pub states: Vec<StateFile>,
+    /// `summary.json`, if present.
+    pub summary: Option<Summary>,
+    /// What was missing or cut short (empty for a complete run).
+    pub notes: Vec<String>,
+}
+
+fn read_text(path: &Path) -> Result<String, OutputError> {
+    std::fs::read_to_string(path).map_err(|source| OutputError::Read {
+        path: path.display().to_string(),
+        source,
+    })
+}
+
+fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, OutputError> {
+    let text = read_text(path)?;
+    serde_json::from_str(&text).map_err(|e| OutputError::malformed(path, e.to_string()))
+}
+
+/// Reads `mesh.json` and checks that every index it holds is in range.
+pub fn read_mesh(path: &Path) -> Result<MeshFile, OutputError> {
+    let mesh: MeshFile = read_json(path)?;
+    let n = mesh.nodes.len();
+    let bad = |what: &str| OutputError::malformed(path, what.to_string());
+    if mesh.elements.is_empty() {
+        return Err(bad("no elements"));
+    }
+    if mesh.domains.len() != mesh.elements.len() {
+        return Err(bad(&format!(
+            "{} domains for {} elements",
+            mesh.domains.len(),
+            mesh.elements.len()
+        )));
+    }
+    let in_range = |ids: &[usize]| ids.iter().all(|&i| i < n);
+    for (k, el) in mesh.elements.iter().enumerate() {
+        if !in_range(el) {
+            return Err(bad(&format!("element {k} refers to a node ≥ {n}")));
+        }
+    }
+    for (name, edges) in [
+        ("outer_edges", &mesh.outer_edges),
+        ("nucleus_edges", &mesh.nucleus_edges),
+        ("membrane_inner_edges", &mesh.membrane_inner_edges),
+    ] {
+        if edges.iter().any(|e| !in_range(e)) {
+            return Err(bad(&format!("{name} refers to a node ≥ {n}")));
+        }
+    }
+    if mesh.nodes.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(bad("non-finite node coordinate"));
+    }
+    Ok(mesh)
+}
+
+/// Parses `timeseries.csv`. The header must be exactly
+/// [`Observables::CSV_HEADER`]. A last line without its newline that does not parse is
+/// taken as cut short by an interruption and dropped (reported in the second value);
+/// any other bad line is an error naming the line.
+pub fn parse_timeseries(
+    path: &Path,
+    text: &str,
+) -> Result<(Vec<Observables>, Option<String>), OutputError> {
+    let mut lines = text.split_inclusive('\n').enumerate();
+    let header = match lines.next() {
+        Some((_, h)) => h.trim_end(),
+        None => return Err(OutputError::malformed(path, "empty file (no header)")),
+    };
+    if header != Observables::CSV_HEADER {
+        return Err(OutputError::malformed(
+            path,
+            format!(
+                "line 1: header is `{header}`, expected `{}`",
+                Observables::CSV_HEADER
+            ),
+        ));
+    }
+    let mut rows = Vec::new();
+    let mut cut = None;
+    for (k, raw) in lines {
+        let complete = raw.ends_with('\n');
+        let line = raw.trim_end();
+        if line.is_empty() {
+            continue;
+        }
+        match parse_row(line) {
+            Ok(o) => rows.push(o),
+            Err(msg) if !complete => {
+                cut = Some(format!(
+                    "{}: last line {} cut short ({msg}); dropped",
+                    path.display(),
+                    k + 1
+                ));
+            }
+            Err(msg) => {
+                return Err(OutputError::malformed(
+                    path,
+                    format!("line {}: {msg}", k + 1),
+                ));
+            }
+        }
+    }
+    if rows.windows(2).any(|w| !(w[1].t >= w[0].t)) {
+        return Err(OutputError::malformed(path, "times are not increasing"));
+    }
+    Ok((rows, cut))
+}
+
+fn parse_row(line: &str) -> Result<Observables, String> {
+    let v: Vec<f64> = line
+        .split(',')
+        .map(|f| {
+            f.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("`{f}` is not a number"))
+        })
+        .collect::<Result<_, _>>()?;
+    if v.len() != 7 {
+        return Err(format!("{} fields, expected 7", v.len()));
+    }
+    Ok(Observables {
+        t: v[0],
+        contact_radius: v[1],
+        uy_top: v[2],
+        uy_centre: v[3],
+        uy_bottom: v[4],
+        strain_nucleus: v[5],
+        strain_cytoplasm: v[6],
+    })
+}
+
+/// Reads a state file and checks its sizes against the mesh.
+pub fn read_state(path: &Path, mesh: &MeshFile) -> Result<StateFile, OutputError> {
+    let s: StateFile = read_json(path)?;
+    let (nn, ne) = (mesh.nodes.len(), mesh.elements.len());
+    if s.u.len() != nn {
+        return Err(OutputError::malformed(
+            path,
+            format!("{} displacements for the mesh's {nn} nodes", s.u.len()),
+        ));
+    }
+    if s.element_strain.len() != ne || s.element_jacobian.len() != ne {
+        return Err(OutputError::malformed(
+            path,
+            format!("per-element arrays do not match the mesh's {ne} elements"),
+        ));
+    }
+    if s.u.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(OutputError::malformed(path, "non-finite displacement"));
+    }
+    Ok(s)
+}
+
+impl RunData {
+    /// Loads the run in `dir`; see the module documentation for what may be missing.
+    pub fn load(dir: impl AsRef<Path>) -> Result<RunData, OutputError> {
+        let dir = dir.as_ref().to_path_buf();
+        if !dir.is_dir() {
+            return Err(OutputError::Read {
+                path: dir.display().to_string(),
+                source: std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    "not a run directory (no such directory)",
+                ),
+            });
+        }
+        let mesh = read_mesh(&dir.join("mesh.json"))?;
+        let csv_path = dir.join("timeseries.csv");
+        let (series, cut) = parse_timeseries(&csv_path, &read_text(&csv_path)?)?;
+        let mut notes: Vec<String> = cut.into_iter().collect();
+        if series.is_empty() {
+            notes.push(format!("{}: no data rows", csv_path.display()));
+        }
+        let summary_path = dir.join("summary.json");
+        let summary: Option<Summary> = if summary_path.exists() {
+            Some(read_json(&summary_path)?)
+        } else {
+            notes.push(format!("{}: missing", summary_path.display()));
+            None
+        };
+        let mut states = Vec::new();
+        for phase in PHASES {
+            let p = dir.join(format!("state_{phase}.json"));
+            if p.exists() {
+                states.push(read_state(&p, &mesh)?);
+            }
+        }
+        if let Some(s) = &summary {
+            if !s.finished {
+                let why = s
+                    .failure
+                    .as_ref()
+                    .map(|f| f.reason.clone())
+                    .unwrap_or_else(|| "interrupted or still running".into());
+                let t = series.last().map(|o| o.t).unwrap_or(0.0);
+                notes.push(format!(
+                    "{}: run did not finish (last output t = {t} s of {} s): {why}",
+                    dir.display(),
+                    mesh.phase_times[3]
+                ));
+            }
+        }
+        let name = summary
+            .as_ref()
+            .map(|s| s.case.clone())
+            .or_else(|| dir.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .unwrap_or_else(|| "run".into());
+        Ok(RunData {
+            dir,
+            name,
+            mesh,
+            series,
+            states,
+            summary,
+            notes,
+        })
+    }
+
+    /// Whether the summary says the run reached its end time.
+    pub fn finished(&self) -> bool {
+        self.summary.as_ref().is_some_and(|s| s.finished)
+    }
+
+    /// End time the run was meant to reach [s].
+    pub fn t_end(&self) -> f64 {
+        self.mesh.phase_times[3]
+    }
+
+    /// Last time written [s] (0 without rows).
+    pub fn t_last(&self) -> f64 {
+        self.series.last().map(|o| o.t).unwrap_or(0.0)
+    }
+
+    /// The row at time `t` (linear interpolation between rows), if `t` lies within the
+    /// rows written.
+    pub fn at(&self, t: f64) -> Option<Observables> {
+        interpolate(&self.series, t)
+    }
+
+    /// The state file of `phase`, if written.
+    pub fn state(&self, phase: &str) -> Option<&StateFile> {
+        self.states.iter().find(|s| s.phase == phase)
+    }
+}
+
+/// The row of `rows` (sorted by time) at time `t`, linearly interpolated, or `None` when
+/// `t` lies outside the rows (with a relative slack of 1e-9 of the last time).
+pub fn interpolate(rows: &[Observables], t: f64) -> Option<Observables> {
+    let first = rows.first()?;
+    let last = rows.last()?;
+    let slack = 1e-9 * last.t.abs().max(1.0);
+    if t < first.t - slack || t > last.t + slack {
+        return None;
+    }
+    let k = rows.partition_point(|o| o.t < t);
+    if k == 0 {
+        return Some(*first);
+    }
+    if k >= rows.len() {
+        return Some(*last);
+    }
+    let (a, b) = (rows[k - 1], rows[k]);
+    if (b.t - t).abs() <= slack {
+        return Some(b);
+    }
+    let w = if b.t > a.t {
+        (t - a.t) / (b.t - a.t)
+    } else {
+        1.0
+    };
+    let mix = |x: f64, y: f64| x + w * (y - x);
+    Some(Observables {
+        t,
+        contact_radius: mix(a.contact_radius, b.contact_radius),
+        uy_top: mix(a.uy_top, b.uy_top),
+        uy_centre: mix(a.uy_centre, b.uy_centre),
+        uy_bottom: mix(a.uy_bottom, b.uy_bottom),
+        strain_nucleus: mix(a.strain_nucleus, b.strain_nucleus),
+        strain_cytoplasm: mix(a.strain_cytoplasm, b.strain_cytoplasm),
+    })
+}
