@@ -508,6 +508,7 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
         _ => None,
     };
     let mut stats_before = Stats::default();
+    let mut switch_pending = switch_time.is_some();
     let start = Instant::now();
     let interrupt = opts.interrupt.clone();
     let mut failure: Option<String> = None;
@@ -526,6 +527,22 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
             ));
             !stop.load(Ordering::Relaxed)
         };
+        // Once past the requested switch time, advance in short probes until the contact
+        // carries the cell, switch the system there, then go on to the output time.
+        if switch_pending && solver.integ_ref().t() >= switch_time.unwrap_or(f64::INFINITY) {
+            match advance_switching(&mut solver, tout, &opts.settings, &mut on_step) {
+                Ok(Some((old_stats, t_switch))) => {
+                    stats_before = add_stats(&stats_before, &old_stats);
+                    summary.inertia_switched_off_at = Some(t_switch);
+                    switch_pending = false;
+                }
+                Ok(None) => {}
+                Err(e) => {
+                    failure = Some(e);
+                    break;
+                }
+            }
+        }
         if let Err(e) = solver.integ().advance_to(tout, &mut on_step) {
             failure = Some(e.to_string());
             break;
@@ -548,20 +565,12 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
                 summary.states.push(name);
             }
         }
-        if Some(tout) == switch_time {
-            let mut probe_step = |_: f64, _: &Stats| !interrupt.load(Ordering::Relaxed);
-            match switch_off_inertia(&mut solver, &opts.settings, &mut probe_step) {
-                Ok((new_solver, t_switch)) => {
-                    stats_before = add_stats(&stats_before, &solver.integ_ref().stats());
-                    summary.stats = stats_before.clone();
-                    solver = new_solver;
-                    summary.inertia_switched_off_at = Some(t_switch);
-                }
-                Err(e) => {
-                    failure = Some(e);
-                    break;
-                }
-            }
+        if switch_pending && solver.integ_ref().t() - switch_time.unwrap_or(f64::INFINITY) > SWITCH_PROBE_LIMIT {
+            failure = Some(format!(
+                "cannot switch inertia off: in the {SWITCH_PROBE_LIMIT} s after t = {} s the contact never carried the cell's weight",
+                switch_time.unwrap_or_default()
+            ));
+            break;
         }
         write_json(&out.join("summary.json"), &summary)?;
     }
@@ -597,60 +606,44 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
 const SWITCH_PROBE_LIMIT: f64 = 50.0;
 const SWITCH_PROBE_DT: f64 = 0.01;
 
-/// Switches inertia off: the same model on (u, μ_as), restarted from the current state with
-/// u̇ = v. Without inertia the rigid vertical mode has no damping and only the contact's
-/// stiffness, so the switch is made at a moment the contact carries the cell's current
-/// weight (probing forward with inertia in 0.01 s steps if the cell is in the air, e.g.
-/// between bounces), and y is first made consistent with u̇ = v (the rigid mode jumps to
-/// equilibrium). Returns the new integrator and the switch time.
-fn switch_off_inertia(
+/// Advances towards `tout` in steps of [`SWITCH_PROBE_DT`] (never past `tout`), and at the
+/// first moment the contact carries the cell's current weight switches inertia off: the
+/// same model on (u, μ_as), restarted there from the current state with u̇ = v. Without
+/// inertia the rigid vertical mode has no damping and only the contact's stiffness, so the
+/// switch must wait for contact (the cell may be in the air between bounces), and y is
+/// first made consistent with u̇ = v (the rigid mode jumps to equilibrium; the μ_as ODEs
+/// keep μ_as and get a consistent μ̇_as). Returns the old integrator's statistics and the
+/// switch time once switched, `None` if `tout` came first.
+fn advance_switching(
     solver: &mut Solver,
+    tout: f64,
     settings: &RunSettings,
     on_step: &mut dyn FnMut(f64, &Stats) -> bool,
-) -> Result<(Solver, f64), String> {
-    let t_request = solver.integ_ref().t();
+) -> Result<Option<(Stats, f64)>, String> {
     loop {
         let t = solver.integ_ref().t();
-        let (y, yp) = (
-            solver.integ_ref().y().to_vec(),
-            solver.integ_ref().yp().to_vec(),
-        );
+        let y = solver.integ_ref().y();
         let model = solver.model();
         let ph = &model.params.phases;
         let load = model.weight() * ph.t_g(t) * ph.gravity_sign(t);
-        let support = model.contact_force_total(&y).y;
-        if load > 0.0 && support >= load {
-            let (mut y2, mut yp2) = model.drop_inertia_state(&y, &yp);
+        if load > 0.0 && model.contact_force_total(y).y >= load {
+            let (mut y2, mut yp2) = model.drop_inertia_state(y, solver.integ_ref().yp());
             let mut p2: ModelParams = model.params.clone();
             p2.inertia = false;
             let mut m2 = CellModel::new(p2, model.mesh.clone())?;
             let atol = Atol::Vector(m2.atol_vector(settings.atol));
             let for_y: Vec<bool> = (0..m2.dofs.n).map(|i| i < m2.dofs.n_u).collect();
-            consistent_init(
-                &mut m2,
-                t,
-                &mut y2,
-                &mut yp2,
-                &for_y,
-                settings.linear_solver,
-                settings.rtol,
-                &atol,
-            )
-            .map_err(|e| format!("switching inertia off at t = {t}: {e}"))?;
+            consistent_init(&mut m2, t, &mut y2, &mut yp2, &for_y, settings.linear_solver, settings.rtol, &atol)
+                .map_err(|e| format!("switching inertia off at t = {t}: {e}"))?;
             m2.set_initial(t, y2, yp2);
-            let new = Solver::new(m2, settings)
-                .map_err(|e| format!("restart without inertia at t = {t}: {e}"))?;
-            return Ok((new, t));
+            let new = Solver::new(m2, settings).map_err(|e| format!("restart without inertia at t = {t}: {e}"))?;
+            let old = std::mem::replace(solver, new);
+            return Ok(Some((old.integ_ref().stats(), t)));
         }
-        if t - t_request > SWITCH_PROBE_LIMIT {
-            return Err(format!(
-                "cannot switch inertia off: from t = {t_request} s to {t} s the contact never carried the cell's weight (support {support:.3e} of {load:.3e} pN/µm)"
-            ));
+        if t >= tout {
+            return Ok(None);
         }
-        solver
-            .integ()
-            .advance_to(t + SWITCH_PROBE_DT, on_step)
-            .map_err(|e| e.to_string())?;
+        solver.integ().advance_to((t + SWITCH_PROBE_DT).min(tout), on_step).map_err(|e| e.to_string())?;
     }
 }
 

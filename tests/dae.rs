@@ -423,10 +423,11 @@ fn ida_recovers_from_an_inadmissible_state() {
 
 #[test]
 fn bdf2_cuts_its_step_on_an_inadmissible_state() {
-    // Two failing calls: the attempt with the stored factorization, then the one with a
-    // fresh Jacobian, so the step must be halved once.
+    // Three failing calls: the attempts with the stored factorization, with a fresh
+    // Jacobian and with full Newton each fail at their first residual, so the step must be
+    // halved once.
     let mut w = Wrapped::new(Analytic::new(10.0));
-    (w.fail_after, w.fail_count) = (0.5, 2);
+    (w.fail_after, w.fail_count) = (0.5, 3);
     let mut b = Bdf2::new(
         w,
         Bdf2Options {

@@ -28,6 +28,7 @@ pub fn run_case(
         settings,
         progress: Progress::Hidden,
         interrupt: Arc::new(AtomicBool::new(false)),
+        snapshots: Default::default(),
     };
     let summary = run::run(&case, &file, &opts).unwrap_or_else(|e| panic!("{path}: {e}"));
     (summary, read_csv(&dir.join("timeseries.csv")), dir)
