@@ -565,7 +565,9 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
                 summary.states.push(name);
             }
         }
-        if switch_pending && solver.integ_ref().t() - switch_time.unwrap_or(f64::INFINITY) > SWITCH_PROBE_LIMIT {
+        if switch_pending
+            && solver.integ_ref().t() - switch_time.unwrap_or(f64::INFINITY) > SWITCH_PROBE_LIMIT
+        {
             failure = Some(format!(
                 "cannot switch inertia off: in the {SWITCH_PROBE_LIMIT} s after t = {} s the contact never carried the cell's weight",
                 switch_time.unwrap_or_default()
@@ -633,17 +635,30 @@ fn advance_switching(
             let mut m2 = CellModel::new(p2, model.mesh.clone())?;
             let atol = Atol::Vector(m2.atol_vector(settings.atol));
             let for_y: Vec<bool> = (0..m2.dofs.n).map(|i| i < m2.dofs.n_u).collect();
-            consistent_init(&mut m2, t, &mut y2, &mut yp2, &for_y, settings.linear_solver, settings.rtol, &atol)
-                .map_err(|e| format!("switching inertia off at t = {t}: {e}"))?;
+            consistent_init(
+                &mut m2,
+                t,
+                &mut y2,
+                &mut yp2,
+                &for_y,
+                settings.linear_solver,
+                settings.rtol,
+                &atol,
+            )
+            .map_err(|e| format!("switching inertia off at t = {t}: {e}"))?;
             m2.set_initial(t, y2, yp2);
-            let new = Solver::new(m2, settings).map_err(|e| format!("restart without inertia at t = {t}: {e}"))?;
+            let new = Solver::new(m2, settings)
+                .map_err(|e| format!("restart without inertia at t = {t}: {e}"))?;
             let old = std::mem::replace(solver, new);
             return Ok(Some((old.integ_ref().stats(), t)));
         }
         if t >= tout {
             return Ok(None);
         }
-        solver.integ().advance_to((t + SWITCH_PROBE_DT).min(tout), on_step).map_err(|e| e.to_string())?;
+        solver
+            .integ()
+            .advance_to((t + SWITCH_PROBE_DT).min(tout), on_step)
+            .map_err(|e| e.to_string())?;
     }
 }
 
