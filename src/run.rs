@@ -550,6 +550,14 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
         let y = solver.integ_ref().y().to_vec();
         let model = solver.model();
         let obs = model.observe(tout, &y);
+        if !obs.is_finite() || y.iter().any(|v| !v.is_finite()) {
+            // Not expected (the residual reports non-finite values as inadmissible, and
+            // the integrators cut the step), but a run must never write NaN.
+            failure = Some(format!(
+                "non-finite state or output at t = {tout} s (not written)"
+            ));
+            break;
+        }
         write_row(&mut csv, &obs)?;
         if frames.is_active() {
             let yp = solver.integ_ref().yp();

@@ -3,6 +3,7 @@
 
 mod cli;
 mod dae;
+mod hard;
 mod model;
 mod plots;
 mod scenes;
