@@ -115,6 +115,12 @@ enum Command {
         /// The case file (RON).
         case: PathBuf,
     },
+    /// Print a markdown table of runs (outcome, cost, final values) from their summaries.
+    Table {
+        /// Run directories (each with a summary.json).
+        #[arg(required = true)]
+        run_dirs: Vec<PathBuf>,
+    },
 }
 
 /// Loads a case; a bad case prints its located error and exits with status 2.
@@ -344,5 +350,19 @@ fn main() -> ExitCode {
             },
             Err(code) => code,
         },
+        Command::Table { run_dirs } => {
+            println!("{}", output::table::HEADER);
+            let mut status = ExitCode::SUCCESS;
+            for dir in run_dirs {
+                match output::table::read_summary(&dir) {
+                    Ok(s) => println!("{}", output::table::row(&s)),
+                    Err(e) => {
+                        eprintln!("error: {e}");
+                        status = ExitCode::from(2);
+                    }
+                }
+            }
+            status
+        }
     }
 }

@@ -17,7 +17,8 @@
 //! - [`snapshot`]: what the run loop hands over at each output time, and the writer that
 //!   feeds [`vtu`] and [`movie`];
 //! - [`paper`]: `cellsim paper` — the five scenes, the paper's reported values and the
-//!   comparison table.
+//!   comparison table;
+//! - [`table`]: `cellsim table` — a markdown row per run from its summary.
 
 pub mod figures;
 pub mod geometry;
@@ -25,6 +26,7 @@ pub mod movie;
 pub mod paper;
 pub mod read;
 pub mod snapshot;
+pub mod table;
 pub mod vtu;
 
 pub use read::RunData;
