@@ -115,3 +115,35 @@ fn run_writes_its_time_series_summary_and_states() {
         "state at t_end"
     );
 }
+
+#[test]
+fn table_prints_a_row_per_run_and_refuses_a_missing_one() {
+    let out = format!("{}/cli-table", env!("CARGO_TARGET_TMPDIR"));
+    let _ = std::fs::remove_dir_all(&out);
+    let res = cellsim(&[
+        "run",
+        "cases/fast/flat-gravity.ron",
+        "--out",
+        &out,
+        "--quiet",
+    ]);
+    assert!(res.status.success());
+    let res = cellsim(&["table", &out]);
+    assert!(res.status.success());
+    let text = String::from_utf8_lossy(&res.stdout);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3, "{text}");
+    assert!(
+        lines[2].starts_with("| flat-gravity | finished |"),
+        "{text}"
+    );
+    // The final uy_top of the summary appears in the row.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{out}/summary.json")).unwrap())
+            .unwrap();
+    let uy = summary["final_values"]["uy_top"].as_f64().unwrap();
+    assert!(lines[2].contains(&format!("{uy:.3}")), "{text}");
+    let res = cellsim(&["table", "no/such/run"]);
+    assert_eq!(res.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&res.stderr).contains("no/such/run/summary.json"));
+}
