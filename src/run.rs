@@ -18,7 +18,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::case::{self, Case, InertiaMode};
 use crate::dae::bdf2::{Bdf2, Bdf2Options};
-use crate::dae::{Atol, Integrator, IntegratorError, LinearSolverKind, Stats, consistent_init};
+use crate::dae::{
+    Atol, Dae, Integrator, IntegratorError, LinearSolverKind, Stats, consistent_init,
+};
 use crate::fem::{Domain, Mesh, MeshError};
 use crate::model::observe::Observables;
 use crate::model::{CellModel, ModelParams};
@@ -62,6 +64,7 @@ impl RunSettings {
             linear_solver: match s.linear_solver {
                 case::LinearSolver::Faer => LinearSolverKind::Faer,
                 case::LinearSolver::Klu => LinearSolverKind::Klu,
+                case::LinearSolver::FaerCondensed => LinearSolverKind::FaerCondensed,
             },
             max_order: s.max_order,
             max_steps: s.max_steps,
@@ -318,6 +321,12 @@ enum Solver {
 impl Solver {
     fn new(model: CellModel, s: &RunSettings) -> Result<Self, IntegratorError> {
         let atol = Atol::Vector(model.atol_vector(s.atol));
+        // The condensed solver needs the (u, v) pairs: without inertia, its full-size LU.
+        let linear_solver = if model.first_order_blocks().is_some() {
+            s.linear_solver
+        } else {
+            s.linear_solver.uncondensed()
+        };
         Ok(match s.integrator {
             case::Integrator::Ida => {
                 let opts = IdaOptions {
@@ -326,7 +335,7 @@ impl Solver {
                     max_order: s.max_order,
                     init_step: s.initial_step,
                     max_steps: s.max_steps as i64,
-                    linear_solver: s.linear_solver,
+                    linear_solver,
                     ..Default::default()
                 };
                 Solver::Ida(Box::new(Ida::new(model, opts)?))
@@ -336,7 +345,7 @@ impl Solver {
                     dt: s.dt,
                     rtol: s.rtol,
                     atol,
-                    linear_solver: s.linear_solver,
+                    linear_solver,
                     ..Default::default()
                 };
                 Solver::Bdf2(Box::new(Bdf2::new(model, opts)?))
@@ -641,7 +650,7 @@ fn advance_switching(
                 &mut y2,
                 &mut yp2,
                 &for_y,
-                settings.linear_solver,
+                settings.linear_solver.uncondensed(),
                 settings.rtol,
                 &atol,
             )

@@ -3,6 +3,7 @@
 
 mod cli;
 mod dae;
+mod linsolve;
 mod model;
 mod plots;
 mod scenes;
