@@ -5,7 +5,8 @@
 //! Compiled in only with the cargo feature `timers`; without it [`time`] is the bare call
 //! (no clock read, no counter) and [`totals`] returns zeros. With it, the totals are
 //! process-wide (relaxed atomics), so one run at a time should be measured:
-//! `cargo run --release --features timers --example profile -- CASE.ron`.
+//! `cargo run --release --features timers -- run CASE.ron --quiet` prints the breakdown
+//! at the end of the run and writes it into summary.json (`timers`).
 
 /// What is being timed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
