@@ -43,11 +43,11 @@ fn state(m: &CellModel) -> (Vec<f64>, Vec<f64>) {
             0.05 * (0.3 * x[1]).sin() * x[0] / 10.0,
             -0.5 + 0.04 * (0.25 * x[0]).cos(),
         ];
-        for k in 0..2 {
+        for (k, &duk) in du.iter().enumerate() {
             let d = m.dofs.u[i][k];
             if d != usize::MAX {
-                y[d] = du[k];
-                yp[d] = 1e-4 * du[k];
+                y[d] = duk;
+                yp[d] = 1e-4 * duk;
             }
         }
     }

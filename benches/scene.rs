@@ -10,7 +10,7 @@
 //!
 //! `cargo bench --bench scene`
 
-use std::path::PathBuf;
+use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -40,11 +40,11 @@ fn unknowns(case: &Case, file: &str) -> usize {
     cellsim::model::CellModel::new(p, mesh).unwrap().dofs.n
 }
 
-fn run_once(case: &Case, file: &str, kind: LinearSolverKind, out: &PathBuf) -> u64 {
+fn run_once(case: &Case, file: &str, kind: LinearSolverKind, out: &Path) -> u64 {
     let mut settings = RunSettings::from_case(case);
     settings.linear_solver = kind;
     let opts = RunOptions {
-        out: out.clone(),
+        out: out.to_path_buf(),
         settings,
         progress: Progress::Hidden,
         interrupt: Arc::new(AtomicBool::new(false)),

@@ -218,7 +218,7 @@ impl TimeBreakdown {
                 .map(|c| format!("{c:>8}"))
                 .unwrap_or_else(|| " ".repeat(8));
             format!(
-                "  {name:<22} {s:>9.3} s {:>6.1} %  {c} calls\n",
+                "  {name:<22} {s:>9.3} s {:>6.1} %  {c}\n",
                 100.0 * s / self.wall
             )
         };
