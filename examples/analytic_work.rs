@@ -31,7 +31,9 @@ fn measure(make: &dyn Fn() -> Box<dyn Integrator>) -> (f64, Stats, f64) {
     let mut reps = 0;
     while reps == 0 || t0.elapsed().as_secs_f64() < MIN_WALL {
         let mut integ = make();
-        integ.advance_to(1.0, &mut |_, _| true).expect("integration");
+        integ
+            .advance_to(1.0, &mut |_, _| true)
+            .expect("integration");
         out = Some((error(integ.y()), integ.stats()));
         reps += 1;
     }
@@ -102,7 +104,9 @@ fn main() {
         bdf_ladder.push((e, s.residual_evals as f64, wall));
     }
     println!("\nat equal error (log-log interpolation on each ladder):");
-    println!("  error    IDA res.evals  BDF2 res.evals  ratio   IDA wall[us]  BDF2 wall[us]  ratio");
+    println!(
+        "  error    IDA res.evals  BDF2 res.evals  ratio   IDA wall[us]  BDF2 wall[us]  ratio"
+    );
     for target in [1e-4, 1e-5, 1e-6, 1e-7] {
         let pick = |l: &[(f64, f64, f64)], wall: bool| {
             let pts: Vec<(f64, f64)> = l

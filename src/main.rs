@@ -226,6 +226,9 @@ fn main() -> ExitCode {
                         100.0 * f.strain_cytoplasm,
                         out.display()
                     );
+                    if let Some(t) = &s.timers {
+                        print!("{}", t.table());
+                    }
                     ExitCode::SUCCESS
                 }
                 Err(e) => {

@@ -18,7 +18,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::case::{self, Case, InertiaMode};
 use crate::dae::bdf2::{Bdf2, Bdf2Options};
-use crate::dae::{Atol, Integrator, IntegratorError, LinearSolverKind, Stats, consistent_init};
+use crate::dae::{
+    Atol, Dae, Integrator, IntegratorError, LinearSolverKind, Stats, consistent_init,
+};
 use crate::fem::{Domain, Mesh, MeshError};
 use crate::model::observe::Observables;
 use crate::model::{CellModel, ModelParams};
@@ -62,6 +64,7 @@ impl RunSettings {
             linear_solver: match s.linear_solver {
                 case::LinearSolver::Faer => LinearSolverKind::Faer,
                 case::LinearSolver::Klu => LinearSolverKind::Klu,
+                case::LinearSolver::FaerCondensed => LinearSolverKind::FaerCondensed,
             },
             max_order: s.max_order,
             max_steps: s.max_steps,
@@ -158,6 +161,85 @@ pub struct Summary {
     pub cellsim_version: String,
     /// SUNDIALS version linked.
     pub sundials_version: String,
+    /// Where the integration's wall time went (built with the `timers` feature only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timers: Option<TimeBreakdown>,
+}
+
+/// Wall time of the integration split by what IDA (or BDF2) was doing: the callbacks it
+/// made, its own work, and the rest of the run loop (outputs, inertia switch). Measured
+/// by [`crate::dae::timing`] (cargo feature `timers`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TimeBreakdown {
+    /// Integration wall time [s] (= `Summary::wall_seconds`).
+    pub wall: f64,
+    /// Residual evaluations called by IDA [s] and their number.
+    pub residual: f64,
+    pub residual_calls: u64,
+    /// Jacobian assemblies [s] and their number.
+    pub jacobian: f64,
+    pub jacobian_calls: u64,
+    /// Numeric LU factorizations [s] and their number.
+    pub factorize: f64,
+    pub factorize_calls: u64,
+    /// Triangular solves [s] and their number.
+    pub solve: f64,
+    pub solve_calls: u64,
+    /// IDA's own work: time inside IDASolve/IDACalcIC minus the callbacks above [s].
+    pub ida_internal: f64,
+    /// Outside IDA: outputs, observables, the inertia switch (with its consistent
+    /// initialization) [s].
+    pub outside: f64,
+}
+
+impl TimeBreakdown {
+    /// From the timers' totals and the integration wall time.
+    pub fn from_totals(t: &crate::dae::timing::Totals, wall: f64) -> Self {
+        use crate::dae::timing::Phase;
+        Self {
+            wall,
+            residual: t.get(Phase::Residual),
+            residual_calls: t.count(Phase::Residual),
+            jacobian: t.get(Phase::Jacobian),
+            jacobian_calls: t.count(Phase::Jacobian),
+            factorize: t.get(Phase::Factorize),
+            factorize_calls: t.count(Phase::Factorize),
+            solve: t.get(Phase::Solve),
+            solve_calls: t.count(Phase::Solve),
+            ida_internal: t.ida_internal(),
+            outside: wall - t.get(Phase::Ida),
+        }
+    }
+
+    /// A table of seconds and shares of the wall time.
+    pub fn table(&self) -> String {
+        let row = |name: &str, s: f64, calls: Option<u64>| {
+            let c = calls
+                .map(|c| format!("{c:>8}"))
+                .unwrap_or_else(|| " ".repeat(8));
+            format!(
+                "  {name:<22} {s:>9.3} s {:>6.1} %  {c}\n",
+                100.0 * s / self.wall
+            )
+        };
+        let mut out = String::from("time breakdown (feature `timers`):\n");
+        out += &row("residual", self.residual, Some(self.residual_calls));
+        out += &row(
+            "Jacobian assembly",
+            self.jacobian,
+            Some(self.jacobian_calls),
+        );
+        out += &row(
+            "LU factorization",
+            self.factorize,
+            Some(self.factorize_calls),
+        );
+        out += &row("LU solve", self.solve, Some(self.solve_calls));
+        out += &row("IDA internals", self.ida_internal, None);
+        out += &row("outside IDA", self.outside, None);
+        out += &row("total (wall)", self.wall, None);
+        out
+    }
 }
 
 /// What the mesh file records: enough to redraw the deformed cell from a state file.
@@ -318,6 +400,12 @@ enum Solver {
 impl Solver {
     fn new(model: CellModel, s: &RunSettings) -> Result<Self, IntegratorError> {
         let atol = Atol::Vector(model.atol_vector(s.atol));
+        // The condensed solver needs the (u, v) pairs: without inertia, its full-size LU.
+        let linear_solver = if model.first_order_blocks().is_some() {
+            s.linear_solver
+        } else {
+            s.linear_solver.uncondensed()
+        };
         Ok(match s.integrator {
             case::Integrator::Ida => {
                 let opts = IdaOptions {
@@ -326,7 +414,7 @@ impl Solver {
                     max_order: s.max_order,
                     init_step: s.initial_step,
                     max_steps: s.max_steps as i64,
-                    linear_solver: s.linear_solver,
+                    linear_solver,
                     ..Default::default()
                 };
                 Solver::Ida(Box::new(Ida::new(model, opts)?))
@@ -336,7 +424,7 @@ impl Solver {
                     dt: s.dt,
                     rtol: s.rtol,
                     atol,
-                    linear_solver: s.linear_solver,
+                    linear_solver,
                     ..Default::default()
                 };
                 Solver::Bdf2(Box::new(Bdf2::new(model, opts)?))
@@ -475,6 +563,7 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
         states: Vec::new(),
         cellsim_version: env!("CARGO_PKG_VERSION").to_string(),
         sundials_version: crate::sundials::SUNDIALS_VERSION.to_string(),
+        timers: None,
     };
     let csv_path = out.join("timeseries.csv");
     let mut csv = BufWriter::new(File::create(&csv_path).map_err(io_err(&csv_path))?);
@@ -509,6 +598,7 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
     };
     let mut stats_before = Stats::default();
     let mut switch_pending = switch_time.is_some();
+    crate::dae::timing::reset();
     let start = Instant::now();
     let interrupt = opts.interrupt.clone();
     let mut failure: Option<String> = None;
@@ -585,6 +675,12 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
         write_json(&out.join("summary.json"), &summary)?;
     }
     summary.wall_seconds = start.elapsed().as_secs_f64();
+    if crate::dae::timing::ENABLED {
+        summary.timers = Some(TimeBreakdown::from_totals(
+            &crate::dae::timing::totals(),
+            summary.wall_seconds,
+        ));
+    }
     bar.finish_and_clear();
     if let Err(e) = frames.finish() {
         failure.get_or_insert(format!("writing the VTU/GIF output: {e}"));
@@ -655,7 +751,7 @@ fn advance_switching(
                 &mut y2,
                 &mut yp2,
                 &for_y,
-                settings.linear_solver,
+                settings.linear_solver.uncondensed(),
                 settings.rtol,
                 &atol,
             )

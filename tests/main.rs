@@ -4,6 +4,7 @@
 mod cli;
 mod dae;
 mod hard;
+mod linsolve;
 mod model;
 mod plots;
 mod scenes;

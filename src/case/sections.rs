@@ -797,6 +797,9 @@ pub enum LinearSolver {
     Faer,
     /// SUNDIALS' KLU.
     Klu,
+    /// faer's LU on the half-size system left after eliminating the velocities (inertia
+    /// on); the full-size faer LU once inertia is off.
+    FaerCondensed,
 }
 
 /// Time integration and linear algebra settings.
@@ -819,7 +822,7 @@ pub struct Solver {
     /// Maximum number of internal steps between two output times (IDA's mxstep).
     /// Default 5000. Valid: ≥ 1.
     pub max_steps: u64,
-    /// `Faer` or `Klu`. Default `Faer` (measured faster on these matrices).
+    /// `Faer`, `Klu` or `FaerCondensed`. Default `Faer` (measured faster on these matrices).
     pub linear_solver: LinearSolver,
     /// First step size tried by IDA (s). Default none (IDA's estimate). Valid: > 0.
     pub initial_step: Option<f64>,

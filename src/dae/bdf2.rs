@@ -129,7 +129,10 @@ impl<D: Dae> Bdf2<D> {
                 )));
             }
         }
-        let mut solver = opts.linear_solver.build();
+        let mut solver = opts
+            .linear_solver
+            .build_for(&dae)
+            .map_err(|e| IntegratorError::Linear(e.to_string()))?;
         solver
             .analyse(dae.pattern())
             .map_err(|e| IntegratorError::Linear(e.to_string()))?;

@@ -6,8 +6,10 @@
 //! [`LinearSolver::solve_in_place`] back-substitutes.
 //!
 //! Backends: faer's supernodal sparse LU, sequential ([`FaerLu`], the default; measured
-//! faster than its 2-thread run and than KLU on P2 elasticity matrices), and SUNDIALS' KLU
-//! with AMD ordering ([`crate::sundials::KluLu`]).
+//! faster than its 2-thread run and than KLU on P2 elasticity matrices), SUNDIALS' KLU
+//! with AMD ordering ([`crate::sundials::KluLu`]), and faer's LU on the half-size system
+//! left after eliminating the velocities of a first-order (u, v) system
+//! ([`super::condensed::CondensedLu`]).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::SparseColMatRef;
@@ -18,7 +20,8 @@ use faer::sparse::linalg::lu::{
 use faer::{Conj, MatMut, Par};
 use serde::{Deserialize, Serialize};
 
-use super::Pattern;
+use super::condensed::CondensedLu;
+use super::{Dae, Pattern};
 
 /// Why a linear solver failed.
 #[derive(Debug, Clone, thiserror::Error)]
@@ -26,6 +29,10 @@ pub enum LinearSolverError {
     /// Called out of order (e.g. solve before factorize).
     #[error("linear solver used before {0}")]
     NotReady(&'static str),
+    /// The solver needs a structure the problem does not have (e.g. the condensed solver
+    /// on a system without (u, v) pairs).
+    #[error("{0}")]
+    Unsupported(String),
     /// The matrix is singular (structurally or numerically); recoverable by the
     /// integrator (a smaller step changes `cj`).
     #[error("singular matrix: {0}")]
@@ -56,14 +63,52 @@ pub enum LinearSolverKind {
     Faer,
     /// SUNDIALS' KLU (SuiteSparse) with AMD ordering.
     Klu,
+    /// faer's LU on the condensed system: the velocities of a first-order (u, v) system
+    /// eliminated ([`CondensedLu`]). Needs a problem with [`Dae::first_order_blocks`]
+    /// (the cell model with inertia).
+    #[serde(rename = "faer-condensed")]
+    FaerCondensed,
 }
 
 impl LinearSolverKind {
-    /// A fresh solver of this kind.
+    /// A fresh solver of this kind for a problem described by its pattern alone. The
+    /// condensed kind needs the problem's block layout ([`Self::build_for`]); built here it
+    /// reports [`LinearSolverError::Unsupported`] from `analyse`.
     pub fn build(self) -> Box<dyn LinearSolver> {
         match self {
             LinearSolverKind::Faer => Box::new(FaerLu::new()),
             LinearSolverKind::Klu => Box::new(crate::sundials::KluLu::new()),
+            LinearSolverKind::FaerCondensed => Box::new(CondensedLu::unconfigured()),
+        }
+    }
+
+    /// A fresh solver of this kind for `dae`. Fails with
+    /// [`LinearSolverError::Unsupported`] when the condensed kind is asked for a problem
+    /// without first-order (u, v) pairs (e.g. the cell model without inertia; see
+    /// [`Self::uncondensed`]).
+    pub fn build_for<D: Dae + ?Sized>(
+        self,
+        dae: &D,
+    ) -> Result<Box<dyn LinearSolver>, LinearSolverError> {
+        match self {
+            LinearSolverKind::FaerCondensed => match dae.first_order_blocks() {
+                Some(blocks) => Ok(Box::new(CondensedLu::new(blocks))),
+                None => Err(LinearSolverError::Unsupported(
+                    "the condensed solver (faer-condensed) needs a first-order (u, v) system, \
+                     and this problem has no velocity unknowns (inertia off?): use faer or klu"
+                        .into(),
+                )),
+            },
+            other => Ok(other.build()),
+        }
+    }
+
+    /// The kind to use on a problem without (u, v) pairs: `Faer` for the condensed
+    /// kind (its LU on the full system), the kind itself otherwise.
+    pub fn uncondensed(self) -> Self {
+        match self {
+            LinearSolverKind::FaerCondensed => LinearSolverKind::Faer,
+            other => other,
         }
     }
 }

@@ -16,11 +16,14 @@
 //! Two integrators implement [`Integrator`]: SUNDIALS IDA ([`crate::sundials::Ida`],
 //! variable order and step) and the fixed-step [`bdf2::Bdf2`] that verifies it. Both use
 //! the same [`linsolve::LinearSolver`] (faer's sparse LU by default, SUNDIALS' KLU as an
-//! alternative).
+//! alternative, or [`condensed::CondensedLu`], which eliminates the velocities of a
+//! first-order (u, v) system and factorizes the half-size system).
 
 pub mod bdf2;
+pub mod condensed;
 pub mod linsolve;
 pub mod problems;
+pub mod timing;
 
 use faer::sparse::SymbolicSparseColMat;
 use serde::{Deserialize, Serialize};
@@ -74,6 +77,38 @@ pub trait Dae {
     /// Times where the forcing has a kink (phase boundaries). Integrators stop exactly there.
     fn breakpoints(&self) -> Vec<f64> {
         Vec::new()
+    }
+
+    /// The (position, velocity) pairs of a second-order system written in first-order
+    /// form, if it has them: see [`FirstOrderBlocks`]. A linear solver may use them to
+    /// eliminate the velocities ([`condensed::CondensedLu`]). Default: none.
+    fn first_order_blocks(&self) -> Option<FirstOrderBlocks> {
+        None
+    }
+}
+
+/// The kinematic structure of a second-order system written in first order: pairs
+/// (p, q) of unknowns where row p of F is the kinematic equation `ẏ_p − y_q = 0`, so that
+/// row p of `J = ∂F/∂y + cj ∂F/∂ẏ` has exactly two entries, `J_pp = cj` and
+/// `J_pq = −1` (any nonzero `J_pq` and any `J_pp` are accepted: they are read from J's
+/// values at each factorization), and row q is the second-order (momentum) equation of
+/// the same component.
+///
+/// With y = (u, v, μ), the cell model's J is `[[cj·I, −I, 0], [K, cj·M + C, B],
+/// [R_u, 0, cj·I − R_μ]]` and the pairs are (u_k, v_k).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FirstOrderBlocks {
+    /// The pairs `[p, q]`: p the position unknown (and kinematic row), q its velocity
+    /// unknown (and momentum row). Every index appears at most once over all pairs.
+    pub pairs: Vec<[usize; 2]>,
+}
+
+impl FirstOrderBlocks {
+    /// Pairs `(p₀ + k, q₀ + k)` for k in 0..m: contiguous position and velocity blocks.
+    pub fn contiguous(p0: usize, q0: usize, m: usize) -> Self {
+        Self {
+            pairs: (0..m).map(|k| [p0 + k, q0 + k]).collect(),
+        }
     }
 }
 
@@ -245,7 +280,9 @@ pub fn consistent_init(
     const MAX_ITERS: u32 = 30;
     let n = dae.size();
     let pattern = dae.pattern().clone();
-    let mut solver = kind.build();
+    let mut solver = kind
+        .build_for(&*dae)
+        .map_err(|e| IntegratorError::Linear(e.to_string()))?;
     solver
         .analyse(&pattern)
         .map_err(|e| IntegratorError::Linear(e.to_string()))?;

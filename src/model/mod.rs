@@ -27,7 +27,7 @@ use nalgebra::{Matrix2, Vector2};
 use num_dual::DualSVec64;
 
 use crate::dae::linsolve::{pattern_from_entries, position};
-use crate::dae::{Dae, DaeError, Pattern};
+use crate::dae::{Dae, DaeError, FirstOrderBlocks, Pattern};
 use crate::fem::p2::{ElementGeometry, P2Tabulation};
 use crate::fem::quadrature::TriangleRule;
 use crate::fem::{Domain, Mesh};
@@ -827,6 +827,15 @@ impl Dae for CellModel {
             Some(s) => s.clone(),
             None => (0.0, vec![0.0; self.dofs.n], vec![0.0; self.dofs.n]),
         }
+    }
+
+    /// With inertia, the pairs (u_k, v_k): rows [0, n_u) are the kinematic rows u̇ − v = 0
+    /// and row n_u + k is the momentum balance of u_k's component.
+    fn first_order_blocks(&self) -> Option<FirstOrderBlocks> {
+        self.dofs.inertia.then(|| {
+            let n_u = self.dofs.n_u;
+            FirstOrderBlocks::contiguous(0, n_u, n_u)
+        })
     }
 
     fn breakpoints(&self) -> Vec<f64> {

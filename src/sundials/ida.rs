@@ -17,6 +17,7 @@ use sundials_sys as sys;
 
 use super::{Context, NVector, guard, ida_flag_name, view, view_mut};
 use crate::dae::linsolve::{LinearSolver, LinearSolverError, LinearSolverKind};
+use crate::dae::timing::{self, Phase};
 use crate::dae::{Atol, Dae, DaeError, Integrator, IntegratorError, Stats};
 
 /// Initial-condition calculation (IDACalcIC) before the first step.
@@ -179,7 +180,10 @@ impl<D: Dae> Ida<D> {
         let vector = |v: &[f64]| NVector::from_slice(v, &ctx).map_err(IntegratorError::Input);
         let (yy, yp, out_y, out_yp) = (vector(&y0)?, vector(&yp0)?, vector(&y0)?, vector(&yp0)?);
 
-        let mut solver = opts.linear_solver.build();
+        let mut solver = opts
+            .linear_solver
+            .build_for(&dae)
+            .map_err(|e| IntegratorError::Linear(e.to_string()))?;
         solver
             .analyse(dae.pattern())
             .map_err(|e| IntegratorError::Linear(e.to_string()))?;
@@ -382,7 +386,8 @@ impl<D: Dae> Ida<D> {
                     CalcIc::AlgebraicAndDerivatives { tout1 } => (sys::IDA_YA_YDP_INIT, tout1),
                     CalcIc::AllOfY { tout1 } => (sys::IDA_Y_INIT, tout1),
                 };
-                self.check("IDACalcIC", sys::IDACalcIC(mem, icopt, tout1))?;
+                let flag = timing::time(Phase::Ida, || sys::IDACalcIC(mem, icopt, tout1));
+                self.check("IDACalcIC", flag)?;
                 self.check(
                     "IDAGetConsistentIC",
                     sys::IDAGetConsistentIC(mem, self.out_y.0, self.out_yp.0),
@@ -450,7 +455,7 @@ impl<D: Dae> Integrator for Ida<D> {
             }
             self.user.callback_error = None;
             // SAFETY: valid IDA memory and vectors of the right length.
-            let flag = unsafe {
+            let flag = timing::time(Phase::Ida, || unsafe {
                 sys::IDASolve(
                     self.mem,
                     tout,
@@ -459,7 +464,7 @@ impl<D: Dae> Integrator for Ida<D> {
                     self.yp.0,
                     sys::IDA_ONE_STEP,
                 )
-            };
+            });
             self.check("IDASolve", flag)?;
             self.t_internal = tret;
             if flag == sys::IDA_TSTOP_RETURN {
@@ -556,7 +561,7 @@ unsafe extern "C" fn residual_trampoline<D: Dae>(
     unsafe {
         let user = &mut *(user_data as *mut UserData<D>);
         let (y, ypv, r) = (view(yy), view(yp), view_mut(rr));
-        let out = guard(|| user.dae.residual(t, y, ypv, r));
+        let out = guard(|| timing::time(Phase::Residual, || user.dae.residual(t, y, ypv, r)));
         dae_code(user, out, "residual")
     }
 }
@@ -579,7 +584,11 @@ unsafe extern "C" fn jacobian_trampoline<D: Dae>(
         let user = &mut *(user_data as *mut UserData<D>);
         let (y, ypv) = (view(yy), view(yp));
         let UserData { dae, ls, .. } = user;
-        let out = guard(|| dae.jacobian(t, y, ypv, cj, &mut ls.values));
+        let out = guard(|| {
+            timing::time(Phase::Jacobian, || {
+                dae.jacobian(t, y, ypv, cj, &mut ls.values)
+            })
+        });
         dae_code(user, out, "jacobian")
     }
 }
@@ -666,7 +675,7 @@ unsafe extern "C" fn ls_setup(s: sys::SUNLinearSolver, _a: sys::SUNMatrix) -> c_
     unsafe {
         let st = ls_state((*s).content);
         let LsState { solver, values, .. } = st;
-        let r = guard(|| solver.factorize(values));
+        let r = guard(|| timing::time(Phase::Factorize, || solver.factorize(values)));
         if matches!(r, Ok(Ok(()))) {
             st.factorizations += 1;
         }
@@ -689,7 +698,7 @@ unsafe extern "C" fn ls_solve(
         }
         let xs = view_mut(x);
         let LsState { solver, .. } = st;
-        let r = guard(|| solver.solve_in_place(xs));
+        let r = guard(|| timing::time(Phase::Solve, || solver.solve_in_place(xs)));
         ls_code(st, r)
     }
 }

@@ -1,0 +1,178 @@
+//! The kernels of one IDA step on the default scene's model (`cases/pillars-push-pull.ron`:
+//! pillars, adhesion μ_as unknowns, both active regions) at three mesh refinements
+//! (`mesh.refine` 0.5, 1 = the default, 2): residual, Jacobian assembly, symbolic and
+//! numeric LU and the solve with faer and KLU, and, on the same model with inertia
+//! (unknowns u, v, μ_as), the full-size LU against the condensed one (velocities
+//! eliminated, `faer-condensed`).
+//!
+//! Each benchmark's parameter is the number of unknowns n of its system, so that
+//! `scripts/bench_table.py` can fit cost ∝ n^α per kernel. The state is the cell at rest
+//! translated 0.5 µm down into the pillars' contact band, with a smooth deformation, at
+//! t = 45 000 s (gravity, adhesion and active strain all on), and cj = 1/(10 s) (no
+//! inertia) or 1/(10 ms) (inertia, as during the fall).
+//!
+//! `cargo bench --bench kernels`
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use cellsim::case::Case;
+use cellsim::dae::{Dae, LinearSolverKind};
+use cellsim::fem::Mesh;
+use cellsim::model::CellModel;
+use cellsim::scene;
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+
+const REFINES: [f64; 3] = [0.5, 1.0, 2.0];
+const T: f64 = 45_000.0;
+
+fn model(refine: f64, inertia: bool) -> CellModel {
+    let file = format!("{}/cases/pillars-push-pull.ron", env!("CARGO_MANIFEST_DIR"));
+    let mut case = Case::load(&file).unwrap();
+    case.mesh.refine = refine;
+    let mesh = Mesh::generate(&scene::mesh_params(&case)).unwrap();
+    CellModel::new(scene::model_params(&case, &file, inertia).unwrap(), mesh).unwrap()
+}
+
+/// The cell 0.5 µm down (in the contact band), smoothly deformed; small rates.
+fn state(m: &CellModel) -> (Vec<f64>, Vec<f64>) {
+    let n = m.size();
+    let (mut y, mut yp) = (vec![0.0; n], vec![0.0; n]);
+    for (i, x) in m.mesh.nodes.iter().enumerate() {
+        let du = [
+            0.05 * (0.3 * x[1]).sin() * x[0] / 10.0,
+            -0.5 + 0.04 * (0.25 * x[0]).cos(),
+        ];
+        for (k, &duk) in du.iter().enumerate() {
+            let d = m.dofs.u[i][k];
+            if d != usize::MAX {
+                y[d] = duk;
+                yp[d] = 1e-4 * duk;
+            }
+        }
+    }
+    let off = m.dofs.mu_offset();
+    for k in 0..m.dofs.n_mu() {
+        y[off + k] = 700.0;
+        yp[off + k] = 0.1;
+    }
+    (y, yp)
+}
+
+fn kernels(c: &mut Criterion) {
+    for &refine in &REFINES {
+        let mut m = model(refine, false);
+        let n = m.size();
+        let (y, yp) = state(&m);
+        let mut r = vec![0.0; n];
+        let nnz = m.pattern().compute_nnz();
+        let mut vals = vec![0.0; nnz];
+        eprintln!("refine {refine}: n = {n}, nnz(J) = {nnz}");
+        let mut g = c.benchmark_group("residual");
+        g.bench_with_input(BenchmarkId::new("residual", n), &n, |b, _| {
+            b.iter(|| {
+                m.residual(T, black_box(&y), black_box(&yp), &mut r)
+                    .unwrap()
+            })
+        });
+        g.finish();
+        let mut g = c.benchmark_group("jacobian");
+        g.bench_with_input(BenchmarkId::new("jacobian", n), &n, |b, _| {
+            b.iter(|| {
+                m.jacobian(T, black_box(&y), black_box(&yp), 0.1, &mut vals)
+                    .unwrap()
+            })
+        });
+        g.finish();
+        m.jacobian(T, &y, &yp, 0.1, &mut vals).unwrap();
+        let rhs: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).sin()).collect();
+        for kind in [LinearSolverKind::Faer, LinearSolverKind::Klu] {
+            let name = kind.build().name();
+            let mut g = c.benchmark_group(format!("lu-symbolic-{name}"));
+            g.bench_with_input(
+                BenchmarkId::new(format!("lu-symbolic-{name}"), n),
+                &n,
+                |b, _| {
+                    b.iter(|| {
+                        let mut s = kind.build();
+                        s.analyse(black_box(m.pattern())).unwrap();
+                        s
+                    })
+                },
+            );
+            g.finish();
+            let mut s = kind.build();
+            s.analyse(m.pattern()).unwrap();
+            let mut g = c.benchmark_group(format!("lu-numeric-{name}"));
+            g.bench_with_input(
+                BenchmarkId::new(format!("lu-numeric-{name}"), n),
+                &n,
+                |b, _| b.iter(|| s.factorize(black_box(&vals)).unwrap()),
+            );
+            g.finish();
+            s.factorize(&vals).unwrap();
+            let mut x = rhs.clone();
+            let mut g = c.benchmark_group(format!("lu-solve-{name}"));
+            g.bench_with_input(
+                BenchmarkId::new(format!("lu-solve-{name}"), n),
+                &n,
+                |b, _| {
+                    b.iter(|| {
+                        x.copy_from_slice(&rhs);
+                        s.solve_in_place(black_box(&mut x)).unwrap()
+                    })
+                },
+            );
+            g.finish();
+        }
+
+        // With inertia: full-size LU against the condensed one, on the same J.
+        let mut mi = model(refine, true);
+        let ni = mi.size();
+        let (y, yp) = state(&mi);
+        let mut vals = vec![0.0; mi.pattern().compute_nnz()];
+        mi.jacobian(T, &y, &yp, 100.0, &mut vals).unwrap();
+        let rhs: Vec<f64> = (0..ni).map(|i| (0.37 * i as f64).sin()).collect();
+        eprintln!("refine {refine} with inertia: n = {ni}");
+        for kind in [
+            LinearSolverKind::Faer,
+            LinearSolverKind::FaerCondensed,
+            LinearSolverKind::Klu,
+        ] {
+            let mut s = kind.build_for(&mi).unwrap();
+            let name = s.name();
+            s.analyse(mi.pattern()).unwrap();
+            let mut g = c.benchmark_group(format!("inertia-lu-numeric-{name}"));
+            g.bench_with_input(
+                BenchmarkId::new(format!("inertia-lu-numeric-{name}"), ni),
+                &ni,
+                |b, _| b.iter(|| s.factorize(black_box(&vals)).unwrap()),
+            );
+            g.finish();
+            s.factorize(&vals).unwrap();
+            let mut x = rhs.clone();
+            let mut g = c.benchmark_group(format!("inertia-lu-solve-{name}"));
+            g.bench_with_input(
+                BenchmarkId::new(format!("inertia-lu-solve-{name}"), ni),
+                &ni,
+                |b, _| {
+                    b.iter(|| {
+                        x.copy_from_slice(&rhs);
+                        s.solve_in_place(black_box(&mut x)).unwrap()
+                    })
+                },
+            );
+            g.finish();
+        }
+    }
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(1));
+    targets = kernels
+}
+criterion_main!(benches);
