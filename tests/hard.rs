@@ -83,10 +83,13 @@ fn coarsest_mesh_finishes() {
 }
 
 #[test]
-fn very_loose_tolerance_finishes_or_stops_cleanly() {
-    // Measured: IDA at rtol 1e-2 stops at t ≈ 9.66 s, just after the inertia switch,
-    // with repeated corrector convergence failures (IDA_CONV_FAIL, h ≈ 3e-7 s).
-    run_hard("rtol-loose");
+fn very_loose_tolerance_finishes() {
+    // IDA at rtol 1e-2 used to stop at t ≈ 9.66 s, just after the inertia switch, with
+    // repeated corrector convergence failures (IDA_CONV_FAIL, h ≈ 3e-7 s), while the
+    // switch carried the landing's velocities over; with the cell placed at rest there
+    // it finishes (977 steps; final uy_top within 0.1 % of rtol 1e-4's).
+    let s = run_hard("rtol-loose");
+    assert!(s.finished);
 }
 
 #[test]
