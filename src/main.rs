@@ -57,6 +57,14 @@ enum Command {
         /// Sparse LU [default: the case's].
         #[arg(long, value_enum)]
         linear_solver: Option<LinearSolverKind>,
+        /// BDF2 time step while the cell falls with inertia, s, when smaller than --dt
+        /// [default: --dt throughout].
+        #[arg(long)]
+        dt_inertia: Option<f64>,
+        /// Wall-clock budget of the integration, s: past it the run stops cleanly with its
+        /// outputs so far and the reason in summary.json [default: none].
+        #[arg(long)]
+        max_wall: Option<f64>,
         /// No progress line.
         #[arg(long)]
         quiet: bool,
@@ -166,6 +174,8 @@ fn main() -> ExitCode {
             atol,
             dt,
             linear_solver,
+            dt_inertia,
+            max_wall,
             quiet,
             vtu,
             gif,
@@ -178,6 +188,8 @@ fn main() -> ExitCode {
                 ("rtol", rtol, Some(1.0)),
                 ("atol", atol, None),
                 ("dt", dt, None),
+                ("dt-inertia", dt_inertia, None),
+                ("max-wall", max_wall, None),
             ] {
                 if let Err(code) = check_positive(name, v, upper) {
                     return code;
@@ -194,6 +206,8 @@ fn main() -> ExitCode {
             settings.atol = atol.unwrap_or(settings.atol);
             settings.dt = dt.unwrap_or(settings.dt);
             settings.linear_solver = linear_solver.unwrap_or(settings.linear_solver);
+            settings.dt_inertia = dt_inertia;
+            settings.max_wall_seconds = max_wall;
             let out = out.unwrap_or_else(|| PathBuf::from("runs").join(&case.name));
             let visible = !quiet && std::io::stderr().is_terminal();
             let opts = RunOptions {
