@@ -25,6 +25,7 @@ pub mod movie;
 pub mod paper;
 pub mod read;
 pub mod snapshot;
+pub mod study_plots;
 pub mod vtu;
 
 pub use read::RunData;
