@@ -6,3 +6,4 @@ mod dae;
 mod model;
 mod plots;
 mod scenes;
+mod study;
