@@ -59,6 +59,14 @@ fn log_range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo, hi)
 }
 
+/// As [`log_range`], starting at a power of 10: plotters labels a log axis only from the
+/// first power of 10 in range, so a range within one decade and a bit would show one or
+/// two labels.
+fn log_range_from_decade(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (lo, hi) = log_range(values);
+    (10f64.powf(lo.log10().floor()), hi)
+}
+
 /// Tick labels on a log axis: plain decimals between 1e-2 and 1e4, else 1e-5 style.
 fn fmt_tick(v: &f64) -> String {
     let v = *v;
@@ -100,7 +108,8 @@ fn log_chart<'a, 'b>(
         .configure_mesh()
         .x_desc(x_desc)
         .y_desc(y_desc)
-        .x_labels(40)
+        // Labels between the powers of 10 only on a short axis (they would crowd a long one).
+        .x_labels(if x.1 / x.0 < 100.0 { 40 } else { 10 })
         .y_labels(12)
         .x_label_formatter(&fmt_tick)
         .y_label_formatter(&|v: &f64| format!("{v:.0e}"))
@@ -229,7 +238,7 @@ pub fn work_precision_figure(path: &Path, report: &StudyReport) -> Result<(), Ou
         let rows = &report.runs;
         let (bp, bl) = labelled_work(rows, Role::Bdf2, q);
         let (ip, il) = labelled_work(rows, Role::Ida, q);
-        let x = log_range(bp.iter().chain(&ip).map(|p| p.1));
+        let x = log_range_from_decade(bp.iter().chain(&ip).map(|p| p.1));
         let mut ys: Vec<f64> = bp.iter().chain(&ip).map(|p| p.0).collect();
         if q == Quantity::UyTop {
             ys.push(TARGET_ERROR);
