@@ -17,4 +17,5 @@ pub mod output;
 pub mod physics;
 pub mod run;
 pub mod scene;
+pub mod study;
 pub mod sundials;

@@ -14,6 +14,7 @@ use cellsim::fem::Mesh;
 use cellsim::output::{self, RunData, SnapshotOptions, paper};
 use cellsim::run::{self, Progress, RunOptions, RunSettings};
 use cellsim::scene;
+use cellsim::study;
 
 /// Finite-element simulation of a cell settling, spreading and contracting on a flat or
 /// micropillared substrate (Mondésert-Deveraux, Aubry & Allena 2019), integrated with
@@ -57,6 +58,14 @@ enum Command {
         /// Sparse LU [default: the case's].
         #[arg(long, value_enum)]
         linear_solver: Option<LinearSolverKind>,
+        /// BDF2 time step while the cell falls with inertia, s, when smaller than --dt
+        /// [default: --dt throughout].
+        #[arg(long)]
+        dt_inertia: Option<f64>,
+        /// Wall-clock budget of the integration, s: past it the run stops cleanly with its
+        /// outputs so far and the reason in summary.json [default: none].
+        #[arg(long)]
+        max_wall: Option<f64>,
         /// No progress line.
         #[arg(long)]
         quiet: bool,
@@ -91,6 +100,49 @@ enum Command {
         #[arg(long)]
         gif: bool,
         /// No progress lines.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Time-step sensitivity and work-precision study of one scene: a tight IDA reference,
+    /// a BDF2 dt ladder and an IDA rtol ladder; writes study.csv, study.json,
+    /// work-precision.png, dt-sensitivity.png and each run in runs/<label>/.
+    Study {
+        /// The case file (RON).
+        case: PathBuf,
+        /// Output directory [default: runs/study/<case name>].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Quantities of interest shown in study.csv and the figures (comma-separated)
+        /// [default: all].
+        #[arg(long, value_enum, value_delimiter = ',')]
+        quantities: Vec<study::Quantity>,
+        /// Largest BDF2 time step, s [default: t_end / 100]; the ladder halves on past rungs
+        /// that fail until --rungs rungs from the largest that converges down.
+        #[arg(long)]
+        dt_max: Option<f64>,
+        /// BDF2 rungs (halvings of dt).
+        #[arg(long, default_value_t = 5)]
+        rungs: usize,
+        /// IDA's rtol ladder (comma-separated).
+        #[arg(long, value_delimiter = ',', default_values_t = study::DEFAULT_RTOLS)]
+        rtols: Vec<f64>,
+        /// rtol of the reference (IDA); 10x looser if it fails, and said so.
+        #[arg(long, default_value_t = 1e-8)]
+        ref_rtol: f64,
+        /// rtol of BDF2's Newton convergence test.
+        #[arg(long, default_value_t = 1e-8)]
+        bdf2_rtol: f64,
+        /// BDF2 step during the fall (with inertia) on the largest rung, s, halved with dt
+        /// [default: dt throughout].
+        #[arg(long)]
+        dt_inertia: Option<f64>,
+        /// Wall-clock budget of each run, s [default: none].
+        #[arg(long)]
+        max_wall: Option<f64>,
+        /// Keep runs in <out>/runs that finished with the same settings.
+        #[arg(long)]
+        reuse: bool,
+        /// No progress lines while a run integrates.
         #[arg(long)]
         quiet: bool,
     },
@@ -172,6 +224,8 @@ fn main() -> ExitCode {
             atol,
             dt,
             linear_solver,
+            dt_inertia,
+            max_wall,
             quiet,
             vtu,
             gif,
@@ -184,6 +238,8 @@ fn main() -> ExitCode {
                 ("rtol", rtol, Some(1.0)),
                 ("atol", atol, None),
                 ("dt", dt, None),
+                ("dt-inertia", dt_inertia, None),
+                ("max-wall", max_wall, None),
             ] {
                 if let Err(code) = check_positive(name, v, upper) {
                     return code;
@@ -200,6 +256,8 @@ fn main() -> ExitCode {
             settings.atol = atol.unwrap_or(settings.atol);
             settings.dt = dt.unwrap_or(settings.dt);
             settings.linear_solver = linear_solver.unwrap_or(settings.linear_solver);
+            settings.dt_inertia = dt_inertia;
+            settings.max_wall_seconds = max_wall;
             let out = out.unwrap_or_else(|| PathBuf::from("runs").join(&case.name));
             let visible = !quiet && std::io::stderr().is_terminal();
             let opts = RunOptions {
@@ -290,6 +348,72 @@ fn main() -> ExitCode {
                 Err(e) => {
                     eprintln!("error: {e}");
                     ExitCode::from(2)
+                }
+            }
+        }
+        Command::Study {
+            case: path,
+            out,
+            quantities,
+            dt_max,
+            rungs,
+            rtols,
+            ref_rtol,
+            bdf2_rtol,
+            dt_inertia,
+            max_wall,
+            reuse,
+            quiet,
+        } => {
+            let case = match load_case(&path) {
+                Ok(c) => c,
+                Err(code) => return code,
+            };
+            let mut checks = vec![
+                ("ref-rtol", Some(ref_rtol), Some(1.0)),
+                ("bdf2-rtol", Some(bdf2_rtol), Some(1.0)),
+                ("dt-max", dt_max, None),
+                ("dt-inertia", dt_inertia, None),
+                ("max-wall", max_wall, None),
+            ];
+            checks.extend(rtols.iter().map(|r| ("rtols", Some(*r), Some(1.0))));
+            for (name, v, upper) in checks {
+                if let Err(code) = check_positive(name, v, upper) {
+                    return code;
+                }
+            }
+            if rungs < 2 || rtols.is_empty() {
+                eprintln!("error: --rungs must be at least 2 and --rtols not empty");
+                return ExitCode::from(2);
+            }
+            let out = out.unwrap_or_else(|| PathBuf::from("runs/study").join(&case.name));
+            let opts = study::StudyOptions {
+                out: out.clone(),
+                dt_max,
+                rungs,
+                rtols,
+                ref_rtol,
+                bdf2_rtol,
+                dt_inertia,
+                max_wall,
+                quantities: if quantities.is_empty() {
+                    study::Quantity::ALL.to_vec()
+                } else {
+                    quantities
+                },
+                reuse,
+                progress: !quiet,
+                interrupt: interrupt_flag(),
+            };
+            match study::run_study(&case, &path.display().to_string(), &opts) {
+                Ok(report) => {
+                    print!("{}", study::summary_text(&report));
+                    println!("study written in {}", out.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
                 }
             }
         }

@@ -50,6 +50,16 @@ pub struct RunSettings {
     pub max_steps: u64,
     /// IDA's first step [s].
     pub initial_step: Option<f64>,
+    /// BDF2's step while the system has inertia (the fall, before inertia is switched
+    /// off), when smaller than `dt` [s]. A fixed step much longer than the fall cannot land
+    /// the cell on the penalty contact (Newton diverges at contact onset), so a dt ladder
+    /// over a whole scene caps the step of the fall. `None`: `dt` throughout.
+    #[serde(default)]
+    pub dt_inertia: Option<f64>,
+    /// Wall-clock budget of the integration [s]: past it the run stops cleanly, with
+    /// its outputs so far and the reason in the summary. `None`: no limit.
+    #[serde(default)]
+    pub max_wall_seconds: Option<f64>,
 }
 
 impl RunSettings {
@@ -69,6 +79,8 @@ impl RunSettings {
             max_order: s.max_order,
             max_steps: s.max_steps,
             initial_step: s.initial_step,
+            dt_inertia: None,
+            max_wall_seconds: None,
         }
     }
 }
@@ -420,8 +432,12 @@ impl Solver {
                 Solver::Ida(Box::new(Ida::new(model, opts)?))
             }
             case::Integrator::Bdf2 => {
+                let dt = match s.dt_inertia {
+                    Some(h) if model.dofs.inertia => s.dt.min(h),
+                    _ => s.dt,
+                };
                 let opts = Bdf2Options {
-                    dt: s.dt,
+                    dt,
                     rtol: s.rtol,
                     atol,
                     linear_solver,
@@ -602,12 +618,27 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
     let start = Instant::now();
     let interrupt = opts.interrupt.clone();
     let mut failure: Option<String> = None;
+    // The wall-clock budget stops the run through the same path as Ctrl-C; `over_budget`
+    // tells the two apart for the reason written in the summary.
+    let budget = opts.settings.max_wall_seconds;
+    let over_budget = std::cell::Cell::new(false);
+    let explain = |reason: String| match budget {
+        Some(limit) if over_budget.get() => {
+            format!("wall-clock budget of {limit} s exhausted ({reason})")
+        }
+        _ => reason,
+    };
 
     for tout in output_times(case) {
         let base = stats_before.clone();
         let bar_ref = &bar;
         let stop = &interrupt;
+        let over_budget = &over_budget;
         let mut on_step = |t: f64, s: &Stats| {
+            if budget.is_some_and(|limit| start.elapsed().as_secs_f64() > limit) {
+                over_budget.set(true);
+                return false;
+            }
             bar_ref.set_position((t * 1000.0).round().max(0.0) as u64);
             bar_ref.set_message(format!(
                 "t = {t:>9.3e} s  step {:>6}  order {}  h = {:.2e}",
@@ -628,13 +659,13 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
                 }
                 Ok(None) => {}
                 Err(e) => {
-                    failure = Some(e);
+                    failure = Some(explain(e));
                     break;
                 }
             }
         }
         if let Err(e) = solver.integ().advance_to(tout, &mut on_step) {
-            failure = Some(e.to_string());
+            failure = Some(explain(e.to_string()));
             break;
         }
         let y = solver.integ_ref().y().to_vec();
@@ -692,6 +723,8 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
             Ok(summary)
         }
         Some(reason) => {
+            // The statistics up to the failing step (not only up to the last output).
+            summary.stats = add_stats(&stats_before, &solver.integ_ref().stats());
             summary.failure = Some(Failure {
                 reason: reason.clone(),
                 t_last_output: summary.final_values.map(|o| o.t).unwrap_or(0.0),

@@ -8,3 +8,4 @@ mod linsolve;
 mod model;
 mod plots;
 mod scenes;
+mod study;

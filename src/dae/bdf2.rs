@@ -234,9 +234,12 @@ impl<D: Dae> Bdf2<D> {
             if attempt == 0 && !stale_ok {
                 continue;
             }
-            // Predictor: y_new = y + h ẏ.
+            // Predictor: y_new = y + h ẏ (y itself on the first step: after a restart ẏ
+            // may hold velocities of the algebraic components the new system does not
+            // constrain, e.g. a rigid mode that just became algebraic).
+            let lead = if self.h_prev.is_some() { h } else { 0.0 };
             for i in 0..n {
-                self.y_new[i] = self.yn[i] + h * self.ypn[i];
+                self.y_new[i] = self.yn[i] + lead * self.ypn[i];
             }
             if attempt >= 1 {
                 self.refresh_jacobian(t_new, cj)?;

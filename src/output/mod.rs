@@ -26,6 +26,7 @@ pub mod movie;
 pub mod paper;
 pub mod read;
 pub mod snapshot;
+pub mod study_plots;
 pub mod table;
 pub mod vtu;
 
