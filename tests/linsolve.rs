@@ -5,23 +5,13 @@ use cellsim::case::Case;
 use cellsim::dae::bdf2::{Bdf2, Bdf2Options};
 use cellsim::dae::linsolve::LinearSolverError;
 use cellsim::dae::{Atol, Dae, Integrator, IntegratorError, LinearSolverKind, Pattern};
-use cellsim::fem::{Mesh, MeshParams};
+use cellsim::fem::Mesh;
+
+use crate::model::Lcg;
 use cellsim::model::{CellModel, ModelParams};
 use cellsim::physics::{ActiveStrain, Bottom, Pac, Pillars, Substrate};
 use cellsim::scene;
 use cellsim::sundials::{Ida, IdaOptions};
-
-/// Deterministic pseudo-random numbers in [0, 1).
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 /// Pillars, adhesion (μ_as unknowns) and both active regions: every block of J present.
 fn pillars_model(inertia: bool) -> CellModel {
@@ -42,45 +32,13 @@ fn pillars_model(inertia: bool) -> CellModel {
     });
     p.inertia = inertia;
     p.drag = if inertia { 0.0 } else { 1e-3 };
-    let mesh = Mesh::generate(&MeshParams {
-        refine: 0.5,
-        ..Default::default()
-    })
-    .unwrap();
-    CellModel::new(p, mesh).unwrap()
+    CellModel::new(p, crate::model::coarse_mesh()).unwrap()
 }
 
 /// The cell sunk 0.5 µm into the pillars (contact and adhesion bands active), with a
 /// smooth random deformation, random velocities and μ_as.
 fn deformed_state(m: &CellModel, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    let mut rng = Lcg(seed);
-    let n = m.size();
-    let (mut y, mut yp) = (vec![0.0; n], vec![0.0; n]);
-    let (a, b) = (rng.next(), rng.next());
-    for (i, x) in m.mesh.nodes.iter().enumerate() {
-        let du = [
-            0.05 * (0.3 * x[1] + a).sin() * x[0] / 10.0,
-            -0.5 + 0.04 * (0.25 * x[0] + b).cos(),
-        ];
-        for k in 0..2 {
-            let d = m.dofs.u[i][k];
-            if d != usize::MAX {
-                y[d] = du[k];
-                yp[d] = 1e-3 * (rng.next() - 0.5);
-                let v = m.dofs.v[i][k];
-                if v != usize::MAX {
-                    y[v] = 1e-2 * (rng.next() - 0.5);
-                    yp[v] = 1e-1 * (rng.next() - 0.5);
-                }
-            }
-        }
-    }
-    let off = m.dofs.mu_offset();
-    for k in 0..m.dofs.n_mu() {
-        y[off + k] = 1.4e3 * rng.next();
-        yp[off + k] = rng.next();
-    }
-    (y, yp)
+    crate::model::deformed_state(m, 0.5, seed)
 }
 
 fn matvec(p: &Pattern, v: &[f64], x: &[f64]) -> Vec<f64> {

@@ -6,9 +6,9 @@ use cellsim::model::{CellModel, ModelParams};
 use cellsim::physics::{ActiveStrain, Bottom, Pac, Pillars, Substrate};
 
 /// Deterministic pseudo-random numbers in [0, 1).
-struct Lcg(u64);
+pub struct Lcg(pub u64);
 impl Lcg {
-    fn next(&mut self) -> f64 {
+    pub fn next(&mut self) -> f64 {
         self.0 = self
             .0
             .wrapping_mul(6364136223846793005)
@@ -17,7 +17,7 @@ impl Lcg {
     }
 }
 
-fn coarse_mesh() -> Mesh {
+pub fn coarse_mesh() -> Mesh {
     Mesh::generate(&MeshParams {
         refine: 0.5,
         ..Default::default()
@@ -27,7 +27,7 @@ fn coarse_mesh() -> Mesh {
 
 /// A deformed state where the cell bottom has sunk into the contact and adhesion bands:
 /// a rigid shift down by `sink` plus a smooth random field, random velocities and μ_as.
-fn deformed_state(m: &CellModel, sink: f64, seed: u64) -> (Vec<f64>, Vec<f64>) {
+pub fn deformed_state(m: &CellModel, sink: f64, seed: u64) -> (Vec<f64>, Vec<f64>) {
     let mut rng = Lcg(seed);
     let n = m.size();
     let mut y = vec![0.0; n];
