@@ -133,7 +133,7 @@ enum Command {
         #[arg(long, default_value_t = 1e-8)]
         bdf2_rtol: f64,
         /// BDF2 step during the fall (with inertia) on the largest rung, s, halved with dt
-        /// [default: dt throughout].
+        /// [default: t_s/16 when the case has inertia OffAfter(t_s), else dt throughout].
         #[arg(long)]
         dt_inertia: Option<f64>,
         /// Wall-clock budget of each run, s [default: none].

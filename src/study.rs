@@ -8,9 +8,10 @@
 //! 2. **BDF2 ladder**: fixed-step BDF2 at dt = `dt_max`, `dt_max`/2, … . A rung that fails
 //!    before any rung has finished does not count: the ladder halves on until it has
 //!    `rungs` rungs from the largest dt that converges down (at most
-//!    [`MAX_LEADING_FAILURES`] failures first). With `dt_inertia` the step of the fall
-//!    (while the system has inertia) is capped at `dt_inertia` on the largest rung and
-//!    halved along with dt, so every part of the solution is refined by the ladder. BDF2's
+//!    [`MAX_LEADING_FAILURES`] failures first). With `dt_inertia` (default
+//!    [`default_dt_inertia`]) the step of the fall (while the system has inertia) is capped
+//!    at `dt_inertia` on the largest rung and halved along with dt, so every part of the
+//!    solution is refined by the ladder. BDF2's
 //!    Newton iteration is converged to `bdf2_rtol` (default 1e-8), far below its
 //!    truncation error, so the error measured is the method's.
 //! 3. **IDA ladder**: IDA at each of `rtols` (absolute tolerance scaled with rtol as for
@@ -173,6 +174,18 @@ pub struct StudyOptions {
 /// Default largest BDF2 step: t_end / 100.
 pub fn default_dt_max(case: &Case) -> f64 {
     case.phases.t_end / 100.0
+}
+
+/// Default BDF2 step of the fall on the largest rung: when the case switches inertia off
+/// after `t_s` (`OffAfter(t_s)`), `t_s / 16`, at most `dt_max` — sixteen steps resolve the
+/// fall and landing, where a step sized for the slow phases (t_end / 100) fails on the
+/// landing's contact however often it is halved. `None` otherwise (with inertia `On`
+/// throughout, `dt` is the step of the whole run; with `Off` there is no fall).
+pub fn default_dt_inertia(case: &Case, dt_max: f64) -> Option<f64> {
+    match case.inertia.mode {
+        case::InertiaMode::OffAfter(ts) if ts < case.phases.t_end => Some((ts / 16.0).min(dt_max)),
+        _ => None,
+    }
 }
 
 /// Default IDA rtol ladder.
@@ -641,6 +654,13 @@ pub struct Speedup {
     pub ida_wall: Option<f64>,
     /// Whether IDA's ladder had to be extrapolated.
     pub ida_extrapolated: bool,
+    /// The cheapest IDA run whose error is at or below the target: (label, wall [s]).
+    /// A run that meets the target costs at least the interpolated wall, so BDF2's wall
+    /// over this one bounds the speed-up from below without extrapolating IDA's ladder.
+    pub ida_meeting_target: Option<(String, f64)>,
+    /// BDF2's wall at the target over `ida_meeting_target`'s: a lower bound of the
+    /// speed-up.
+    pub ida_speedup_at_least: Option<f64>,
 }
 
 /// study.json.
@@ -716,7 +736,7 @@ fn progress_line(r: &StudyRow) {
         );
     } else {
         eprintln!(
-            "study: {:<22} FAILED after {:.2} s wall, {} steps, t = {}: {}",
+            "study: {:<22} FAILED after {:.2} s wall, {} steps, last output t = {}: {}",
             r.label,
             r.wall_seconds,
             r.stats.steps,
@@ -802,7 +822,8 @@ pub fn run_study(case: &Case, file: &str, opts: &StudyOptions) -> Result<StudyRe
 
     // 2. The BDF2 ladder, from the largest dt that converges down.
     let mut dt = dt_max;
-    let mut dt_inertia = opts.dt_inertia;
+    let dt_inertia0 = opts.dt_inertia.or_else(|| default_dt_inertia(case, dt_max));
+    let mut dt_inertia = dt_inertia0;
     let mut counted = 0;
     let mut leading_failures = 0;
     while counted < opts.rungs && !interrupted() {
@@ -854,7 +875,7 @@ pub fn run_study(case: &Case, file: &str, opts: &StudyOptions) -> Result<StudyRe
         case,
         file,
         opts,
-        dt_max,
+        (dt_max, dt_inertia0),
         ReferenceInfo {
             label: reference.row.label.clone(),
             rtol: reference.row.rtol,
@@ -910,7 +931,7 @@ fn analyse(
     case: &Case,
     file: &str,
     opts: &StudyOptions,
-    dt_max: f64,
+    (dt_max, dt_inertia): (f64, Option<f64>),
     reference: ReferenceInfo,
     rows: &[StudyRow],
     series: &[Vec<Observables>],
@@ -944,6 +965,16 @@ fn analyse(
     let ida_w = wall_at(&work_points(rows, Role::Ida, q0), TARGET_ERROR);
     let speedup = match (bdf2_w, ida_w) {
         (Some((b, _)), Some((i, _))) if i > 0.0 => Some(b / i),
+        _ => None,
+    };
+    let ida_meeting_target = rows
+        .iter()
+        .filter(|r| r.role == Role::Ida && r.finished)
+        .filter(|r| r.error(q0).is_some_and(|e| e <= TARGET_ERROR))
+        .min_by(|a, b| a.wall_seconds.total_cmp(&b.wall_seconds))
+        .map(|r| (r.label.clone(), r.wall_seconds));
+    let speedup_at_least = match (bdf2_w, &ida_meeting_target) {
+        (Some((b, _)), Some((_, i))) if *i > 0.0 => Some(b / i),
         _ => None,
     };
 
@@ -1006,6 +1037,8 @@ fn analyse(
             bdf2_extrapolated: bdf2_w.is_some_and(|w| w.1),
             ida_wall: ida_w.map(|w| w.0),
             ida_extrapolated: ida_w.is_some_and(|w| w.1),
+            ida_meeting_target,
+            ida_speedup_at_least: speedup_at_least,
         },
         interrupted,
         settings: StudySettings {
@@ -1014,7 +1047,7 @@ fn analyse(
             rtols: opts.rtols.clone(),
             ref_rtol: opts.ref_rtol,
             bdf2_rtol: opts.bdf2_rtol,
-            dt_inertia: opts.dt_inertia,
+            dt_inertia,
             max_wall: opts.max_wall,
             quantities: opts.quantities.clone(),
         },
@@ -1105,6 +1138,12 @@ pub fn summary_text(r: &StudyReport) -> String {
         e(d.ida_wall),
         how(d.ida_extrapolated)
     );
+    if let (Some(v), Some((label, w))) = (d.ida_speedup_at_least, &d.ida_meeting_target) {
+        let _ = writeln!(
+            s,
+            "ida_speedup at least {v:.2}: BDF2's wall at the target over {label}'s ({w:.2} s), the cheapest IDA run within it"
+        );
+    }
     if let Some(c) = &r.reference_check {
         let _ = writeln!(
             s,

@@ -8,31 +8,16 @@ use cellsim::dae::{Atol, Dae, Integrator, IntegratorError, LinearSolverKind, Pat
 use cellsim::fem::Mesh;
 
 use crate::model::Lcg;
-use cellsim::model::{CellModel, ModelParams};
-use cellsim::physics::{ActiveStrain, Bottom, Pac, Pillars, Substrate};
+use cellsim::model::CellModel;
 use cellsim::scene;
 use cellsim::sundials::{Ida, IdaOptions};
 
-/// Pillars, adhesion (μ_as unknowns) and both active regions: every block of J present.
 fn pillars_model(inertia: bool) -> CellModel {
-    let mut p = ModelParams::defaults();
-    p.substrate = Substrate::Pillars(Pillars::default());
-    p.active = Some(ActiveStrain {
-        pac: Some(Pac {
-            e: 0.7,
-            theta_deg: -18.0,
-            inner_axes: [5.0, 4.5],
-            outer_axes: [7.5, 7.0],
-        }),
-        bottom: Some(Bottom {
-            e: 0.7,
-            theta_deg: -35.0,
-        }),
-        ..Default::default()
-    });
-    p.inertia = inertia;
-    p.drag = if inertia { 0.0 } else { 1e-3 };
-    CellModel::new(p, crate::model::coarse_mesh()).unwrap()
+    CellModel::new(
+        crate::model::active_pillars_params(inertia),
+        crate::model::coarse_mesh(),
+    )
+    .unwrap()
 }
 
 /// The cell sunk 0.5 µm into the pillars (contact and adhesion bands active), with a

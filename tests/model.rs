@@ -129,7 +129,8 @@ fn jacobian_fd_error(
     worst
 }
 
-fn active_pillars_params(inertia: bool) -> ModelParams {
+/// Pillars, adhesion (μ_as unknowns) and both active regions: every block of J present.
+pub fn active_pillars_params(inertia: bool) -> ModelParams {
     let mut p = ModelParams::defaults();
     p.substrate = Substrate::Pillars(Pillars::default());
     p.active = Some(ActiveStrain {

@@ -4,8 +4,11 @@
 use std::path::Path;
 use std::process::Command;
 
+use cellsim::case::{Case, InertiaMode};
 use cellsim::model::observe::Observables;
-use cellsim::study::{Quantity, errors_against, fit_loglog, interp_loglog, wall_at};
+use cellsim::study::{
+    Quantity, default_dt_inertia, errors_against, fit_loglog, interp_loglog, wall_at,
+};
 
 #[test]
 fn loglog_fit_recovers_an_exact_power_law() {
@@ -56,6 +59,23 @@ fn loglog_interpolation_is_exact_on_a_power_law_and_flags_extrapolation() {
     assert!(wall_at(&flat, 1e-2).is_none());
     assert!(wall_at(&flat, 5e-4).is_some());
     assert_eq!(wall_at(&pts, 1e-1).map(|w| w.1), Some(true));
+}
+
+#[test]
+fn the_fall_step_defaults_to_a_sixteenth_of_the_inertia_window() {
+    let mut case = Case::load("cases/pillars-push-pull.ron").unwrap();
+    assert_eq!(case.inertia.mode, InertiaMode::OffAfter(9.0));
+    assert_eq!(default_dt_inertia(&case, 500.0), Some(9.0 / 16.0));
+    // Never above the largest step.
+    assert_eq!(default_dt_inertia(&case, 0.25), Some(0.25));
+    // No switch: no fall to cap (Off), or dt is the step throughout (On).
+    for mode in [InertiaMode::Off, InertiaMode::On] {
+        case.inertia.mode = mode;
+        assert_eq!(default_dt_inertia(&case, 500.0), None);
+    }
+    // A switch at or after the end is no switch.
+    case.inertia.mode = InertiaMode::OffAfter(case.phases.t_end);
+    assert_eq!(default_dt_inertia(&case, 500.0), None);
 }
 
 #[test]
