@@ -120,8 +120,9 @@ enum Command {
         /// that fail until --rungs rungs from the largest that converges down.
         #[arg(long)]
         dt_max: Option<f64>,
-        /// BDF2 rungs (halvings of dt).
-        #[arg(long, default_value_t = 5)]
+        /// BDF2 rungs (halvings of dt). Six from t_end/100 reach the rungs where contact
+        /// onsets are resolved and the order is visible.
+        #[arg(long, default_value_t = 6)]
         rungs: usize,
         /// IDA's rtol ladder (comma-separated).
         #[arg(long, value_delimiter = ',', default_values_t = study::DEFAULT_RTOLS)]

@@ -30,7 +30,9 @@
 //! (yₙ, ẏₙ, yₙ₊₁, ẏₙ₊₁), which is more accurate than the method, so outputs keep order 2.
 
 use super::linsolve::{LinearSolver, LinearSolverError, LinearSolverKind};
-use super::{Atol, Dae, DaeError, Integrator, IntegratorError, Stats, error_weights, wrms_norm};
+use super::{
+    Atol, Dae, DaeError, Integrator, IntegratorError, Setup, Stats, error_weights, wrms_norm,
+};
 
 /// BDF2 settings.
 #[derive(Debug, Clone)]
@@ -113,33 +115,14 @@ impl<D: Dae> Bdf2<D> {
             )));
         }
         let n = dae.size();
-        let (t0, y0, yp0) = dae.initial();
-        if y0.len() != n || yp0.len() != n {
-            return Err(IntegratorError::Input(format!(
-                "initial values have lengths {} and {}, the system has {n} unknowns",
-                y0.len(),
-                yp0.len()
-            )));
-        }
-        if let Atol::Vector(v) = &opts.atol {
-            if v.len() != n {
-                return Err(IntegratorError::Input(format!(
-                    "{} absolute tolerances for {n} unknowns",
-                    v.len()
-                )));
-            }
-        }
-        let mut solver = opts
-            .linear_solver
-            .build_for(&dae)
-            .map_err(|e| IntegratorError::Linear(e.to_string()))?;
-        solver
-            .analyse(dae.pattern())
-            .map_err(|e| IntegratorError::Linear(e.to_string()))?;
-        let nnz = dae.pattern().compute_nnz();
-        let mut breakpoints: Vec<f64> = dae.breakpoints().into_iter().filter(|b| *b > t0).collect();
-        breakpoints.sort_by(f64::total_cmp);
-        breakpoints.dedup();
+        let Setup {
+            t0,
+            y0,
+            yp0,
+            solver,
+            nnz,
+            breakpoints,
+        } = Setup::new(&dae, opts.linear_solver, &opts.atol)?;
         Ok(Self {
             dae,
             opts,

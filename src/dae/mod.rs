@@ -234,6 +234,64 @@ pub enum IntegratorError {
     Input(String),
 }
 
+/// What every integrator sets up from a problem before its first step.
+pub struct Setup {
+    /// Initial time.
+    pub t0: f64,
+    /// Initial y, checked to have the problem's size.
+    pub y0: Vec<f64>,
+    /// Initial ẏ, likewise.
+    pub yp0: Vec<f64>,
+    /// The linear solver, its symbolic analysis of the Jacobian's pattern done.
+    pub solver: Box<dyn LinearSolver>,
+    /// Nonzeros of the pattern (length of the Jacobian's value array).
+    pub nnz: usize,
+    /// The problem's breakpoints after t0, sorted, without repeats.
+    pub breakpoints: Vec<f64>,
+}
+
+impl Setup {
+    /// Checks the initial values and the per-component tolerances against the problem's
+    /// size, builds `kind`'s linear solver and analyses the pattern.
+    pub fn new<D: Dae>(
+        dae: &D,
+        kind: LinearSolverKind,
+        atol: &Atol,
+    ) -> Result<Self, IntegratorError> {
+        let n = dae.size();
+        let (t0, y0, yp0) = dae.initial();
+        if y0.len() != n || yp0.len() != n {
+            return Err(IntegratorError::Input(format!(
+                "initial values have lengths {} and {}, the system has {n} unknowns",
+                y0.len(),
+                yp0.len()
+            )));
+        }
+        if let Atol::Vector(v) = atol {
+            if v.len() != n {
+                return Err(IntegratorError::Input(format!(
+                    "{} absolute tolerances for {n} unknowns",
+                    v.len()
+                )));
+            }
+        }
+        let linear = |e: linsolve::LinearSolverError| IntegratorError::Linear(e.to_string());
+        let mut solver = kind.build_for(dae).map_err(linear)?;
+        solver.analyse(dae.pattern()).map_err(linear)?;
+        let mut breakpoints: Vec<f64> = dae.breakpoints().into_iter().filter(|b| *b > t0).collect();
+        breakpoints.sort_by(f64::total_cmp);
+        breakpoints.dedup();
+        Ok(Self {
+            t0,
+            y0,
+            yp0,
+            solver,
+            nnz: dae.pattern().compute_nnz(),
+            breakpoints,
+        })
+    }
+}
+
 /// What every integrator offers to a driver: advance to a time, look at the state.
 pub trait Integrator {
     /// Advances the solution to `tout` (never past the next breakpoint without stopping

@@ -492,6 +492,44 @@ impl CellModel {
             Matrix2::identity() - el.active[q] * t_a
         }
     }
+
+    /// At solid quadrature point `q` of element `e`: F (checked admissible), Ḟ and F_a.
+    #[allow(non_snake_case)]
+    #[inline]
+    fn solid_point(
+        e: usize,
+        el: &Element,
+        q: usize,
+        ue: &Nodal,
+        ve: &Nodal,
+        t_a: f64,
+    ) -> Result<[Matrix2<f64>; 3], DaeError> {
+        let g = &el.geo.grads[q];
+        let F = deformation(ue, g);
+        Self::check_admissible(e, q, &F)?;
+        Ok([F, rate(ve, g), Self::active_fa(el, q, t_a)])
+    }
+
+    /// At contact quadrature point `q` of an element: F and the current position x.
+    #[allow(non_snake_case)]
+    #[inline]
+    fn contact_point(&self, el: &Element, q: usize, ue: &Nodal) -> (Matrix2<f64>, Vector2<f64>) {
+        let nv = &self.ctab.values[q];
+        let F = deformation(ue, &el.cgeo.grads[q]);
+        let mut x = Vector2::new(el.cgeo.x[q][0], el.cgeo.x[q][1]);
+        for a in 0..6 {
+            x.x += nv[a] * ue[a][0];
+            x.y += nv[a] * ue[a][1];
+        }
+        (F, x)
+    }
+
+    /// μ_as interpolated at contact quadrature point `q` of a membrane element.
+    #[inline]
+    fn mu_at(&self, el: &Element, q: usize, y: &[f64]) -> f64 {
+        let nv = &self.ctab.values[q];
+        (0..6).map(|a| nv[a] * y[self.dofs.mu[el.nodes[a]]]).sum()
+    }
 }
 
 impl Dae for CellModel {
@@ -523,10 +561,7 @@ impl Dae for CellModel {
             let solid = &p.solids[el.solid];
             for q in 0..el.geo.jxw.len() {
                 let g = &el.geo.grads[q];
-                let F = deformation(&ue, g);
-                Self::check_admissible(e, q, &F)?;
-                let Fdot = rate(&ve, g);
-                let Fa = Self::active_fa(el, q, t_a);
+                let [F, Fdot, Fa] = Self::solid_point(e, el, q, &ue, &ve, t_a)?;
                 let P = piola_total(solid, &p.viscosity, &F, &Fdot, &Fa);
                 let w = el.geo.jxw[q];
                 for a in 0..6 {
@@ -555,25 +590,18 @@ impl Dae for CellModel {
             if self.in_reach(el, &ue) {
                 let with_mu = !el.pos_mm.is_empty();
                 for q in 0..el.cgeo.jxw.len() {
-                    let g = &el.cgeo.grads[q];
                     let nv = &self.ctab.values[q];
-                    let F = deformation(&ue, g);
+                    let (F, x) = self.contact_point(el, q, &ue);
                     let J = F.determinant();
                     if !(J > 0.0) {
                         return Err(DaeError::Inadmissible(format!(
                             "element {e}, contact point {q}: det F = {J:.3e}"
                         )));
                     }
-                    let mut x = Vector2::new(el.cgeo.x[q][0], el.cgeo.x[q][1]);
-                    for a in 0..6 {
-                        x.x += nv[a] * ue[a][0];
-                        x.y += nv[a] * ue[a][1];
-                    }
                     let mut b = contact_force(&p.substrate, &p.contact, &x, J);
                     if with_mu && t_as > 0.0 {
                         if let Some(ad) = &p.adhesion {
-                            let mu: f64 =
-                                (0..6).map(|a| nv[a] * y[self.dofs.mu[el.nodes[a]]]).sum();
+                            let mu = self.mu_at(el, q, y);
                             b += adhesion_force(&p.substrate, ad, &x, &F, &el.radial[q], mu, t_as);
                         }
                     }
@@ -643,10 +671,7 @@ impl Dae for CellModel {
             let solid = &p.solids[el.solid];
             for q in 0..el.geo.jxw.len() {
                 let g = &el.geo.grads[q];
-                let F = deformation(&ue, g);
-                Self::check_admissible(e, q, &F)?;
-                let Fdot = rate(&ve, g);
-                let Fa = Self::active_fa(el, q, t_a);
+                let [F, Fdot, Fa] = Self::solid_point(e, el, q, &ue, &ve, t_a)?;
                 let mp = material_point(solid, &p.viscosity, &F, &Fdot, &Fa);
                 let w = el.geo.jxw[q];
                 // K_(a i)(b k) = w Σ_JL A_(iJ)(kL) ∇Nₐ_J ∇N_b_L, same for C with ∂P/∂Ḟ.
@@ -695,12 +720,7 @@ impl Dae for CellModel {
                 for q in 0..el.cgeo.jxw.len() {
                     let g = &el.cgeo.grads[q];
                     let nv = &self.ctab.values[q];
-                    let F = deformation(&ue, g);
-                    let mut x = Vector2::new(el.cgeo.x[q][0], el.cgeo.x[q][1]);
-                    for a in 0..6 {
-                        x.x += nv[a] * ue[a][0];
-                        x.y += nv[a] * ue[a][1];
-                    }
+                    let (F, x) = self.contact_point(el, q, &ue);
                     let xd = Vector2::new(
                         D7::from_re(x.x).derivative(0),
                         D7::from_re(x.y).derivative(1),
@@ -715,9 +735,7 @@ impl Dae for CellModel {
                     let mut b = contact_force(&p.substrate, &p.contact, &xd, J);
                     if with_mu && t_as > 0.0 {
                         if let Some(ad) = &p.adhesion {
-                            let mu: f64 =
-                                (0..6).map(|a| nv[a] * y[self.dofs.mu[el.nodes[a]]]).sum();
-                            let mud = D7::from_re(mu).derivative(6);
+                            let mud = D7::from_re(self.mu_at(el, q, y)).derivative(6);
                             b += adhesion_force(
                                 &p.substrate,
                                 ad,

@@ -18,7 +18,7 @@ use sundials_sys as sys;
 use super::{Context, NVector, guard, ida_flag_name, view, view_mut};
 use crate::dae::linsolve::{LinearSolver, LinearSolverError, LinearSolverKind};
 use crate::dae::timing::{self, Phase};
-use crate::dae::{Atol, Dae, DaeError, Integrator, IntegratorError, Stats};
+use crate::dae::{Atol, Dae, DaeError, Integrator, IntegratorError, Setup, Stats};
 
 /// Initial-condition calculation (IDACalcIC) before the first step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -161,15 +161,14 @@ impl<D: Dae> Ida<D> {
     /// Sets IDA up on `dae` from its consistent initial values; with `opts.calc_ic` the
     /// initial conditions are corrected by IDACalcIC first.
     pub fn new(dae: D, opts: IdaOptions) -> Result<Self, IntegratorError> {
-        let n = dae.size();
-        let (t0, y0, yp0) = dae.initial();
-        if y0.len() != n || yp0.len() != n {
-            return Err(IntegratorError::Input(format!(
-                "initial values have lengths {} and {}, the system has {n} unknowns",
-                y0.len(),
-                yp0.len()
-            )));
-        }
+        let Setup {
+            t0,
+            y0,
+            yp0,
+            solver,
+            nnz,
+            breakpoints,
+        } = Setup::new(&dae, opts.linear_solver, &opts.atol)?;
         if !(opts.rtol >= 0.0) || !(1..=5).contains(&opts.max_order) {
             return Err(IntegratorError::Input(format!(
                 "rtol = {} must be ≥ 0 and max_order = {} in 1..=5",
@@ -180,17 +179,6 @@ impl<D: Dae> Ida<D> {
         let vector = |v: &[f64]| NVector::from_slice(v, &ctx).map_err(IntegratorError::Input);
         let (yy, yp, out_y, out_yp) = (vector(&y0)?, vector(&yp0)?, vector(&y0)?, vector(&yp0)?);
 
-        let mut solver = opts
-            .linear_solver
-            .build_for(&dae)
-            .map_err(|e| IntegratorError::Linear(e.to_string()))?;
-        solver
-            .analyse(dae.pattern())
-            .map_err(|e| IntegratorError::Linear(e.to_string()))?;
-        let nnz = dae.pattern().compute_nnz();
-        let mut breakpoints: Vec<f64> = dae.breakpoints().into_iter().filter(|b| *b > t0).collect();
-        breakpoints.sort_by(f64::total_cmp);
-        breakpoints.dedup();
         let user = Box::new(UserData {
             dae,
             ls: LsState {
@@ -268,12 +256,7 @@ impl<D: Dae> Ida<D> {
                     self.check("IDASStolerances", sys::IDASStolerances(mem, opts.rtol, *a))?
                 }
                 Atol::Vector(v) => {
-                    if v.len() != n {
-                        return Err(IntegratorError::Input(format!(
-                            "{} absolute tolerances for {n} unknowns",
-                            v.len()
-                        )));
-                    }
+                    // Its length was checked by Setup::new.
                     let av = NVector::from_slice(v, &self.ctx).map_err(IntegratorError::Input)?;
                     self.check(
                         "IDASVtolerances",
