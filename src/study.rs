@@ -1062,7 +1062,7 @@ pub fn summary_text(r: &StudyReport) -> String {
     let e = |x: Option<f64>| x.map(|v| format!("{v:.3e}")).unwrap_or_else(|| "—".into());
     let _ = writeln!(
         s,
-        "reference: IDA rtol {:e}, atol {:e} µm, {:.1} s wall, {} steps{}",
+        "reference: IDA rtol {:e}, atol {:.3e} µm, {:.1} s wall, {} steps{}",
         r.reference.rtol,
         r.reference.atol,
         r.reference.wall_seconds,

@@ -822,9 +822,9 @@ pub struct Solver {
     /// Maximum number of internal steps between two output times (IDA's mxstep).
     /// Default 5000. Valid: ≥ 1.
     pub max_steps: u64,
-    /// `Faer`, `Klu` or `FaerCondensed`. Default `Faer` (faster on fine meshes and with
-    /// inertia; KLU is slightly faster on the default mesh without inertia:
-    /// docs/benchmarks.md).
+    /// `Faer`, `Klu` or `FaerCondensed`. Default `Faer`: 1.3× faster than KLU on the fine
+    /// mesh, 1.05× slower on the default one (whole runs, docs/benchmarks.md);
+    /// `FaerCondensed` is fastest while inertia is on.
     pub linear_solver: LinearSolver,
     /// First step size tried by IDA (s). Default none (IDA's estimate). Valid: > 0.
     pub initial_step: Option<f64>,
