@@ -122,16 +122,16 @@ enum Command {
         dt_max: Option<f64>,
         /// BDF2 rungs (halvings of dt). Six from t_end/100 reach the rungs where contact
         /// onsets are resolved and the order is visible.
-        #[arg(long, default_value_t = 6)]
+        #[arg(long, default_value_t = study::DEFAULT_RUNGS)]
         rungs: usize,
         /// IDA's rtol ladder (comma-separated).
         #[arg(long, value_delimiter = ',', default_values_t = study::DEFAULT_RTOLS)]
         rtols: Vec<f64>,
         /// rtol of the reference (IDA); 10x looser if it fails, and said so.
-        #[arg(long, default_value_t = 1e-8)]
+        #[arg(long, default_value_t = study::DEFAULT_REF_RTOL)]
         ref_rtol: f64,
         /// rtol of BDF2's Newton convergence test.
-        #[arg(long, default_value_t = 1e-8)]
+        #[arg(long, default_value_t = study::DEFAULT_BDF2_RTOL)]
         bdf2_rtol: f64,
         /// BDF2 step during the fall (with inertia) on the largest rung, s, halved with dt
         /// [default: t_s/16 when the case has inertia OffAfter(t_s), else dt throughout].
@@ -388,20 +388,25 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             let out = out.unwrap_or_else(|| PathBuf::from("runs/study").join(&case.name));
-            let opts = study::StudyOptions {
-                out: out.clone(),
+            let defaults = study::StudySettings::defaults(&case);
+            let dt_max = dt_max.unwrap_or(defaults.dt_max);
+            let settings = study::StudySettings {
                 dt_max,
                 rungs,
                 rtols,
                 ref_rtol,
                 bdf2_rtol,
-                dt_inertia,
+                dt_inertia: dt_inertia.or_else(|| study::default_dt_inertia(&case, dt_max)),
                 max_wall,
                 quantities: if quantities.is_empty() {
-                    study::Quantity::ALL.to_vec()
+                    defaults.quantities
                 } else {
                     quantities
                 },
+            };
+            let opts = study::StudyOptions {
+                out: out.clone(),
+                settings,
                 reuse,
                 progress: !quiet,
                 interrupt: interrupt_flag(),

@@ -142,27 +142,13 @@ impl Role {
     }
 }
 
-/// Options of a study.
+/// Options of a study: its settings and how to run it.
 #[derive(Clone)]
 pub struct StudyOptions {
     /// Output directory.
     pub out: PathBuf,
-    /// Largest BDF2 step [s] (default: [`default_dt_max`]).
-    pub dt_max: Option<f64>,
-    /// BDF2 rungs wanted from the largest dt that converges down.
-    pub rungs: usize,
-    /// IDA's rtol ladder.
-    pub rtols: Vec<f64>,
-    /// rtol of the reference (IDA).
-    pub ref_rtol: f64,
-    /// rtol of BDF2's Newton convergence test (atol scaled alike).
-    pub bdf2_rtol: f64,
-    /// BDF2's step during the fall on the largest rung, halved with dt [s].
-    pub dt_inertia: Option<f64>,
-    /// Wall-clock budget of each run [s].
-    pub max_wall: Option<f64>,
-    /// Quantities reported in study.csv and the figures.
-    pub quantities: Vec<Quantity>,
+    /// The ladders and tolerances (recorded in study.json).
+    pub settings: StudySettings,
     /// Keep runs in `out/runs` that finished with the same settings.
     pub reuse: bool,
     /// Show a progress line during each run (on a terminal).
@@ -190,6 +176,13 @@ pub fn default_dt_inertia(case: &Case, dt_max: f64) -> Option<f64> {
 
 /// Default IDA rtol ladder.
 pub const DEFAULT_RTOLS: [f64; 6] = [1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
+/// Default number of BDF2 rungs: six from t_end/100 reach the rungs where the pillar
+/// scenes' contact onsets are resolved and the order is visible.
+pub const DEFAULT_RUNGS: usize = 6;
+/// Default reference rtol (IDA).
+pub const DEFAULT_REF_RTOL: f64 = 1e-8;
+/// Default rtol of BDF2's Newton test: far below its truncation error.
+pub const DEFAULT_BDF2_RTOL: f64 = 1e-8;
 
 /// One run of the study: a row of study.csv.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -697,24 +690,43 @@ pub struct StudyReport {
 }
 
 /// The ladder settings, as recorded in study.json.
+/// The ladders and tolerances of a study, as recorded in study.json.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct StudySettings {
-    /// Largest BDF2 dt tried [s].
+    /// Largest BDF2 step tried [s] (default [`default_dt_max`]).
     pub dt_max: f64,
-    /// BDF2 rungs wanted.
+    /// BDF2 rungs wanted from the largest dt that converges down.
     pub rungs: usize,
-    /// IDA rtols.
+    /// IDA's rtol ladder.
     pub rtols: Vec<f64>,
-    /// Reference rtol asked for.
+    /// rtol of the reference (IDA) asked for.
     pub ref_rtol: f64,
-    /// BDF2 Newton rtol.
+    /// rtol of BDF2's Newton convergence test (atol scaled alike).
     pub bdf2_rtol: f64,
-    /// Fall step on the largest rung [s].
+    /// BDF2's step during the fall on the largest rung, halved with dt [s] (default
+    /// [`default_dt_inertia`]).
     pub dt_inertia: Option<f64>,
-    /// Wall budget per run [s].
+    /// Wall-clock budget of each run [s].
     pub max_wall: Option<f64>,
-    /// Quantities.
+    /// Quantities reported in study.csv and the figures.
     pub quantities: Vec<Quantity>,
+}
+
+impl StudySettings {
+    /// The defaults for `case`.
+    pub fn defaults(case: &Case) -> Self {
+        let dt_max = default_dt_max(case);
+        Self {
+            dt_max,
+            rungs: DEFAULT_RUNGS,
+            rtols: DEFAULT_RTOLS.to_vec(),
+            ref_rtol: DEFAULT_REF_RTOL,
+            bdf2_rtol: DEFAULT_BDF2_RTOL,
+            dt_inertia: default_dt_inertia(case, dt_max),
+            max_wall: None,
+            quantities: Quantity::ALL.to_vec(),
+        }
+    }
 }
 
 fn progress_line(r: &StudyRow) {
@@ -759,18 +771,18 @@ pub fn run_study(case: &Case, file: &str, opts: &StudyOptions) -> Result<StudyRe
     // Every error is computed internally (uy_top drives the fit and the speed-up); the
     // CSV and figures show the quantities asked for.
     let all = Quantity::ALL.to_vec();
-    let dt_max = opts.dt_max.unwrap_or_else(|| default_dt_max(case));
-    let mut csv = CsvWriter::create(opts.out.join("study.csv"), &opts.quantities)?;
+    let set = &opts.settings;
+    let mut csv = CsvWriter::create(opts.out.join("study.csv"), &set.quantities)?;
     let interrupted = || opts.interrupt.load(Ordering::Relaxed);
 
     // 1. The reference.
     let mut failed_attempts = Vec::new();
     let mut reference: Option<Outcome> = None;
-    let mut rtol = opts.ref_rtol;
+    let mut rtol = set.ref_rtol;
     for _ in 0..REF_ATTEMPTS {
         let settings = {
             let mut s = scaled_settings(case, case::Integrator::Ida, rtol);
-            s.max_wall_seconds = opts.max_wall;
+            s.max_wall_seconds = set.max_wall;
             s
         };
         let label = format!("ref-ida-rtol{}", fmt_rtol(rtol));
@@ -821,16 +833,15 @@ pub fn run_study(case: &Case, file: &str, opts: &StudyOptions) -> Result<StudyRe
     };
 
     // 2. The BDF2 ladder, from the largest dt that converges down.
-    let mut dt = dt_max;
-    let dt_inertia0 = opts.dt_inertia.or_else(|| default_dt_inertia(case, dt_max));
-    let mut dt_inertia = dt_inertia0;
+    let mut dt = set.dt_max;
+    let mut dt_inertia = set.dt_inertia;
     let mut counted = 0;
     let mut leading_failures = 0;
-    while counted < opts.rungs && !interrupted() {
-        let mut settings = scaled_settings(case, case::Integrator::Bdf2, opts.bdf2_rtol);
+    while counted < set.rungs && !interrupted() {
+        let mut settings = scaled_settings(case, case::Integrator::Bdf2, set.bdf2_rtol);
         settings.dt = dt;
         settings.dt_inertia = dt_inertia;
-        settings.max_wall_seconds = opts.max_wall;
+        settings.max_wall_seconds = set.max_wall;
         let label = format!("bdf2-dt{}", fmt_num(dt));
         let o = one_run(case, file, opts, Role::Bdf2, label, settings)?;
         let row = record(o, &mut rows, &mut series)?;
@@ -858,12 +869,12 @@ pub fn run_study(case: &Case, file: &str, opts: &StudyOptions) -> Result<StudyRe
     }
 
     // 3. The IDA ladder.
-    for &r in &opts.rtols {
+    for &r in &set.rtols {
         if interrupted() {
             break;
         }
         let mut settings = scaled_settings(case, case::Integrator::Ida, r);
-        settings.max_wall_seconds = opts.max_wall;
+        settings.max_wall_seconds = set.max_wall;
         let label = format!("ida-rtol{}", fmt_rtol(r));
         let o = one_run(case, file, opts, Role::Ida, label, settings)?;
         record(o, &mut rows, &mut series)?;
@@ -875,7 +886,6 @@ pub fn run_study(case: &Case, file: &str, opts: &StudyOptions) -> Result<StudyRe
         case,
         file,
         opts,
-        (dt_max, dt_inertia0),
         ReferenceInfo {
             label: reference.row.label.clone(),
             rtol: reference.row.rtol,
@@ -931,7 +941,6 @@ fn analyse(
     case: &Case,
     file: &str,
     opts: &StudyOptions,
-    (dt_max, dt_inertia): (f64, Option<f64>),
     reference: ReferenceInfo,
     rows: &[StudyRow],
     series: &[Vec<Observables>],
@@ -1041,16 +1050,7 @@ fn analyse(
             ida_speedup_at_least: speedup_at_least,
         },
         interrupted,
-        settings: StudySettings {
-            dt_max,
-            rungs: opts.rungs,
-            rtols: opts.rtols.clone(),
-            ref_rtol: opts.ref_rtol,
-            bdf2_rtol: opts.bdf2_rtol,
-            dt_inertia,
-            max_wall: opts.max_wall,
-            quantities: opts.quantities.clone(),
-        },
+        settings: opts.settings.clone(),
         runs: rows.to_vec(),
     }
 }
