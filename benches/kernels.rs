@@ -17,7 +17,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use cellsim::case::Case;
-use cellsim::dae::{Dae, LinearSolverKind};
+use cellsim::dae::{Dae, LinearSolver, LinearSolverKind};
 use cellsim::fem::Mesh;
 use cellsim::model::CellModel;
 use cellsim::scene;
@@ -57,6 +57,35 @@ fn state(m: &CellModel) -> (Vec<f64>, Vec<f64>) {
         yp[off + k] = 0.1;
     }
     (y, yp)
+}
+
+/// Benchmarks `{prefix}lu-numeric-{name}` (factorize `vals`) and `{prefix}lu-solve-{name}`
+/// (solve with `rhs`) of an analysed solver, parameter n = `rhs.len()`.
+fn bench_numeric_and_solve(
+    c: &mut Criterion,
+    prefix: &str,
+    s: &mut Box<dyn LinearSolver>,
+    vals: &[f64],
+    rhs: &[f64],
+) {
+    let (name, n) = (s.name(), rhs.len());
+    let id = format!("{prefix}lu-numeric-{name}");
+    let mut g = c.benchmark_group(&id);
+    g.bench_with_input(BenchmarkId::new(&id, n), &n, |b, _| {
+        b.iter(|| s.factorize(black_box(vals)).unwrap())
+    });
+    g.finish();
+    s.factorize(vals).unwrap();
+    let mut x = rhs.to_vec();
+    let id = format!("{prefix}lu-solve-{name}");
+    let mut g = c.benchmark_group(&id);
+    g.bench_with_input(BenchmarkId::new(&id, n), &n, |b, _| {
+        b.iter(|| {
+            x.copy_from_slice(rhs);
+            s.solve_in_place(black_box(&mut x)).unwrap()
+        })
+    });
+    g.finish();
 }
 
 fn kernels(c: &mut Criterion) {
@@ -103,27 +132,7 @@ fn kernels(c: &mut Criterion) {
             g.finish();
             let mut s = kind.build();
             s.analyse(m.pattern()).unwrap();
-            let mut g = c.benchmark_group(format!("lu-numeric-{name}"));
-            g.bench_with_input(
-                BenchmarkId::new(format!("lu-numeric-{name}"), n),
-                &n,
-                |b, _| b.iter(|| s.factorize(black_box(&vals)).unwrap()),
-            );
-            g.finish();
-            s.factorize(&vals).unwrap();
-            let mut x = rhs.clone();
-            let mut g = c.benchmark_group(format!("lu-solve-{name}"));
-            g.bench_with_input(
-                BenchmarkId::new(format!("lu-solve-{name}"), n),
-                &n,
-                |b, _| {
-                    b.iter(|| {
-                        x.copy_from_slice(&rhs);
-                        s.solve_in_place(black_box(&mut x)).unwrap()
-                    })
-                },
-            );
-            g.finish();
+            bench_numeric_and_solve(c, "", &mut s, &vals, &rhs);
         }
 
         // With inertia: full-size LU against the condensed one, on the same J.
@@ -140,29 +149,8 @@ fn kernels(c: &mut Criterion) {
             LinearSolverKind::Klu,
         ] {
             let mut s = kind.build_for(&mi).unwrap();
-            let name = s.name();
             s.analyse(mi.pattern()).unwrap();
-            let mut g = c.benchmark_group(format!("inertia-lu-numeric-{name}"));
-            g.bench_with_input(
-                BenchmarkId::new(format!("inertia-lu-numeric-{name}"), ni),
-                &ni,
-                |b, _| b.iter(|| s.factorize(black_box(&vals)).unwrap()),
-            );
-            g.finish();
-            s.factorize(&vals).unwrap();
-            let mut x = rhs.clone();
-            let mut g = c.benchmark_group(format!("inertia-lu-solve-{name}"));
-            g.bench_with_input(
-                BenchmarkId::new(format!("inertia-lu-solve-{name}"), ni),
-                &ni,
-                |b, _| {
-                    b.iter(|| {
-                        x.copy_from_slice(&rhs);
-                        s.solve_in_place(black_box(&mut x)).unwrap()
-                    })
-                },
-            );
-            g.finish();
+            bench_numeric_and_solve(c, "inertia-", &mut s, &vals, &rhs);
         }
     }
 }

@@ -76,9 +76,9 @@ fn bad_command_line_values_and_missing_files_exit_with_status_2() {
     }
 }
 
-#[test]
-fn run_writes_its_time_series_summary_and_states() {
-    let out = format!("{}/cli-run", env!("CARGO_TARGET_TMPDIR"));
+/// `cellsim run cases/fast/flat-gravity.ron` into a fresh `<tmp>/<dir>`; returns the path.
+fn run_flat_gravity(dir: &str) -> String {
+    let out = format!("{}/{dir}", env!("CARGO_TARGET_TMPDIR"));
     let _ = std::fs::remove_dir_all(&out);
     let res = cellsim(&[
         "run",
@@ -92,6 +92,12 @@ fn run_writes_its_time_series_summary_and_states() {
         "{}",
         String::from_utf8_lossy(&res.stderr)
     );
+    out
+}
+
+#[test]
+fn run_writes_its_time_series_summary_and_states() {
+    let out = run_flat_gravity("cli-run");
     let rows = read_csv(&std::path::Path::new(&out).join("timeseries.csv"));
     assert!(rows.len() >= 201, "{} rows", rows.len());
     assert!(rows.iter().all(|r| r.iter().all(|v| v.is_finite())));
@@ -118,16 +124,7 @@ fn run_writes_its_time_series_summary_and_states() {
 
 #[test]
 fn table_prints_a_row_per_run_and_refuses_a_missing_one() {
-    let out = format!("{}/cli-table", env!("CARGO_TARGET_TMPDIR"));
-    let _ = std::fs::remove_dir_all(&out);
-    let res = cellsim(&[
-        "run",
-        "cases/fast/flat-gravity.ron",
-        "--out",
-        &out,
-        "--quiet",
-    ]);
-    assert!(res.status.success());
+    let out = run_flat_gravity("cli-table");
     let res = cellsim(&["table", &out]);
     assert!(res.status.success());
     let text = String::from_utf8_lossy(&res.stdout);

@@ -33,8 +33,8 @@ impl Observables {
     pub const CSV_HEADER: &'static str =
         "t,contact_radius,uy_top,uy_centre,uy_bottom,strain_nucleus,strain_cytoplasm";
 
-    /// Whether every value is finite (a run never writes NaN or infinity).
-    pub fn is_finite(&self) -> bool {
+    /// The values in CSV column order.
+    pub fn values(&self) -> [f64; 7] {
         [
             self.t,
             self.contact_radius,
@@ -44,22 +44,16 @@ impl Observables {
             self.strain_nucleus,
             self.strain_cytoplasm,
         ]
-        .iter()
-        .all(|v| v.is_finite())
+    }
+
+    /// Whether every value is finite (a run never writes NaN or infinity).
+    pub fn is_finite(&self) -> bool {
+        self.values().iter().all(|v| v.is_finite())
     }
 
     /// One CSV row (full precision).
     pub fn csv_row(&self) -> String {
-        format!(
-            "{},{},{},{},{},{},{}",
-            self.t,
-            self.contact_radius,
-            self.uy_top,
-            self.uy_centre,
-            self.uy_bottom,
-            self.strain_nucleus,
-            self.strain_cytoplasm
-        )
+        self.values().map(|v| v.to_string()).join(",")
     }
 }
 

@@ -66,10 +66,6 @@ pub struct IdaOptions {
     pub max_conv_fails: Option<i32>,
     /// Most error-test failures per step (IDA's default 10).
     pub max_err_test_fails: Option<i32>,
-    /// Safety factor of the Newton convergence test (IDASetNonlinConvCoef; IDA's
-    /// default 0.33): the corrector stops when its estimated error, in the weighted RMS
-    /// norm of the error test, is below this.
-    pub nonlin_conv_coef: Option<f64>,
 }
 
 impl Default for IdaOptions {
@@ -88,7 +84,6 @@ impl Default for IdaOptions {
             max_newton_iters: None,
             max_conv_fails: None,
             max_err_test_fails: None,
-            nonlin_conv_coef: None,
         }
     }
 }
@@ -329,9 +324,6 @@ impl<D: Dae> Ida<D> {
             }
             if let Some(m) = opts.max_err_test_fails {
                 self.check("IDASetMaxErrTestFails", sys::IDASetMaxErrTestFails(mem, m))?;
-            }
-            if let Some(c) = opts.nonlin_conv_coef {
-                self.check("IDASetNonlinConvCoef", sys::IDASetNonlinConvCoef(mem, c))?;
             }
             if opts.suppress_alg || opts.calc_ic.is_some() {
                 let id: Vec<f64> = self
