@@ -11,8 +11,6 @@
 //! `cargo bench --bench scene`
 
 use std::path::Path;
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use cellsim::case::{Case, InertiaMode};
@@ -47,7 +45,7 @@ fn run_once(case: &Case, file: &str, kind: LinearSolverKind, out: &Path) -> u64 
         out: out.to_path_buf(),
         settings,
         progress: Progress::Hidden,
-        interrupt: Arc::new(AtomicBool::new(false)),
+        interrupt: cellsim::stop::StopFlag::new(),
         snapshots: SnapshotOptions::default(),
     };
     let s = run::run(case, file, &opts).unwrap();

@@ -17,5 +17,6 @@ pub mod output;
 pub mod physics;
 pub mod run;
 pub mod scene;
+pub mod stop;
 pub mod study;
 pub mod sundials;

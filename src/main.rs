@@ -1,10 +1,8 @@
 //! The `cellsim` command line: load a case → build the model → integrate → write outputs.
 
-use std::io::IsTerminal;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Parser, Subcommand, ValueEnum};
 
@@ -14,16 +12,116 @@ use cellsim::fem::Mesh;
 use cellsim::output::{self, RunData, SnapshotOptions, paper};
 use cellsim::run::{self, Progress, RunOptions, RunSettings};
 use cellsim::scene;
+use cellsim::stop::{self, StopFlag};
 use cellsim::study;
 
+const LONG_ABOUT: &str = "\
+Finite-element simulation of a living cell that settles under gravity onto a flat or \
+micropillared substrate, spreads by adhesion and contracts its actin, pulling its nucleus \
+between the pillars: the model of Mondésert-Deveraux, Aubry & Allena (Biomech Model \
+Mechanobiol 2019).
+
+The half cell (nucleus, cytoplasm, membrane) is a large-strain compressible Yeoh solid \
+with Kelvin-Voigt viscosity and active strain, on six-node triangles; gravity, penalty \
+contact, adhesion and the adhesion coefficient (an unknown field) make one implicit DAE \
+F(t, y, y') = 0. It is integrated by SUNDIALS IDA (variable-order, variable-step BDF) with \
+an exact sparse Jacobian, and verified by a fixed-step BDF2 on the same residual. A scene \
+is a RON case file (cases/*.ron); every run writes its time series, states and summary as \
+it goes.";
+
+const EXIT_STATUSES: &str = "\
+Exit status:
+  0    success
+  1    the integration failed or was stopped by its own limits (step limit, stall, \
+wall-clock budget); the outputs so far and summary.json (with the reason) are kept
+  2    bad input: a case file, a command-line value or a missing file (nothing is run)
+  129  stopped by SIGHUP, 130 by SIGINT (Ctrl-C), 143 by SIGTERM: the current step is \
+finished, the outputs and summary.json are written, with the signal and time as reason";
+
 /// Finite-element simulation of a cell settling, spreading and contracting on a flat or
-/// micropillared substrate (Mondésert-Deveraux, Aubry & Allena 2019), integrated with
-/// SUNDIALS IDA or a fixed-step BDF2.
+/// micropillared substrate, integrated with SUNDIALS IDA or a fixed-step BDF2.
 #[derive(Parser)]
-#[command(name = "cellsim", version, about)]
+#[command(
+    name = "cellsim",
+    version,
+    about,
+    long_about = LONG_ABOUT,
+    after_help = EXIT_STATUSES,
+    // `--rtol -1` must reach the range check, not be read as an option.
+    allow_negative_numbers = true
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
+}
+
+/// The sparse LU of the Newton systems.
+#[derive(Clone, Copy, ValueEnum)]
+enum LinearSolverArg {
+    /// faer's sparse LU (pure Rust; the default).
+    Faer,
+    /// SuiteSparse's KLU, through SUNDIALS.
+    Klu,
+    /// faer's LU after eliminating the velocities while inertia is on (half-size system);
+    /// the full LU once inertia is off.
+    FaerCondensed,
+}
+
+impl From<LinearSolverArg> for LinearSolverKind {
+    fn from(a: LinearSolverArg) -> Self {
+        match a {
+            LinearSolverArg::Faer => LinearSolverKind::Faer,
+            LinearSolverArg::Klu => LinearSolverKind::Klu,
+            LinearSolverArg::FaerCondensed => LinearSolverKind::FaerCondensed,
+        }
+    }
+}
+
+/// A quantity of interest of a study.
+#[derive(Clone, Copy, ValueEnum)]
+enum QuantityArg {
+    /// Final vertical displacement of the nucleus top.
+    UyTop,
+    /// Final contact radius.
+    ContactRadius,
+    /// Final mean strain norm over the nucleus.
+    StrainNucleus,
+    /// Final mean strain norm over the cytoplasm.
+    StrainCytoplasm,
+    /// The nucleus-top displacement over time (largest error in time).
+    UyTopCurve,
+}
+
+impl From<QuantityArg> for study::Quantity {
+    fn from(a: QuantityArg) -> Self {
+        match a {
+            QuantityArg::UyTop => study::Quantity::UyTop,
+            QuantityArg::ContactRadius => study::Quantity::ContactRadius,
+            QuantityArg::StrainNucleus => study::Quantity::StrainNucleus,
+            QuantityArg::StrainCytoplasm => study::Quantity::StrainCytoplasm,
+            QuantityArg::UyTopCurve => study::Quantity::UyTopCurve,
+        }
+    }
+}
+
+/// Writes a line to stdout; a closed pipe (`cellsim check CASE | head -1`) ends the
+/// program quietly instead of panicking.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        let mut o = std::io::stdout().lock();
+        if let Err(e) = writeln!(o, $($arg)*).and_then(|_| o.flush()) {
+            if e.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(0);
+            }
+        }
+    }};
+}
+
+/// Writes a line to stderr, ignoring a closed stderr.
+macro_rules! err {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -36,117 +134,16 @@ enum IntegratorArg {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run one scene: writes timeseries.csv, summary.json, mesh.json and state_<phase>.json.
-    Run {
-        /// The case file (RON), e.g. cases/flat.ron.
-        case: PathBuf,
-        /// Output directory [default: runs/<case name>].
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Integrator [default: the case's].
-        #[arg(long, value_enum)]
-        integrator: Option<IntegratorArg>,
-        /// Relative tolerance [default: the case's].
-        #[arg(long)]
-        rtol: Option<f64>,
-        /// Absolute tolerance on displacements, µm [default: the case's].
-        #[arg(long)]
-        atol: Option<f64>,
-        /// BDF2 time step, s [default: the case's].
-        #[arg(long)]
-        dt: Option<f64>,
-        /// Sparse LU [default: the case's].
-        #[arg(long, value_enum)]
-        linear_solver: Option<LinearSolverKind>,
-        /// BDF2 time step while the cell falls with inertia, s, when smaller than --dt
-        /// [default: --dt throughout].
-        #[arg(long)]
-        dt_inertia: Option<f64>,
-        /// Wall-clock budget of the integration, s: past it the run stops cleanly with its
-        /// outputs so far and the reason in summary.json [default: none].
-        #[arg(long)]
-        max_wall: Option<f64>,
-        /// No progress line.
-        #[arg(long)]
-        quiet: bool,
-        /// Also write a ParaView file per output time (vtu/<case>_NNNNN.vtu) and their
-        /// collection <case>.pvd.
-        #[arg(long)]
-        vtu: bool,
-        /// Also write the deformation as an animated GIF (<case>.gif).
-        #[arg(long)]
-        gif: bool,
-    },
+    /// Run one scene: writes timeseries.csv, summary.json, mesh.json and state_<phase>.json
+    /// as it goes.
+    Run(RunArgs),
     /// Run the five paper scenes (and the upside-down control) and write the paper's
     /// figures and comparison.md.
-    Paper {
-        /// Output directory: figures, comparison.md and runs/<scene>/.
-        #[arg(long, default_value = "plots")]
-        out: PathBuf,
-        /// Runs at once [default: the number of cores].
-        #[arg(long)]
-        jobs: Option<usize>,
-        /// Read the scene files from this directory instead of the copies of cases/
-        /// compiled into cellsim.
-        #[arg(long)]
-        cases: Option<PathBuf>,
-        /// Keep the runs in <out>/runs that finished; run only the others.
-        #[arg(long)]
-        reuse: bool,
-        /// Also write each run's VTU files (see `run --vtu`).
-        #[arg(long)]
-        vtu: bool,
-        /// Also write each run's animated GIF (see `run --gif`).
-        #[arg(long)]
-        gif: bool,
-        /// No progress lines.
-        #[arg(long)]
-        quiet: bool,
-    },
+    Paper(PaperArgs),
     /// Time-step sensitivity and work-precision study of one scene: a tight IDA reference,
     /// a BDF2 dt ladder and an IDA rtol ladder; writes study.csv, study.json,
     /// work-precision.png, dt-sensitivity.png and each run in runs/<label>/.
-    Study {
-        /// The case file (RON).
-        case: PathBuf,
-        /// Output directory [default: runs/study/<case name>].
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Quantities of interest shown in study.csv and the figures (comma-separated)
-        /// [default: all].
-        #[arg(long, value_enum, value_delimiter = ',')]
-        quantities: Vec<study::Quantity>,
-        /// Largest BDF2 time step, s [default: t_end / 100]; the ladder halves on past rungs
-        /// that fail until --rungs rungs from the largest that converges down.
-        #[arg(long)]
-        dt_max: Option<f64>,
-        /// BDF2 rungs (halvings of dt). Six from t_end/100 reach the rungs where contact
-        /// onsets are resolved and the order is visible.
-        #[arg(long, default_value_t = study::DEFAULT_RUNGS)]
-        rungs: usize,
-        /// IDA's rtol ladder (comma-separated).
-        #[arg(long, value_delimiter = ',', default_values_t = study::DEFAULT_RTOLS)]
-        rtols: Vec<f64>,
-        /// rtol of the reference (IDA); 10x looser if it fails, and said so.
-        #[arg(long, default_value_t = study::DEFAULT_REF_RTOL)]
-        ref_rtol: f64,
-        /// rtol of BDF2's Newton convergence test.
-        #[arg(long, default_value_t = study::DEFAULT_BDF2_RTOL)]
-        bdf2_rtol: f64,
-        /// BDF2 step during the fall (with inertia) on the largest rung, s, halved with dt
-        /// [default: t_s/16 when the case has inertia OffAfter(t_s), else dt throughout].
-        #[arg(long)]
-        dt_inertia: Option<f64>,
-        /// Wall-clock budget of each run, s [default: none].
-        #[arg(long)]
-        max_wall: Option<f64>,
-        /// Keep runs in <out>/runs that finished with the same settings.
-        #[arg(long)]
-        reuse: bool,
-        /// No progress lines while a run integrates.
-        #[arg(long)]
-        quiet: bool,
-    },
+    Study(StudyArgs),
     /// Redraw one run's figures from its files (works on a run that stopped early).
     Plot {
         /// The run directory (as written by `cellsim run`).
@@ -163,7 +160,8 @@ enum Command {
         #[arg(long)]
         svg: Option<PathBuf>,
     },
-    /// Check a case file and print it with every default filled in.
+    /// Check a case file (every rule a run would check before integrating) and print it
+    /// with every default filled in.
     Check {
         /// The case file (RON).
         case: PathBuf,
@@ -176,10 +174,125 @@ enum Command {
     },
 }
 
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+struct RunArgs {
+    /// The case file (RON), e.g. cases/flat.ron.
+    case: PathBuf,
+    /// Output directory [default: runs/<case name>].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Integrator [default: the case's].
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorArg>,
+    /// Relative tolerance, 0 < rtol < 1 [default: the case's].
+    #[arg(long)]
+    rtol: Option<f64>,
+    /// Absolute tolerance on displacements, µm, > 0 [default: the case's].
+    #[arg(long)]
+    atol: Option<f64>,
+    /// BDF2 time step, s, > 0 [default: the case's].
+    #[arg(long)]
+    dt: Option<f64>,
+    /// Sparse LU [default: the case's].
+    #[arg(long, value_enum)]
+    linear_solver: Option<LinearSolverArg>,
+    /// BDF2 time step while the cell falls with inertia, s, when smaller than --dt
+    /// [default: --dt throughout].
+    #[arg(long)]
+    dt_inertia: Option<f64>,
+    /// Wall-clock budget of the integration, s: past it the run stops cleanly with its
+    /// outputs so far and the reason in summary.json [default: none].
+    #[arg(long)]
+    max_wall: Option<f64>,
+    /// No progress display (by default a progress bar on a terminal, a plain line every
+    /// 10 s otherwise).
+    #[arg(long)]
+    quiet: bool,
+    /// Also write a ParaView file per output time (vtu/<case>_NNNNN.vtu) and their
+    /// collection <case>.pvd.
+    #[arg(long)]
+    vtu: bool,
+    /// Also write the deformation as an animated GIF (<case>.gif).
+    #[arg(long)]
+    gif: bool,
+}
+
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+struct PaperArgs {
+    /// Output directory: figures, comparison.md and runs/<scene>/.
+    #[arg(long, default_value = "plots")]
+    out: PathBuf,
+    /// Runs at once [default: the number of cores].
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Read the scene files from this directory instead of the copies of cases/
+    /// compiled into cellsim.
+    #[arg(long)]
+    cases: Option<PathBuf>,
+    /// Keep the runs in <out>/runs that finished; run only the others.
+    #[arg(long)]
+    reuse: bool,
+    /// Also write each run's VTU files (see `run --vtu`).
+    #[arg(long)]
+    vtu: bool,
+    /// Also write each run's animated GIF (see `run --gif`).
+    #[arg(long)]
+    gif: bool,
+    /// No progress display.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(clap::Args)]
+#[command(allow_negative_numbers = true)]
+struct StudyArgs {
+    /// The case file (RON).
+    case: PathBuf,
+    /// Output directory [default: runs/study/<case name>].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Quantities of interest shown in study.csv and the figures (comma-separated)
+    /// [default: all].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    quantities: Vec<QuantityArg>,
+    /// Largest BDF2 time step, s [default: t_end / 100]; the ladder halves on past rungs
+    /// that fail until --rungs rungs from the largest that converges down.
+    #[arg(long)]
+    dt_max: Option<f64>,
+    /// BDF2 rungs (halvings of dt), at least 2. Six from t_end/100 reach the rungs where
+    /// contact onsets are resolved and the order is visible.
+    #[arg(long, default_value_t = study::DEFAULT_RUNGS)]
+    rungs: usize,
+    /// IDA's rtol ladder (comma-separated).
+    #[arg(long, value_delimiter = ',', default_values_t = study::DEFAULT_RTOLS)]
+    rtols: Vec<f64>,
+    /// rtol of the reference (IDA); 10x looser if it fails, and said so.
+    #[arg(long, default_value_t = study::DEFAULT_REF_RTOL)]
+    ref_rtol: f64,
+    /// rtol of BDF2's Newton convergence test.
+    #[arg(long, default_value_t = study::DEFAULT_BDF2_RTOL)]
+    bdf2_rtol: f64,
+    /// BDF2 step during the fall (with inertia) on the largest rung, s, halved with dt
+    /// [default: t_s/16 when the case has inertia OffAfter(t_s), else dt throughout].
+    #[arg(long)]
+    dt_inertia: Option<f64>,
+    /// Wall-clock budget of each run, s [default: none].
+    #[arg(long)]
+    max_wall: Option<f64>,
+    /// Keep runs in <out>/runs that finished with the same settings.
+    #[arg(long)]
+    reuse: bool,
+    /// No progress display while a run integrates.
+    #[arg(long)]
+    quiet: bool,
+}
+
 /// Loads a case; a bad case prints its located error and exits with status 2.
 fn load_case(path: &Path) -> Result<Case, ExitCode> {
     Case::load(path).map_err(|e| {
-        eprintln!("error: {e}");
+        err!("error: {e}");
         ExitCode::from(2)
     })
 }
@@ -192,310 +305,324 @@ fn check_positive(name: &str, v: Option<f64>, upper: Option<f64>) -> Result<(), 
                 Some(u) => format!("0 < {name} < {u}"),
                 None => format!("{name} > 0"),
             };
-            eprintln!("error: --{name} = {x} is out of range (must satisfy {range})");
+            err!("error: --{name} = {x} is out of range (must satisfy {range})");
             return Err(ExitCode::from(2));
         }
     }
     Ok(())
 }
 
-fn interrupt_flag() -> Arc<AtomicBool> {
-    let flag = Arc::new(AtomicBool::new(false));
+/// Installs the handler of SIGINT, SIGTERM and SIGHUP: the first asks the run to stop
+/// cleanly (finish the step, write the outputs and the summary, exit 128 + signal); a
+/// second one exits at once with that status.
+fn stop_on_signals() -> StopFlag {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let flag = StopFlag::new();
     let f = flag.clone();
-    // A second Ctrl-C while stopping falls through to the default (exit).
-    let _ = ctrlc::set_handler(move || {
-        if f.swap(true, Ordering::SeqCst) {
-            std::process::exit(130);
+    match signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) {
+        Ok(mut signals) => {
+            std::thread::spawn(move || {
+                for sig in signals.forever() {
+                    if f.request(sig) {
+                        std::process::exit(128 + sig);
+                    }
+                    err!(
+                        "\n{}: finishing the current step and writing the summary (again to quit now)",
+                        stop::signal_name(sig)
+                    );
+                }
+            });
         }
-        eprintln!(
-            "\ninterrupted: finishing the current step and writing the summary (Ctrl-C again to quit now)"
-        );
-    });
+        Err(e) => err!("warning: cannot handle signals ({e}): a signal will end the run at once"),
+    }
     flag
+}
+
+/// The exit status of a run, paper or study that did not succeed: 128 + signal when a
+/// signal stopped it, `otherwise` else.
+fn failure_status(stop: &StopFlag, otherwise: u8) -> ExitCode {
+    ExitCode::from(stop.exit_status().unwrap_or(otherwise))
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Run {
-            case: path,
-            out,
-            integrator,
-            rtol,
-            atol,
-            dt,
-            linear_solver,
-            dt_inertia,
-            max_wall,
-            quiet,
-            vtu,
-            gif,
-        } => {
-            let case = match load_case(&path) {
-                Ok(c) => c,
-                Err(code) => return code,
-            };
-            for (name, v, upper) in [
-                ("rtol", rtol, Some(1.0)),
-                ("atol", atol, None),
-                ("dt", dt, None),
-                ("dt-inertia", dt_inertia, None),
-                ("max-wall", max_wall, None),
-            ] {
-                if let Err(code) = check_positive(name, v, upper) {
-                    return code;
-                }
-            }
-            let mut settings = RunSettings::from_case(&case);
-            if let Some(i) = integrator {
-                settings.integrator = match i {
-                    IntegratorArg::Ida => case::Integrator::Ida,
-                    IntegratorArg::Bdf2 => case::Integrator::Bdf2,
-                };
-            }
-            settings.rtol = rtol.unwrap_or(settings.rtol);
-            settings.atol = atol.unwrap_or(settings.atol);
-            settings.dt = dt.unwrap_or(settings.dt);
-            settings.linear_solver = linear_solver.unwrap_or(settings.linear_solver);
-            settings.dt_inertia = dt_inertia;
-            settings.max_wall_seconds = max_wall;
-            let out = out.unwrap_or_else(|| PathBuf::from("runs").join(&case.name));
-            let visible = !quiet && std::io::stderr().is_terminal();
-            let opts = RunOptions {
-                out: out.clone(),
-                settings,
-                progress: Progress::Bar(run::progress_bar(&case, visible)),
-                interrupt: interrupt_flag(),
-                snapshots: SnapshotOptions { vtu, gif },
-            };
-            match run::run(&case, &path.display().to_string(), &opts) {
-                Ok(s) => {
-                    let f = s.final_values.unwrap_or_default();
-                    println!(
-                        "{}: finished t = {} s in {:.1} s wall ({} steps, {} Jacobians, {} unknowns); contact radius {:.3} µm, uy(p_t) {:.4} µm, mean |E| nucleus {:.1} %, cytoplasm {:.1} %; outputs in {}",
-                        s.case,
-                        f.t,
-                        s.wall_seconds,
-                        s.stats.steps,
-                        s.stats.jacobian_evals,
-                        s.unknowns.total,
-                        f.contact_radius,
-                        f.uy_top,
-                        100.0 * f.strain_nucleus,
-                        100.0 * f.strain_cytoplasm,
-                        out.display()
-                    );
-                    if let Some(t) = &s.timers {
-                        print!("{}", t.table());
-                    }
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    if matches!(e, run::RunError::Scene(_)) {
-                        ExitCode::from(2)
-                    } else {
-                        ExitCode::FAILURE
-                    }
-                }
-            }
+        Command::Run(args) => run_command(args),
+        Command::Paper(args) => paper_command(args),
+        Command::Study(args) => study_command(args),
+        Command::Plot { run_dir, out } => plot_command(&run_dir, out),
+        Command::Mesh { case, svg } => mesh_command(&case, svg.as_deref()),
+        Command::Check { case } => check_command(&case),
+        Command::Table { run_dirs } => table_command(&run_dirs),
+    }
+}
+
+/// Returns early from a handler with the exit status of an `Err`.
+macro_rules! tryc {
+    ($e:expr) => {
+        match $e {
+            Ok(v) => v,
+            Err(code) => return code,
         }
-        Command::Paper {
-            out,
-            jobs,
-            cases,
-            reuse,
-            vtu,
-            gif,
-            quiet,
-        } => {
-            let jobs =
-                jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-            if jobs == 0 {
-                eprintln!("error: --jobs must be at least 1");
-                return ExitCode::from(2);
-            }
-            let opts = paper::PaperOptions {
-                out: out.clone(),
-                jobs,
-                cases,
-                reuse,
-                snapshots: SnapshotOptions { vtu, gif },
-                progress: !quiet,
-                interrupt: interrupt_flag(),
-            };
-            match paper::run_paper(&opts) {
-                Ok(report) => {
-                    for p in &report.problems {
-                        eprintln!("error: {p}");
-                    }
-                    for r in &report.runs {
-                        if let Err(e) = &r.result {
-                            eprintln!("error: {e}");
-                        }
-                    }
-                    println!(
-                        "{} files written in {} (comparison table: {})",
-                        report.written.len(),
-                        out.display(),
-                        out.join("comparison.md").display()
-                    );
-                    if report.ok() {
-                        ExitCode::SUCCESS
-                    } else {
-                        ExitCode::FAILURE
-                    }
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::from(2)
-                }
-            }
-        }
-        Command::Study {
-            case: path,
-            out,
-            quantities,
-            dt_max,
-            rungs,
-            rtols,
-            ref_rtol,
-            bdf2_rtol,
-            dt_inertia,
-            max_wall,
-            reuse,
-            quiet,
-        } => {
-            let case = match load_case(&path) {
-                Ok(c) => c,
-                Err(code) => return code,
-            };
-            let mut checks = vec![
-                ("ref-rtol", Some(ref_rtol), Some(1.0)),
-                ("bdf2-rtol", Some(bdf2_rtol), Some(1.0)),
-                ("dt-max", dt_max, None),
-                ("dt-inertia", dt_inertia, None),
-                ("max-wall", max_wall, None),
-            ];
-            checks.extend(rtols.iter().map(|r| ("rtols", Some(*r), Some(1.0))));
-            for (name, v, upper) in checks {
-                if let Err(code) = check_positive(name, v, upper) {
-                    return code;
-                }
-            }
-            if rungs < 2 || rtols.is_empty() {
-                eprintln!("error: --rungs must be at least 2 and --rtols not empty");
-                return ExitCode::from(2);
-            }
-            let out = out.unwrap_or_else(|| PathBuf::from("runs/study").join(&case.name));
-            let defaults = study::StudySettings::defaults(&case);
-            let dt_max = dt_max.unwrap_or(defaults.dt_max);
-            let settings = study::StudySettings {
-                dt_max,
-                rungs,
-                rtols,
-                ref_rtol,
-                bdf2_rtol,
-                dt_inertia: dt_inertia.or_else(|| study::default_dt_inertia(&case, dt_max)),
-                max_wall,
-                quantities: if quantities.is_empty() {
-                    defaults.quantities
-                } else {
-                    quantities
-                },
-            };
-            let opts = study::StudyOptions {
-                out: out.clone(),
-                settings,
-                reuse,
-                progress: !quiet,
-                interrupt: interrupt_flag(),
-            };
-            match study::run_study(&case, &path.display().to_string(), &opts) {
-                Ok(report) => {
-                    print!("{}", study::summary_text(&report));
-                    println!("study written in {}", out.display());
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::FAILURE
-                }
-            }
-        }
-        Command::Plot { run_dir, out } => {
-            let run = match RunData::load(&run_dir) {
-                Ok(r) => r,
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    return ExitCode::from(2);
-                }
-            };
-            for n in &run.notes {
-                eprintln!("note: {n}");
-            }
-            let out = out.unwrap_or_else(|| run_dir.join("plots"));
-            match output::figures::plot_run(&run, &out) {
-                Ok(files) => {
-                    for f in files {
-                        println!("{}", f.display());
-                    }
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::FAILURE
-                }
-            }
-        }
-        Command::Mesh { case: path, svg } => {
-            let case = match load_case(&path) {
-                Ok(c) => c,
-                Err(code) => return code,
-            };
-            match Mesh::generate(&scene::mesh_params(&case)) {
-                Ok(mesh) => {
-                    println!("{}", mesh.quality());
-                    if let Some(p) = svg {
-                        if let Err(e) = mesh.write_svg(&p) {
-                            eprintln!("error: {e}");
-                            return ExitCode::FAILURE;
-                        }
-                    }
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {}: mesh: {e}", path.display());
-                    ExitCode::from(2)
-                }
-            }
-        }
-        Command::Check { case: path } => match load_case(&path) {
-            Ok(c) => match c.to_ron() {
-                Ok(text) => {
-                    println!("{text}");
-                    ExitCode::SUCCESS
-                }
-                Err(e) => {
-                    eprintln!("error: {e}");
-                    ExitCode::FAILURE
-                }
-            },
-            Err(code) => code,
+    };
+}
+
+fn run_command(a: RunArgs) -> ExitCode {
+    let case = tryc!(load_case(&a.case));
+    for (name, v, upper) in [
+        ("rtol", a.rtol, Some(1.0)),
+        ("atol", a.atol, None),
+        ("dt", a.dt, None),
+        ("dt-inertia", a.dt_inertia, None),
+        ("max-wall", a.max_wall, None),
+    ] {
+        tryc!(check_positive(name, v, upper));
+    }
+    let mut settings = RunSettings::from_case(&case);
+    if let Some(i) = a.integrator {
+        settings.integrator = match i {
+            IntegratorArg::Ida => case::Integrator::Ida,
+            IntegratorArg::Bdf2 => case::Integrator::Bdf2,
+        };
+    }
+    settings.rtol = a.rtol.unwrap_or(settings.rtol);
+    settings.atol = a.atol.unwrap_or(settings.atol);
+    settings.dt = a.dt.unwrap_or(settings.dt);
+    if let Some(l) = a.linear_solver {
+        settings.linear_solver = l.into();
+    }
+    settings.dt_inertia = a.dt_inertia;
+    settings.max_wall_seconds = a.max_wall;
+    let out = a
+        .out
+        .unwrap_or_else(|| PathBuf::from("runs").join(&case.name));
+    let stop = stop_on_signals();
+    let opts = RunOptions {
+        out: out.clone(),
+        settings,
+        progress: Progress::for_stderr(&case, a.quiet),
+        interrupt: stop.clone(),
+        snapshots: SnapshotOptions {
+            vtu: a.vtu,
+            gif: a.gif,
         },
-        Command::Table { run_dirs } => {
-            println!("{}", output::table::HEADER);
-            let mut status = ExitCode::SUCCESS;
-            for dir in run_dirs {
-                match output::table::read_summary(&dir) {
-                    Ok(s) => println!("{}", output::table::row(&s)),
-                    Err(e) => {
-                        eprintln!("error: {e}");
-                        status = ExitCode::from(2);
-                    }
-                }
+    };
+    match run::run(&case, &a.case.display().to_string(), &opts) {
+        Ok(s) => {
+            let f = s.final_values.unwrap_or_default();
+            out!(
+                "{}: finished t = {} s in {:.1} s wall ({} steps, {} Jacobians, {} unknowns); contact radius {:.3} µm, uy(p_t) {:.4} µm, mean |E| nucleus {:.1} %, cytoplasm {:.1} %; outputs in {}",
+                s.case,
+                f.t,
+                s.wall_seconds,
+                s.stats.steps,
+                s.stats.jacobian_evals,
+                s.unknowns.total,
+                f.contact_radius,
+                f.uy_top,
+                100.0 * f.strain_nucleus,
+                100.0 * f.strain_cytoplasm,
+                out.display()
+            );
+            if let Some(t) = &s.timers {
+                out!("{}", t.table().trim_end());
             }
-            status
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            err!("error: {e}");
+            if matches!(e, run::RunError::Scene(_) | run::RunError::Mesh { .. }) {
+                ExitCode::from(2)
+            } else {
+                failure_status(&stop, 1)
+            }
         }
     }
+}
+
+fn paper_command(a: PaperArgs) -> ExitCode {
+    let jobs = a
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if jobs == 0 {
+        err!("error: --jobs = 0 is out of range (must satisfy jobs >= 1)");
+        return ExitCode::from(2);
+    }
+    let stop = stop_on_signals();
+    let opts = paper::PaperOptions {
+        out: a.out.clone(),
+        jobs,
+        cases: a.cases,
+        reuse: a.reuse,
+        snapshots: SnapshotOptions {
+            vtu: a.vtu,
+            gif: a.gif,
+        },
+        progress: !a.quiet,
+        interrupt: stop.clone(),
+    };
+    match paper::run_paper(&opts) {
+        Ok(report) => {
+            for p in &report.problems {
+                err!("error: {p}");
+            }
+            for r in &report.runs {
+                if let Err(e) = &r.result {
+                    err!("error: {e}");
+                }
+            }
+            out!(
+                "{} files written in {} (comparison table: {})",
+                report.written.len(),
+                a.out.display(),
+                a.out.join("comparison.md").display()
+            );
+            if report.ok() {
+                ExitCode::SUCCESS
+            } else {
+                failure_status(&stop, 1)
+            }
+        }
+        Err(e) => {
+            err!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn study_command(a: StudyArgs) -> ExitCode {
+    let case = tryc!(load_case(&a.case));
+    let mut checks = vec![
+        ("ref-rtol", Some(a.ref_rtol), Some(1.0)),
+        ("bdf2-rtol", Some(a.bdf2_rtol), Some(1.0)),
+        ("dt-max", a.dt_max, None),
+        ("dt-inertia", a.dt_inertia, None),
+        ("max-wall", a.max_wall, None),
+    ];
+    checks.extend(a.rtols.iter().map(|r| ("rtols", Some(*r), Some(1.0))));
+    for (name, v, upper) in checks {
+        tryc!(check_positive(name, v, upper));
+    }
+    if a.rungs < 2 || a.rtols.is_empty() {
+        err!("error: --rungs must be at least 2 and --rtols not empty");
+        return ExitCode::from(2);
+    }
+    let out = a
+        .out
+        .unwrap_or_else(|| PathBuf::from("runs/study").join(&case.name));
+    let defaults = study::StudySettings::defaults(&case);
+    let dt_max = a.dt_max.unwrap_or(defaults.dt_max);
+    let settings = study::StudySettings {
+        dt_max,
+        rungs: a.rungs,
+        rtols: a.rtols,
+        ref_rtol: a.ref_rtol,
+        bdf2_rtol: a.bdf2_rtol,
+        dt_inertia: a
+            .dt_inertia
+            .or_else(|| study::default_dt_inertia(&case, dt_max)),
+        max_wall: a.max_wall,
+        quantities: if a.quantities.is_empty() {
+            defaults.quantities
+        } else {
+            a.quantities.into_iter().map(Into::into).collect()
+        },
+    };
+    let stop = stop_on_signals();
+    let opts = study::StudyOptions {
+        out: out.clone(),
+        settings,
+        reuse: a.reuse,
+        progress: !a.quiet,
+        interrupt: stop.clone(),
+    };
+    match study::run_study(&case, &a.case.display().to_string(), &opts) {
+        Ok(report) => {
+            out!("{}", study::summary_text(&report).trim_end());
+            out!("study written in {}", out.display());
+            match stop.exit_status() {
+                Some(s) => ExitCode::from(s),
+                None => ExitCode::SUCCESS,
+            }
+        }
+        Err(e) => {
+            err!("error: {e}");
+            failure_status(&stop, 1)
+        }
+    }
+}
+
+fn plot_command(run_dir: &Path, out: Option<PathBuf>) -> ExitCode {
+    let run = match RunData::load(run_dir) {
+        Ok(r) => r,
+        Err(e) => {
+            err!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    for n in &run.notes {
+        err!("note: {n}");
+    }
+    let out = out.unwrap_or_else(|| run_dir.join("plots"));
+    match output::figures::plot_run(&run, &out) {
+        Ok(files) => {
+            for f in files {
+                out!("{}", f.display());
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            err!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn mesh_command(path: &Path, svg: Option<&Path>) -> ExitCode {
+    let case = tryc!(load_case(path));
+    match Mesh::generate(&scene::mesh_params(&case)) {
+        Ok(mesh) => {
+            out!("{}", mesh.quality());
+            if let Some(p) = svg {
+                if let Err(e) = mesh.write_svg(p) {
+                    err!("error: {e}");
+                    return ExitCode::FAILURE;
+                }
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            err!("error: {}: mesh: {e}", path.display());
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn check_command(path: &Path) -> ExitCode {
+    let case = tryc!(load_case(path));
+    match case.to_ron() {
+        Ok(text) => {
+            out!("{text}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            err!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn table_command(run_dirs: &[PathBuf]) -> ExitCode {
+    out!("{}", output::table::HEADER);
+    let mut status = ExitCode::SUCCESS;
+    for dir in run_dirs {
+        match output::table::read_summary(dir) {
+            Ok(s) => out!("{}", output::table::row(&s)),
+            Err(e) => {
+                err!("error: {e}");
+                status = ExitCode::from(2);
+            }
+        }
+    }
+    status
 }

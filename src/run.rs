@@ -9,9 +9,7 @@
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
@@ -27,6 +25,7 @@ use crate::model::{CellModel, ModelParams};
 use crate::output::{Snapshot, SnapshotOptions, SnapshotWriter};
 use crate::physics::{ActiveStrain, Substrate};
 use crate::scene::{self, SceneError};
+use crate::stop::{StopFlag, signal_name};
 use crate::sundials::{Ida, IdaOptions};
 
 /// Integration settings of one run: the case's `solver` section, possibly overridden on
@@ -88,11 +87,258 @@ impl RunSettings {
 /// How a run reports progress.
 #[derive(Clone, Default)]
 pub enum Progress {
-    /// Nothing (not a terminal, or `--quiet`).
+    /// Nothing (`--quiet`).
     #[default]
     Hidden,
-    /// A progress line.
+    /// A progress line redrawn in place (stderr is a terminal).
     Bar(ProgressBar),
+    /// A plain line on stderr after the first step and then every `every` of wall time
+    /// (stderr is a file or a pipe, as in a batch job's log): simulated time, steps and
+    /// wall time, prefixed by `label`.
+    Lines {
+        /// Prefix of each line (the case name).
+        label: String,
+        /// Interval between lines.
+        every: Duration,
+    },
+}
+
+/// Interval between plain progress lines when stderr is not a terminal.
+pub const PROGRESS_LINE_INTERVAL: Duration = Duration::from_secs(10);
+
+impl Progress {
+    /// A bar on a terminal, plain lines every [`PROGRESS_LINE_INTERVAL`] otherwise,
+    /// nothing when `quiet`.
+    pub fn for_stderr(case: &Case, quiet: bool) -> Self {
+        use std::io::IsTerminal;
+        if quiet {
+            Progress::Hidden
+        } else if std::io::stderr().is_terminal() {
+            Progress::Bar(progress_bar(case, true))
+        } else {
+            Progress::Lines {
+                label: case.name.clone(),
+                every: PROGRESS_LINE_INTERVAL,
+            }
+        }
+    }
+}
+
+/// Shows a run's progress after each step, as its [`Progress`] asks.
+struct Reporter {
+    progress: Progress,
+    t_end: f64,
+    start: Instant,
+    /// When the last plain line was written (`None`: none yet; the first step writes one).
+    last_line: Option<Instant>,
+}
+
+impl Reporter {
+    fn new(progress: &Progress, t_end: f64) -> Self {
+        let now = Instant::now();
+        Self {
+            progress: progress.clone(),
+            t_end,
+            start: now,
+            last_line: None,
+        }
+    }
+
+    fn step(&mut self, t: f64, s: &Stats) {
+        match &self.progress {
+            Progress::Hidden => {}
+            Progress::Bar(bar) => {
+                bar.set_position((t * 1000.0).round().max(0.0) as u64);
+                bar.set_message(format!(
+                    "t = {t:>9.3e} s  step {:>6}  order {}  h = {:.2e}",
+                    s.steps, s.last_order, s.last_step
+                ));
+            }
+            Progress::Lines { label, every } => {
+                if self.last_line.is_none_or(|l| l.elapsed() >= *every) {
+                    self.last_line = Some(Instant::now());
+                    use std::io::Write;
+                    // A closed stderr must not stop the run.
+                    let _ = writeln!(
+                        std::io::stderr(),
+                        "{label}: t = {t:.4e} s of {:.4e} s ({:.1} %), {} steps, h = {:.2e} s, wall {:.1} s",
+                        self.t_end,
+                        100.0 * t / self.t_end,
+                        s.steps,
+                        s.last_step,
+                        self.start.elapsed().as_secs_f64()
+                    );
+                }
+            }
+        }
+    }
+
+    fn finish(&self) {
+        if let Progress::Bar(bar) = &self.progress {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+/// Steps in the stall rule's sliding window (see [`StepGuard`]).
+pub const STALL_STEPS: usize = 1000;
+/// Stall threshold on the mean step over the window, as a fraction of the regular output
+/// interval t_end / n_times.
+pub const STALL_FRACTION: f64 = 1e-4;
+
+/// Why the driver stopped the integrator before its output time (not a failure of the
+/// method itself).
+#[derive(Debug, Clone, PartialEq)]
+pub enum StopCause {
+    /// A signal asked to stop (SIGINT, SIGTERM, SIGHUP).
+    Signal(i32),
+    /// The wall-clock budget was spent [s].
+    Budget(f64),
+    /// More than `max_steps` steps between two output times.
+    StepLimit {
+        /// The limit (`solver.max_steps`).
+        max_steps: u64,
+        /// The output time being worked towards [s].
+        tout: f64,
+    },
+    /// The mean step over the last [`STALL_STEPS`] steps fell below the stall threshold.
+    Stalled {
+        /// The threshold [s].
+        threshold: f64,
+        /// Simulated time covered by those steps [s].
+        advanced: f64,
+        /// Step size [s] and order of the last step.
+        h: f64,
+        /// BDF order of the last step.
+        order: u32,
+        /// Error-test and Newton convergence failures during those steps.
+        error_test_failures: u64,
+        /// Newton convergence failures during those steps.
+        newton_failures: u64,
+    },
+}
+
+impl StopCause {
+    /// The reason written in the summary, for a stop at time `t`.
+    pub fn reason(&self, t: f64) -> String {
+        match self {
+            StopCause::Signal(s) => format!("interrupted by {} at t = {t:.6e} s", signal_name(*s)),
+            StopCause::Budget(limit) => {
+                format!("wall-clock budget of {limit} s exhausted at t = {t:.6e} s")
+            }
+            StopCause::StepLimit { max_steps, tout } => format!(
+                "step limit: more than solver.max_steps = {max_steps} steps between two output \
+                 times, at t = {t:.6e} s (next output at {tout:.6e} s)"
+            ),
+            StopCause::Stalled {
+                threshold,
+                advanced,
+                h,
+                order,
+                error_test_failures,
+                newton_failures,
+            } => {
+                let kind = if error_test_failures + newton_failures == 0 {
+                    "none (the steps were accepted at that size)".to_string()
+                } else if error_test_failures >= newton_failures {
+                    format!(
+                        "local error test ({error_test_failures} error-test and \
+                         {newton_failures} Newton convergence failures)"
+                    )
+                } else {
+                    format!(
+                        "Newton convergence ({newton_failures} convergence and \
+                         {error_test_failures} error-test failures)"
+                    )
+                };
+                format!(
+                    "stalled at t = {t:.6e} s: the last {STALL_STEPS} steps advanced {advanced:.3e} s, \
+                     a mean step below {threshold:.3e} s ({STALL_FRACTION:e} of the output \
+                     interval); last step h = {h:.3e} s, order {order}; failures in those \
+                     steps: {kind}. Tighter tolerances (solver.rtol) or BDF2 may help"
+                )
+            }
+        }
+    }
+}
+
+/// The driver's own limits, checked after every step: a stop request, the wall-clock
+/// budget, `max_steps` steps between two output times, and the stall rule: a run stops
+/// when its last [`STALL_STEPS`] steps together advanced less than [`STALL_FRACTION`] ×
+/// [`STALL_STEPS`] output intervals, i.e. their mean step is below 1e-4 of the regular
+/// output interval t_end / n_times (12.5 ms on the paper's scenes, 50 µs on the 200-s
+/// test cases). No scene needs that (the landing's few hundred short steps are diluted in
+/// the window; inertia kept on through the ringing of the landing takes 0.5 ms steps,
+/// ten times the threshold of the 200-s cases), and it is what a step size collapsed to a
+/// tolerance the Newton iteration cannot meet looks like (`--rtol 0.5`: h between 1 µs
+/// and 20 µs for thousands of steps).
+struct StepGuard {
+    stop: StopFlag,
+    start: Instant,
+    budget: Option<f64>,
+    max_steps: u64,
+    threshold: f64,
+    steps_in_interval: u64,
+    tout: f64,
+    /// (t, error-test failures, Newton failures) after each of the last steps.
+    window: std::collections::VecDeque<(f64, u64, u64)>,
+}
+
+impl StepGuard {
+    fn new(stop: StopFlag, budget: Option<f64>, max_steps: u64, output_interval: f64) -> Self {
+        Self {
+            stop,
+            start: Instant::now(),
+            budget,
+            max_steps,
+            threshold: STALL_FRACTION * output_interval,
+            steps_in_interval: 0,
+            tout: 0.0,
+            window: std::collections::VecDeque::with_capacity(STALL_STEPS + 1),
+        }
+    }
+
+    /// A new output interval starts towards `tout`.
+    fn next_output(&mut self, tout: f64) {
+        self.tout = tout;
+        self.steps_in_interval = 0;
+    }
+
+    /// Checks the limits after a step to `t` (`s`: statistics of the whole run so far).
+    fn check(&mut self, t: f64, s: &Stats) -> Option<StopCause> {
+        self.steps_in_interval += 1;
+        if let Some(sig) = self.stop.signal() {
+            return Some(StopCause::Signal(sig));
+        }
+        if let Some(limit) = self.budget {
+            if self.start.elapsed().as_secs_f64() > limit {
+                return Some(StopCause::Budget(limit));
+            }
+        }
+        if self.steps_in_interval > self.max_steps {
+            return Some(StopCause::StepLimit {
+                max_steps: self.max_steps,
+                tout: self.tout,
+            });
+        }
+        self.window
+            .push_back((t, s.error_test_failures, s.newton_failures));
+        if self.window.len() > STALL_STEPS {
+            let (t0, etf0, nf0) = self.window.pop_front().unwrap_or((t, 0, 0));
+            let advanced = t - t0;
+            if advanced < self.threshold * STALL_STEPS as f64 {
+                return Some(StopCause::Stalled {
+                    threshold: self.threshold,
+                    advanced,
+                    h: s.last_step,
+                    order: s.last_order,
+                    error_test_failures: s.error_test_failures.saturating_sub(etf0),
+                    newton_failures: s.newton_failures.saturating_sub(nf0),
+                });
+            }
+        }
+        None
+    }
 }
 
 /// Options of one run.
@@ -104,8 +350,8 @@ pub struct RunOptions {
     pub settings: RunSettings,
     /// Progress display.
     pub progress: Progress,
-    /// Set to stop the run cleanly (Ctrl-C).
-    pub interrupt: Arc<AtomicBool>,
+    /// Set to stop the run cleanly (SIGINT, SIGTERM, SIGHUP).
+    pub interrupt: StopFlag,
     /// Per-output-time files besides the CSV row (`--vtu`, `--gif`).
     pub snapshots: SnapshotOptions,
 }
@@ -126,12 +372,55 @@ pub struct Unknowns {
 /// Why a run stopped early.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Failure {
+    /// What kind of stop it was.
+    #[serde(default)]
+    pub kind: FailureKind,
     /// What happened.
     pub reason: String,
     /// Simulated time of the last output written [s].
     pub t_last_output: f64,
     /// Steps taken.
     pub step: u64,
+}
+
+/// The kind of an early stop, so that readers of a summary need not parse its reason.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FailureKind {
+    /// The integration method failed (Newton, error test, linear solver, inadmissible
+    /// state, the inertia switch).
+    #[default]
+    Integration,
+    /// A signal asked the run to stop.
+    Interrupted,
+    /// The wall-clock budget was spent.
+    Budget,
+    /// More than `solver.max_steps` steps between two output times.
+    StepLimit,
+    /// The step size collapsed (the stall rule of [`StepGuard`]).
+    Stalled,
+    /// An output could not be written.
+    Output,
+}
+
+impl FailureKind {
+    /// Whether the run was stopped from outside (signal or budget) rather than by the
+    /// method or the model.
+    pub fn is_external(self) -> bool {
+        matches!(self, FailureKind::Interrupted | FailureKind::Budget)
+    }
+}
+
+impl StopCause {
+    /// The failure kind this stop is recorded as.
+    pub fn kind(&self) -> FailureKind {
+        match self {
+            StopCause::Signal(_) => FailureKind::Interrupted,
+            StopCause::Budget(_) => FailureKind::Budget,
+            StopCause::StepLimit { .. } => FailureKind::StepLimit,
+            StopCause::Stalled { .. } => FailureKind::Stalled,
+        }
+    }
 }
 
 /// `summary.json`.
@@ -531,10 +820,6 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
             message,
         })?;
     let (nu, nv, nm) = model.block_sizes();
-    let bar = match &opts.progress {
-        Progress::Bar(b) => b.clone(),
-        Progress::Hidden => ProgressBar::hidden(),
-    };
 
     let ph = &case.phases;
     let mesh_file = MeshFile {
@@ -616,41 +901,28 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
     let mut switch_pending = switch_time.is_some();
     crate::dae::timing::reset();
     let start = Instant::now();
-    let interrupt = opts.interrupt.clone();
-    let mut failure: Option<String> = None;
-    // The wall-clock budget stops the run through the same path as Ctrl-C; `over_budget`
-    // tells the two apart for the reason written in the summary.
-    let budget = opts.settings.max_wall_seconds;
-    let over_budget = std::cell::Cell::new(false);
-    let explain = |reason: String| match budget {
-        Some(limit) if over_budget.get() => {
-            format!("wall-clock budget of {limit} s exhausted ({reason})")
-        }
-        _ => reason,
-    };
+    let mut failure: Option<(FailureKind, String)> = None;
+    let times = output_times(case);
+    let mut reporter = Reporter::new(&opts.progress, ph.t_end);
+    let mut guard = StepGuard::new(
+        opts.interrupt.clone(),
+        opts.settings.max_wall_seconds,
+        opts.settings.max_steps,
+        ph.t_end / case.output.n_times.max(1) as f64,
+    );
+    // Why the driver stopped the integrator, and when (the integrator itself only says
+    // "interrupted").
+    let mut stopped: Option<(StopCause, f64)> = None;
 
-    for tout in output_times(case) {
-        let base = stats_before.clone();
-        let bar_ref = &bar;
-        let stop = &interrupt;
-        let over_budget = &over_budget;
-        let mut on_step = |t: f64, s: &Stats| {
-            if budget.is_some_and(|limit| start.elapsed().as_secs_f64() > limit) {
-                over_budget.set(true);
-                return false;
-            }
-            bar_ref.set_position((t * 1000.0).round().max(0.0) as u64);
-            bar_ref.set_message(format!(
-                "t = {t:>9.3e} s  step {:>6}  order {}  h = {:.2e}",
-                base.steps + s.steps,
-                s.last_order,
-                s.last_step
-            ));
-            !stop.load(Ordering::Relaxed)
-        };
+    for tout in times {
+        guard.next_output(tout);
         // Once past the requested switch time, advance in short probes until the contact
         // carries the cell, switch the system there, then go on to the output time.
         if switch_pending && solver.integ_ref().t() >= switch_time.unwrap_or(f64::INFINITY) {
+            let base = stats_before.clone();
+            let mut on_step = |t: f64, s: &Stats| {
+                after_step(&mut guard, &mut reporter, &mut stopped, &base, t, s)
+            };
             match advance_switching(&mut solver, tout, &opts.settings, &mut on_step) {
                 Ok(Some((old_stats, t_switch))) => {
                     stats_before = add_stats(&stats_before, &old_stats);
@@ -659,13 +931,16 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
                 }
                 Ok(None) => {}
                 Err(e) => {
-                    failure = Some(explain(e));
+                    failure = Some((FailureKind::Integration, e));
                     break;
                 }
             }
         }
+        let base = stats_before.clone();
+        let mut on_step =
+            |t: f64, s: &Stats| after_step(&mut guard, &mut reporter, &mut stopped, &base, t, s);
         if let Err(e) = solver.integ().advance_to(tout, &mut on_step) {
-            failure = Some(explain(e.to_string()));
+            failure = Some((FailureKind::Integration, e.to_string()));
             break;
         }
         let y = solver.integ_ref().y().to_vec();
@@ -674,8 +949,9 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
         if !obs.is_finite() || y.iter().any(|v| !v.is_finite()) {
             // Not expected (the residual reports non-finite values as inadmissible, and
             // the integrators cut the step), but a run must never write NaN.
-            failure = Some(format!(
-                "non-finite state or output at t = {tout} s (not written)"
+            failure = Some((
+                FailureKind::Integration,
+                format!("non-finite state or output at t = {tout} s (not written)"),
             ));
             break;
         }
@@ -697,13 +973,20 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
         if switch_pending
             && solver.integ_ref().t() - switch_time.unwrap_or(f64::INFINITY) > SWITCH_PROBE_LIMIT
         {
-            failure = Some(format!(
-                "cannot switch inertia off: in the {SWITCH_PROBE_LIMIT} s after t = {} s the contact never carried the cell's weight",
-                switch_time.unwrap_or_default()
+            failure = Some((
+                FailureKind::Integration,
+                format!(
+                    "cannot switch inertia off: in the {SWITCH_PROBE_LIMIT} s after t = {} s the contact never carried the cell's weight",
+                    switch_time.unwrap_or_default()
+                ),
             ));
             break;
         }
+        summary.wall_seconds = start.elapsed().as_secs_f64();
         write_json(&out.join("summary.json"), &summary)?;
+    }
+    if let Some((cause, t)) = &stopped {
+        failure = Some((cause.kind(), cause.reason(*t)));
     }
     summary.wall_seconds = start.elapsed().as_secs_f64();
     if crate::dae::timing::ENABLED {
@@ -712,9 +995,12 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
             summary.wall_seconds,
         ));
     }
-    bar.finish_and_clear();
+    reporter.finish();
     if let Err(e) = frames.finish() {
-        failure.get_or_insert(format!("writing the VTU/GIF output: {e}"));
+        failure.get_or_insert((
+            FailureKind::Output,
+            format!("writing the VTU/GIF output: {e}"),
+        ));
     }
     match failure {
         None => {
@@ -722,10 +1008,11 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
             write_json(&out.join("summary.json"), &summary)?;
             Ok(summary)
         }
-        Some(reason) => {
+        Some((kind, reason)) => {
             // The statistics up to the failing step (not only up to the last output).
             summary.stats = add_stats(&stats_before, &solver.integ_ref().stats());
             summary.failure = Some(Failure {
+                kind,
                 reason: reason.clone(),
                 t_last_output: summary.final_values.map(|o| o.t).unwrap_or(0.0),
                 step: summary.stats.steps,
@@ -738,6 +1025,26 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
             })
         }
     }
+}
+
+/// What the driver does after every step of either integrator (`s`: the statistics of
+/// the current integrator, `base`: those of the systems before it): check its limits and
+/// show progress. Returns false to stop the integrator, the cause recorded in `stopped`.
+fn after_step(
+    guard: &mut StepGuard,
+    reporter: &mut Reporter,
+    stopped: &mut Option<(StopCause, f64)>,
+    base: &Stats,
+    t: f64,
+    s: &Stats,
+) -> bool {
+    let total = add_stats(base, s);
+    if let Some(cause) = guard.check(t, &total) {
+        *stopped = Some((cause, t));
+        return false;
+    }
+    reporter.step(t, &total);
+    true
 }
 
 /// Longest stretch probed with inertia, after the requested switch time, for the moment
@@ -855,5 +1162,84 @@ fn state_file(
         element_strain: per_el.iter().map(|p| p.0).collect(),
         element_jacobian: per_el.iter().map(|p| p.1).collect(),
         observables,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stats(steps: u64, h: f64) -> Stats {
+        Stats {
+            steps,
+            last_step: h,
+            last_order: 2,
+            ..Stats::default()
+        }
+    }
+
+    #[test]
+    fn step_guard_stops_a_collapsed_step_but_not_a_fast_one() {
+        // Output interval 1 s: threshold 1e-4 s on the mean step.
+        let mut g = StepGuard::new(StopFlag::new(), None, u64::MAX, 1.0);
+        g.next_output(1e9);
+        // Steps of 2e-4 s: never a stall.
+        let mut t = 0.0;
+        for k in 0..3 * STALL_STEPS as u64 {
+            t += 2e-4;
+            assert_eq!(g.check(t, &stats(k, 2e-4)), None, "step {k}");
+        }
+        // Then steps of 1e-6 s: the mean over the window falls below 1e-4 s after about
+        // half a window, and the stall is reported with what the window advanced.
+        let mut stopped = None;
+        for k in 0..STALL_STEPS as u64 {
+            t += 1e-6;
+            if let Some(c) = g.check(t, &stats(k, 1e-6)) {
+                stopped = Some((k, c));
+                break;
+            }
+        }
+        let (k, cause) = stopped.expect("stall detected");
+        assert!(
+            k > STALL_STEPS as u64 / 3 && k < STALL_STEPS as u64,
+            "after {k} steps"
+        );
+        match cause {
+            StopCause::Stalled {
+                threshold,
+                advanced,
+                ..
+            } => {
+                assert_eq!(threshold, 1e-4);
+                assert!(advanced < threshold * STALL_STEPS as f64, "{advanced}");
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn step_guard_enforces_max_steps_per_output_interval_and_the_stop_flag() {
+        let stop = StopFlag::new();
+        let mut g = StepGuard::new(stop.clone(), None, 3, 1.0);
+        g.next_output(1.0);
+        for k in 0..3 {
+            assert_eq!(g.check(0.1 * k as f64, &stats(k, 0.1)), None);
+        }
+        assert!(matches!(
+            g.check(0.4, &stats(3, 0.1)),
+            Some(StopCause::StepLimit { max_steps: 3, .. })
+        ));
+        // A new interval starts the count again.
+        g.next_output(2.0);
+        assert_eq!(g.check(1.1, &stats(4, 0.1)), None);
+        stop.request(crate::stop::SIGTERM);
+        let cause = g.check(1.2, &stats(5, 0.1)).expect("stop");
+        assert_eq!(cause, StopCause::Signal(crate::stop::SIGTERM));
+        assert_eq!(cause.kind(), FailureKind::Interrupted);
+        assert!(
+            cause
+                .reason(1.2)
+                .starts_with("interrupted by SIGTERM at t = 1.2")
+        );
     }
 }

@@ -41,8 +41,6 @@
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 
 use serde::{Deserialize, Serialize};
 
@@ -50,7 +48,8 @@ use crate::case::{self, Case};
 use crate::dae::Stats;
 use crate::model::observe::Observables;
 use crate::output::read::parse_timeseries;
-use crate::run::{self, Progress, RunError, RunOptions, RunSettings, Summary};
+use crate::run::{self, FailureKind, Progress, RunError, RunOptions, RunSettings, Summary};
+use crate::stop::StopFlag;
 
 /// Relative error of the final uy_top at which the speed-up is measured.
 pub const TARGET_ERROR: f64 = 1e-3;
@@ -62,7 +61,7 @@ pub const REF_ATTEMPTS: usize = 3;
 pub const MAX_LEADING_FAILURES: usize = 4;
 
 /// A quantity of interest.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Quantity {
     /// Final vertical displacement of the nucleus top p_t.
@@ -154,7 +153,7 @@ pub struct StudyOptions {
     /// Show a progress line during each run (on a terminal).
     pub progress: bool,
     /// Set to stop cleanly (Ctrl-C).
-    pub interrupt: Arc<AtomicBool>,
+    pub interrupt: StopFlag,
 }
 
 /// Default largest BDF2 step: t_end / 100.
@@ -203,6 +202,9 @@ pub struct StudyRow {
     pub finished: bool,
     /// Why not.
     pub failure: Option<String>,
+    /// What kind of stop that was (absent in study files written before it was recorded).
+    #[serde(default)]
+    pub failure_kind: Option<FailureKind>,
     /// Whether it was reused from an earlier study.
     pub reused: bool,
     /// Wall-clock seconds of the integration.
@@ -433,13 +435,21 @@ fn one_run(
         }
     }
     if summary.is_none() {
-        let visible = opts.progress && std::io::IsTerminal::is_terminal(&std::io::stderr());
-        let bar = run::progress_bar(case, visible);
-        bar.set_prefix(label.clone());
+        let progress = match Progress::for_stderr(case, !opts.progress) {
+            Progress::Bar(bar) => {
+                bar.set_prefix(label.clone());
+                Progress::Bar(bar)
+            }
+            Progress::Lines { every, .. } => Progress::Lines {
+                label: format!("study: {label}"),
+                every,
+            },
+            Progress::Hidden => Progress::Hidden,
+        };
         let ropts = RunOptions {
             out: dir.clone(),
             settings: settings.clone(),
-            progress: Progress::Bar(bar),
+            progress,
             interrupt: opts.interrupt.clone(),
             snapshots: Default::default(),
         };
@@ -461,6 +471,7 @@ fn one_run(
                         atol: settings.atol,
                         finished: false,
                         failure: Some(e.to_string()),
+                        failure_kind: Some(FailureKind::Integration),
                         reused: false,
                         wall_seconds: 0.0,
                         stats: Stats::default(),
@@ -486,6 +497,7 @@ fn one_run(
             rtol: settings.rtol,
             atol: settings.atol,
             finished: summary.finished,
+            failure_kind: summary.failure.as_ref().map(|f| f.kind),
             failure: summary.failure.map(|f| f.reason),
             reused,
             wall_seconds: summary.wall_seconds,
@@ -760,9 +772,7 @@ fn progress_line(r: &StudyRow) {
 
 /// Whether a failed run stopped for the wall budget or an interruption (not the method).
 fn stopped_by_driver(r: &StudyRow) -> bool {
-    r.failure
-        .as_deref()
-        .is_some_and(|f| f.contains("wall-clock budget") || f.starts_with("interrupted"))
+    r.failure_kind.is_some_and(FailureKind::is_external)
 }
 
 /// Runs the study; see the module documentation.
@@ -773,7 +783,7 @@ pub fn run_study(case: &Case, file: &str, opts: &StudyOptions) -> Result<StudyRe
     let all = Quantity::ALL.to_vec();
     let set = &opts.settings;
     let mut csv = CsvWriter::create(opts.out.join("study.csv"), &set.quantities)?;
-    let interrupted = || opts.interrupt.load(Ordering::Relaxed);
+    let interrupted = || opts.interrupt.is_set();
 
     // 1. The reference.
     let mut failed_attempts = Vec::new();

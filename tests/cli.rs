@@ -144,3 +144,221 @@ fn table_prints_a_row_per_run_and_refuses_a_missing_one() {
     assert_eq!(res.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&res.stderr).contains("no/such/run/summary.json"));
 }
+
+/// A case file in the test's temporary directory: `base` (a file in cases/) with the
+/// replacements applied; returns its path.
+fn variant(name: &str, base: &str, replace: &[(&str, &str)]) -> String {
+    let mut text = std::fs::read_to_string(format!("{}/{base}", env!("CARGO_MANIFEST_DIR")))
+        .expect("read base case");
+    for (from, to) in replace {
+        assert!(text.contains(from), "{base} has no `{from}`");
+        text = text.replacen(from, to, 1);
+    }
+    let path = format!("{}/{name}.ron", env!("CARGO_TARGET_TMPDIR"));
+    std::fs::write(&path, text).expect("write case");
+    path
+}
+
+fn summary_of(dir: &str) -> serde_json::Value {
+    let text = std::fs::read_to_string(format!("{dir}/summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("summary JSON")
+}
+
+fn tmp(dir: &str) -> String {
+    let out = format!("{}/{dir}", env!("CARGO_TARGET_TMPDIR"));
+    let _ = std::fs::remove_dir_all(&out);
+    out
+}
+
+#[test]
+fn sigterm_and_sighup_stop_a_run_cleanly_with_128_plus_the_signal() {
+    for (signal, status) in [("TERM", 143), ("HUP", 129), ("INT", 130)] {
+        let out = tmp(&format!("cli-signal-{signal}"));
+        let child = Command::new(env!("CARGO_BIN_EXE_cellsim"))
+            .args([
+                "run",
+                "cases/fast/push-pull-short.ron",
+                "--out",
+                &out,
+                "--quiet",
+            ])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("start cellsim");
+        // Wait for a few output rows, then look at the summary written so far.
+        let csv = format!("{out}/timeseries.csv");
+        let start = std::time::Instant::now();
+        while std::fs::read_to_string(&csv).map_or(0, |t| t.lines().count()) < 4 {
+            assert!(start.elapsed().as_secs() < 60, "no output rows");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        let during = summary_of(&out);
+        assert!(during["wall_seconds"].as_f64().unwrap() > 0.0, "{during}");
+        let killed = Command::new("kill")
+            .args([&format!("-{signal}"), &child.id().to_string()])
+            .status()
+            .expect("kill");
+        assert!(killed.success());
+        let res = child.wait_with_output().expect("wait");
+        let stderr = String::from_utf8_lossy(&res.stderr);
+        assert_eq!(res.status.code(), Some(status), "SIG{signal}: {stderr}");
+        let s = summary_of(&out);
+        assert_eq!(s["finished"], false);
+        assert_eq!(s["failure"]["kind"], "interrupted", "{s}");
+        let reason = s["failure"]["reason"].as_str().unwrap();
+        assert!(
+            reason.starts_with(&format!("interrupted by SIG{signal} at t = ")),
+            "{reason}"
+        );
+        assert!(s["wall_seconds"].as_f64().unwrap() > 0.0);
+        // Every row in the summary's count is in the CSV, each complete.
+        let rows = crate::scenes::read_csv(std::path::Path::new(&csv));
+        assert_eq!(rows.len() as u64, s["outputs"].as_u64().unwrap());
+        assert_eq!(
+            rows.last().unwrap()[0],
+            s["final_values"]["t"].as_f64().unwrap()
+        );
+    }
+}
+
+#[test]
+fn a_collapsed_step_stops_the_run_with_a_stall_diagnostic() {
+    let out = tmp("cli-stall");
+    let res = cellsim(&[
+        "run",
+        "cases/fast/flat-gravity.ron",
+        "--rtol",
+        "0.5",
+        "--out",
+        &out,
+        "--quiet",
+    ]);
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert_eq!(res.status.code(), Some(1), "{stderr}");
+    let s = summary_of(&out);
+    assert_eq!(s["failure"]["kind"], "stalled", "{s}");
+    let reason = s["failure"]["reason"].as_str().unwrap();
+    for needle in [
+        "stalled at t = ",
+        "last step h = ",
+        "order ",
+        "failures in those steps",
+    ] {
+        assert!(reason.contains(needle), "{reason}");
+    }
+    // The outputs before the stall are kept.
+    assert!(s["outputs"].as_u64().unwrap() > 10, "{s}");
+}
+
+#[test]
+fn max_steps_is_enforced_for_ida_and_bdf2() {
+    let case = variant(
+        "max-steps-1",
+        "cases/fast/push-pull-short.ron",
+        &[(
+            "inertia: (mode:",
+            "solver: (max_steps: 1),\n    inertia: (mode:",
+        )],
+    );
+    for integrator in ["ida", "bdf2"] {
+        let out = tmp(&format!("cli-max-steps-{integrator}"));
+        let res = cellsim(&[
+            "run",
+            &case,
+            "--integrator",
+            integrator,
+            "--dt",
+            "0.1",
+            "--out",
+            &out,
+            "--quiet",
+        ]);
+        let stderr = String::from_utf8_lossy(&res.stderr);
+        assert_eq!(res.status.code(), Some(1), "{integrator}: {stderr}");
+        let s = summary_of(&out);
+        assert_eq!(s["failure"]["kind"], "step_limit", "{integrator}: {s}");
+        assert!(stderr.contains("solver.max_steps = 1"), "{stderr}");
+    }
+}
+
+#[test]
+fn an_end_time_just_after_the_inertia_switch_finishes() {
+    // The switch lands on an output time (9.576 s, one of 400 in [0, 9.6]); the restarted
+    // IDA must give the state there before its first step.
+    let case = variant(
+        "push-pull-9.6",
+        "cases/pillars-push-pull.ron",
+        &[("t_end: 50000.0", "t_end: 9.6")],
+    );
+    let out = tmp("cli-switch-end");
+    let res = cellsim(&["run", &case, "--out", &out, "--quiet"]);
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert!(res.status.success(), "{stderr}");
+    let s = summary_of(&out);
+    assert_eq!(s["finished"], true);
+    assert!(s["inertia_switched_off_at"].as_f64().unwrap() <= 9.6);
+}
+
+#[test]
+fn a_closed_stdout_ends_quietly() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_cellsim"))
+        .args(["check", "cases/flat.ron"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("start cellsim");
+    // Close the reading end before cellsim writes (as `| head -1` does once it has read
+    // its line).
+    drop(child.stdout.take());
+    let res = child.wait_with_output().expect("wait");
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(res.status.code(), Some(0), "{stderr}");
+}
+
+#[test]
+fn negative_numbers_reach_the_range_check_and_help_is_for_users() {
+    for args in [
+        vec!["run", "cases/fast/flat-gravity.ron", "--rtol", "-1"],
+        vec!["run", "cases/fast/flat-gravity.ron", "--atol", "-1e-6"],
+        vec!["study", "cases/fast/flat-gravity.ron", "--dt-max", "-5"],
+    ] {
+        let res = cellsim(&args);
+        let stderr = String::from_utf8_lossy(&res.stderr);
+        assert_eq!(res.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains("is out of range"), "{args:?}: {stderr}");
+    }
+    for sub in ["run", "paper", "study", "check", "mesh", "plot", "table"] {
+        let res = cellsim(&[sub, "--help"]);
+        let text = String::from_utf8_lossy(&res.stdout);
+        assert!(res.status.success());
+        assert!(!text.contains("[`"), "{sub} --help: {text}");
+    }
+    let res = cellsim(&["--help"]);
+    let text = String::from_utf8_lossy(&res.stdout);
+    for needle in ["IDA", "BDF2", "Exit status", "143", "130", "bad input"] {
+        assert!(text.contains(needle), "--help lacks {needle}: {text}");
+    }
+}
+
+#[test]
+fn progress_goes_to_a_log_as_plain_lines() {
+    let out = tmp("cli-progress");
+    let res = cellsim(&["run", "cases/fast/flat-gravity.ron", "--out", &out]);
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert!(res.status.success(), "{stderr}");
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("flat-gravity: t = "))
+        .unwrap_or_else(|| panic!("no progress line in: {stderr}"));
+    for needle in [" s of 2.0000e2 s (", " steps, h = ", "wall "] {
+        assert!(line.contains(needle), "{line}");
+    }
+    assert!(
+        !stderr.contains('\r'),
+        "no terminal redraws in a log: {stderr:?}"
+    );
+}

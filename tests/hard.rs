@@ -3,8 +3,6 @@
 //! and free of NaN. The fast cases run here; the README's "Hard cases" table has all.
 
 use std::path::Path;
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
 
 use cellsim::case::Case;
 use cellsim::run::{self, Progress, RunError, RunOptions, RunSettings, Summary};
@@ -21,7 +19,7 @@ fn run_hard(name: &str) -> Summary {
         out: out.clone(),
         settings: RunSettings::from_case(&case),
         progress: Progress::Hidden,
-        interrupt: Arc::new(AtomicBool::new(false)),
+        interrupt: cellsim::stop::StopFlag::new(),
         snapshots: Default::default(),
     };
     let result = run::run(&case, &file, &opts);

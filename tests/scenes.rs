@@ -1,8 +1,6 @@
 //! Whole scenes through `run::run`: the two integrators agree, outputs are complete.
 
 use std::path::PathBuf;
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
 
 use cellsim::case::{self, Case};
 use cellsim::run::{self, Progress, RunOptions, RunSettings, Summary};
@@ -27,7 +25,7 @@ pub fn run_case(
         out: dir.clone(),
         settings,
         progress: Progress::Hidden,
-        interrupt: Arc::new(AtomicBool::new(false)),
+        interrupt: cellsim::stop::StopFlag::new(),
         snapshots: Default::default(),
     };
     let summary = run::run(&case, &file, &opts).unwrap_or_else(|e| panic!("{path}: {e}"));

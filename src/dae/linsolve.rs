@@ -55,7 +55,7 @@ pub trait LinearSolver {
 }
 
 /// Which sparse LU to use.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LinearSolverKind {
     /// faer's sequential supernodal LU (default).

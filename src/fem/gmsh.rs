@@ -523,7 +523,7 @@ impl Mesh {
 
     /// Writes [`Mesh::to_gmsh`] to `path`.
     pub fn write_gmsh(&self, path: &Path) -> Result<(), MeshError> {
-        std::fs::write(path, self.to_gmsh()).map_err(|source| MeshError::Io {
+        std::fs::write(path, self.to_gmsh()).map_err(|source| MeshError::Write {
             path: path.display().to_string(),
             source,
         })

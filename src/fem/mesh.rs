@@ -253,6 +253,14 @@ pub enum MeshError {
         /// Underlying error.
         source: std::io::Error,
     },
+    /// Writing a mesh or a drawing of it failed.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// File path.
+        path: String,
+        /// Underlying error.
+        source: std::io::Error,
+    },
     /// A mesh file is malformed or does not fit the model.
     #[error("mesh file {path}, line {line}: {message}")]
     Format {
@@ -1060,7 +1068,7 @@ impl Mesh {
             ));
         }
         s.push_str("</svg>\n");
-        std::fs::write(path, s).map_err(|source| MeshError::Io {
+        std::fs::write(path, s).map_err(|source| MeshError::Write {
             path: path.display().to_string(),
             source,
         })

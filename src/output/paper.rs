@@ -14,8 +14,7 @@
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Mutex;
 use std::time::Instant;
 
 use indicatif::MultiProgress;
@@ -29,6 +28,7 @@ use super::read::RunData;
 use super::snapshot::SnapshotOptions;
 use crate::case::Case;
 use crate::run::{self, Progress, RunOptions, RunSettings, StateFile};
+use crate::stop::StopFlag;
 
 /// One of the paper's scenes: its name and case file.
 #[derive(Debug, Clone, Copy)]
@@ -343,7 +343,7 @@ pub struct PaperOptions {
     /// Show progress lines.
     pub progress: bool,
     /// Set to stop every run cleanly.
-    pub interrupt: Arc<AtomicBool>,
+    pub interrupt: StopFlag,
 }
 
 /// How one scene's run went.
@@ -429,7 +429,8 @@ pub fn run_cases(cases: &[(Case, String)], opts: &PaperOptions) -> Vec<SceneOutc
         if visible {
             let _ = mp.println(&msg);
         } else if opts.progress {
-            eprintln!("{msg}");
+            let _ =
+                std::io::Write::write_all(&mut std::io::stderr(), format!("{msg}\n").as_bytes());
         }
     };
     let queue: Mutex<Vec<usize>> = Mutex::new((0..cases.len()).rev().collect());
@@ -491,18 +492,27 @@ fn run_one(
             }
         }
     }
-    if opts.interrupt.load(Ordering::Relaxed) {
+    if opts.interrupt.is_set() {
         return SceneOutcome {
             result: Err(format!("{name}: interrupted before it started")),
             name,
             dir: dir.to_path_buf(),
         };
     }
-    let bar = run::progress_bar_in(case, visible, Some(mp));
+    let progress = if visible {
+        Progress::Bar(run::progress_bar_in(case, true, Some(mp)))
+    } else if opts.progress {
+        Progress::Lines {
+            label: case.name.clone(),
+            every: run::PROGRESS_LINE_INTERVAL,
+        }
+    } else {
+        Progress::Hidden
+    };
     let ropts = RunOptions {
         out: dir.to_path_buf(),
         settings: RunSettings::from_case(case),
-        progress: Progress::Bar(bar),
+        progress,
         interrupt: opts.interrupt.clone(),
         snapshots: opts.snapshots,
     };

@@ -367,6 +367,12 @@ impl<D: Dae> Ida<D> {
                     "IDAGetConsistentIC",
                     sys::IDAGetConsistentIC(mem, self.out_y.0, self.out_yp.0),
                 )?;
+                self.yy
+                    .as_mut_slice()
+                    .copy_from_slice(self.out_y.as_slice());
+                self.yp
+                    .as_mut_slice()
+                    .copy_from_slice(self.out_yp.as_slice());
             }
         }
         Ok(())
@@ -450,6 +456,18 @@ impl<D: Dae> Integrator for Ida<D> {
             if !on_step(tret, &stats) {
                 return Err(IntegratorError::Interrupted { t: tret });
             }
+        }
+        if tout == self.t_internal {
+            // At IDA's own time y and ẏ are what it returned (or, before its first step,
+            // the initial values: IDAGetDky has no derivative of order 1 to give then).
+            self.out_y
+                .as_mut_slice()
+                .copy_from_slice(self.yy.as_slice());
+            self.out_yp
+                .as_mut_slice()
+                .copy_from_slice(self.yp.as_slice());
+            self.t_out = tout;
+            return Ok(());
         }
         // SAFETY: tout lies in [tn - hu, tn], where IDAGetDky interpolates.
         unsafe {
