@@ -186,24 +186,24 @@ struct RunArgs {
     #[arg(long, value_enum)]
     integrator: Option<IntegratorArg>,
     /// Relative tolerance, 0 < rtol < 1 [default: the case's].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     rtol: Option<f64>,
     /// Absolute tolerance on displacements, µm, > 0 [default: the case's].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     atol: Option<f64>,
     /// BDF2 time step, s, > 0 [default: the case's].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     dt: Option<f64>,
     /// Sparse LU [default: the case's].
     #[arg(long, value_enum)]
     linear_solver: Option<LinearSolverArg>,
     /// BDF2 time step while the cell falls with inertia, s, when smaller than --dt
     /// [default: --dt throughout].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     dt_inertia: Option<f64>,
     /// Wall-clock budget of the integration, s: past it the run stops cleanly with its
     /// outputs so far and the reason in summary.json [default: none].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     max_wall: Option<f64>,
     /// No progress display (by default a progress bar on a terminal, a plain line every
     /// 10 s otherwise).
@@ -259,27 +259,27 @@ struct StudyArgs {
     quantities: Vec<QuantityArg>,
     /// Largest BDF2 time step, s [default: t_end / 100]; the ladder halves on past rungs
     /// that fail until --rungs rungs from the largest that converges down.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     dt_max: Option<f64>,
     /// BDF2 rungs (halvings of dt), at least 2. Six from t_end/100 reach the rungs where
     /// contact onsets are resolved and the order is visible.
     #[arg(long, default_value_t = study::DEFAULT_RUNGS)]
     rungs: usize,
     /// IDA's rtol ladder (comma-separated).
-    #[arg(long, value_delimiter = ',', default_values_t = study::DEFAULT_RTOLS)]
+    #[arg(long, allow_hyphen_values = true, value_delimiter = ',', default_values_t = study::DEFAULT_RTOLS)]
     rtols: Vec<f64>,
     /// rtol of the reference (IDA); 10x looser if it fails, and said so.
-    #[arg(long, default_value_t = study::DEFAULT_REF_RTOL)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = study::DEFAULT_REF_RTOL)]
     ref_rtol: f64,
     /// rtol of BDF2's Newton convergence test.
-    #[arg(long, default_value_t = study::DEFAULT_BDF2_RTOL)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = study::DEFAULT_BDF2_RTOL)]
     bdf2_rtol: f64,
     /// BDF2 step during the fall (with inertia) on the largest rung, s, halved with dt
     /// [default: t_s/16 when the case has inertia OffAfter(t_s), else dt throughout].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     dt_inertia: Option<f64>,
     /// Wall-clock budget of each run, s [default: none].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     max_wall: Option<f64>,
     /// Keep runs in <out>/runs that finished with the same settings.
     #[arg(long)]
