@@ -6,7 +6,7 @@ APT_PACKAGES := libsundials-dev libsuitesparse-dev libclang-dev pkg-config \
 CARGO ?= cargo
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all deps build paper test robertson bench lint clean
+.PHONY: all deps build paper test memcheck robertson bench lint clean
 
 all: build
 
@@ -32,6 +32,10 @@ paper: deps
 # All tests (release mode: the finite-element tests are numeric).
 test: deps
 	$(CARGO) test --release
+
+# valgrind memcheck of short cell-model runs with each sparse LU (installs valgrind).
+memcheck: deps
+	scripts/memcheck.sh
 
 robertson: deps
 	$(CARGO) run --release --example robertson

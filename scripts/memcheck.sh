@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Memory check of the cell model under valgrind memcheck: short runs through IDA with each
+# sparse LU (faer, KLU, the condensed faer), covering the fall, the landing and the inertia
+# switch (cases/fast/flat-gravity.ron to t = 12 s) and one run on micropillars with
+# adhesion and both active regions (cases/fast/push-pull-short.ron to t = 110 s, faer).
+# Fails unless every run reports "definitely lost: 0 bytes" and no memory error.
+#
+# scripts/valgrind.supp holds the one suppression needed, with its reason.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if ! command -v valgrind >/dev/null; then
+    sudo=""; [ "$(id -u)" = 0 ] || sudo=sudo
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends valgrind
+fi
+cargo build --release --quiet
+
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+sed 's/t_end: 200.0,/t_end: 12.0,/' cases/fast/flat-gravity.ron > "$tmp/fall.ron"
+sed 's/t_end: 600.0,/t_end: 110.0,/' cases/fast/push-pull-short.ron > "$tmp/pillars.ron"
+grep -q 't_end: 12.0' "$tmp/fall.ron" && grep -q 't_end: 110.0' "$tmp/pillars.ron"
+
+status=0
+for run in fall:faer fall:klu fall:faer-condensed pillars:faer; do
+    case_name=${run%%:*}
+    solver=${run#*:}
+    log="$tmp/$case_name-$solver.log"
+    if ! valgrind --leak-check=full --errors-for-leak-kinds=definite --error-exitcode=3 \
+        --suppressions=scripts/valgrind.supp \
+        target/release/cellsim run "$tmp/$case_name.ron" --out "$tmp/out-$case_name-$solver" \
+        --quiet --linear-solver "$solver" >/dev/null 2>"$log"; then
+        echo "memcheck: $case_name with $solver FAILED:"
+        cat "$log"
+        status=1
+    fi
+    echo "memcheck: $case_name ($solver): $(grep -o 'definitely lost: .*' "$log"); $(grep -o 'ERROR SUMMARY: [0-9]* errors' "$log")"
+done
+exit $status
