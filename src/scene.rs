@@ -147,6 +147,9 @@ impl std::fmt::Debug for LayerCheck<'_> {
     }
 }
 
+/// The layer name of the mesh check of [`layer_checks`]; the other layers are physics.
+const MESH_GENERATOR: &str = "mesh generator";
+
 fn layer_check<'c>(
     layer: &'static str,
     reads: &[&str],
@@ -186,7 +189,7 @@ fn physics_refusal(
 pub fn layer_checks(case: &Case) -> Vec<LayerCheck<'_>> {
     let mut checks = Vec::new();
     checks.push(layer_check(
-        "mesh generator",
+        MESH_GENERATOR,
         &["geometry", "mesh.h_bottom", "mesh.h_nucleus", "mesh.refine"],
         move || mesh_refusal(case),
     ));
@@ -334,7 +337,9 @@ fn mesh_refusal(case: &Case) -> Result<(), Refusal> {
         Err(e) => e,
     };
     let fields = match &e {
-        MeshError::InvalidParam { field: name, .. } => {
+        MeshError::InvalidParam {
+            field: name, value, ..
+        } => {
             let f = match *name {
                 "center[0]" | "center[1]" | "center" => field("geometry.centre_y", g.centre_y),
                 "r_n" => field("geometry.r_n", g.r_n),
@@ -345,7 +350,7 @@ fn mesh_refusal(case: &Case) -> Result<(), Refusal> {
                 "refine" => field("mesh.refine", m.refine),
                 _ => None,
             };
-            vec![f.unwrap_or_else(|| ("mesh".to_string(), String::new()))]
+            vec![f.unwrap_or_else(|| ("mesh".to_string(), case::num(*value)))]
         }
         // Too many elements: the sizes and the refinement share the blame, the one that
         // refines most (relative to its default) first.
@@ -378,7 +383,7 @@ pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParam
         message,
     };
     for check in layer_checks(case) {
-        if check.layer == "mesh generator" {
+        if check.layer == MESH_GENERATOR {
             continue;
         }
         check.run().map_err(|r| {

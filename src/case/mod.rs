@@ -146,6 +146,8 @@ impl Case {
     /// byte that is not is reported at its line and column); `file_label` names the file in
     /// error messages.
     pub fn from_bytes(bytes: &[u8], file_label: &str) -> Result<Case, CaseError> {
+        // Columns count from after a byte-order mark, as in `from_str`.
+        let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
         match std::str::from_utf8(bytes) {
             Ok(text) => Case::from_str(text, file_label),
             Err(e) => {
@@ -193,7 +195,8 @@ impl Case {
         }
     }
 
-    /// Checks every range and consistency rule; returns all violations.
+    /// Checks every range and consistency rule, and what the mesh generator, the material
+    /// law and the physics validators would refuse; returns all violations.
     pub fn validate(&self) -> Result<(), Vec<Violation>> {
         let violations = self.violations(&|_| false);
         if violations.is_empty() {

@@ -801,6 +801,12 @@ fn case_file_encoding() {
         Case::from_str(&valid, "plain.ron").ok()
     );
     assert!(Case::from_bytes(bom.as_bytes(), "bom.ron").is_ok());
+    // ... and columns count from after it.
+    let e = Case::from_bytes(b"\xEF\xBB\xBF(name: \"\xFF", "bom.ron").err();
+    assert_eq!(
+        e.and_then(|e| e.position()),
+        Some(Position { line: 1, col: 9 })
+    );
     // A byte that is not UTF-8: its line and column, and the field it is in.
     let mut bytes = b"(\n  name: \"caf".to_vec();
     bytes.push(0xE9); // Latin-1 é
