@@ -48,6 +48,7 @@ pub use sections::{
     Viscosity, units,
 };
 pub use validate::{Rule, Violation};
+pub(crate) use validate::{axes, num};
 
 use locate::FieldMap;
 
@@ -55,7 +56,9 @@ use locate::FieldMap;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Case {
-    /// Name of the case, used to label outputs. Required; must not be empty.
+    /// Name of the case, used to label outputs and to name their directory. Required.
+    /// Valid: a single path component: not empty, no `/` or `\`, not `.` or `..`, no
+    /// control characters.
     pub name: String,
     /// Free text: what the case is for. Optional.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -132,15 +135,43 @@ impl Case {
     pub fn load(path: impl AsRef<Path>) -> Result<Case, CaseError> {
         let path = path.as_ref();
         let label = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| CaseError::Read {
+        let bytes = std::fs::read(path).map_err(|source| CaseError::Read {
             file: label.clone(),
             source,
         })?;
-        Case::from_str(&text, &label)
+        Case::from_bytes(&bytes, &label)
+    }
+
+    /// Parses and validates a case from the bytes of a file, which must be UTF-8 text (a
+    /// byte that is not is reported at its line and column); `file_label` names the file in
+    /// error messages.
+    pub fn from_bytes(bytes: &[u8], file_label: &str) -> Result<Case, CaseError> {
+        // Columns count from after a byte-order mark, as in `from_str`.
+        let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+        match std::str::from_utf8(bytes) {
+            Ok(text) => Case::from_str(text, file_label),
+            Err(e) => {
+                let valid = bytes.get(..e.valid_up_to()).unwrap_or_default();
+                let position = end_of(&String::from_utf8_lossy(valid));
+                let byte = bytes.get(e.valid_up_to()).copied().unwrap_or_default();
+                let fields = FieldMap::scan(&String::from_utf8_lossy(bytes));
+                Err(CaseError::Parse {
+                    file: file_label.to_string(),
+                    position,
+                    field: fields.path_at(position).map(str::to_string),
+                    message: format!(
+                        "not valid UTF-8: byte 0x{byte:02X} here does not belong to a UTF-8 \
+                         character (a case file must be UTF-8 text)"
+                    ),
+                })
+            }
+        }
     }
 
     /// Parses and validates a case from `text`; `file_label` names it in error messages.
+    /// A leading byte-order mark is ignored.
     pub fn from_str(text: &str, file_label: &str) -> Result<Case, CaseError> {
+        let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
         let case: Case = match ron_options().from_str(text) {
             Ok(case) => case,
             Err(e) => return Err(parse_error(e, text, file_label)),
@@ -164,7 +195,8 @@ impl Case {
         }
     }
 
-    /// Checks every range and consistency rule; returns all violations.
+    /// Checks every range and consistency rule, and what the mesh generator, the material
+    /// law and the physics validators would refuse; returns all violations.
     pub fn validate(&self) -> Result<(), Vec<Violation>> {
         let violations = self.violations(&|_| false);
         if violations.is_empty() {
@@ -192,6 +224,16 @@ fn parse_error(e: ron::error::SpannedError, text: &str, file: &str) -> CaseError
         let names: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
         names.join(", ")
     };
+    if let Some((position, number)) = decimal_for_integer(&e.code, text, start)
+        .or_else(|| decimal_for_integer(&e.code, text, end))
+    {
+        return CaseError::Parse {
+            file: file.to_string(),
+            position,
+            field: fields.path_at(position).map(str::to_string),
+            message: format!("expected an integer, found the decimal number `{number}`"),
+        };
+    }
     let (position, field, message) = match &e.code {
         E::MissingStructField { field, .. } => {
             // ron points at (or spans to) the closing bracket of the struct that lacks it.
@@ -228,7 +270,7 @@ fn parse_error(e: ron::error::SpannedError, text: &str, file: &str) -> CaseError
             "field written twice".to_string(),
         ),
         _ if fields.is_blank() => (
-            start,
+            Position { line: 1, col: 1 },
             None,
             "the file is empty: a case needs at least `name`, `substrate` and `phases`".to_string(),
         ),
@@ -245,6 +287,74 @@ fn parse_error(e: ron::error::SpannedError, text: &str, file: &str) -> CaseError
         field,
         message,
     }
+}
+
+/// The position just after the end of `text`.
+fn end_of(text: &str) -> Position {
+    let line = text.matches('\n').count() + 1;
+    let col = text.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    Position { line, col }
+}
+
+/// If ron stopped inside (or, for an integer error, at the start of) a decimal number such
+/// as `400.5` or `4e2`, the number's position and text: an integer field was given a
+/// decimal number. Told from the text at the error position, whatever the field.
+fn decimal_for_integer(
+    code: &ron::error::Error,
+    text: &str,
+    at: Position,
+) -> Option<(Position, String)> {
+    use ron::error::Error as E;
+    // Errors of an integer parse, reported at the number's start.
+    let integer_error = matches!(
+        code,
+        E::ExpectedInteger | E::InvalidIntegerDigit { .. } | E::IntegerOutOfBounds
+    );
+    // Errors after a value that ended early: an integer parse stopped at `.` or `e`.
+    let stopped_early = matches!(
+        code,
+        E::ExpectedComma
+            | E::ExpectedStructLikeEnd
+            | E::ExpectedOptionEnd
+            | E::ExpectedArrayEnd
+            | E::ExpectedMapEnd
+            | E::TrailingCharacters
+    );
+    if !(integer_error || stopped_early) {
+        return None;
+    }
+    let line: Vec<char> = text.lines().nth(at.line.checked_sub(1)?)?.chars().collect();
+    let i = at.col.checked_sub(1)?;
+    let in_number = |c: char| c.is_ascii_digit() || matches!(c, '.' | '_' | 'e' | 'E' | '+' | '-');
+    let mut start = i.min(line.len());
+    while start > 0 && in_number(line[start - 1]) {
+        start -= 1;
+    }
+    let mut end = start;
+    while end < line.len() && in_number(line[end]) {
+        end += 1;
+    }
+    let inside = start < i && i < end;
+    let at_start = start == i && i < end && integer_error;
+    if !(inside || at_start) {
+        return None;
+    }
+    // Not the tail of an identifier.
+    if start > 0 && (line[start - 1].is_alphanumeric() || line[start - 1] == '_') {
+        return None;
+    }
+    let number: String = line[start..end].iter().collect();
+    let unsigned = number.trim_start_matches(['+', '-']);
+    let decimal = unsigned.starts_with(|c: char| c.is_ascii_digit())
+        && number.contains(['.', 'e', 'E'])
+        && number.replace('_', "").parse::<f64>().is_ok();
+    decimal.then_some((
+        Position {
+            line: at.line,
+            col: start + 1,
+        },
+        number,
+    ))
 }
 
 /// The first non-whitespace position at or after `from` on the same line, but not past

@@ -854,11 +854,20 @@ impl Default for Solver {
 pub struct Output {
     /// Number of equally spaced output times in [0, t_end] for the time series (contact
     /// radius, displacements of p_t, c, p_b, mean ‖E‖ per domain). Default 400.
-    /// Valid: ≥ 200.
+    /// Valid: 200 ≤ n_times ≤ 100 000 ([`Output::MIN_TIMES`], [`Output::MAX_TIMES`]; the
+    /// upper bound stops a typo from allocating gigabytes of output times).
     pub n_times: u32,
     /// Also write the full state (deformed shape, domains, active regions, substrate) at
     /// the ends of the phases T_g0, T_as0, T_a0 and at t_end. Default true.
     pub phase_states: bool,
+}
+
+impl Output {
+    /// Fewest output times a case may ask for (`n_times`).
+    pub const MIN_TIMES: u32 = 200;
+    /// Most output times a case may ask for (`n_times`): 100 000, far more than a plot
+    /// resolves.
+    pub const MAX_TIMES: u32 = 100_000;
 }
 
 impl Default for Output {

@@ -8,7 +8,7 @@
 use std::fmt;
 
 use super::Case;
-use super::sections::{InertiaMode, Substrate};
+use super::sections::{InertiaMode, Output, Substrate};
 
 /// What rule a value broke.
 #[derive(Debug, Clone, PartialEq)]
@@ -72,13 +72,36 @@ pub(crate) fn num(v: f64) -> String {
 
 /// Collects violations. `written(path)` tells whether the file states a field, to choose
 /// which side of a two-field rule to blame.
+///
+/// One mistake gives one message: the checker remembers the fields reported invalid (and
+/// the other fields of a failed rule relating several), and skips every later check that
+/// reads one of them, since its verdict would be a knock-on of the first. Checks name the
+/// fields they read besides the one they blame.
 struct Checker<'a> {
     out: Vec<Violation>,
     written: &'a dyn Fn(&str) -> bool,
+    /// Fields reported invalid, and the fields their failed rules related them to.
+    invalid: Vec<String>,
 }
 
 impl Checker<'_> {
-    fn push(&mut self, field: &str, value: String, rule: Rule) {
+    /// Has any of `fields` been found invalid? A section path (`substrate`) stands for
+    /// every field in it.
+    fn any_invalid(&self, fields: &[&str]) -> bool {
+        fields.iter().any(|f| {
+            self.invalid.iter().any(|bad| {
+                bad == f || (bad.starts_with(f) && bad.as_bytes().get(f.len()) == Some(&b'.'))
+            })
+        })
+    }
+
+    /// Reports `field`, unless it or one of the other fields the rule `reads` was found
+    /// invalid already.
+    fn report(&mut self, field: &str, reads: &[&str], value: String, rule: Rule) {
+        if self.any_invalid(&[field]) || self.any_invalid(reads) {
+            return;
+        }
+        self.invalid.push(field.to_string());
         self.out.push(Violation {
             field: field.to_string(),
             value,
@@ -86,18 +109,39 @@ impl Checker<'_> {
         });
     }
 
-    /// Requires `ok` and a finite value; `range` states the rule.
-    fn range(&mut self, field: &str, v: f64, ok: bool, range: impl Into<String>) {
+    /// Reports `field` for a rule that reads no other field.
+    fn push(&mut self, field: &str, value: String, rule: Rule) {
+        self.report(field, &[], value, rule);
+    }
+
+    /// Requires `ok` and a finite value; `range` states the rule, which reads `reads`
+    /// besides `field`.
+    fn range_given(
+        &mut self,
+        field: &str,
+        reads: &[&str],
+        v: f64,
+        ok: bool,
+        range: impl Into<String>,
+    ) {
         if !v.is_finite() {
             let range = format!("{}, and be finite", range.into());
-            self.push(field, num(v), Rule::Range(range));
+            self.report(field, reads, num(v), Rule::Range(range));
         } else if !ok {
-            self.push(field, num(v), Rule::Range(range.into()));
+            self.report(field, reads, num(v), Rule::Range(range.into()));
         }
     }
 
+    /// Requires `ok` and a finite value; `range` states the rule.
+    fn range(&mut self, field: &str, v: f64, ok: bool, range: impl Into<String>) {
+        self.range_given(field, &[], v, ok, range);
+    }
+
     fn finite(&mut self, field: &str, v: f64) {
-        self.range(field, v, true, format!("{} is finite", short(field)));
+        if !v.is_finite() {
+            let rule = format!("{} is finite", short(field));
+            self.push(field, num(v), Rule::Range(rule));
+        }
     }
 
     fn positive(&mut self, field: &str, v: f64) {
@@ -119,10 +163,21 @@ impl Checker<'_> {
         self.range(field, v, ok_lo && v < hi, rule);
     }
 
-    /// Requires a < b for two fields; blames `b` only if the file writes b but not a.
+    /// Requires a < b for two finite fields; blames `b` only if the file writes b but not
+    /// a. A failed rule makes both fields invalid for later checks.
     fn less(&mut self, a: &str, va: f64, b: &str, vb: f64) {
-        if va < vb || !va.is_finite() || !vb.is_finite() {
-            return; // non-finite values are reported by their own range checks
+        if self.any_invalid(&[a, b]) {
+            return;
+        }
+        for (field, v) in [(a, va), (b, vb)] {
+            if !v.is_finite() {
+                let rule = format!("{} < {}, and be finite", short(a), short(b));
+                self.push(field, num(v), Rule::Range(rule));
+                return;
+            }
+        }
+        if va < vb {
+            return;
         }
         let blame_b = (self.written)(b) && !(self.written)(a);
         if blame_b {
@@ -132,6 +187,8 @@ impl Checker<'_> {
             let rule = format!("{} < {} = {}", short(a), short(b), num(vb));
             self.push(a, num(va), Rule::Range(rule));
         }
+        self.invalid.push(a.to_string());
+        self.invalid.push(b.to_string());
     }
 
     fn int_range(&mut self, field: &str, v: u64, lo: u64, hi: Option<u64>) {
@@ -144,6 +201,40 @@ impl Checker<'_> {
             self.push(field, v.to_string(), Rule::Range(rule));
         }
     }
+
+    /// Runs the checks of the lower layers (mesh generator, material law, physics
+    /// validators) that read no field found invalid, and reports what they refuse on the
+    /// first of the refusal's fields that the file writes (else its first).
+    fn layers(&mut self, case: &Case) {
+        for check in crate::scene::layer_checks(case) {
+            let reads: Vec<&str> = check.reads.iter().map(String::as_str).collect();
+            if self.any_invalid(&reads) {
+                continue;
+            }
+            let Err(refusal) = check.run() else {
+                continue;
+            };
+            let blamed = refusal
+                .fields
+                .iter()
+                .find(|(f, _)| (self.written)(f))
+                .or(refusal.fields.first());
+            if let Some((field, value)) = blamed {
+                let why = format!("refused by the {}: {}", check.layer, refusal.message);
+                self.report(field, &reads, value.clone(), Rule::Conflict(why));
+            }
+        }
+    }
+}
+
+/// Is `name` usable as one path component (an output directory): not empty, no `/` or
+/// `\`, not `.` or `..`, no control characters?
+pub(crate) fn is_single_path_component(name: &str) -> bool {
+    !name.trim().is_empty()
+        && name != "."
+        && name != ".."
+        && !name.contains(['/', '\\'])
+        && !name.chars().any(char::is_control)
 }
 
 /// Last component of a dotted path, as used in a rule.
@@ -158,13 +249,19 @@ impl Case {
         let mut c = Checker {
             out: Vec::new(),
             written,
+            invalid: Vec::new(),
         };
 
-        if self.name.trim().is_empty() {
+        if !is_single_path_component(&self.name) {
             c.push(
                 "name",
                 format!("{:?}", self.name),
-                Rule::Conflict("the name must not be empty".into()),
+                Rule::Conflict(
+                    "the name labels the outputs and names their directory, so it must be a \
+                     single path component: not empty, no `/` or `\\`, not `.` or `..`, no \
+                     control characters"
+                        .into(),
+                ),
             );
         }
 
@@ -187,7 +284,7 @@ impl Case {
             ("mesh.h_nucleus", m.h_nucleus),
         ] {
             let rule = format!("0 < {} <= r_c = {}", short(field), num(g.r_c));
-            c.range(field, h, h > 0.0 && h <= g.r_c, rule);
+            c.range_given(field, &["geometry.r_c"], h, h > 0.0 && h <= g.r_c, rule);
         }
         c.positive("mesh.refine", m.refine);
         c.int_range(
@@ -236,51 +333,61 @@ impl Case {
             Substrate::Flat(f) => {
                 let bottom = g.bottom_y();
                 let rule = format!("y_s < centre_y - r_c = {}", num(bottom));
-                c.range("substrate.y_s", f.y_s, f.y_s < bottom, rule);
+                c.range_given(
+                    "substrate.y_s",
+                    &["geometry.centre_y", "geometry.r_c"],
+                    f.y_s,
+                    f.y_s < bottom,
+                    rule,
+                );
             }
             Substrate::Pillars(p) => {
-                let before = c.out.len();
                 c.positive("substrate.width", p.width);
                 c.positive("substrate.spacing", p.spacing);
                 c.positive("substrate.height", p.height);
                 c.range("substrate.q", p.q, p.q >= 2.0, "q >= 2");
                 c.positive("substrate.gap", p.gap);
                 let period = p.period();
-                if period.is_finite() && period > 0.0 && p.first_center.is_finite() {
-                    // Mirror symmetry about x = 0: pillar axes at first_center + k·period
-                    // must map onto each other under x → −x.
-                    let half = 0.5 * period;
-                    let r = (p.first_center / half).round() * half - p.first_center;
-                    let rule = format!(
-                        "first_center = k (width + spacing)/2 = k {} for an integer k, so \
-                         that the pillars are mirror symmetric about the symmetry line x = 0",
-                        num(half)
-                    );
-                    c.range(
-                        "substrate.first_center",
-                        p.first_center,
-                        r.abs() <= 1e-9 * period,
-                        rule,
-                    );
-                } else {
-                    c.finite("substrate.first_center", p.first_center);
-                }
-                // The gap is only meaningful for a well-formed pillar shape.
-                let shape_ok = c.out.len() == before;
+                // Mirror symmetry about x = 0: pillar axes at first_center + k·period must
+                // map onto each other under x → −x.
+                let half = 0.5 * period;
+                let r = (p.first_center / half).round() * half - p.first_center;
+                let rule = format!(
+                    "first_center = k (width + spacing)/2 = k {} for an integer k, so that the \
+                     pillars are mirror symmetric about the symmetry line x = 0",
+                    num(half)
+                );
+                let symmetric = period.is_finite() && r.abs() <= 1e-9 * period;
+                c.range_given(
+                    "substrate.first_center",
+                    &["substrate.width", "substrate.spacing"],
+                    p.first_center,
+                    symmetric,
+                    rule,
+                );
                 if let Some(y_top) = p.y_top {
                     c.finite("substrate.y_top", y_top);
-                    if shape_ok && y_top.is_finite() && g.r_c > 0.0 {
-                        let gap = p.smallest_gap(g, y_top);
-                        if gap.is_nan() || gap <= 0.0 {
-                            c.push(
-                                "substrate.y_top",
-                                num(y_top),
-                                Rule::Conflict(format!(
-                                    "the pillars must start below the cell, but the \
-                                     smallest initial gap is {gap:.3} µm (needs > 0)"
-                                )),
-                            );
-                        }
+                }
+                // The pillars must start below the cell: needs a well-formed pillar array
+                // and cell, so it reads both sections.
+                let reads = ["substrate", "geometry"];
+                if !c.any_invalid(&reads) {
+                    let y_top = p.resolved_y_top(g);
+                    let gap = p.smallest_gap(g, y_top);
+                    if gap.is_nan() || gap <= 0.0 {
+                        let (field, value) = match p.y_top {
+                            Some(y) => ("substrate.y_top", y),
+                            None => ("substrate.gap", p.gap),
+                        };
+                        c.report(
+                            field,
+                            &reads,
+                            num(value),
+                            Rule::Conflict(format!(
+                                "the pillars must start below the cell, but the smallest \
+                                 initial gap is {gap:.3} µm (needs > 0)"
+                            )),
+                        );
                     }
                 }
             }
@@ -305,29 +412,39 @@ impl Case {
             c.interval("active.pac.e", pac.e, 0.0, 1.0, false);
             c.interval("active.pac.theta_deg", pac.theta_deg, -90.0, 90.0, true);
             let (inner, outer) = (pac.inner_semi_axes, pac.outer_semi_axes);
-            let inner_ok = inner.0 > 0.0 && inner.1 > 0.0;
-            let rule = "both inner semi-axes > 0";
-            if !(inner_ok && inner.0.is_finite() && inner.1.is_finite()) {
+            let (inner_path, outer_path) =
+                ("active.pac.inner_semi_axes", "active.pac.outer_semi_axes");
+            let finite_positive =
+                |(a, b): (f64, f64)| a.is_finite() && b.is_finite() && a > 0.0 && b > 0.0;
+            if !finite_positive(inner) {
                 c.push(
-                    "active.pac.inner_semi_axes",
+                    inner_path,
                     axes(inner),
-                    Rule::Range(rule.into()),
+                    Rule::Range("both inner semi-axes > 0".into()),
+                );
+            } else if !(outer.0.is_finite() && outer.1.is_finite()) {
+                c.push(
+                    outer_path,
+                    axes(outer),
+                    Rule::Range("both outer semi-axes finite".into()),
                 );
             } else if !(inner.0 < outer.0 && inner.1 < outer.1) {
                 // Blame the outer ellipse only if the file writes it and not the inner one.
-                let blame_outer = (c.written)("active.pac.outer_semi_axes")
-                    && !(c.written)("active.pac.inner_semi_axes");
+                let blame_outer = (c.written)(outer_path) && !(c.written)(inner_path);
                 let (field, value, rule) = if blame_outer {
                     let rule = format!("outer > inner = {}, each axis", axes(inner));
-                    ("active.pac.outer_semi_axes", axes(outer), rule)
+                    (outer_path, axes(outer), rule)
                 } else {
                     let rule = format!("inner < outer = {}, each axis", axes(outer));
-                    ("active.pac.inner_semi_axes", axes(inner), rule)
+                    (inner_path, axes(inner), rule)
                 };
                 c.push(field, value, Rule::Range(rule));
+                c.invalid
+                    .extend([inner_path.to_string(), outer_path.to_string()]);
             } else if !(outer.0 < g.r_c && outer.1 < g.r_c) {
-                c.push(
-                    "active.pac.outer_semi_axes",
+                c.report(
+                    outer_path,
+                    &["geometry.r_c"],
                     axes(outer),
                     Rule::Range(format!(
                         "outer < r_c = {}, each axis (these are semi-axes, not full axes)",
@@ -361,8 +478,9 @@ impl Case {
             InertiaMode::On => {}
             InertiaMode::Off => {
                 if inertia.drag == 0.0 {
-                    c.push(
+                    c.report(
                         "inertia.mode",
+                        &["inertia.drag"],
                         "Off".into(),
                         Rule::Conflict(
                             "without inertia and without drag (inertia.drag = 0) the cell's \
@@ -396,12 +514,22 @@ impl Case {
         }
 
         // Output.
-        c.int_range("output.n_times", self.output.n_times.into(), 200, None);
+        c.int_range(
+            "output.n_times",
+            self.output.n_times.into(),
+            Output::MIN_TIMES.into(),
+            Some(Output::MAX_TIMES.into()),
+        );
+
+        // What the mesh generator, the material law and the physics validators would
+        // refuse when the run sets up.
+        c.layers(self);
 
         c.out
     }
 }
 
-fn axes((a, b): (f64, f64)) -> String {
+/// Formats a pair of semi-axes for a message.
+pub(crate) fn axes((a, b): (f64, f64)) -> String {
     format!("({}, {})", num(a), num(b))
 }

@@ -166,13 +166,7 @@ impl MeshParams {
                 "too far from the origin for the element size (coordinates would lose precision)",
             );
         }
-        // Estimate the element count: ≈ 2.3 elements per h² of area at the finest size,
-        // plus the membrane band.
-        let h_min = self.h_bottom.min(self.h_nucleus) / self.refine;
-        let area = 0.5 * PI * self.r_c * self.r_c;
-        let layers = self.membrane_layers() as f64;
-        let l_m = h_min.min(MEMBRANE_ASPECT * (self.r_c - self.r_cp) / layers);
-        let estimate = 2.3 * area / (h_min * h_min) + 2.0 * layers * PI * self.r_c / l_m;
+        let estimate = self.estimated_elements();
         if estimate > MAX_ELEMENTS {
             return Err(MeshError::TooFine {
                 estimate,
@@ -180,6 +174,19 @@ impl MeshParams {
             });
         }
         Ok(())
+    }
+
+    /// Estimated number of elements of the mesh these parameters give, computed from the
+    /// sizes without meshing: ≈ 2.3 elements per h² of area at the finest size
+    /// min(h_bottom, h_nucleus) / refine, plus the membrane band. [`MeshParams::validate`]
+    /// refuses more than [`MAX_ELEMENTS`]. Meaningful for radii and sizes that pass the
+    /// other checks of `validate` (finite, positive, r_cp < r_c).
+    pub fn estimated_elements(&self) -> f64 {
+        let h_min = self.h_bottom.min(self.h_nucleus) / self.refine;
+        let area = 0.5 * PI * self.r_c * self.r_c;
+        let layers = self.membrane_layers() as f64;
+        let l_m = h_min.min(MEMBRANE_ASPECT * (self.r_c - self.r_cp) / layers);
+        2.3 * area / (h_min * h_min) + 2.0 * layers * PI * self.r_c / l_m
     }
 
     /// Target element size h(y) at height y (µm), the grading law of the module
