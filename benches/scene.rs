@@ -16,7 +16,8 @@ use std::time::Duration;
 use cellsim::case::{Case, InertiaMode};
 use cellsim::dae::LinearSolverKind;
 use cellsim::output::SnapshotOptions;
-use cellsim::run::{self, Progress, RunOptions, RunSettings};
+use cellsim::record::RunSettings;
+use cellsim::run::{self, Progress, RunOptions};
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 
 fn case(refine: f64, t_end: f64, inertia_on: bool) -> (Case, String) {

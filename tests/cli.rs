@@ -370,3 +370,20 @@ fn progress_goes_to_a_log_as_plain_lines() {
         "no terminal redraws in a log: {stderr:?}"
     );
 }
+
+#[test]
+fn a_mesh_drawing_that_cannot_be_written_says_so() {
+    let res = cellsim(&[
+        "mesh",
+        "cases/fast/flat-gravity.ron",
+        "--svg",
+        "/nonexistent-dir/mesh.svg",
+    ]);
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert_eq!(res.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("cannot write /nonexistent-dir/mesh.svg"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("read"), "{stderr}");
+}

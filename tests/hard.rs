@@ -5,7 +5,8 @@
 use std::path::Path;
 
 use cellsim::case::Case;
-use cellsim::run::{self, Progress, RunError, RunOptions, RunSettings, Summary};
+use cellsim::record::{RunSettings, Summary};
+use cellsim::run::{self, Progress, RunError, RunOptions};
 
 use crate::scenes::read_csv;
 

@@ -3,7 +3,7 @@
 //! The fixture `tests/data/small-push-pull/` is a complete run directory written by
 //! `cellsim run tests/data/small-push-pull.ron --out tests/data/small-push-pull` (coarse
 //! push-pull, 200 output times, four states). If the run file formats change
-//! (`run::MeshFile`, `StateFile`, `Summary`), regenerate it with that command.
+//! (`record::MeshFile`, `StateFile`, `Summary`), regenerate it with that command.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -17,9 +17,10 @@ use cellsim::output::movie::{FRAME_SIZE, MAX_FRAMES, Movie};
 use cellsim::output::paper::{self, Quantity, SceneOutcome, When};
 use cellsim::output::read::parse_timeseries;
 use cellsim::output::vtu::{QUADRATIC_TRIANGLE, VtuSeries, read_vtu, write_vtu};
-use cellsim::output::{OutputError, RunData, Snapshot};
+use cellsim::output::{OutputError, RunData};
 use cellsim::physics::Substrate;
-use cellsim::run::StateFile;
+use cellsim::record::Snapshot;
+use cellsim::record::StateFile;
 
 fn fixture() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/small-push-pull")
@@ -661,7 +662,7 @@ fn paper_figures_from_stored_runs() {
             .all(|r| r.value > 0.0 && !r.source.is_empty())
     );
     // The compiled-in scenes parse, and the control continues push-pull.
-    let cases = paper::paper_cases(None).expect("scene files");
+    let cases = cellsim::paper::paper_cases(None).expect("scene files");
     assert_eq!(cases.len(), 6);
     let control = &cases[5].0;
     assert_eq!(control.name, paper::CONTROL);

@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use cellsim::case::{self, Case};
-use cellsim::run::{self, Progress, RunOptions, RunSettings, Summary};
+use cellsim::record::{RunSettings, Summary};
+use cellsim::run::{self, Progress, RunOptions};
 
 fn tmp(name: &str) -> PathBuf {
     let p = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);

@@ -171,6 +171,31 @@ pub struct Stats {
     pub last_step: f64,
 }
 
+/// Statistics of consecutive integrations (e.g. before and after a system change): counts
+/// add up, the last order and step are those of the later one.
+impl std::ops::AddAssign<&Stats> for Stats {
+    fn add_assign(&mut self, b: &Stats) {
+        self.steps += b.steps;
+        self.residual_evals += b.residual_evals;
+        self.jacobian_evals += b.jacobian_evals;
+        self.lu_factorizations += b.lu_factorizations;
+        self.newton_iters += b.newton_iters;
+        self.newton_failures += b.newton_failures;
+        self.error_test_failures += b.error_test_failures;
+        self.last_order = b.last_order;
+        self.last_step = b.last_step;
+    }
+}
+
+impl std::ops::Add<&Stats> for &Stats {
+    type Output = Stats;
+    fn add(self, b: &Stats) -> Stats {
+        let mut s = self.clone();
+        s += b;
+        s
+    }
+}
+
 /// Why an integration stopped before its target time.
 #[derive(Debug, Clone, thiserror::Error)]
 pub enum IntegratorError {

@@ -23,7 +23,7 @@ use super::geometry::{Backdrop, Bounds, CellShape, Pt, Rect, substrate_floor};
 use super::read::RunData;
 use crate::fem::Domain;
 use crate::model::observe::Observables;
-use crate::run::{MeshFile, StateFile};
+use crate::record::{MeshFile, StateFile};
 
 /// Pixel size of the time-series and bar figures.
 pub const TIME_SIZE: (u32, u32) = (1200, 800);

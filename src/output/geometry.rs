@@ -7,7 +7,7 @@ use nalgebra::Vector2;
 use crate::fem::Domain;
 use crate::fem::p2::{EDGES, edge_shape, shape};
 use crate::physics::{ActiveStrain, Substrate};
-use crate::run::MeshFile;
+use crate::record::MeshFile;
 
 /// A point [µm].
 pub type Pt = [f64; 2];

@@ -2,9 +2,10 @@
 //! comparison, ParaView files and animations.
 //!
 //! The rule of this module: **plotting reads only files a run wrote** (`timeseries.csv`,
-//! `mesh.json`, `state_<phase>.json`, `summary.json`, see [`crate::run`]), never the
+//! `mesh.json`, `state_<phase>.json`, `summary.json`, see [`crate::record`]), never the
 //! solver's memory, so every figure can be redrawn from a finished or an interrupted run.
-//! The per-output-time writers ([`snapshot`]: VTU and GIF) are handed a [`Snapshot`], the
+//! The per-output-time writers ([`snapshot`]: VTU and GIF) are handed a
+//! [`crate::record::Snapshot`], the
 //! same kind of plain data a state file holds, by the run loop.
 //!
 //! Module map:
@@ -26,12 +27,11 @@ pub mod movie;
 pub mod paper;
 pub mod read;
 pub mod snapshot;
-pub mod study_plots;
 pub mod table;
 pub mod vtu;
 
 pub use read::RunData;
-pub use snapshot::{Snapshot, SnapshotOptions, SnapshotWriter};
+pub use snapshot::{SnapshotOptions, SnapshotWriter};
 
 use std::path::Path;
 

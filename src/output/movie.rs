@@ -12,8 +12,8 @@ use plotters::prelude::*;
 use super::OutputError;
 use super::figures::{ShapeStyleOptions, draw_shape};
 use super::geometry::{Backdrop, Bounds, substrate_floor};
-use super::snapshot::Snapshot;
-use crate::run::MeshFile;
+use crate::record::MeshFile;
+use crate::record::Snapshot;
 
 /// Pixel size of a frame.
 pub const FRAME_SIZE: (u32, u32) = (800, 560);

@@ -2,7 +2,7 @@
 //!
 //! A run writes `mesh.json` first, then `timeseries.csv` row by row (flushed), a
 //! `state_<phase>.json` at each phase end and `summary.json` after every row (see
-//! [`crate::run`]). An interrupted or failed run therefore leaves a CSV with fewer rows,
+//! [`crate::record`]). An interrupted or failed run therefore leaves a CSV with fewer rows,
 //! fewer states, and a summary with `finished = false`; a run killed mid-write may leave
 //! a last CSV line cut short. All of these load: what is missing is recorded in
 //! [`RunData::notes`]. What cannot be loaded is an absent or malformed `mesh.json` or
@@ -15,7 +15,7 @@ use serde::de::DeserializeOwned;
 
 use super::OutputError;
 use crate::model::observe::Observables;
-use crate::run::{MeshFile, StateFile, Summary};
+use crate::record::{MeshFile, StateFile, Summary};
 
 /// The phases whose end a state file records, in time order (`state_<phase>.json`).
 pub const PHASES: [&str; 4] = ["gravity", "spreading", "active", "end"];

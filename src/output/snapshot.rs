@@ -9,24 +9,7 @@ use std::path::{Path, PathBuf};
 use super::OutputError;
 use super::movie::Movie;
 use super::vtu::VtuSeries;
-use crate::run::MeshFile;
-
-/// The state of the cell at one output time.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Snapshot {
-    /// Time [s].
-    pub t: f64,
-    /// Displacement of every node [µm].
-    pub u: Vec<[f64; 2]>,
-    /// Velocity of every node [µm/s]: the v unknowns with inertia, u̇ without.
-    pub v: Vec<[f64; 2]>,
-    /// μ_as per node [pN/µm³] (`None` off the membrane or without adhesion).
-    pub mu_as: Vec<Option<f64>>,
-    /// Per element: reference-area mean of ‖E‖_F.
-    pub element_strain: Vec<f64>,
-    /// Per element: reference-area mean of det F.
-    pub element_jacobian: Vec<f64>,
-}
+use crate::record::{MeshFile, Snapshot};
 
 /// Which per-output-time files a run writes besides its CSV row.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]

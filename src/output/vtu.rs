@@ -21,9 +21,9 @@ use vtkio::model::{
 };
 
 use super::OutputError;
-use super::snapshot::Snapshot;
 use crate::fem::Domain;
-use crate::run::MeshFile;
+use crate::record::MeshFile;
+use crate::record::Snapshot;
 
 /// The VTK cell type of a six-node triangle.
 pub const QUADRATIC_TRIANGLE: u8 = 22;

@@ -14,8 +14,8 @@ use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-use super::OutputError;
-use super::figures::PALETTE;
+use crate::output::OutputError;
+use crate::output::figures::PALETTE;
 use crate::study::{
     Quantity, Role, StudyReport, StudyRow, TARGET_ERROR, fit_loglog, ladder_points, work_points,
 };
@@ -31,7 +31,7 @@ const GREY: RGBColor = RGBColor(110, 110, 110);
 
 /// Draws both figures into `out`; returns their paths.
 pub fn plot_study(report: &StudyReport, out: &Path) -> Result<Vec<PathBuf>, OutputError> {
-    super::create_dir(out)?;
+    crate::output::create_dir(out)?;
     let wp = out.join("work-precision.png");
     work_precision_figure(&wp, report)?;
     let dt = out.join("dt-sensitivity.png");

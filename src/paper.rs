@@ -1,0 +1,224 @@
+//! `cellsim paper`: the five scenes of MODEL.md §7 (and the upside-down control), run in
+//! parallel into `DIR/runs/<scene>/`, then the paper's figures and the comparison with
+//! what the paper reports, drawn from those files ([`crate::output::paper`]).
+//!
+//! The scenes are the case files of `cases/`, compiled into the binary (so the command
+//! works from any directory; `--cases DIR` reads them from a directory instead).
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use indicatif::MultiProgress;
+
+use crate::case::Case;
+use crate::output::paper::{CONTROL, PaperReport, SCENES, SceneOutcome, draw_paper};
+use crate::output::{OutputError, RunData, SnapshotOptions};
+use crate::record::RunSettings;
+use crate::run::{self, Progress, RunOptions};
+use crate::stop::StopFlag;
+
+/// Options of [`run_paper`].
+#[derive(Debug, Clone)]
+pub struct PaperOptions {
+    /// Output directory (figures, `comparison.md`, `runs/`).
+    pub out: PathBuf,
+    /// Runs at once.
+    pub jobs: usize,
+    /// Read the case files from this directory instead of the compiled-in copies.
+    pub cases: Option<PathBuf>,
+    /// Do not rerun a scene whose run directory holds a finished run.
+    pub reuse: bool,
+    /// Per-output-time files of each run (`--vtu`, `--gif`).
+    pub snapshots: SnapshotOptions,
+    /// Show progress lines.
+    pub progress: bool,
+    /// Set to stop every run cleanly.
+    pub interrupt: StopFlag,
+}
+
+/// The cases to run: the five scenes and the control, each with its label for messages.
+pub fn paper_cases(cases_dir: Option<&Path>) -> Result<Vec<(Case, String)>, String> {
+    let mut out = Vec::new();
+    for s in SCENES {
+        let (case, label) = match cases_dir {
+            Some(d) => {
+                let p = d.join(Path::new(s.file).file_name().unwrap_or_default());
+                (
+                    Case::load(&p).map_err(|e| e.to_string())?,
+                    p.display().to_string(),
+                )
+            }
+            None => (
+                Case::from_str(s.text, s.file).map_err(|e| e.to_string())?,
+                s.file.to_string(),
+            ),
+        };
+        if case.name != s.name {
+            return Err(format!(
+                "{label}: case name `{}`, expected `{}`",
+                case.name, s.name
+            ));
+        }
+        out.push((case, label));
+    }
+    let push_pull = out.iter().find(|(c, _)| c.name == "pillars-push-pull");
+    let upside = out.iter().find(|(c, _)| c.name == "upside-down");
+    if let (Some((pp, label)), Some((ud, _))) = (push_pull, upside) {
+        let mut control = pp.clone();
+        control.name = CONTROL.to_string();
+        control.description = Some(
+            "Control of the upside-down scene: push-pull continued to its end time, gravity unchanged"
+                .into(),
+        );
+        control.phases.t_end = ud.phases.t_end;
+        control.output = ud.output.clone();
+        let label = format!("{label} (continued to t = {} s)", ud.phases.t_end);
+        out.push((control, label));
+    }
+    Ok(out)
+}
+
+/// Runs `cases` into `out/runs/<name>/`, `jobs` at a time, one progress line each.
+pub fn run_cases(cases: &[(Case, String)], opts: &PaperOptions) -> Vec<SceneOutcome> {
+    let runs_dir = opts.out.join("runs");
+    let visible = opts.progress && std::io::stderr().is_terminal();
+    let mp = MultiProgress::new();
+    if !visible {
+        mp.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let say = |msg: String| {
+        if visible {
+            let _ = mp.println(&msg);
+        } else if opts.progress {
+            let _ =
+                std::io::Write::write_all(&mut std::io::stderr(), format!("{msg}\n").as_bytes());
+        }
+    };
+    let queue: Mutex<Vec<usize>> = Mutex::new((0..cases.len()).rev().collect());
+    let results: Mutex<Vec<Option<SceneOutcome>>> = Mutex::new(vec![None; cases.len()]);
+    let jobs = opts.jobs.clamp(1, cases.len().max(1));
+    std::thread::scope(|scope| {
+        for _ in 0..jobs {
+            scope.spawn(|| {
+                loop {
+                    let next = queue.lock().ok().and_then(|mut q| q.pop());
+                    let Some(k) = next else { break };
+                    let (case, label) = &cases[k];
+                    let dir = runs_dir.join(&case.name);
+                    let outcome = run_one(case, label, &dir, opts, &mp, visible, &say);
+                    if let Ok(mut r) = results.lock() {
+                        r[k] = Some(outcome);
+                    }
+                }
+            });
+        }
+    });
+    results
+        .into_inner()
+        .unwrap_or_default()
+        .into_iter()
+        .zip(cases)
+        .map(|(r, (c, _))| {
+            r.unwrap_or_else(|| SceneOutcome {
+                name: c.name.clone(),
+                dir: runs_dir.join(&c.name),
+                result: Err(format!("{}: not run", c.name)),
+            })
+        })
+        .collect()
+}
+
+fn run_one(
+    case: &Case,
+    label: &str,
+    dir: &Path,
+    opts: &PaperOptions,
+    mp: &MultiProgress,
+    visible: bool,
+    say: &(dyn Fn(String) + Sync),
+) -> SceneOutcome {
+    let name = case.name.clone();
+    if opts.reuse {
+        if let Ok(r) = RunData::load(dir) {
+            if r.finished() {
+                say(format!(
+                    "{name}: reusing the finished run in {}",
+                    dir.display()
+                ));
+                return SceneOutcome {
+                    name,
+                    dir: dir.to_path_buf(),
+                    result: Ok(false),
+                };
+            }
+        }
+    }
+    if opts.interrupt.is_set() {
+        return SceneOutcome {
+            result: Err(format!("{name}: interrupted before it started")),
+            name,
+            dir: dir.to_path_buf(),
+        };
+    }
+    let progress = if visible {
+        Progress::Bar(run::progress_bar_in(case, true, Some(mp)))
+    } else if opts.progress {
+        Progress::Lines {
+            label: case.name.clone(),
+            every: run::PROGRESS_LINE_INTERVAL,
+        }
+    } else {
+        Progress::Hidden
+    };
+    let ropts = RunOptions {
+        out: dir.to_path_buf(),
+        settings: RunSettings::from_case(case),
+        progress,
+        interrupt: opts.interrupt.clone(),
+        snapshots: opts.snapshots,
+    };
+    let start = Instant::now();
+    let result = match run::run(case, label, &ropts) {
+        Ok(s) => {
+            say(format!(
+                "{name}: finished t = {} s in {:.1} s wall ({} steps)",
+                s.final_values.map(|o| o.t).unwrap_or(0.0),
+                s.wall_seconds,
+                s.stats.steps
+            ));
+            Ok(true)
+        }
+        Err(e) => {
+            say(format!(
+                "{name}: stopped after {:.1} s: {e}",
+                start.elapsed().as_secs_f64()
+            ));
+            Err(e.to_string())
+        }
+    };
+    SceneOutcome {
+        name,
+        dir: dir.to_path_buf(),
+        result,
+    }
+}
+
+/// `cellsim paper`: runs the scenes (unless reused), then writes the figures and
+/// `comparison.md` into `opts.out`.
+pub fn run_paper(opts: &PaperOptions) -> Result<PaperReport, OutputError> {
+    crate::output::create_dir(&opts.out)?;
+    let cases = paper_cases(opts.cases.as_deref()).map_err(|m| OutputError::Malformed {
+        path: opts
+            .cases
+            .as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|| "cases (compiled in)".into()),
+        message: m,
+    })?;
+    let runs = run_cases(&cases, opts);
+    let mut report = draw_paper(&opts.out, &runs);
+    report.runs = runs;
+    Ok(report)
+}

@@ -1,0 +1,324 @@
+//! The files a run writes, as types: the one place that says what is on disk.
+//!
+//! `cellsim run` writes, into its directory and as it goes: `mesh.json` ([`MeshFile`])
+//! first, `timeseries.csv` row by row (the observables, [`crate::model::observe`]), a
+//! `state_<phase>.json` ([`StateFile`]) at each phase end and `summary.json`
+//! ([`Summary`], with [`RunSettings`], [`Unknowns`], the integrator statistics and, for a
+//! run that stopped early, a typed [`Failure`]) after every row. The drivers (run, study,
+//! paper) write these records and the figures read them back, so neither side imports the
+//! other: this module sits below both.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::case::{self, Case};
+use crate::dae::{LinearSolverKind, Stats};
+use crate::fem::Domain;
+use crate::model::observe::Observables;
+use crate::physics::{ActiveStrain, Substrate};
+
+/// Integration settings of one run: the case's `solver` section, possibly overridden on
+/// the command line.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunSettings {
+    /// "ida" or "bdf2".
+    pub integrator: case::Integrator,
+    /// Relative tolerance (IDA's error test; BDF2's Newton weights).
+    pub rtol: f64,
+    /// Absolute tolerance on displacements [µm] (scaled per block, see
+    /// [`CellModel::atol_vector`]).
+    pub atol: f64,
+    /// BDF2 step [s].
+    pub dt: f64,
+    /// Sparse LU.
+    pub linear_solver: LinearSolverKind,
+    /// IDA's maximum order.
+    pub max_order: u32,
+    /// IDA's step limit between outputs.
+    pub max_steps: u64,
+    /// IDA's first step [s].
+    pub initial_step: Option<f64>,
+    /// BDF2's step while the system has inertia (the fall, before inertia is switched
+    /// off), when smaller than `dt` [s]. A fixed step much longer than the fall cannot land
+    /// the cell on the penalty contact (Newton diverges at contact onset), so a dt ladder
+    /// over a whole scene caps the step of the fall. `None`: `dt` throughout.
+    #[serde(default)]
+    pub dt_inertia: Option<f64>,
+    /// Wall-clock budget of the integration [s]: past it the run stops cleanly, with
+    /// its outputs so far and the reason in the summary. `None`: no limit.
+    #[serde(default)]
+    pub max_wall_seconds: Option<f64>,
+}
+
+impl RunSettings {
+    /// The case's own settings.
+    pub fn from_case(case: &Case) -> Self {
+        let s = &case.solver;
+        Self {
+            integrator: s.integrator,
+            rtol: s.rtol,
+            atol: s.atol,
+            dt: s.bdf2_dt,
+            linear_solver: match s.linear_solver {
+                case::LinearSolver::Faer => LinearSolverKind::Faer,
+                case::LinearSolver::Klu => LinearSolverKind::Klu,
+                case::LinearSolver::FaerCondensed => LinearSolverKind::FaerCondensed,
+            },
+            max_order: s.max_order,
+            max_steps: s.max_steps,
+            initial_step: s.initial_step,
+            dt_inertia: None,
+            max_wall_seconds: None,
+        }
+    }
+}
+
+/// Unknown counts of the system.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Unknowns {
+    /// All unknowns.
+    pub total: usize,
+    /// Displacements.
+    pub u: usize,
+    /// Velocities (0 without inertia).
+    pub v: usize,
+    /// Adhesion coefficients.
+    pub mu_as: usize,
+}
+
+/// Why a run stopped early.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Failure {
+    /// What kind of stop it was.
+    #[serde(default)]
+    pub kind: FailureKind,
+    /// What happened.
+    pub reason: String,
+    /// Simulated time of the last output written [s].
+    pub t_last_output: f64,
+    /// Steps taken.
+    pub step: u64,
+}
+
+/// The kind of an early stop, so that readers of a summary need not parse its reason.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FailureKind {
+    /// The integration method failed (Newton, error test, linear solver, inadmissible
+    /// state, the inertia switch).
+    #[default]
+    Integration,
+    /// A signal asked the run to stop.
+    Interrupted,
+    /// The wall-clock budget was spent.
+    Budget,
+    /// More than `solver.max_steps` steps between two output times.
+    StepLimit,
+    /// The step size collapsed (the stall rule of [`StepGuard`]).
+    Stalled,
+    /// An output could not be written.
+    Output,
+}
+
+impl FailureKind {
+    /// Whether the run was stopped from outside (signal or budget) rather than by the
+    /// method or the model.
+    pub fn is_external(self) -> bool {
+        matches!(self, FailureKind::Interrupted | FailureKind::Budget)
+    }
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// Case name.
+    pub case: String,
+    /// Case file.
+    pub case_file: String,
+    /// Integration settings used.
+    pub settings: RunSettings,
+    /// Inertia mode of the case.
+    pub inertia: String,
+    /// Unknown counts (of the system at the start).
+    pub unknowns: Unknowns,
+    /// Elements and nodes of the mesh.
+    pub mesh_elements: usize,
+    /// Nodes of the mesh.
+    pub mesh_nodes: usize,
+    /// Wall-clock seconds of the integration (mesh and set-up excluded).
+    pub wall_seconds: f64,
+    /// Wall-clock seconds of mesh generation and model set-up.
+    pub setup_seconds: f64,
+    /// Integrator statistics (summed over both systems when inertia is switched off).
+    pub stats: Stats,
+    /// Whether the run reached its end time.
+    pub finished: bool,
+    /// Why not, if it did not.
+    pub failure: Option<Failure>,
+    /// The last output row.
+    pub final_values: Option<Observables>,
+    /// Output rows written (including t = 0).
+    pub outputs: usize,
+    /// Time at which inertia was switched off, if it was.
+    pub inertia_switched_off_at: Option<f64>,
+    /// State files written (phase ends).
+    pub states: Vec<String>,
+    /// cellsim version.
+    pub cellsim_version: String,
+    /// SUNDIALS version linked.
+    pub sundials_version: String,
+    /// Where the integration's wall time went (built with the `timers` feature only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timers: Option<TimeBreakdown>,
+}
+
+/// Wall time of the integration split by what IDA (or BDF2) was doing: the callbacks it
+/// made, its own work, and the rest of the run loop (outputs, inertia switch). Measured
+/// by [`crate::dae::timing`] (cargo feature `timers`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TimeBreakdown {
+    /// Integration wall time [s] (= `Summary::wall_seconds`).
+    pub wall: f64,
+    /// Residual evaluations called by IDA [s] and their number.
+    pub residual: f64,
+    pub residual_calls: u64,
+    /// Jacobian assemblies [s] and their number.
+    pub jacobian: f64,
+    pub jacobian_calls: u64,
+    /// Numeric LU factorizations [s] and their number.
+    pub factorize: f64,
+    pub factorize_calls: u64,
+    /// Triangular solves [s] and their number.
+    pub solve: f64,
+    pub solve_calls: u64,
+    /// IDA's own work: time inside IDASolve/IDACalcIC minus the callbacks above [s].
+    pub ida_internal: f64,
+    /// Outside IDA: outputs, observables, the inertia switch (with its consistent
+    /// initialization) [s].
+    pub outside: f64,
+}
+
+impl TimeBreakdown {
+    /// From the timers' totals and the integration wall time.
+    pub fn from_totals(t: &crate::dae::timing::Totals, wall: f64) -> Self {
+        use crate::dae::timing::Phase;
+        Self {
+            wall,
+            residual: t.get(Phase::Residual),
+            residual_calls: t.count(Phase::Residual),
+            jacobian: t.get(Phase::Jacobian),
+            jacobian_calls: t.count(Phase::Jacobian),
+            factorize: t.get(Phase::Factorize),
+            factorize_calls: t.count(Phase::Factorize),
+            solve: t.get(Phase::Solve),
+            solve_calls: t.count(Phase::Solve),
+            ida_internal: t.ida_internal(),
+            outside: wall - t.get(Phase::Ida),
+        }
+    }
+
+    /// A table of seconds and shares of the wall time.
+    pub fn table(&self) -> String {
+        let row = |name: &str, s: f64, calls: Option<u64>| {
+            let c = calls
+                .map(|c| format!("{c:>8}"))
+                .unwrap_or_else(|| " ".repeat(8));
+            format!(
+                "  {name:<22} {s:>9.3} s {:>6.1} %  {c}\n",
+                100.0 * s / self.wall
+            )
+        };
+        let mut out = String::from("time breakdown (feature `timers`):\n");
+        out += &row("residual", self.residual, Some(self.residual_calls));
+        out += &row(
+            "Jacobian assembly",
+            self.jacobian,
+            Some(self.jacobian_calls),
+        );
+        out += &row(
+            "LU factorization",
+            self.factorize,
+            Some(self.factorize_calls),
+        );
+        out += &row("LU solve", self.solve, Some(self.solve_calls));
+        out += &row("IDA internals", self.ida_internal, None);
+        out += &row("outside IDA", self.outside, None);
+        out += &row("total (wall)", self.wall, None);
+        out
+    }
+}
+
+/// What the mesh file records: enough to redraw the deformed cell from a state file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct MeshFile {
+    /// Reference node coordinates [µm].
+    pub nodes: Vec<[f64; 2]>,
+    /// Six-node elements.
+    pub elements: Vec<[usize; 6]>,
+    /// Domain of each element.
+    pub domains: Vec<Domain>,
+    /// Outer boundary edges (vertex, mid, vertex), bottom to top.
+    pub outer_edges: Vec<[usize; 3]>,
+    /// Nucleus interface edges.
+    pub nucleus_edges: Vec<[usize; 3]>,
+    /// Membrane inner interface edges.
+    pub membrane_inner_edges: Vec<[usize; 3]>,
+    /// The substrate.
+    pub substrate: Substrate,
+    /// Active strain regions, if any.
+    pub active: Option<ActiveStrain>,
+    /// Contact band half-width ε_ct [µm].
+    pub contact_eps: f64,
+    /// Fibronectin layer thickness e_f [µm], with adhesion.
+    pub layer_thickness: Option<f64>,
+    /// Cell centre [µm].
+    pub center: [f64; 2],
+    /// Phase end times T_g0, T_as0, T_a0 and the end time [s].
+    pub phase_times: [f64; 4],
+}
+
+/// A state written at a phase end.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct StateFile {
+    /// Phase name: "gravity", "spreading", "active" or "end".
+    pub phase: String,
+    /// Time [s].
+    pub t: f64,
+    /// Displacement of every node [µm].
+    pub u: Vec<[f64; 2]>,
+    /// μ_as per node [pN/µm³] (None off the membrane or without adhesion).
+    pub mu_as: Vec<Option<f64>>,
+    /// Per element: mean ‖E‖_F and mean det F.
+    pub element_strain: Vec<f64>,
+    /// Per element: mean det F.
+    pub element_jacobian: Vec<f64>,
+    /// The observables at this time.
+    pub observables: Observables,
+}
+
+/// The state of the cell at one output time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    /// Time [s].
+    pub t: f64,
+    /// Displacement of every node [µm].
+    pub u: Vec<[f64; 2]>,
+    /// Velocity of every node [µm/s]: the v unknowns with inertia, u̇ without.
+    pub v: Vec<[f64; 2]>,
+    /// μ_as per node [pN/µm³] (`None` off the membrane or without adhesion).
+    pub mu_as: Vec<Option<f64>>,
+    /// Per element: reference-area mean of ‖E‖_F.
+    pub element_strain: Vec<f64>,
+    /// Per element: reference-area mean of det F.
+    pub element_jacobian: Vec<f64>,
+}
+
+/// Writes `value` as pretty JSON to `path` through a temporary file and a rename, so that
+/// a reader never sees half a file.
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> std::io::Result<()> {
+    let text = serde_json::to_string_pretty(value).map_err(std::io::Error::other)?;
+    let tmp = path.with_extension("json.tmp");
+    std::fs::write(&tmp, text)?;
+    std::fs::rename(&tmp, path)
+}
