@@ -31,6 +31,7 @@
 mod error;
 mod locate;
 mod sections;
+pub mod terms;
 mod validate;
 
 #[cfg(test)]

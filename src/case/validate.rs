@@ -206,7 +206,7 @@ impl Checker<'_> {
     /// validators) that read no field found invalid, and reports what they refuse on the
     /// first of the refusal's fields that the file writes (else its first).
     fn layers(&mut self, case: &Case) {
-        for check in crate::scene::layer_checks(case) {
+        for check in super::terms::layer_checks(case) {
             let reads: Vec<&str> = check.reads.iter().map(String::as_str).collect();
             if self.any_invalid(&reads) {
                 continue;

@@ -1,0 +1,362 @@
+//! A case in the lower layers' terms: the mesh parameters, the substrate, the phase
+//! switches and the physics laws in solver units, and the checks those layers make of
+//! them ([`layer_checks`]), so that validating a case runs the very rules the mesh
+//! generator and the physics apply, and reports a refusal at the case field it comes from.
+//! (The model's full parameters are built one layer up, by [`crate::scene`].)
+
+use super::{self as case, Case};
+use crate::fem::{MeshError, MeshParams};
+use crate::physics::{self, ActiveStrain, Flip, Phases, Substrate, Viscosity, Yeoh};
+
+/// Mesh parameters of a case.
+pub fn mesh_params(case: &Case) -> MeshParams {
+    MeshParams {
+        center: case.geometry.centre(),
+        r_n: case.geometry.r_n,
+        r_cp: case.geometry.r_cp,
+        r_c: case.geometry.r_c,
+        h_bottom: case.mesh.h_bottom,
+        h_nucleus: case.mesh.h_nucleus,
+        refine: case.mesh.refine,
+        ..MeshParams::default()
+    }
+}
+
+/// The substrate of a case in solver terms (pillar tops placed from the gap rule).
+pub fn substrate(case: &Case) -> Substrate {
+    match &case.substrate {
+        case::Substrate::Flat(f) => Substrate::Flat { y_s: f.y_s },
+        case::Substrate::Pillars(p) => {
+            Substrate::Pillars(p.at_height(p.resolved_y_top(&case.geometry)))
+        }
+    }
+}
+
+/// The fluid-phase viscosity of a case.
+pub fn viscosity(case: &Case) -> Viscosity {
+    Viscosity {
+        lambda_f: case.viscosity.lambda_f,
+        mu_f: case.viscosity.mu_f,
+    }
+}
+
+/// The phase switches of a case (with the gravity flip if the case turns upside down).
+pub fn phases(case: &Case) -> Phases {
+    let ph = &case.phases;
+    Phases {
+        t_g0: ph.t_g0,
+        t_as0: ph.t_as0,
+        t_a0: ph.t_a0,
+        flip: case.gravity.upside_down.then_some(Flip {
+            start: ph.t_a0,
+            duration: case.gravity.flip_duration,
+        }),
+    }
+}
+
+/// The active-strain regions of a case; `None` if it has neither region.
+pub fn active(case: &Case) -> Option<ActiveStrain> {
+    let active = ActiveStrain {
+        pac: case.active.pac.as_ref().map(|p| physics::Pac {
+            e: p.e,
+            theta_deg: p.theta_deg,
+            inner_axes: [p.inner_semi_axes.0, p.inner_semi_axes.1],
+            outer_axes: [p.outer_semi_axes.0, p.outer_semi_axes.1],
+        }),
+        bottom: case.active.bottom.as_ref().map(|b| physics::Bottom {
+            e: b.e,
+            theta_deg: b.theta_deg,
+        }),
+        eps: case.active.eps_a,
+        center: case.geometry.centre(),
+    };
+    (active.pac.is_some() || active.bottom.is_some()).then_some(active)
+}
+
+/// The contact law of a case in solver units.
+pub fn contact(case: &Case) -> physics::Contact {
+    physics::Contact {
+        mu_ct: case.contact.mu_ct(),
+        eps: case.contact.eps_ct,
+    }
+}
+
+/// The adhesion law of a case in solver units, if it has adhesion.
+pub fn adhesion(case: &Case) -> Option<physics::Adhesion> {
+    case.adhesion.as_ref().map(|a| physics::Adhesion {
+        e_f: a.e_f,
+        eps: a.eps,
+        mu_as0: a.mu_as0(),
+        mu_as_max: a.mu_as_max(),
+    })
+}
+
+/// A parameter that a lower layer (the mesh generator, a material law, a physics
+/// validator) refuses, traced back to the case fields it comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refusal {
+    /// The case fields (dotted paths) the refused parameter comes from, with their values
+    /// as the case writes them (case units, formatted), the most likely culprit first. At
+    /// least one.
+    pub fields: Vec<(String, String)>,
+    /// The lower layer's own message: its name for the parameter, the value in its units
+    /// and the rule.
+    pub message: String,
+}
+
+/// One check of a lower layer run on a case: [`model_params`] runs the physics ones
+/// before building, and [`Case::load`] runs them all so that a case it accepts is one
+/// the run accepts.
+pub struct LayerCheck<'c> {
+    /// The layer, as a message names it ("mesh generator", "material law", ...).
+    pub layer: &'static str,
+    /// The case fields the check reads: dotted paths, where a section (`substrate`)
+    /// stands for every field in it.
+    pub reads: Vec<String>,
+    check: Box<dyn Fn() -> Result<(), Refusal> + 'c>,
+}
+
+impl LayerCheck<'_> {
+    /// Runs the check.
+    pub fn run(&self) -> Result<(), Refusal> {
+        (self.check)()
+    }
+}
+
+impl std::fmt::Debug for LayerCheck<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LayerCheck")
+            .field("layer", &self.layer)
+            .field("reads", &self.reads)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The layer name of the mesh check of [`layer_checks`]; the other layers are physics.
+/// The name of the mesh generator's layer in [`LayerCheck::layer`].
+pub const MESH_GENERATOR: &str = "mesh generator";
+
+fn layer_check<'c>(
+    layer: &'static str,
+    reads: &[&str],
+    check: impl Fn() -> Result<(), Refusal> + 'c,
+) -> LayerCheck<'c> {
+    LayerCheck {
+        layer,
+        reads: reads.iter().map(|r| r.to_string()).collect(),
+        check: Box::new(check),
+    }
+}
+
+/// A case field and its value, formatted as in case messages.
+fn field(path: impl Into<String>, value: f64) -> Option<(String, String)> {
+    Some((path.into(), case::num(value)))
+}
+
+/// Turns a physics validator's error into a [`Refusal`]; `to_case` maps the validator's
+/// parameter name to the case field, else the refusal names `section`.
+fn physics_refusal(
+    e: physics::PhysicsError,
+    section: &str,
+    to_case: impl Fn(&str) -> Option<(String, String)>,
+) -> Refusal {
+    let physics::PhysicsError::InvalidParameter { name, value, .. } = &e;
+    let fields = vec![to_case(name).unwrap_or_else(|| (section.to_string(), case::num(*value)))];
+    Refusal {
+        fields,
+        message: e.to_string(),
+    }
+}
+
+/// Every check the lower layers make of a case's parameters before a run integrates:
+/// [`MeshParams::validate`] (which includes the element-count estimate), the material law
+/// [`Yeoh::from_engineering`] of each domain, and the validators of the phases, the
+/// substrate, the active strain, contact, adhesion and viscosity.
+pub fn layer_checks(case: &Case) -> Vec<LayerCheck<'_>> {
+    let mut checks = Vec::new();
+    checks.push(layer_check(
+        MESH_GENERATOR,
+        &["geometry", "mesh.h_bottom", "mesh.h_nucleus", "mesh.refine"],
+        move || mesh_refusal(case),
+    ));
+    let m = &case.materials;
+    for (domain, mat) in [
+        ("nucleus", &m.nucleus),
+        ("cytoplasm", &m.cytoplasm),
+        ("membrane", &m.membrane),
+    ] {
+        let e_path = format!("materials.{domain}.e");
+        let nu_path = format!("materials.{domain}.nu");
+        let reads = [
+            e_path.as_str(),
+            nu_path.as_str(),
+            "materials.gamma",
+            "materials.beta_fraction",
+        ];
+        checks.push(layer_check("material law", &reads, move || {
+            Yeoh::from_engineering(mat.e, mat.nu, m.gamma, m.beta_fraction)
+                .map(drop)
+                .map_err(|e| {
+                    physics_refusal(e, &format!("materials.{domain}"), |name| match name {
+                        "E" => field(format!("materials.{domain}.e"), mat.e),
+                        "nu" => field(format!("materials.{domain}.nu"), mat.nu),
+                        "gamma" => field("materials.gamma", m.gamma),
+                        "beta_fraction" => field("materials.beta_fraction", m.beta_fraction),
+                        _ => None,
+                    })
+                })
+        }));
+    }
+    checks.push(layer_check(
+        "phase switches",
+        &["phases", "gravity.flip_duration"],
+        move || {
+            let ph = &case.phases;
+            phases(case).validate().map_err(|e| {
+                physics_refusal(e, "phases", |name| match name {
+                    "t_g0" => field("phases.t_g0", ph.t_g0),
+                    "t_as0" => field("phases.t_as0", ph.t_as0),
+                    "t_a0" | "flip.start" => field("phases.t_a0", ph.t_a0),
+                    "flip.duration" => field("gravity.flip_duration", case.gravity.flip_duration),
+                    _ => None,
+                })
+            })
+        },
+    ));
+    checks.push(layer_check(
+        "substrate model",
+        &["substrate", "geometry"],
+        move || {
+            substrate(case).validate().map_err(|e| {
+                physics_refusal(e, "substrate", |name| match (&case.substrate, name) {
+                    (case::Substrate::Flat(f), "y_s") => field("substrate.y_s", f.y_s),
+                    (case::Substrate::Pillars(p), name) => match name {
+                        "pillars.width" => field("substrate.width", p.width),
+                        "pillars.spacing" => field("substrate.spacing", p.spacing),
+                        "pillars.height" => field("substrate.height", p.height),
+                        "pillars.q" => field("substrate.q", p.q),
+                        "pillars.first_center" => field("substrate.first_center", p.first_center),
+                        // Without an explicit y_top, the tops are placed from the gap.
+                        "pillars.y_top" => match p.y_top {
+                            Some(y) => field("substrate.y_top", y),
+                            None => field("substrate.gap", p.gap),
+                        },
+                        _ => None,
+                    },
+                    _ => None,
+                })
+            })
+        },
+    ));
+    checks.push(layer_check(
+        "active-strain model",
+        &["active", "geometry.centre_y"],
+        move || {
+            let Some(a) = active(case) else {
+                return Ok(());
+            };
+            a.validate().map_err(|e| {
+                let (pac, bottom) = (case.active.pac.as_ref(), case.active.bottom.as_ref());
+                physics_refusal(e, "active", |name| match name {
+                    "active.eps" => field("active.eps_a", case.active.eps_a),
+                    "active.center" => field("geometry.centre_y", case.geometry.centre_y),
+                    "pac.e" => pac.and_then(|p| field("active.pac.e", p.e)),
+                    "pac.theta_deg" => pac.and_then(|p| field("active.pac.theta_deg", p.theta_deg)),
+                    "pac.inner_axes" => pac.map(|p| {
+                        let v = case::axes(p.inner_semi_axes);
+                        ("active.pac.inner_semi_axes".to_string(), v)
+                    }),
+                    "pac.outer_axes" => pac.map(|p| {
+                        let v = case::axes(p.outer_semi_axes);
+                        ("active.pac.outer_semi_axes".to_string(), v)
+                    }),
+                    "bottom.e" => bottom.and_then(|b| field("active.bottom.e", b.e)),
+                    "bottom.theta_deg" => {
+                        bottom.and_then(|b| field("active.bottom.theta_deg", b.theta_deg))
+                    }
+                    _ => None,
+                })
+            })
+        },
+    ));
+    checks.push(layer_check("contact model", &["contact"], move || {
+        contact(case).validate().map_err(|e| {
+            physics_refusal(e, "contact", |name| match name {
+                "contact.mu_ct" => field("contact.mu_ct_n_m3", case.contact.mu_ct_n_m3),
+                "contact.eps" => field("contact.eps_ct", case.contact.eps_ct),
+                _ => None,
+            })
+        })
+    }));
+    checks.push(layer_check("adhesion model", &["adhesion"], move || {
+        let (Some(a), Some(written)) = (adhesion(case), case.adhesion.as_ref()) else {
+            return Ok(());
+        };
+        a.validate().map_err(|e| {
+            physics_refusal(e, "adhesion", |name| match name {
+                "adhesion.e_f" => field("adhesion.e_f", written.e_f),
+                "adhesion.eps" => field("adhesion.eps", written.eps),
+                "adhesion.mu_as0" => field("adhesion.mu_as0_n_m3s", written.mu_as0_n_m3s),
+                "adhesion.mu_as_max" => field("adhesion.mu_as_max_n_m3", written.mu_as_max_n_m3),
+                _ => None,
+            })
+        })
+    }));
+    checks.push(layer_check("viscosity model", &["viscosity"], move || {
+        viscosity(case).validate().map_err(|e| {
+            physics_refusal(e, "viscosity", |name| match name {
+                "lambda_f" => field("viscosity.lambda_f", case.viscosity.lambda_f),
+                "mu_f" => field("viscosity.mu_f", case.viscosity.mu_f),
+                _ => None,
+            })
+        })
+    }));
+    checks
+}
+
+/// [`MeshParams::validate`] of a case, its error traced back to the case fields.
+fn mesh_refusal(case: &Case) -> Result<(), Refusal> {
+    let g = &case.geometry;
+    let m = &case.mesh;
+    let e = match mesh_params(case).validate() {
+        Ok(()) => return Ok(()),
+        Err(e) => e,
+    };
+    let fields = match &e {
+        MeshError::InvalidParam {
+            field: name, value, ..
+        } => {
+            let f = match *name {
+                "center[0]" | "center[1]" | "center" => field("geometry.centre_y", g.centre_y),
+                "r_n" => field("geometry.r_n", g.r_n),
+                "r_cp" => field("geometry.r_cp", g.r_cp),
+                "r_c" => field("geometry.r_c", g.r_c),
+                "h_bottom" => field("mesh.h_bottom", m.h_bottom),
+                "h_nucleus" => field("mesh.h_nucleus", m.h_nucleus),
+                "refine" => field("mesh.refine", m.refine),
+                _ => None,
+            };
+            vec![f.unwrap_or_else(|| ("mesh".to_string(), case::num(*value)))]
+        }
+        // Too many elements: the sizes and the refinement share the blame, the one that
+        // refines most (relative to its default) first.
+        _ => {
+            let d = case::Mesh::default();
+            let mut fields = vec![
+                (m.refine / d.refine, field("mesh.refine", m.refine)),
+                (d.h_bottom / m.h_bottom, field("mesh.h_bottom", m.h_bottom)),
+                (
+                    d.h_nucleus / m.h_nucleus,
+                    field("mesh.h_nucleus", m.h_nucleus),
+                ),
+            ];
+            fields.sort_by(|a, b| b.0.total_cmp(&a.0));
+            fields.into_iter().filter_map(|(_, f)| f).collect()
+        }
+    };
+    Err(Refusal {
+        fields,
+        message: e.to_string(),
+    })
+}
+
