@@ -10,8 +10,8 @@
 
 use crate::fem::{Domain, Mesh};
 
-/// Marker for an eliminated (or absent) unknown.
-pub const NONE: usize = usize::MAX;
+/// Marker for an eliminated (or absent) unknown (the assembly's marker).
+pub use crate::fem::assembly::NONE;
 
 /// Where each nodal unknown lives in y.
 #[derive(Debug, Clone)]

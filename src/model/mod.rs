@@ -26,7 +26,7 @@ pub mod observe;
 use nalgebra::{Matrix2, Vector2};
 use num_dual::DualSVec64;
 
-use crate::dae::linsolve::{pattern_from_entries, position};
+use crate::fem::assembly::{pattern_from_entries, position};
 use crate::dae::{Dae, DaeError, FirstOrderBlocks, Pattern};
 use crate::fem::p2::{ElementGeometry, P2Tabulation};
 use crate::fem::quadrature::TriangleRule;
