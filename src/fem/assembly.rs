@@ -119,6 +119,11 @@ impl BlockPositions {
         self.positions.is_empty()
     }
 
+    /// The positions, row-major ([`NONE`] where eliminated).
+    pub fn positions(&self) -> &[usize] {
+        &self.positions
+    }
+
     /// Adds the local block `a` (row-major rows of `N` columns) to `values`:
     /// `values[pos(r, c)] += a[r][c]` for every entry not eliminated.
     #[inline]

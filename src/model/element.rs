@@ -3,7 +3,7 @@
 //! the standard and the band rules, the consistent mass, the active-strain tensors and
 //! the outward radial directions of the membrane.
 
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::Vector2;
 
 use super::kinematics::{DIM, NodalOf, Tensor, Vector};
 use super::{ModelError, ModelParams};
@@ -106,12 +106,14 @@ impl Element {
             }
         }
         let mass = mass1.map(|row| row.map(|m| m * rho));
-        let active_q: Vec<Matrix2<f64>> = match active {
+        let active_q: Vec<Tensor<f64>> = match active {
             Some(act) => {
-                let a: Vec<Matrix2<f64>> = geo
+                let a: Vec<Tensor<f64>> = geo
                     .x
                     .iter()
-                    .map(|p| Matrix2::identity() - act.fa(&Vector2::new(p[0], p[1]), domain, 1.0))
+                    .map(|p| {
+                        Tensor::<f64>::identity() - act.fa(&Vector2::new(p[0], p[1]), domain, 1.0)
+                    })
                     .collect();
                 if a.iter().all(|m| m.abs().max() == 0.0) {
                     Vec::new()
@@ -148,9 +150,9 @@ impl Element {
     #[inline]
     pub(crate) fn active_fa(&self, q: usize, t_a: f64) -> Tensor<f64> {
         if self.active.is_empty() {
-            Matrix2::identity()
+            Tensor::<f64>::identity()
         } else {
-            Matrix2::identity() - self.active[q] * t_a
+            Tensor::<f64>::identity() - self.active[q] * t_a
         }
     }
 }

@@ -24,7 +24,7 @@
 //! - [`mu_rate_residual`] / [`mu_rate_tangent`]: the nodal adhesion rows
 //!   `μ̇_as − r(x, μ_as)`.
 
-use nalgebra::{Const, Matrix2, SVector, Vector2};
+use nalgebra::{Const, SVector};
 use num_dual::DualSVec64;
 
 use super::ModelParams;
@@ -294,13 +294,13 @@ impl BandPoint {
 #[inline]
 pub(crate) fn band_force<T: Real>(
     p: &ModelParams,
-    x: &Vector2<T>,
-    F: &Matrix2<T>,
+    x: &Vector<T>,
+    F: &Tensor<T>,
     J: T,
-    radial: Option<&Vector2<f64>>,
+    radial: Option<&Vector<f64>>,
     mu: Option<T>,
     t_as: f64,
-) -> Vector2<T> {
+) -> Vector<T> {
     let mut b = contact_force(&p.substrate, &p.contact, x, J);
     if let (Some(ad), Some(mu), Some(n)) = (&p.adhesion, mu, radial) {
         b += adhesion_force(&p.substrate, ad, x, F, n, mu, t_as);
@@ -378,7 +378,7 @@ pub(crate) fn band_tangent(
         let xd: SVector<DualB, DIM> =
             SVector::from_fn(|k, _| DualB::from_re(pt.x[k]).derivative(k));
         let Fd: Tensor<DualB> =
-            Matrix2::from_fn(|k, l| DualB::from_re(pt.F[(k, l)]).derivative(f_dir(k, l)));
+            Tensor::<DualB>::from_fn(|k, l| DualB::from_re(pt.F[(k, l)]).derivative(f_dir(k, l)));
         let J = Kin::det::<DualB>(&Fd);
         let mud = pt.mu.map(|mu| DualB::from_re(mu).derivative(MU_DIR));
         let b = band_force(p, &xd, &Fd, J, el.radial.get(q), mud, t_as);

@@ -14,11 +14,11 @@
 //! quadrature point, assembled into a pattern fixed at construction by positions computed
 //! once per element (refilling, never rebuilding).
 //!
-//! Layout: [`element`] sets up the reference elements (geometry, mass, active strain);
+//! Layout: `element` sets up the reference elements (geometry, mass, active strain);
 //! [`kinematics`] gives the quadrature-point kinematics (F, Ḟ, x, J) for any dimension,
-//! with plane strain the one kinematic model; [`kernels`] gives each term's residual
+//! with plane strain the one kinematic model; `kernels` gives each term's residual
 //! contribution and tangent per element (solid, mass, contact/adhesion band, μ_as rate);
-//! [`plan`] is the assembly plan (pattern and positions, built once) that scatters them.
+//! `plan` is the assembly plan (pattern and positions, built once) that scatters them.
 //!
 //! Contact and adhesion act as body forces in thin bands near the substrate. They are
 //! integrated with a separate high-degree (optionally subdivided) rule, and only on the
@@ -33,14 +33,12 @@ pub mod kinematics;
 pub mod observe;
 mod plan;
 
-use nalgebra::Vector2;
-
 use crate::dae::{Dae, DaeError, FirstOrderBlocks, Pattern};
 use crate::fem::p2::{P2Error, P2Tabulation};
 use crate::fem::{Domain, Mesh};
 use crate::physics::{ActiveStrain, Adhesion, Contact, Phases, Substrate, Viscosity, Yeoh};
 use dofs::{DofMap, NONE};
-use element::{Element, ElementState, NODES, ReferenceElements};
+use element::{Element, ElementState, NODES, Nodal, ReferenceElements};
 use kernels::{ElementTangent, Switches};
 pub(crate) use kinematics::deformation;
 use kinematics::{DIM, Vector};
@@ -145,9 +143,9 @@ pub struct CellModel {
 }
 
 impl CellModel {
-    /// Builds the model on `mesh`: unknown numbering, the reference elements
-    /// ([`element`]) and the assembly plan ([`plan`]: the pattern of the iteration matrix
-    /// and the positions to refill it).
+    /// Builds the model on `mesh`: unknown numbering, the reference elements (geometry,
+    /// mass, active strain) and the assembly plan (the pattern of the iteration matrix and
+    /// the positions to refill it).
     pub fn new(params: ModelParams, mesh: Mesh) -> Result<Self, ModelError> {
         let dofs = DofMap::new(&mesh, params.inertia, params.adhesion.is_some());
         let ReferenceElements { elements, ctab } = ReferenceElements::new(&params, &mesh)?;
@@ -250,19 +248,19 @@ impl CellModel {
     /// some node lies within the band's reach plus 1.5 × the element's current diameter
     /// of the substrate (every point of the element is within one diameter of a node, and
     /// the depth d is 1-Lipschitz up to the first-order distance's corner factor).
-    fn in_reach(&self, el: &Element, ue: &[[f64; 2]; 6]) -> bool {
+    fn in_reach(&self, el: &Element, ue: &Nodal) -> bool {
         let p = &self.params;
         let band = match &p.adhesion {
             Some(ad) if el.domain == Domain::Membrane => (ad.e_f + ad.eps).max(p.contact.eps),
             _ => p.contact.eps,
         };
-        let xs: [Vector2<f64>; 6] = std::array::from_fn(|a| {
+        let xs: [Vector<f64>; NODES] = std::array::from_fn(|a| {
             let xn = self.mesh.nodes[el.nodes[a]];
-            Vector2::new(xn[0] + ue[a][0], xn[1] + ue[a][1])
+            Vector::<f64>::from_fn(|k, _| xn[k] + ue[a][k])
         });
         let mut diam2: f64 = 0.0;
-        for a in 0..6 {
-            for b in a + 1..6 {
+        for a in 0..NODES {
+            for b in a + 1..NODES {
                 diam2 = diam2.max((xs[a] - xs[b]).norm_squared());
             }
         }

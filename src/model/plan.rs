@@ -189,3 +189,48 @@ impl AssemblyPlan {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fem::MeshParams;
+    use crate::model::{CellModel, ModelParams};
+
+    /// Every entry of every element block whose row and column exist has its place in the
+    /// pattern, and the eliminated ones none.
+    #[test]
+    fn every_element_entry_has_its_place_in_the_pattern() {
+        let mesh = Mesh::generate(&MeshParams {
+            refine: 0.5,
+            ..Default::default()
+        })
+        .expect("mesh");
+        for inertia in [true, false] {
+            let params = ModelParams {
+                inertia,
+                ..ModelParams::defaults()
+            };
+            let m = CellModel::new(params, mesh.clone()).expect("model");
+            let nnz = m.plan.pattern.compute_nnz();
+            for (el, ep) in m.elements.iter().zip(&m.plan.elements) {
+                let d = ElementDofs::new(&m.dofs, &el.nodes);
+                assert_eq!(ep.momentum_v.is_empty(), !inertia);
+                assert_eq!(ep.momentum_mu.is_empty(), !el.with_mu);
+                let blocks: [(&BlockPositions, &[usize]); 3] = [
+                    (&ep.momentum_u, &d.u),
+                    (&ep.momentum_v, &d.v),
+                    (&ep.momentum_mu, &d.mu),
+                ];
+                for (block, cols) in blocks {
+                    for (k, &p) in block.positions().iter().enumerate() {
+                        let (r, c) = (d.rows[k / cols.len()], cols[k % cols.len()]);
+                        assert_eq!(p == NONE, r == NONE || c == NONE);
+                        assert!(p == NONE || p < nnz);
+                    }
+                }
+            }
+            assert!(m.plan.kinematic.iter().flatten().all(|&p| p < nnz));
+            assert!(m.plan.mu_rate.iter().all(|p| p[0] < nnz));
+        }
+    }
+}
