@@ -23,16 +23,11 @@ use cellsim::scene;
 
 const T: f64 = 550.0;
 
-/// Deterministic pseudo-random numbers in [0, 1).
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
+/// Deterministic scattered numbers in [0, 1): the fractional parts of k·φ⁻¹ (no random
+/// generator needed for a fixed state).
+fn scatter(k: &mut u64) -> f64 {
+    *k += 1;
+    (*k as f64 * 0.618_033_988_749_894_9).fract()
 }
 
 fn model(case: &str, inertia: bool) -> Result<CellModel, String> {
@@ -44,7 +39,7 @@ fn model(case: &str, inertia: bool) -> Result<CellModel, String> {
 }
 
 fn state(m: &CellModel) -> (Vec<f64>, Vec<f64>) {
-    let mut rng = Lcg(17);
+    let mut seq = 0u64;
     let n = m.size();
     let (mut y, mut yp) = (vec![0.0; n], vec![0.0; n]);
     for (i, x) in m.mesh.nodes.iter().enumerate() {
@@ -56,19 +51,19 @@ fn state(m: &CellModel) -> (Vec<f64>, Vec<f64>) {
             let d = m.dofs.u[i][k];
             if d != usize::MAX {
                 y[d] = duk;
-                yp[d] = 1e-3 * (rng.next() - 0.5);
+                yp[d] = 1e-3 * (scatter(&mut seq) - 0.5);
                 let v = m.dofs.v[i][k];
                 if v != usize::MAX {
-                    y[v] = 1e-2 * (rng.next() - 0.5);
-                    yp[v] = 1e-1 * (rng.next() - 0.5);
+                    y[v] = 1e-2 * (scatter(&mut seq) - 0.5);
+                    yp[v] = 1e-1 * (scatter(&mut seq) - 0.5);
                 }
             }
         }
     }
     let off = m.dofs.mu_offset();
     for k in 0..m.dofs.n_mu() {
-        y[off + k] = 1.4e3 * rng.next();
-        yp[off + k] = rng.next();
+        y[off + k] = 1.4e3 * scatter(&mut seq);
+        yp[off + k] = scatter(&mut seq);
     }
     (y, yp)
 }
