@@ -515,11 +515,10 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
     })?;
     let inertia0 = scene::starts_with_inertia(case);
     let params = scene::model_params(case, file, inertia0)?;
-    let model =
-        CellModel::new(params.clone(), mesh.clone()).map_err(|message| RunError::Model {
-            file: file.into(),
-            message,
-        })?;
+    let model = CellModel::new(params.clone(), mesh.clone()).map_err(|e| RunError::Model {
+        file: file.into(),
+        message: e.to_string(),
+    })?;
     let (nu, nv, nm) = model.block_sizes();
 
     let ph = &case.phases;
@@ -783,7 +782,7 @@ fn advance_switching(
             yp2[..model.dofs.n_u].iter_mut().for_each(|v| *v = 0.0);
             let mut p2: ModelParams = model.params.clone();
             p2.inertia = false;
-            let mut m2 = CellModel::new(p2, model.mesh.clone())?;
+            let mut m2 = CellModel::new(p2, model.mesh.clone()).map_err(|e| e.to_string())?;
             let atol = Atol::Vector(m2.atol_vector(settings.atol));
             let for_y: Vec<bool> = (0..m2.dofs.n).map(|i| i < m2.dofs.n_u).collect();
             consistent_init(

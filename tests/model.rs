@@ -469,7 +469,7 @@ fn kelvin_voigt_creep_follows_its_exponential() {
     let eta = visc.lambda_f + 2.0 * visc.mu_f;
     let tau = eta / modulus;
     let sigma0 = 1e-5 * modulus;
-    let pattern = cellsim::dae::linsolve::pattern_from_entries(1, &[(0, 0)]);
+    let pattern = cellsim::fem::assembly::pattern_from_entries(1, &[(0, 0)]);
     let mut ida = Ida::new(
         Creep {
             yeoh,

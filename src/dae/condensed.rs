@@ -28,8 +28,9 @@
 //! search) and factorizes; [`CondensedLu::solve_in_place`] condenses the right-hand side,
 //! solves and recovers the velocities.
 
-use super::linsolve::{FaerLu, LinearSolver, LinearSolverError, position};
+use super::linsolve::{FaerLu, LinearSolver, LinearSolverError};
 use super::{FirstOrderBlocks, Pattern};
+use crate::fem::assembly::position;
 
 /// Marker for "no index".
 const NONE: usize = usize::MAX;
@@ -394,7 +395,7 @@ impl LinearSolver for CondensedLu {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dae::linsolve::pattern_from_entries;
+    use crate::fem::assembly::pattern_from_entries;
 
     /// A small first-order system: m pairs (p_k = k, q_k = m + k) coupled through a
     /// tridiagonal K and C, and two extra unknowns coupled to the positions.

@@ -215,35 +215,10 @@ impl LinearSolver for FaerLu {
     }
 }
 
-/// Position of every (row, col) entry in a pattern's value array, for refilling values
-/// by a precomputed permutation. Returns `None` for an entry not in the pattern.
-pub fn position(pattern: &Pattern, row: usize, col: usize) -> Option<usize> {
-    let cp = pattern.col_ptr();
-    let rows = &pattern.row_idx()[cp[col]..cp[col + 1]];
-    rows.binary_search(&row).ok().map(|k| cp[col] + k)
-}
-
-/// Builds a pattern from (row, col) pairs (duplicates merged, rows sorted in columns).
-pub fn pattern_from_entries(n: usize, entries: &[(usize, usize)]) -> Pattern {
-    let mut cols: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for &(r, c) in entries {
-        cols[c].push(r);
-    }
-    let mut col_ptr = Vec::with_capacity(n + 1);
-    let mut row_idx = Vec::new();
-    col_ptr.push(0);
-    for mut c in cols {
-        c.sort_unstable();
-        c.dedup();
-        row_idx.extend_from_slice(&c);
-        col_ptr.push(row_idx.len());
-    }
-    Pattern::new_checked(n, n, col_ptr, None, row_idx)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fem::assembly::{pattern_from_entries, position};
 
     /// A small unsymmetric matrix: a 1-D convection–diffusion stencil with a dense row.
     fn test_matrix(n: usize) -> (Pattern, Vec<f64>) {

@@ -7,8 +7,8 @@
 //! - [`Analytic`]: Ascher & Petzold's example 10.2 (`idaAnalytic_mels`), with solution
 //!   x₁ = eᵗ, x₂ = eᵗ/(t − 2).
 
-use super::linsolve::{pattern_from_entries, position};
 use super::{Dae, DaeError, Pattern};
+use crate::fem::assembly::{pattern_from_entries, position};
 
 /// Robertson kinetics: y₁' = −0.04 y₁ + 10⁴ y₂ y₃, y₂' = 0.04 y₁ − 10⁴ y₂ y₃ − 3·10⁷ y₂²,
 /// 0 = y₁ + y₂ + y₃ − 1, y(0) = (1, 0, 0).

@@ -7,7 +7,10 @@
 //! - [`mesh`]: the conforming mesh of the reference half cell (nucleus, cytoplasm,
 //!   membrane), graded from the cell bottom to the nucleus, with curved P2 interfaces.
 //! - [`gmsh`]: reading and writing such meshes as gmsh 4.1 ASCII files.
+//! - [`assembly`]: sparse patterns built once from (row, col) entries and the positions
+//!   of element blocks in them, for refilling assembled matrices.
 
+pub mod assembly;
 pub mod gmsh;
 pub mod mesh;
 pub mod p2;

@@ -8,18 +8,19 @@
 //! Blocks make the iteration matrix `[cj·I, −I; K, cj·M + C]` visible, so the velocity can
 //! be condensed out of the linear solve.
 
+use super::kinematics::DIM;
 use crate::fem::{Domain, Mesh};
 
-/// Marker for an eliminated (or absent) unknown.
-pub const NONE: usize = usize::MAX;
+/// Marker for an eliminated (or absent) unknown (the assembly's marker).
+pub use crate::fem::assembly::NONE;
 
 /// Where each nodal unknown lives in y.
 #[derive(Debug, Clone)]
 pub struct DofMap {
     /// Displacement unknowns per node ([`NONE`] where eliminated).
-    pub u: Vec<[usize; 2]>,
+    pub u: Vec<[usize; DIM]>,
     /// Velocity unknowns per node (all [`NONE`] without inertia).
-    pub v: Vec<[usize; 2]>,
+    pub v: Vec<[usize; DIM]>,
     /// Adhesion-coefficient unknown per node ([`NONE`] off the membrane or without adhesion).
     pub mu: Vec<usize>,
     /// The node of each μ_as unknown, in order.
@@ -41,15 +42,17 @@ impl DofMap {
         for &i in &mesh.symmetry_nodes {
             on_axis[i] = true;
         }
-        let mut u = vec![[NONE; 2]; nn];
+        let mut u = vec![[NONE; DIM]; nn];
         let mut k = 0;
+        // Component 0 is normal to the symmetry line (eliminated on it).
         for (i, ui) in u.iter_mut().enumerate() {
-            if !on_axis[i] {
-                ui[0] = k;
+            for (c, d) in ui.iter_mut().enumerate() {
+                if c == 0 && on_axis[i] {
+                    continue;
+                }
+                *d = k;
                 k += 1;
             }
-            ui[1] = k;
-            k += 1;
         }
         let n_u = k;
         let v = if inertia {
@@ -57,7 +60,7 @@ impl DofMap {
                 .map(|d| d.map(|x| if x == NONE { NONE } else { x + n_u }))
                 .collect()
         } else {
-            vec![[NONE; 2]; nn]
+            vec![[NONE; DIM]; nn]
         };
         let mut next = if inertia { 2 * n_u } else { n_u };
         let mut mu = vec![NONE; nn];
@@ -94,17 +97,17 @@ impl DofMap {
     }
 
     /// Displacement of node `i` read from y (0 for eliminated components).
-    pub fn node_u(&self, y: &[f64], i: usize) -> [f64; 2] {
+    pub fn node_u(&self, y: &[f64], i: usize) -> [f64; DIM] {
         self.u[i].map(|d| if d == NONE { 0.0 } else { y[d] })
     }
 
     /// The rows of the momentum balance of node `i`: the v rows with inertia, else the u rows.
-    pub fn momentum_rows(&self, i: usize) -> [usize; 2] {
+    pub fn momentum_rows(&self, i: usize) -> [usize; DIM] {
         if self.inertia { self.v[i] } else { self.u[i] }
     }
 
     /// The unknowns whose time derivative is the velocity used in Ḟ: v with inertia, u̇ without.
-    pub fn velocity_cols(&self, i: usize) -> [usize; 2] {
+    pub fn velocity_cols(&self, i: usize) -> [usize; DIM] {
         if self.inertia { self.v[i] } else { self.u[i] }
     }
 }

@@ -1,0 +1,236 @@
+//! The assembly plan of the cell model: the pattern of the iteration matrix and, for every
+//! element and nodal row, where its contributions go — built once from the unknown
+//! numbering, then used to scatter the kernels' element vectors and tangents.
+//!
+//! Blocks of J (rows × columns), in terms of [`super::kernels::ElementTangent`]:
+//!
+//! - momentum × u: `K` (with inertia), `K + cj C` (without: v = u̇);
+//! - momentum × v (inertia only): `C` (including `cj M`);
+//! - momentum × μ_as (membrane elements with adhesion): `B`;
+//! - kinematic rows (inertia only): `u̇ − v`, entries `cj` (u_k) and `−1` (v_k);
+//! - adhesion rows: `μ̇_as − r(x, μ_as)`, entries on μ_k and on the node's u.
+
+use super::dofs::DofMap;
+use super::element::{EDOF, Element, NODES};
+use super::kernels::{ElementTangent, ElementVector};
+use super::kinematics::DIM;
+use crate::fem::Mesh;
+use crate::fem::assembly::{BlockPositions, NONE, Pattern, PatternBuilder, position_or_none};
+
+/// Where one element's contributions go.
+pub(crate) struct ElementPositions {
+    /// Momentum rows of the element's displacement components, node-major
+    /// ([`NONE`] where eliminated): the rows of the residual scatter.
+    pub(crate) momentum_rows: [usize; EDOF],
+    /// (momentum rows × u columns).
+    pub(crate) momentum_u: BlockPositions,
+    /// (momentum rows × v columns); empty without inertia.
+    pub(crate) momentum_v: BlockPositions,
+    /// (momentum rows × μ_as columns); empty unless the element carries μ_as.
+    pub(crate) momentum_mu: BlockPositions,
+}
+
+/// The pattern of J and the positions of every block in it.
+pub(crate) struct AssemblyPlan {
+    /// The pattern of the iteration matrix.
+    pub(crate) pattern: Pattern,
+    /// Per element, in mesh order.
+    pub(crate) elements: Vec<ElementPositions>,
+    /// Kinematic rows (inertia): positions of (u_k, u_k) and (u_k, v_k).
+    pub(crate) kinematic: Vec<[usize; 2]>,
+    /// Adhesion rows: positions of (μ_k, μ_k) and (μ_k, u) of its node's components.
+    pub(crate) mu_rate: Vec<[usize; 1 + DIM]>,
+}
+
+/// An element's unknowns: momentum rows, u, v and μ_as columns.
+struct ElementDofs {
+    rows: [usize; EDOF],
+    u: [usize; EDOF],
+    v: [usize; EDOF],
+    mu: [usize; NODES],
+}
+
+impl ElementDofs {
+    fn new(dofs: &DofMap, nodes: &[usize; NODES]) -> Self {
+        let mut d = Self {
+            rows: [NONE; EDOF],
+            u: [NONE; EDOF],
+            v: [NONE; EDOF],
+            mu: nodes.map(|i| dofs.mu[i]),
+        };
+        for (a, &n) in nodes.iter().enumerate() {
+            let m = dofs.momentum_rows(n);
+            for i in 0..DIM {
+                d.rows[DIM * a + i] = m[i];
+                d.u[DIM * a + i] = dofs.u[n][i];
+                d.v[DIM * a + i] = dofs.v[n][i];
+            }
+        }
+        d
+    }
+}
+
+impl AssemblyPlan {
+    /// The plan for `elements` of `mesh` under the numbering `dofs`.
+    pub(crate) fn new(mesh: &Mesh, dofs: &DofMap, elements: &[Element]) -> Self {
+        let inertia = dofs.inertia;
+        let el_dofs: Vec<ElementDofs> = elements
+            .iter()
+            .map(|el| ElementDofs::new(dofs, &el.nodes))
+            .collect();
+        let mut b = PatternBuilder::new();
+        for (el, d) in elements.iter().zip(&el_dofs) {
+            b.add_block(&d.rows, &d.u);
+            if inertia {
+                b.add_block(&d.rows, &d.v);
+            }
+            if el.with_mu {
+                b.add_block(&d.rows, &d.mu);
+            }
+        }
+        let kinematic_pairs: Vec<(usize, usize)> = if inertia {
+            (0..mesh.nodes.len())
+                .flat_map(|i| (0..DIM).map(move |k| (i, k)))
+                .map(|(i, k)| (dofs.u[i][k], dofs.v[i][k]))
+                .filter(|&(uk, _)| uk != NONE)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        for &(uk, vk) in &kinematic_pairs {
+            b.add(uk, uk);
+            b.add(uk, vk);
+        }
+        let mu_row = |k: usize| dofs.mu_offset() + k;
+        for (k, &i) in dofs.mu_nodes.iter().enumerate() {
+            b.add(mu_row(k), mu_row(k));
+            b.add_block(&[mu_row(k)], &dofs.u[i]);
+        }
+        let pattern = b.build(dofs.n);
+        let pos = |r: usize, c: usize| position_or_none(&pattern, r, c);
+        let elements = elements
+            .iter()
+            .zip(&el_dofs)
+            .map(|(el, d)| ElementPositions {
+                momentum_rows: d.rows,
+                momentum_u: BlockPositions::new(&pattern, &d.rows, &d.u),
+                momentum_v: if inertia {
+                    BlockPositions::new(&pattern, &d.rows, &d.v)
+                } else {
+                    BlockPositions::empty()
+                },
+                momentum_mu: if el.with_mu {
+                    BlockPositions::new(&pattern, &d.rows, &d.mu)
+                } else {
+                    BlockPositions::empty()
+                },
+            })
+            .collect();
+        let kinematic = kinematic_pairs
+            .iter()
+            .map(|&(uk, vk)| [pos(uk, uk), pos(uk, vk)])
+            .collect();
+        let mu_rate = dofs
+            .mu_nodes
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| {
+                let row = mu_row(k);
+                let mut p = [pos(row, row); 1 + DIM];
+                for c in 0..DIM {
+                    p[1 + c] = pos(row, dofs.u[i][c]);
+                }
+                p
+            })
+            .collect();
+        Self {
+            pattern,
+            elements,
+            kinematic,
+            mu_rate,
+        }
+    }
+
+    /// `r[row] += f_e[a][i]` over element `e`'s momentum rows.
+    #[inline]
+    pub(crate) fn scatter_residual(&self, e: usize, fe: &ElementVector, r: &mut [f64]) {
+        let rows = &self.elements[e].momentum_rows;
+        for a in 0..NODES {
+            for i in 0..DIM {
+                let row = rows[DIM * a + i];
+                if row != NONE {
+                    r[row] += fe[a][i];
+                }
+            }
+        }
+    }
+
+    /// Adds element `e`'s tangents to J's values: `K` (u columns) and `C` (v columns)
+    /// with inertia, `K + cj C` (u columns) without, and `B` (μ_as columns) where present.
+    #[inline]
+    pub(crate) fn scatter_tangent(&self, e: usize, tan: &ElementTangent, cj: f64, v: &mut [f64]) {
+        let ep = &self.elements[e];
+        if ep.momentum_v.is_empty() {
+            ep.momentum_u.scatter_combined(&tan.k, cj, &tan.c, v);
+        } else {
+            ep.momentum_u.scatter(&tan.k, v);
+            ep.momentum_v.scatter(&tan.c, v);
+        }
+        if !ep.momentum_mu.is_empty() {
+            ep.momentum_mu.scatter(&tan.b, v);
+        }
+    }
+
+    /// The kinematic rows `u̇ − v`: `cj` at (u_k, u_k) and `−1` at (u_k, v_k).
+    pub(crate) fn add_kinematic(&self, cj: f64, v: &mut [f64]) {
+        for &[puu, puv] in &self.kinematic {
+            v[puu] += cj;
+            v[puv] -= 1.0;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fem::MeshParams;
+    use crate::model::{CellModel, ModelParams};
+
+    /// Every entry of every element block whose row and column exist has its place in the
+    /// pattern, and the eliminated ones none.
+    #[test]
+    fn every_element_entry_has_its_place_in_the_pattern() {
+        let mesh = Mesh::generate(&MeshParams {
+            refine: 0.5,
+            ..Default::default()
+        })
+        .expect("mesh");
+        for inertia in [true, false] {
+            let params = ModelParams {
+                inertia,
+                ..ModelParams::defaults()
+            };
+            let m = CellModel::new(params, mesh.clone()).expect("model");
+            let nnz = m.plan.pattern.compute_nnz();
+            for (el, ep) in m.elements.iter().zip(&m.plan.elements) {
+                let d = ElementDofs::new(&m.dofs, &el.nodes);
+                assert_eq!(ep.momentum_v.is_empty(), !inertia);
+                assert_eq!(ep.momentum_mu.is_empty(), !el.with_mu);
+                let blocks: [(&BlockPositions, &[usize]); 3] = [
+                    (&ep.momentum_u, &d.u),
+                    (&ep.momentum_v, &d.v),
+                    (&ep.momentum_mu, &d.mu),
+                ];
+                for (block, cols) in blocks {
+                    for (k, &p) in block.positions().iter().enumerate() {
+                        let (r, c) = (d.rows[k / cols.len()], cols[k % cols.len()]);
+                        assert_eq!(p == NONE, r == NONE || c == NONE);
+                        assert!(p == NONE || p < nnz);
+                    }
+                }
+            }
+            assert!(m.plan.kinematic.iter().flatten().all(|&p| p < nnz));
+            assert!(m.plan.mu_rate.iter().all(|p| p[0] < nnz));
+        }
+    }
+}
