@@ -359,4 +359,3 @@ fn mesh_refusal(case: &Case) -> Result<(), Refusal> {
         message: e.to_string(),
     })
 }
-

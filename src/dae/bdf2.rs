@@ -396,12 +396,7 @@ impl<D: Dae> Integrator for Bdf2<D> {
         tout: f64,
         on_step: &mut dyn FnMut(f64, &Stats) -> bool,
     ) -> Result<(), IntegratorError> {
-        if !(tout >= self.t_out) {
-            return Err(IntegratorError::Input(format!(
-                "output time {tout} is before the current time {}",
-                self.t_out
-            )));
-        }
+        crate::dae::check_output_time(tout, self.t_out)?;
         let eps = 8.0 * f64::EPSILON * tout.abs().max(1.0);
         while self.tn < tout - eps {
             let mut h = self.planned_step();

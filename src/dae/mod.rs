@@ -317,6 +317,18 @@ impl Setup {
     }
 }
 
+/// The check that opens every [`Integrator::advance_to`]: output times only move forward
+/// from the current one, `t_out` (NaN is refused as well).
+pub fn check_output_time(tout: f64, t_out: f64) -> Result<(), IntegratorError> {
+    if tout >= t_out {
+        Ok(())
+    } else {
+        Err(IntegratorError::Input(format!(
+            "output time {tout} is before the current time {t_out}"
+        )))
+    }
+}
+
 /// What every integrator offers to a driver: advance to a time, look at the state.
 pub trait Integrator {
     /// Advances the solution to `tout` (never past the next breakpoint without stopping

@@ -752,6 +752,11 @@ pub struct ShapeStyleOptions {
     pub mesh_lines: bool,
 }
 
+/// Points [x, y] as plotters' coordinate pairs.
+fn xy(points: &[Pt]) -> Vec<(f64, f64)> {
+    points.iter().map(|p| (p[0], p[1])).collect()
+}
+
 /// Draws the deformed full cell of `mesh` displaced by `u` into `area` over `view`, with
 /// equal aspect: the view is widened along one axis so 1 µm has the same length in
 /// pixels on both. `backdrop` caches the substrate drawing between calls with the same
@@ -846,9 +851,8 @@ pub fn draw_shape<DB: DrawingBackend>(
             .filter(|(dd, _)| *dd == d)
             .map(|(_, p)| p)
             .collect();
-        let to_xy = |p: &Vec<Pt>| p.iter().map(|q| (q[0], q[1])).collect::<Vec<_>>();
         chart
-            .draw_series(polys.iter().map(|p| Polygon::new(to_xy(p), color.filled())))
+            .draw_series(polys.iter().map(|p| Polygon::new(xy(p), color.filled())))
             .map_err(e)?
             .label(d.to_string())
             .legend(move |(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], color.filled()));
@@ -857,7 +861,7 @@ pub fn draw_shape<DB: DrawingBackend>(
         let line_color = if opts.mesh_lines { edge } else { color };
         chart
             .draw_series(polys.iter().map(|p| {
-                let mut v = to_xy(p);
+                let mut v = xy(p);
                 if let Some(f) = v.first().copied() {
                     v.push(f);
                 }
@@ -865,23 +869,16 @@ pub fn draw_shape<DB: DrawingBackend>(
             }))
             .map_err(e)?;
     }
-    let dark = RGBColor(40, 40, 40);
-    chart
-        .draw_series(shape.interfaces.iter().map(|l| {
-            PathElement::new(
-                l.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>(),
-                dark.stroke_width(2),
-            )
-        }))
-        .map_err(e)?;
-    chart
-        .draw_series(shape.outer.iter().map(|l| {
-            PathElement::new(
-                l.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>(),
-                BLACK.stroke_width(2),
-            )
-        }))
-        .map_err(e)?;
+    // Each polyline of a list (points [x, y]) as one path in a style.
+    macro_rules! paths {
+        ($lines:expr, $style:expr) => {
+            chart
+                .draw_series($lines.iter().map(|l| PathElement::new(xy(&l[..]), $style)))
+                .map_err(e)?
+        };
+    }
+    paths!(shape.interfaces, RGBColor(40, 40, 40).stroke_width(2));
+    paths!(shape.outer, BLACK.stroke_width(2));
     for (segs, color, name) in [
         (&shape.pac, PAC, "active: PAC (push)"),
         (&shape.bottom, BOTTOM, "active: bottom (pull)"),
@@ -889,36 +886,15 @@ pub fn draw_shape<DB: DrawingBackend>(
         if segs.is_empty() {
             continue;
         }
-        chart
-            .draw_series(segs.iter().map(|s| {
-                PathElement::new(
-                    vec![(s[0][0], s[0][1]), (s[1][0], s[1][1])],
-                    color.stroke_width(3),
-                )
-            }))
-            .map_err(e)?
+        paths!(segs, color.stroke_width(3))
             .label(name)
             .legend(move |(x, y)| {
                 PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
             });
     }
     // Layer edge and substrate surface on top, as the paper's black lines.
-    chart
-        .draw_series(back.layer_edge.iter().map(|sg| {
-            PathElement::new(
-                vec![(sg[0][0], sg[0][1]), (sg[1][0], sg[1][1])],
-                LAYER_EDGE.stroke_width(2),
-            )
-        }))
-        .map_err(e)?;
-    chart
-        .draw_series(back.surface.iter().map(|l| {
-            PathElement::new(
-                l.iter().map(|p| (p[0], p[1])).collect::<Vec<_>>(),
-                BLACK.stroke_width(2),
-            )
-        }))
-        .map_err(e)?;
+    paths!(back.layer_edge, LAYER_EDGE.stroke_width(2));
+    paths!(back.surface, BLACK.stroke_width(2));
     *backdrop = Some(back);
     chart
         .draw_series(

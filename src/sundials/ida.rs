@@ -412,12 +412,7 @@ impl<D: Dae> Integrator for Ida<D> {
         tout: f64,
         on_step: &mut dyn FnMut(f64, &Stats) -> bool,
     ) -> Result<(), IntegratorError> {
-        if !(tout >= self.t_out) {
-            return Err(IntegratorError::Input(format!(
-                "output time {tout} is before the current time {}",
-                self.t_out
-            )));
-        }
+        crate::dae::check_output_time(tout, self.t_out)?;
         let mut tret = self.t_internal;
         while self.t_internal < tout {
             let eps = 8.0 * f64::EPSILON * tout.abs().max(1.0);
