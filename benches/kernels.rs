@@ -17,8 +17,9 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use cellsim::case::Case;
-use cellsim::dae::{Dae, LinearSolver, LinearSolverKind};
+use cellsim::dae::{Dae, LinearSolver};
 use cellsim::fem::Mesh;
+use cellsim::lu::LinearSolverKind;
 use cellsim::model::CellModel;
 use cellsim::scene;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};

@@ -14,7 +14,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use cellsim::case::{Case, InertiaMode};
-use cellsim::dae::LinearSolverKind;
+use cellsim::lu::LinearSolverKind;
 use cellsim::output::SnapshotOptions;
 use cellsim::record::RunSettings;
 use cellsim::run::{self, Progress, RunOptions};

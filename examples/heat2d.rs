@@ -5,7 +5,8 @@
 //! `cargo run --release --example heat2d [-- --klu] [--atol A] [--boundary B] [--grid M]`
 
 use cellsim::dae::problems::Heat2D;
-use cellsim::dae::{Atol, Integrator, LinearSolverKind};
+use cellsim::dae::{Atol, Integrator};
+use cellsim::lu::LinearSolverKind;
 use cellsim::sundials::{CalcIc, Ida, IdaOptions};
 
 fn arg(name: &str, default: f64) -> f64 {
@@ -29,9 +30,9 @@ fn main() {
         rtol: 0.0,
         atol: Atol::Scalar(atol),
         linear_solver: if klu {
-            LinearSolverKind::Klu
+            LinearSolverKind::Klu.into()
         } else {
-            LinearSolverKind::Faer
+            LinearSolverKind::Faer.into()
         },
         calc_ic: Some(CalcIc::AlgebraicAndDerivatives { tout1: 0.01 }),
         constraints: Some(dae.constraints()),

@@ -9,8 +9,9 @@
 
 use std::time::Instant;
 
+use cellsim::dae::Dae;
 use cellsim::dae::problems::Heat2D;
-use cellsim::dae::{Dae, LinearSolverKind};
+use cellsim::lu::LinearSolverKind;
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);

@@ -4,7 +4,8 @@
 //! `cargo run --release --example robertson [-- --klu]`
 
 use cellsim::dae::problems::Robertson;
-use cellsim::dae::{Atol, Integrator, LinearSolverKind};
+use cellsim::dae::{Atol, Integrator};
+use cellsim::lu::LinearSolverKind;
 use cellsim::sundials::{Ida, IdaOptions};
 
 fn main() {
@@ -14,9 +15,9 @@ fn main() {
         rtol,
         atol: Atol::Vector(atol.to_vec()),
         linear_solver: if klu {
-            LinearSolverKind::Klu
+            LinearSolverKind::Klu.into()
         } else {
-            LinearSolverKind::Faer
+            LinearSolverKind::Faer.into()
         },
         ..Default::default()
     };

@@ -12,6 +12,7 @@
 pub mod case;
 pub mod dae;
 pub mod fem;
+pub mod lu;
 pub mod model;
 pub mod output;
 pub mod paper;

@@ -7,8 +7,8 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use cellsim::case::{self, Case};
-use cellsim::dae::LinearSolverKind;
 use cellsim::fem::Mesh;
+use cellsim::lu::LinearSolverKind;
 use cellsim::output::{self, RunData, SnapshotOptions};
 use cellsim::paper;
 use cellsim::record::RunSettings;

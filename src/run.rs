@@ -430,7 +430,7 @@ impl Solver {
                     max_order: s.max_order,
                     init_step: s.initial_step,
                     max_steps: s.max_steps as i64,
-                    linear_solver,
+                    linear_solver: linear_solver.into(),
                     ..Default::default()
                 };
                 Solver::Ida(Box::new(Ida::new(model, opts)?))
@@ -444,7 +444,7 @@ impl Solver {
                     dt,
                     rtol: s.rtol,
                     atol,
-                    linear_solver,
+                    linear_solver: linear_solver.into(),
                     ..Default::default()
                 };
                 Solver::Bdf2(Box::new(Bdf2::new(model, opts)?))
@@ -791,7 +791,7 @@ fn advance_switching(
                 &mut y2,
                 &mut yp2,
                 &for_y,
-                settings.linear_solver.uncondensed(),
+                &settings.linear_solver.uncondensed(),
                 settings.rtol,
                 &atol,
             )

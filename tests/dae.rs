@@ -3,7 +3,8 @@
 
 use cellsim::dae::bdf2::{Bdf2, Bdf2Options};
 use cellsim::dae::problems::{Analytic, Heat2D, Robertson};
-use cellsim::dae::{Atol, Dae, DaeError, Integrator, LinearSolverKind, Pattern, Stats};
+use cellsim::dae::{Atol, Dae, DaeError, Integrator, Pattern, Stats};
+use cellsim::lu::LinearSolverKind;
 use cellsim::sundials::{CalcIc, Ida, IdaOptions};
 
 fn run_to(integ: &mut dyn Integrator, t: f64) {
@@ -16,7 +17,7 @@ fn robertson(kind: LinearSolverKind) -> Ida<Robertson> {
     let opts = IdaOptions {
         rtol: 1e-4,
         atol: Atol::Vector(vec![1e-8, 1e-6, 1e-6]),
-        linear_solver: kind,
+        linear_solver: kind.into(),
         ..Default::default()
     };
     Ida::new(Robertson::new(), opts).unwrap()
@@ -107,7 +108,7 @@ fn heat2d_table(kind: LinearSolverKind, atol: f64, boundary: f64) -> (Vec<HeatRo
     let opts = IdaOptions {
         rtol: 0.0,
         atol: Atol::Scalar(atol),
-        linear_solver: kind,
+        linear_solver: kind.into(),
         calc_ic: Some(CalcIc::AlgebraicAndDerivatives { tout1: 0.01 }),
         constraints: Some(dae.constraints()),
         ..Default::default()
@@ -378,10 +379,10 @@ fn faer_and_klu_give_the_same_answers() {
         (sb.steps, sb.newton_iters, sb.jacobian_evals)
     );
     // And on BDF2 (same Newton path up to round-off).
-    let solve = |kind| {
+    let solve = |kind: LinearSolverKind| {
         let opts = Bdf2Options {
             dt: 0.01,
-            linear_solver: kind,
+            linear_solver: kind.into(),
             ..Default::default()
         };
         let mut b = Bdf2::new(Analytic::new(10.0), opts).unwrap();

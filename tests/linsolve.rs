@@ -4,8 +4,9 @@
 use cellsim::case::Case;
 use cellsim::dae::bdf2::{Bdf2, Bdf2Options};
 use cellsim::dae::linsolve::LinearSolverError;
-use cellsim::dae::{Atol, Dae, Integrator, IntegratorError, LinearSolverKind, Pattern};
+use cellsim::dae::{Atol, Dae, Integrator, IntegratorError, Pattern};
 use cellsim::fem::Mesh;
+use cellsim::lu::LinearSolverKind;
 
 use crate::model::Lcg;
 use cellsim::model::CellModel;
@@ -116,7 +117,7 @@ fn condensed_solver_refuses_a_system_without_velocities() {
     ));
     // Through IDA: a clear error naming the solver, not a crash.
     let opts = IdaOptions {
-        linear_solver: LinearSolverKind::FaerCondensed,
+        linear_solver: LinearSolverKind::FaerCondensed.into(),
         ..Default::default()
     };
     match Ida::new(m, opts) {
@@ -155,7 +156,7 @@ fn inertial_fall(kind: LinearSolverKind, t_end: f64) -> Vec<Output> {
     let opts = IdaOptions {
         rtol: case.solver.rtol,
         atol: Atol::Vector(model.atol_vector(case.solver.atol)),
-        linear_solver: kind,
+        linear_solver: kind.into(),
         ..Default::default()
     };
     let mut ida = Ida::new(model, opts).unwrap();
@@ -236,13 +237,13 @@ fn ida_with_the_condensed_solver_follows_the_full_lu_through_a_fall_and_landing(
 #[test]
 fn bdf2_takes_the_same_steps_with_either_solver() {
     // Fixed steps: the two runs differ only by the linear solves' round-off.
-    let run = |kind| {
+    let run = |kind: LinearSolverKind| {
         let (case, model) = flat_gravity_with_inertia();
         let opts = Bdf2Options {
             dt: 0.25,
             rtol: case.solver.rtol,
             atol: Atol::Vector(model.atol_vector(case.solver.atol)),
-            linear_solver: kind,
+            linear_solver: kind.into(),
             ..Default::default()
         };
         let mut b = Bdf2::new(model, opts).unwrap();

@@ -29,7 +29,7 @@
 //! **Output.** Values between steps come from the cubic Hermite interpolant of
 //! (yₙ, ẏₙ, yₙ₊₁, ẏₙ₊₁), which is more accurate than the method, so outputs keep order 2.
 
-use super::linsolve::{LinearSolver, LinearSolverError, LinearSolverKind};
+use super::linsolve::{FaerFactory, LinearSolver, LinearSolverError, SharedFactory};
 use super::{
     Atol, Dae, DaeError, Integrator, IntegratorError, Setup, Stats, error_weights, wrms_norm,
 };
@@ -50,7 +50,7 @@ pub struct Bdf2Options {
     /// Most consecutive step halvings before giving up.
     pub max_cuts: u32,
     /// Which sparse LU factorizes the iteration matrix.
-    pub linear_solver: LinearSolverKind,
+    pub linear_solver: SharedFactory,
 }
 
 impl Default for Bdf2Options {
@@ -62,7 +62,7 @@ impl Default for Bdf2Options {
             newton_tol: 0.33,
             max_newton_iters: 4,
             max_cuts: 10,
-            linear_solver: LinearSolverKind::Faer,
+            linear_solver: std::sync::Arc::new(FaerFactory),
         }
     }
 }
@@ -122,7 +122,7 @@ impl<D: Dae> Bdf2<D> {
             solver,
             nnz,
             breakpoints,
-        } = Setup::new(&dae, opts.linear_solver, &opts.atol)?;
+        } = Setup::new(&dae, opts.linear_solver.as_ref(), &opts.atol)?;
         Ok(Self {
             dae,
             opts,

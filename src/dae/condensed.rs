@@ -107,7 +107,7 @@ impl CondensedLu {
     }
 
     /// A solver that does not know the problem's pairs: `analyse` fails with
-    /// [`LinearSolverError::Unsupported`]. What [`super::LinearSolverKind::build`] returns
+    /// [`LinearSolverError::Unsupported`]. What [`crate::lu::LinearSolverKind::build`] returns
     /// for the condensed kind, which has no problem to ask.
     pub fn unconfigured() -> Self {
         Self {

@@ -9,7 +9,8 @@
 //! faster than its 2-thread run and than KLU on P2 elasticity matrices), SUNDIALS' KLU
 //! with AMD ordering ([`crate::sundials::KluLu`]), and faer's LU on the half-size system
 //! left after eliminating the velocities of a first-order (u, v) system
-//! ([`super::condensed::CondensedLu`]).
+//! ([`super::condensed::CondensedLu`]). Which one an integrator uses is given by a
+//! [`LinearSolverFactory`] in its options ([`crate::lu::LinearSolverKind`] for users).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::SparseColMatRef;
@@ -18,9 +19,7 @@ use faer::sparse::linalg::lu::{
     LuRef, LuSymbolicParams, NumericLu, SymbolicLu, factorize_symbolic_lu,
 };
 use faer::{Conj, MatMut, Par};
-use serde::{Deserialize, Serialize};
 
-use super::condensed::CondensedLu;
 use super::{Dae, Pattern};
 
 /// Why a linear solver failed.
@@ -54,62 +53,25 @@ pub trait LinearSolver {
     fn name(&self) -> &'static str;
 }
 
-/// Which sparse LU to use.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LinearSolverKind {
-    /// faer's sequential supernodal LU (default).
-    #[default]
-    Faer,
-    /// SUNDIALS' KLU (SuiteSparse) with AMD ordering.
-    Klu,
-    /// faer's LU on the condensed system: the velocities of a first-order (u, v) system
-    /// eliminated ([`CondensedLu`]). Needs a problem with [`Dae::first_order_blocks`]
-    /// (the cell model with inertia).
-    #[serde(rename = "faer-condensed")]
-    FaerCondensed,
+/// Builds the linear solver of an integrator for a problem. The driver chooses the
+/// factory (e.g. [`crate::lu::LinearSolverKind`], which knows every backend, KLU from
+/// [`crate::sundials`] included); the integrators only call it, so this layer does not
+/// depend on the backends above it.
+pub trait LinearSolverFactory: std::fmt::Debug + Send + Sync {
+    /// A fresh solver for `dae` (its pattern not yet analysed).
+    fn build_for(&self, dae: &dyn Dae) -> Result<Box<dyn LinearSolver>, LinearSolverError>;
 }
 
-impl LinearSolverKind {
-    /// A fresh solver of this kind for a problem described by its pattern alone. The
-    /// condensed kind needs the problem's block layout ([`Self::build_for`]); built here it
-    /// reports [`LinearSolverError::Unsupported`] from `analyse`.
-    pub fn build(self) -> Box<dyn LinearSolver> {
-        match self {
-            LinearSolverKind::Faer => Box::new(FaerLu::new()),
-            LinearSolverKind::Klu => Box::new(crate::sundials::KluLu::new()),
-            LinearSolverKind::FaerCondensed => Box::new(CondensedLu::unconfigured()),
-        }
-    }
+/// A factory as integrator options hold it.
+pub type SharedFactory = std::sync::Arc<dyn LinearSolverFactory>;
 
-    /// A fresh solver of this kind for `dae`. Fails with
-    /// [`LinearSolverError::Unsupported`] when the condensed kind is asked for a problem
-    /// without first-order (u, v) pairs (e.g. the cell model without inertia; see
-    /// [`Self::uncondensed`]).
-    pub fn build_for<D: Dae + ?Sized>(
-        self,
-        dae: &D,
-    ) -> Result<Box<dyn LinearSolver>, LinearSolverError> {
-        match self {
-            LinearSolverKind::FaerCondensed => match dae.first_order_blocks() {
-                Some(blocks) => Ok(Box::new(CondensedLu::new(blocks))),
-                None => Err(LinearSolverError::Unsupported(
-                    "the condensed solver (faer-condensed) needs a first-order (u, v) system, \
-                     and this problem has no velocity unknowns (inertia off?): use faer or klu"
-                        .into(),
-                )),
-            },
-            other => Ok(other.build()),
-        }
-    }
+/// The factory of [`FaerLu`], the default of the integrators' options.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FaerFactory;
 
-    /// The kind to use on a problem without (u, v) pairs: `Faer` for the condensed
-    /// kind (its LU on the full system), the kind itself otherwise.
-    pub fn uncondensed(self) -> Self {
-        match self {
-            LinearSolverKind::FaerCondensed => LinearSolverKind::Faer,
-            other => other,
-        }
+impl LinearSolverFactory for FaerFactory {
+    fn build_for(&self, _dae: &dyn Dae) -> Result<Box<dyn LinearSolver>, LinearSolverError> {
+        Ok(Box::new(FaerLu::new()))
     }
 }
 
@@ -216,7 +178,7 @@ impl LinearSolver for FaerLu {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::fem::assembly::{pattern_from_entries, position};
 
@@ -260,7 +222,8 @@ mod tests {
         y
     }
 
-    fn check_solver(mut s: Box<dyn LinearSolver>) {
+    /// Factorizes and solves a few random sparse systems, checking ‖Ax − b‖.
+    pub(crate) fn check_solver(mut s: Box<dyn LinearSolver>) {
         let n = 50;
         let (p, v) = test_matrix(n);
         s.analyse(&p).unwrap();
@@ -284,11 +247,6 @@ mod tests {
     #[test]
     fn faer_solves_with_small_residual() {
         check_solver(Box::new(FaerLu::new()));
-    }
-
-    #[test]
-    fn klu_solves_with_small_residual() {
-        check_solver(LinearSolverKind::Klu.build());
     }
 
     #[test]

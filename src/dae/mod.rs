@@ -28,7 +28,7 @@ pub mod timing;
 use faer::sparse::SymbolicSparseColMat;
 use serde::{Deserialize, Serialize};
 
-pub use linsolve::{LinearSolver, LinearSolverKind};
+pub use linsolve::{LinearSolver, LinearSolverFactory, SharedFactory};
 
 /// The sparsity pattern of the iteration matrix (compressed sparse columns, row indices
 /// sorted within each column). Values handed to [`Dae::jacobian`] follow its order.
@@ -277,10 +277,10 @@ pub struct Setup {
 
 impl Setup {
     /// Checks the initial values and the per-component tolerances against the problem's
-    /// size, builds `kind`'s linear solver and analyses the pattern.
+    /// size, builds the factory's linear solver and analyses the pattern.
     pub fn new<D: Dae>(
         dae: &D,
-        kind: LinearSolverKind,
+        factory: &dyn LinearSolverFactory,
         atol: &Atol,
     ) -> Result<Self, IntegratorError> {
         let n = dae.size();
@@ -301,7 +301,7 @@ impl Setup {
             }
         }
         let linear = |e: linsolve::LinearSolverError| IntegratorError::Linear(e.to_string());
-        let mut solver = kind.build_for(dae).map_err(linear)?;
+        let mut solver = factory.build_for(dae).map_err(linear)?;
         solver.analyse(dae.pattern()).map_err(linear)?;
         let mut breakpoints: Vec<f64> = dae.breakpoints().into_iter().filter(|b| *b > t0).collect();
         breakpoints.sort_by(f64::total_cmp);
@@ -368,14 +368,14 @@ pub fn consistent_init(
     y: &mut [f64],
     yp: &mut [f64],
     solve_for_y: &[bool],
-    kind: LinearSolverKind,
+    factory: &dyn LinearSolverFactory,
     rtol: f64,
     atol: &Atol,
 ) -> Result<u32, IntegratorError> {
     const MAX_ITERS: u32 = 30;
     let n = dae.size();
     let pattern = dae.pattern().clone();
-    let mut solver = kind
+    let mut solver = factory
         .build_for(&*dae)
         .map_err(|e| IntegratorError::Linear(e.to_string()))?;
     solver

@@ -13,8 +13,9 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::case::{self, Case};
-use crate::dae::{LinearSolverKind, Stats};
+use crate::dae::Stats;
 use crate::fem::Domain;
+use crate::lu::LinearSolverKind;
 use crate::model::observe::Observables;
 use crate::physics::{ActiveStrain, Substrate};
 

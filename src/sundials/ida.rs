@@ -16,7 +16,7 @@ use std::ptr;
 use sundials_sys as sys;
 
 use super::{Context, NVector, guard, ida_flag_name, view, view_mut};
-use crate::dae::linsolve::{LinearSolver, LinearSolverError, LinearSolverKind};
+use crate::dae::linsolve::{FaerFactory, LinearSolver, LinearSolverError, SharedFactory};
 use crate::dae::timing::{self, Phase};
 use crate::dae::{Atol, Dae, DaeError, Integrator, IntegratorError, Setup, Stats};
 
@@ -57,7 +57,7 @@ pub struct IdaOptions {
     /// Compute consistent initial conditions first.
     pub calc_ic: Option<CalcIc>,
     /// Which sparse LU factorizes the iteration matrix.
-    pub linear_solver: LinearSolverKind,
+    pub linear_solver: SharedFactory,
     /// IDASetConstraints: per component 0 (none), 1 (≥ 0), −1 (≤ 0), 2 (> 0), −2 (< 0).
     pub constraints: Option<Vec<f64>>,
     /// Most Newton iterations per step (IDA's default 4).
@@ -79,7 +79,7 @@ impl Default for IdaOptions {
             max_steps: 1_000_000,
             suppress_alg: false,
             calc_ic: None,
-            linear_solver: LinearSolverKind::Faer,
+            linear_solver: std::sync::Arc::new(FaerFactory),
             constraints: None,
             max_newton_iters: None,
             max_conv_fails: None,
@@ -163,7 +163,7 @@ impl<D: Dae> Ida<D> {
             solver,
             nnz,
             breakpoints,
-        } = Setup::new(&dae, opts.linear_solver, &opts.atol)?;
+        } = Setup::new(&dae, opts.linear_solver.as_ref(), &opts.atol)?;
         if !(opts.rtol >= 0.0) || !(1..=5).contains(&opts.max_order) {
             return Err(IntegratorError::Input(format!(
                 "rtol = {} must be ≥ 0 and max_order = {} in 1..=5",

@@ -161,3 +161,11 @@ impl LinearSolver for KluLu {
         "klu"
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn klu_solves_with_small_residual() {
+        crate::dae::linsolve::tests::check_solver(Box::new(super::KluLu::new()));
+    }
+}

@@ -1,0 +1,82 @@
+//! The sparse LUs a user can choose, and how each is built: above the DAE layer (the
+//! [`LinearSolver`] trait, faer's LU, the condensed LU) and the FFI layer (KLU), so that
+//! neither of those imports the other's backends.
+
+use serde::{Deserialize, Serialize};
+
+use crate::dae::Dae;
+use crate::dae::condensed::CondensedLu;
+use crate::dae::linsolve::{
+    FaerLu, LinearSolver, LinearSolverError, LinearSolverFactory, SharedFactory,
+};
+
+/// Which sparse LU to use.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LinearSolverKind {
+    /// faer's sequential supernodal LU (default).
+    #[default]
+    Faer,
+    /// SUNDIALS' KLU (SuiteSparse) with AMD ordering.
+    Klu,
+    /// faer's LU on the condensed system: the velocities of a first-order (u, v) system
+    /// eliminated ([`CondensedLu`]). Needs a problem with [`Dae::first_order_blocks`]
+    /// (the cell model with inertia).
+    #[serde(rename = "faer-condensed")]
+    FaerCondensed,
+}
+
+impl LinearSolverKind {
+    /// A fresh solver of this kind for a problem described by its pattern alone. The
+    /// condensed kind needs the problem's block layout ([`Self::build_for`]); built here it
+    /// reports [`LinearSolverError::Unsupported`] from `analyse`.
+    pub fn build(self) -> Box<dyn LinearSolver> {
+        match self {
+            LinearSolverKind::Faer => Box::new(FaerLu::new()),
+            LinearSolverKind::Klu => Box::new(crate::sundials::KluLu::new()),
+            LinearSolverKind::FaerCondensed => Box::new(CondensedLu::unconfigured()),
+        }
+    }
+
+    /// A fresh solver of this kind for `dae`. Fails with
+    /// [`LinearSolverError::Unsupported`] when the condensed kind is asked for a problem
+    /// without first-order (u, v) pairs (e.g. the cell model without inertia; see
+    /// [`Self::uncondensed`]).
+    pub fn build_for<D: Dae + ?Sized>(
+        self,
+        dae: &D,
+    ) -> Result<Box<dyn LinearSolver>, LinearSolverError> {
+        match self {
+            LinearSolverKind::FaerCondensed => match dae.first_order_blocks() {
+                Some(blocks) => Ok(Box::new(CondensedLu::new(blocks))),
+                None => Err(LinearSolverError::Unsupported(
+                    "the condensed solver (faer-condensed) needs a first-order (u, v) system, \
+                     and this problem has no velocity unknowns (inertia off?): use faer or klu"
+                        .into(),
+                )),
+            },
+            other => Ok(other.build()),
+        }
+    }
+
+    /// The kind to use on a problem without (u, v) pairs: `Faer` for the condensed
+    /// kind (its LU on the full system), the kind itself otherwise.
+    pub fn uncondensed(self) -> Self {
+        match self {
+            LinearSolverKind::FaerCondensed => LinearSolverKind::Faer,
+            other => other,
+        }
+    }
+}
+
+impl LinearSolverFactory for LinearSolverKind {
+    fn build_for(&self, dae: &dyn Dae) -> Result<Box<dyn LinearSolver>, LinearSolverError> {
+        LinearSolverKind::build_for(*self, dae)
+    }
+}
+
+impl From<LinearSolverKind> for SharedFactory {
+    fn from(kind: LinearSolverKind) -> Self {
+        std::sync::Arc::new(kind)
+    }
+}
