@@ -390,23 +390,6 @@ pub fn output_times(case: &Case) -> Vec<f64> {
     t
 }
 
-/// The phase that ends at `t`, if any.
-fn phase_at(case: &Case, t: f64) -> Option<&'static str> {
-    let ph = &case.phases;
-    let close = |a: f64| (a - t).abs() <= 1e-9 * ph.t_end;
-    if close(ph.t_end) {
-        Some("end")
-    } else if close(ph.t_g0) {
-        Some("gravity")
-    } else if close(ph.t_as0) {
-        Some("spreading")
-    } else if close(ph.t_a0) {
-        Some("active")
-    } else {
-        None
-    }
-}
-
 /// Either integrator on the cell model.
 enum Solver {
     Ida(Box<Ida<CellModel>>),
@@ -507,222 +490,404 @@ pub fn progress_bar_in(
 /// Runs one scene; see the module documentation.
 pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunError> {
     let setup_start = Instant::now();
-    let out = &opts.out;
-    std::fs::create_dir_all(out).map_err(io_err(out))?;
+    let model = build_model(case, file)?;
+    let mut files = RunWriter::create(case, file, opts, &model)?;
+    let y0 = vec![0.0; model.dofs.n];
+    if let Err(stop) = files.output(&model, 0.0, &y0, &y0) {
+        let (_, message) = stop.into_stop()?;
+        return Err(RunError::Model {
+            file: file.into(),
+            message,
+        });
+    }
+    let mut driver = Driver::new(case, opts, model).map_err(|e| RunError::Model {
+        file: file.into(),
+        message: e.to_string(),
+    })?;
+    files.summary.setup_seconds = setup_start.elapsed().as_secs_f64();
+
+    let start = Instant::now();
+    let mut stopped = None;
+    for tout in output_times(case) {
+        match driver.advance_to(tout) {
+            Advance::Reached => {}
+            Advance::Stopped(kind, reason) => {
+                stopped = Some((kind, reason));
+                break;
+            }
+        }
+        let (model, y, yp) = driver.state();
+        if let Err(reason) = files.output(model, tout, y, yp) {
+            stopped = Some(reason.into_stop()?);
+            break;
+        }
+        files.summary.stats = driver.stats();
+        files.summary.inertia_switched_off_at = driver.switched_at;
+        if let Some(reason) = driver.switch_overdue() {
+            stopped = Some((FailureKind::Integration, reason));
+            break;
+        }
+        files.summary.wall_seconds = start.elapsed().as_secs_f64();
+        files.write_summary()?;
+    }
+    driver.finish();
+    files.summary.inertia_switched_off_at = driver.switched_at;
+    files.finish(case, driver.stats(), start.elapsed().as_secs_f64(), stopped)
+}
+
+/// The mesh and the cell model of a case, with the system it starts with.
+fn build_model(case: &Case, file: &str) -> Result<CellModel, RunError> {
     let mesh = Mesh::generate(&scene::mesh_params(case)).map_err(|source| RunError::Mesh {
         file: file.into(),
         source,
     })?;
-    let inertia0 = scene::starts_with_inertia(case);
-    let params = scene::model_params(case, file, inertia0)?;
-    let model = CellModel::new(params.clone(), mesh.clone()).map_err(|e| RunError::Model {
+    let params = scene::model_params(case, file, scene::starts_with_inertia(case))?;
+    CellModel::new(params, mesh).map_err(|e| RunError::Model {
         file: file.into(),
         message: e.to_string(),
-    })?;
-    let (nu, nv, nm) = model.block_sizes();
+    })
+}
 
-    let ph = &case.phases;
-    let mesh_file = MeshFile {
-        nodes: mesh.nodes.clone(),
-        elements: mesh.elements.clone(),
-        domains: mesh.domains.clone(),
-        outer_edges: mesh.outer_edges.clone(),
-        nucleus_edges: mesh.nucleus_edges.clone(),
-        membrane_inner_edges: mesh.membrane_inner_edges.clone(),
-        substrate: params.substrate,
-        active: params.active,
-        contact_eps: params.contact.eps,
-        layer_thickness: params.adhesion.map(|a| a.e_f),
-        center: params.center,
-        phase_times: [ph.t_g0, ph.t_as0, ph.t_a0, ph.t_end],
-    };
-    write_json(&out.join("mesh.json"), &mesh_file)?;
-    let n_outputs = output_times(case).len() + 1;
-    let mut frames = SnapshotWriter::new(out, &case.name, &mesh_file, opts.snapshots, n_outputs)?;
+/// How an advance to an output time ended.
+enum Advance {
+    /// The output time was reached.
+    Reached,
+    /// The run stops: the kind of stop and its reason.
+    Stopped(FailureKind, String),
+}
 
-    let mut summary = Summary {
-        case: case.name.clone(),
-        case_file: file.to_string(),
-        settings: opts.settings.clone(),
-        inertia: format!("{:?}", case.inertia.mode),
-        unknowns: Unknowns {
-            total: nu + nv + nm,
-            u: nu,
-            v: nv,
-            mu_as: nm,
-        },
-        mesh_elements: mesh.elements.len(),
-        mesh_nodes: mesh.nodes.len(),
-        wall_seconds: 0.0,
-        setup_seconds: 0.0,
-        stats: Stats::default(),
-        finished: false,
-        failure: None,
-        final_values: None,
-        outputs: 0,
-        inertia_switched_off_at: None,
-        states: Vec::new(),
-        cellsim_version: env!("CARGO_PKG_VERSION").to_string(),
-        sundials_version: crate::sundials::SUNDIALS_VERSION.to_string(),
-        timers: None,
-    };
-    let csv_path = out.join("timeseries.csv");
-    let mut csv = BufWriter::new(File::create(&csv_path).map_err(io_err(&csv_path))?);
-    let write_row = |csv: &mut BufWriter<File>, o: &Observables| -> Result<(), RunError> {
-        writeln!(csv, "{}", o.csv_row())
-            .and_then(|_| csv.flush())
-            .map_err(io_err(&csv_path))
-    };
-    writeln!(csv, "{}", Observables::CSV_HEADER).map_err(io_err(&csv_path))?;
-    let y0 = vec![0.0; model.dofs.n];
-    let first = model.observe(0.0, &y0);
-    write_row(&mut csv, &first)?;
-    if frames.is_active() {
-        frames.write(&snapshot(&model, 0.0, &y0, &y0))?;
+/// The integrator on the current system, and what the driver keeps across output times:
+/// its limits ([`StepGuard`]), the progress display and the pending inertia switch.
+struct Driver {
+    solver: Solver,
+    settings: RunSettings,
+    guard: StepGuard,
+    reporter: Reporter,
+    /// Statistics of the systems before the current one.
+    stats_before: Stats,
+    /// The requested inertia switch time, while the switch is pending.
+    switch_after: Option<f64>,
+    /// When inertia was switched off.
+    switched_at: Option<f64>,
+}
+
+impl Driver {
+    fn new(case: &Case, opts: &RunOptions, model: CellModel) -> Result<Self, IntegratorError> {
+        let ph = &case.phases;
+        Ok(Self {
+            solver: Solver::new(model, &opts.settings)?,
+            settings: opts.settings.clone(),
+            guard: StepGuard::new(
+                opts.interrupt.clone(),
+                opts.settings.max_wall_seconds,
+                opts.settings.max_steps,
+                ph.t_end / case.output.n_times.max(1) as f64,
+            ),
+            reporter: Reporter::new(&opts.progress, ph.t_end),
+            stats_before: Stats::default(),
+            switch_after: match case.inertia.mode {
+                InertiaMode::OffAfter(t) if t < ph.t_end => Some(t),
+                _ => None,
+            },
+            switched_at: None,
+        })
     }
-    summary.outputs = 1;
-    summary.final_values = Some(first);
 
-    let mut solver = match Solver::new(model, &opts.settings) {
-        Ok(s) => s,
-        Err(e) => {
-            return Err(RunError::Model {
-                file: file.into(),
-                message: e.to_string(),
-            });
+    /// Statistics of the run so far (all systems).
+    fn stats(&self) -> Stats {
+        &self.stats_before + &self.solver.integ_ref().stats()
+    }
+
+    /// The model and (y, ẏ) at the last output time reached.
+    fn state(&self) -> (&CellModel, &[f64], &[f64]) {
+        let i = self.solver.integ_ref();
+        (self.solver.model(), i.y(), i.yp())
+    }
+
+    /// Advances to `tout`, switching inertia off on the way once past the requested
+    /// switch time and the contact carries the cell.
+    fn advance_to(&mut self, tout: f64) -> Advance {
+        self.guard.next_output(tout);
+        // Why the driver stopped the integrator, and when (the integrator itself only
+        // says "interrupted").
+        let mut stopped: Option<(StopCause, f64)> = None;
+        let result = self.advance_inner(tout, &mut stopped);
+        match (stopped, result) {
+            (Some((cause, t)), _) => Advance::Stopped(cause.kind(), cause.reason(t)),
+            (None, Err(reason)) => Advance::Stopped(FailureKind::Integration, reason),
+            (None, Ok(())) => Advance::Reached,
         }
-    };
-    summary.setup_seconds = setup_start.elapsed().as_secs_f64();
-    let switch_time = match case.inertia.mode {
-        InertiaMode::OffAfter(t) if t < ph.t_end => Some(t),
-        _ => None,
-    };
-    let mut stats_before = Stats::default();
-    let mut switch_pending = switch_time.is_some();
-    crate::dae::timing::reset();
-    let start = Instant::now();
-    let mut failure: Option<(FailureKind, String)> = None;
-    let times = output_times(case);
-    let mut reporter = Reporter::new(&opts.progress, ph.t_end);
-    let mut guard = StepGuard::new(
-        opts.interrupt.clone(),
-        opts.settings.max_wall_seconds,
-        opts.settings.max_steps,
-        ph.t_end / case.output.n_times.max(1) as f64,
-    );
-    // Why the driver stopped the integrator, and when (the integrator itself only says
-    // "interrupted").
-    let mut stopped: Option<(StopCause, f64)> = None;
+    }
 
-    for tout in times {
-        guard.next_output(tout);
-        // Once past the requested switch time, advance in short probes until the contact
-        // carries the cell, switch the system there, then go on to the output time.
-        if switch_pending && solver.integ_ref().t() >= switch_time.unwrap_or(f64::INFINITY) {
-            let base = stats_before.clone();
-            let mut on_step = |t: f64, s: &Stats| {
-                after_step(&mut guard, &mut reporter, &mut stopped, &base, t, s)
-            };
-            match advance_switching(&mut solver, tout, &opts.settings, &mut on_step) {
-                Ok(Some((old_stats, t_switch))) => {
-                    stats_before += &old_stats;
-                    summary.inertia_switched_off_at = Some(t_switch);
-                    switch_pending = false;
-                }
-                Ok(None) => {}
-                Err(e) => {
-                    failure = Some((FailureKind::Integration, e));
-                    break;
+    fn advance_inner(
+        &mut self,
+        tout: f64,
+        stopped: &mut Option<(StopCause, f64)>,
+    ) -> Result<(), String> {
+        let Self {
+            solver,
+            settings,
+            guard,
+            reporter,
+            stats_before,
+            switch_after,
+            switched_at,
+        } = self;
+        if let Some(ts) = *switch_after {
+            if solver.integ_ref().t() >= ts {
+                let base = stats_before.clone();
+                let mut on_step =
+                    |t: f64, s: &Stats| after_step(guard, reporter, stopped, &base, t, s);
+                if let Some((old_stats, t_switch)) =
+                    advance_switching(solver, tout, settings, &mut on_step)?
+                {
+                    *stats_before += &old_stats;
+                    *switched_at = Some(t_switch);
+                    *switch_after = None;
                 }
             }
         }
         let base = stats_before.clone();
-        let mut on_step =
-            |t: f64, s: &Stats| after_step(&mut guard, &mut reporter, &mut stopped, &base, t, s);
-        if let Err(e) = solver.integ().advance_to(tout, &mut on_step) {
-            failure = Some((FailureKind::Integration, e.to_string()));
-            break;
+        let mut on_step = |t: f64, s: &Stats| after_step(guard, reporter, stopped, &base, t, s);
+        solver
+            .integ()
+            .advance_to(tout, &mut on_step)
+            .map_err(|e| e.to_string())?;
+        Ok(())
+    }
+
+    /// Why the run must stop if the inertia switch is still pending
+    /// [`SWITCH_PROBE_LIMIT`] after its requested time.
+    fn switch_overdue(&self) -> Option<String> {
+        let ts = self.switch_after?;
+        (self.solver.integ_ref().t() - ts > SWITCH_PROBE_LIMIT).then(|| {
+            format!(
+                "cannot switch inertia off: in the {SWITCH_PROBE_LIMIT} s after t = {ts} s the contact never carried the cell's weight"
+            )
+        })
+    }
+
+    fn finish(&self) {
+        self.reporter.finish();
+    }
+}
+
+/// Why an output could not be written at an output time.
+enum OutputStop {
+    /// The state or its observables are not finite (nothing written): the run stops.
+    NonFinite(f64),
+    /// A file could not be written: the run fails with this error.
+    Io(RunError),
+}
+
+impl OutputStop {
+    /// The stop this makes, or the error to return at once.
+    fn into_stop(self) -> Result<(FailureKind, String), RunError> {
+        match self {
+            OutputStop::NonFinite(t) => Ok((
+                FailureKind::Integration,
+                format!("non-finite state or output at t = {t} s (not written)"),
+            )),
+            OutputStop::Io(e) => Err(e),
         }
-        let y = solver.integ_ref().y().to_vec();
-        let model = solver.model();
-        let obs = model.observe(tout, &y);
+    }
+}
+
+impl From<RunError> for OutputStop {
+    fn from(e: RunError) -> Self {
+        OutputStop::Io(e)
+    }
+}
+
+impl From<crate::output::OutputError> for OutputStop {
+    fn from(e: crate::output::OutputError) -> Self {
+        OutputStop::Io(RunError::Output(e))
+    }
+}
+
+/// The files of a run, written as it goes: `mesh.json` first, a `timeseries.csv` row (and
+/// with `--vtu`/`--gif` a snapshot) per output time, `state_<phase>.json` at phase ends,
+/// and `summary.json` after every row and at the end.
+struct RunWriter {
+    out: PathBuf,
+    csv_path: PathBuf,
+    csv: BufWriter<File>,
+    frames: SnapshotWriter,
+    phase_states: bool,
+    phases: [(f64, &'static str); 4],
+    tolerance: f64,
+    summary: Summary,
+}
+
+impl RunWriter {
+    /// Creates the directory, writes `mesh.json` and the CSV header, and starts the summary.
+    fn create(
+        case: &Case,
+        file: &str,
+        opts: &RunOptions,
+        model: &CellModel,
+    ) -> Result<Self, RunError> {
+        let out = opts.out.clone();
+        std::fs::create_dir_all(&out).map_err(io_err(&out))?;
+        let (mesh, params, ph) = (&model.mesh, &model.params, &case.phases);
+        let mesh_file = MeshFile {
+            nodes: mesh.nodes.clone(),
+            elements: mesh.elements.clone(),
+            domains: mesh.domains.clone(),
+            outer_edges: mesh.outer_edges.clone(),
+            nucleus_edges: mesh.nucleus_edges.clone(),
+            membrane_inner_edges: mesh.membrane_inner_edges.clone(),
+            substrate: params.substrate,
+            active: params.active,
+            contact_eps: params.contact.eps,
+            layer_thickness: params.adhesion.map(|a| a.e_f),
+            center: params.center,
+            phase_times: [ph.t_g0, ph.t_as0, ph.t_a0, ph.t_end],
+        };
+        write_json(&out.join("mesh.json"), &mesh_file)?;
+        let n_outputs = output_times(case).len() + 1;
+        let frames = SnapshotWriter::new(&out, &case.name, &mesh_file, opts.snapshots, n_outputs)?;
+        let csv_path = out.join("timeseries.csv");
+        let mut csv = BufWriter::new(File::create(&csv_path).map_err(io_err(&csv_path))?);
+        writeln!(csv, "{}", Observables::CSV_HEADER).map_err(io_err(&csv_path))?;
+        let (nu, nv, nm) = model.block_sizes();
+        let summary = Summary {
+            case: case.name.clone(),
+            case_file: file.to_string(),
+            settings: opts.settings.clone(),
+            inertia: format!("{:?}", case.inertia.mode),
+            unknowns: Unknowns {
+                total: nu + nv + nm,
+                u: nu,
+                v: nv,
+                mu_as: nm,
+            },
+            mesh_elements: mesh.elements.len(),
+            mesh_nodes: mesh.nodes.len(),
+            wall_seconds: 0.0,
+            setup_seconds: 0.0,
+            stats: Stats::default(),
+            finished: false,
+            failure: None,
+            final_values: None,
+            outputs: 0,
+            inertia_switched_off_at: None,
+            states: Vec::new(),
+            cellsim_version: env!("CARGO_PKG_VERSION").to_string(),
+            sundials_version: crate::sundials::SUNDIALS_VERSION.to_string(),
+            timers: None,
+        };
+        Ok(Self {
+            out,
+            csv_path,
+            csv,
+            frames,
+            phase_states: case.output.phase_states,
+            phases: [
+                (ph.t_end, "end"),
+                (ph.t_g0, "gravity"),
+                (ph.t_as0, "spreading"),
+                (ph.t_a0, "active"),
+            ],
+            tolerance: 1e-9 * ph.t_end,
+            summary,
+        })
+    }
+
+    /// The phase that ends at `t`, if any.
+    fn phase_at(&self, t: f64) -> Option<&'static str> {
+        self.phases
+            .iter()
+            .find(|(tp, _)| (tp - t).abs() <= self.tolerance)
+            .map(|(_, name)| *name)
+    }
+
+    /// Writes everything due at output time `t`: the CSV row, a snapshot, and at a phase
+    /// end the state file. Nothing is written for a non-finite state.
+    fn output(
+        &mut self,
+        model: &CellModel,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<(), OutputStop> {
+        let obs = model.observe(t, y);
         if !obs.is_finite() || y.iter().any(|v| !v.is_finite()) {
             // Not expected (the residual reports non-finite values as inadmissible, and
             // the integrators cut the step), but a run must never write NaN.
-            failure = Some((
-                FailureKind::Integration,
-                format!("non-finite state or output at t = {tout} s (not written)"),
+            return Err(OutputStop::NonFinite(t));
+        }
+        writeln!(self.csv, "{}", obs.csv_row())
+            .and_then(|_| self.csv.flush())
+            .map_err(io_err(&self.csv_path))?;
+        if self.frames.is_active() {
+            self.frames.write(&snapshot(model, t, y, yp))?;
+        }
+        self.summary.outputs += 1;
+        self.summary.final_values = Some(obs);
+        if let Some(phase) = self.phase_at(t).filter(|_| self.phase_states && t > 0.0) {
+            let name = format!("state_{phase}.json");
+            write_json(&self.out.join(&name), &state_file(model, phase, t, y, obs))?;
+            self.summary.states.push(name);
+        }
+        Ok(())
+    }
+
+    fn write_summary(&self) -> Result<(), RunError> {
+        write_json(&self.out.join("summary.json"), &self.summary)
+    }
+
+    /// Closes the snapshot files and writes the final summary: finished, or the stop's
+    /// kind and reason with the statistics up to the last step.
+    fn finish(
+        self,
+        case: &Case,
+        stats: Stats,
+        wall: f64,
+        mut stopped: Option<(FailureKind, String)>,
+    ) -> Result<Summary, RunError> {
+        let RunWriter {
+            out,
+            frames,
+            mut summary,
+            ..
+        } = self;
+        summary.wall_seconds = wall;
+        if crate::dae::timing::ENABLED {
+            summary.timers = Some(TimeBreakdown::from_totals(
+                &crate::dae::timing::totals(),
+                wall,
             ));
-            break;
         }
-        write_row(&mut csv, &obs)?;
-        if frames.is_active() {
-            let yp = solver.integ_ref().yp();
-            frames.write(&snapshot(model, tout, &y, yp))?;
+        if let Err(e) = frames.finish() {
+            stopped.get_or_insert((
+                FailureKind::Output,
+                format!("writing the VTU/GIF output: {e}"),
+            ));
         }
-        summary.outputs += 1;
-        summary.final_values = Some(obs);
-        summary.stats = &stats_before + &solver.integ_ref().stats();
-        if let Some(phase) = phase_at(case, tout) {
-            if case.output.phase_states {
-                let name = format!("state_{phase}.json");
-                write_json(&out.join(&name), &state_file(model, phase, tout, &y, obs))?;
-                summary.states.push(name);
+        let path = out.join("summary.json");
+        match stopped {
+            None => {
+                summary.finished = true;
+                write_json(&path, &summary)?;
+                Ok(summary)
             }
-        }
-        if switch_pending
-            && solver.integ_ref().t() - switch_time.unwrap_or(f64::INFINITY) > SWITCH_PROBE_LIMIT
-        {
-            failure = Some((
-                FailureKind::Integration,
-                format!(
-                    "cannot switch inertia off: in the {SWITCH_PROBE_LIMIT} s after t = {} s the contact never carried the cell's weight",
-                    switch_time.unwrap_or_default()
-                ),
-            ));
-            break;
-        }
-        summary.wall_seconds = start.elapsed().as_secs_f64();
-        write_json(&out.join("summary.json"), &summary)?;
-    }
-    if let Some((cause, t)) = &stopped {
-        failure = Some((cause.kind(), cause.reason(*t)));
-    }
-    summary.wall_seconds = start.elapsed().as_secs_f64();
-    if crate::dae::timing::ENABLED {
-        summary.timers = Some(TimeBreakdown::from_totals(
-            &crate::dae::timing::totals(),
-            summary.wall_seconds,
-        ));
-    }
-    reporter.finish();
-    if let Err(e) = frames.finish() {
-        failure.get_or_insert((
-            FailureKind::Output,
-            format!("writing the VTU/GIF output: {e}"),
-        ));
-    }
-    match failure {
-        None => {
-            summary.finished = true;
-            write_json(&out.join("summary.json"), &summary)?;
-            Ok(summary)
-        }
-        Some((kind, reason)) => {
-            // The statistics up to the failing step (not only up to the last output).
-            summary.stats = &stats_before + &solver.integ_ref().stats();
-            summary.failure = Some(Failure {
-                kind,
-                reason: reason.clone(),
-                t_last_output: summary.final_values.map(|o| o.t).unwrap_or(0.0),
-                step: summary.stats.steps,
-            });
-            write_json(&out.join("summary.json"), &summary)?;
-            Err(RunError::Integration {
-                case: case.name.clone(),
-                reason,
-                summary: Box::new(summary),
-            })
+            Some((kind, reason)) => {
+                // The statistics up to the failing step (not only up to the last output).
+                summary.stats = stats;
+                summary.failure = Some(Failure {
+                    kind,
+                    reason: reason.clone(),
+                    t_last_output: summary.final_values.map(|o| o.t).unwrap_or(0.0),
+                    step: summary.stats.steps,
+                });
+                write_json(&path, &summary)?;
+                Err(RunError::Integration {
+                    case: case.name.clone(),
+                    reason,
+                    summary: Box::new(summary),
+                })
+            }
         }
     }
 }
