@@ -121,7 +121,10 @@ fn condensed_solver_refuses_a_system_without_velocities() {
         ..Default::default()
     };
     match Ida::new(m, opts) {
-        Err(IntegratorError::Linear(msg)) => {
+        Err(IntegratorError::Linear {
+            source: LinearSolverError::Unsupported(msg),
+            ..
+        }) => {
             assert!(msg.contains("faer-condensed"), "{msg}")
         }
         Err(e) => panic!("unexpected error {e}"),

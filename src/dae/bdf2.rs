@@ -283,8 +283,8 @@ impl<D: Dae> Bdf2<D> {
                 self.factor_cj = Some(cj);
                 Ok(())
             }
-            Err(e @ LinearSolverError::Singular(_)) => Err(StepFailure::Newton(e.to_string())),
-            Err(e) => Err(StepFailure::Fatal(IntegratorError::Linear(e.to_string()))),
+            Err(e @ LinearSolverError::Singular { .. }) => Err(StepFailure::Newton(e.to_string())),
+            Err(e) => Err(StepFailure::Fatal(IntegratorError::linear(e))),
         }
     }
 
@@ -329,10 +329,10 @@ impl<D: Dae> Bdf2<D> {
             }
             match self.solver.solve_in_place(&mut self.r) {
                 Ok(()) => {}
-                Err(e @ LinearSolverError::Singular(_)) => {
+                Err(e @ LinearSolverError::Singular { .. }) => {
                     return Err(StepFailure::Newton(e.to_string()));
                 }
-                Err(e) => return Err(StepFailure::Fatal(IntegratorError::Linear(e.to_string()))),
+                Err(e) => return Err(StepFailure::Fatal(IntegratorError::linear(e))),
             }
             self.stats.newton_iters += 1;
             for i in 0..n {

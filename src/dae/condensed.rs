@@ -329,11 +329,15 @@ impl LinearSolver for CondensedLu {
         for k in 0..plan.p.len() {
             let (alpha, gamma) = (values[plan.pos_pp[k]], values[plan.pos_pq[k]]);
             if gamma == 0.0 || !gamma.is_finite() || !alpha.is_finite() {
-                return Err(LinearSolverError::Singular(format!(
-                    "condensed solver: kinematic row {} has J = ({alpha:e}, {gamma:e}) in \
-                     columns ({}, {}); the velocity cannot be eliminated",
-                    plan.p[k], plan.p[k], plan.q[k]
-                )));
+                return Err(LinearSolverError::Singular {
+                    solver: "condensed",
+                    column: Some(plan.q[k]),
+                    detail: format!(
+                        "kinematic row {} has J = ({alpha:e}, {gamma:e}) in columns ({}, {}); \
+                         the velocity cannot be eliminated",
+                        plan.p[k], plan.p[k], plan.q[k]
+                    ),
+                });
             }
             plan.inv_gamma[k] = 1.0 / gamma;
             plan.alpha_over_gamma[k] = alpha / gamma;
@@ -493,7 +497,7 @@ mod tests {
         v[position(&p, 1, m + 1).unwrap()] = 0.0;
         assert!(matches!(
             s.factorize(&v),
-            Err(LinearSolverError::Singular(_))
+            Err(LinearSolverError::Singular { .. })
         ));
     }
 }

@@ -34,11 +34,24 @@ pub enum LinearSolverError {
     Unsupported(String),
     /// The matrix is singular (structurally or numerically); recoverable by the
     /// integrator (a smaller step changes `cj`).
-    #[error("singular matrix: {0}")]
-    Singular(String),
+    #[error("singular matrix in {solver}{}: {detail}", at_column(*column))]
+    Singular {
+        /// The backend that met it ("faer", "klu", "condensed").
+        solver: &'static str,
+        /// The column (unknown) with no usable pivot, when the backend tells.
+        column: Option<usize>,
+        /// What the backend said.
+        detail: String,
+    },
     /// Anything else.
     #[error("{0}")]
     Other(String),
+}
+
+fn at_column(column: Option<usize>) -> String {
+    column
+        .map(|c| format!(" at column {c}"))
+        .unwrap_or_default()
 }
 
 /// A sparse direct solver: analyse once, factorize many times, solve.
@@ -142,7 +155,16 @@ impl LinearSolver for FaerLu {
         let stack = MemStack::new(&mut self.mem);
         symbolic
             .factorize_numeric_lu(&mut self.numeric, a, self.par, stack, Default::default())
-            .map_err(|e| LinearSolverError::Singular(format!("faer numeric LU: {e:?}")))?;
+            .map_err(|e| match e {
+                faer::sparse::linalg::LuError::SymbolicSingular { index } => {
+                    LinearSolverError::Singular {
+                        solver: "faer",
+                        column: Some(index),
+                        detail: "no pivot found in the numeric LU".into(),
+                    }
+                }
+                other => LinearSolverError::Other(format!("faer numeric LU: {other:?}")),
+            })?;
         self.factorized = true;
         Ok(())
     }
@@ -166,9 +188,12 @@ impl LinearSolver for FaerLu {
         if b.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
-            Err(LinearSolverError::Singular(
-                "non-finite solution (zero pivot)".into(),
-            ))
+            // The zero pivot's column is not known here: back-substitution spreads it.
+            Err(LinearSolverError::Singular {
+                solver: "faer",
+                column: None,
+                detail: "non-finite solution (zero pivot)".into(),
+            })
         }
     }
 
@@ -247,6 +272,24 @@ pub(crate) mod tests {
     #[test]
     fn faer_solves_with_small_residual() {
         check_solver(Box::new(FaerLu::new()));
+    }
+
+    #[test]
+    fn a_singular_matrix_is_a_typed_singular_error() {
+        // [[1, 1], [1, 1]]: the second pivot is zero.
+        let p = pattern_from_entries(2, &[(0, 0), (0, 1), (1, 0), (1, 1)]);
+        let mut s = FaerLu::new();
+        s.analyse(&p).unwrap();
+        let r = s
+            .factorize(&[1.0, 1.0, 1.0, 1.0])
+            .and_then(|_| s.solve_in_place(&mut [1.0, 2.0]));
+        match r {
+            Err(e @ LinearSolverError::Singular { solver, .. }) => {
+                assert_eq!(solver, "faer");
+                assert!(e.to_string().starts_with("singular matrix in faer"), "{e}");
+            }
+            other => panic!("expected a singular-matrix error, got {other:?}"),
+        }
     }
 
     #[test]

@@ -237,9 +237,15 @@ pub enum IntegratorError {
         /// The last failure.
         reason: String,
     },
-    /// The linear solver failed (structurally singular matrix, ...).
-    #[error("linear solver: {0}")]
-    Linear(String),
+    /// The linear solver failed (structurally singular matrix, a solver that does not fit
+    /// the problem, ...), with what the integrator was doing.
+    #[error("linear solver{}: {source}", context_prefix(context))]
+    Linear {
+        /// What the integrator was doing ("" when nothing more is known).
+        context: &'static str,
+        /// The solver's error.
+        source: linsolve::LinearSolverError,
+    },
     /// The problem reported a fatal error.
     #[error("problem error at t = {t:.6e}: {message}")]
     Problem {
@@ -257,6 +263,24 @@ pub enum IntegratorError {
     /// Invalid options or input.
     #[error("invalid input: {0}")]
     Input(String),
+}
+
+fn context_prefix(context: &str) -> String {
+    if context.is_empty() {
+        String::new()
+    } else {
+        format!(" ({context})")
+    }
+}
+
+impl IntegratorError {
+    /// A linear-solver failure with no further context.
+    pub fn linear(source: linsolve::LinearSolverError) -> Self {
+        IntegratorError::Linear {
+            context: "",
+            source,
+        }
+    }
 }
 
 /// What every integrator sets up from a problem before its first step.
@@ -300,7 +324,7 @@ impl Setup {
                 )));
             }
         }
-        let linear = |e: linsolve::LinearSolverError| IntegratorError::Linear(e.to_string());
+        let linear = IntegratorError::linear;
         let mut solver = factory.build_for(dae).map_err(linear)?;
         solver.analyse(dae.pattern()).map_err(linear)?;
         let mut breakpoints: Vec<f64> = dae.breakpoints().into_iter().filter(|b| *b > t0).collect();
@@ -375,12 +399,8 @@ pub fn consistent_init(
     const MAX_ITERS: u32 = 30;
     let n = dae.size();
     let pattern = dae.pattern().clone();
-    let mut solver = factory
-        .build_for(&*dae)
-        .map_err(|e| IntegratorError::Linear(e.to_string()))?;
-    solver
-        .analyse(&pattern)
-        .map_err(|e| IntegratorError::Linear(e.to_string()))?;
+    let mut solver = factory.build_for(&*dae).map_err(IntegratorError::linear)?;
+    solver.analyse(&pattern).map_err(IntegratorError::linear)?;
     let nnz = pattern.compute_nnz();
     let (mut j0, mut j1) = (vec![0.0; nnz], vec![0.0; nnz]);
     let (mut r, mut w) = (vec![0.0; n], vec![0.0; n]);
@@ -389,8 +409,9 @@ pub fn consistent_init(
         t,
         message: format!("consistent initial values: {e}"),
     };
-    let linear = |e: linsolve::LinearSolverError| {
-        IntegratorError::Linear(format!("consistent initial values: {e}"))
+    let linear = |e: linsolve::LinearSolverError| IntegratorError::Linear {
+        context: "consistent initial values",
+        source: e,
     };
     for it in 1..=MAX_ITERS {
         dae.residual(t, y, yp, &mut r).map_err(problem)?;

@@ -643,7 +643,7 @@ unsafe extern "C" fn ls_getid(_s: sys::SUNLinearSolver) -> sys::SUNLinearSolver_
 fn ls_code(st: &mut LsState, r: Result<Result<(), LinearSolverError>, String>) -> c_int {
     match r {
         Ok(Ok(())) => 0,
-        Ok(Err(e @ LinearSolverError::Singular(_))) => {
+        Ok(Err(e @ LinearSolverError::Singular { .. })) => {
             st.last_error = Some(e.to_string());
             sys::SUNLS_PACKAGE_FAIL_REC as c_int
         }

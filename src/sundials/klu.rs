@@ -125,9 +125,11 @@ impl LinearSolver for KluLu {
             sys::SUNLinSolSetup(st.ls, st.a)
         };
         if flag != 0 {
-            return Err(LinearSolverError::Singular(format!(
-                "KLU setup returned {flag}"
-            )));
+            return Err(LinearSolverError::Singular {
+                solver: "klu",
+                column: None,
+                detail: format!("KLU setup returned {flag}"),
+            });
         }
         self.factorized = true;
         Ok(())
@@ -145,15 +147,21 @@ impl LinearSolver for KluLu {
         // SAFETY: all handles valid; x and b are distinct serial vectors of length n.
         let flag = unsafe { sys::SUNLinSolSolve(st.ls, st.a, st.x.0, st.b.0, 0.0) };
         if flag != 0 {
-            return Err(LinearSolverError::Singular(format!(
-                "KLU solve returned {flag}"
-            )));
+            return Err(LinearSolverError::Singular {
+                solver: "klu",
+                column: None,
+                detail: format!("KLU solve returned {flag}"),
+            });
         }
         b.copy_from_slice(st.x.as_slice());
         if b.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
-            Err(LinearSolverError::Singular("non-finite solution".into()))
+            Err(LinearSolverError::Singular {
+                solver: "klu",
+                column: None,
+                detail: "non-finite solution".into(),
+            })
         }
     }
 
