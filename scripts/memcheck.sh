@@ -27,19 +27,32 @@ runs="fall:faer fall:klu"
 if [ "${1:-}" = "--all" ]; then
     runs="$runs fall:faer-condensed pillars:faer"
 fi
-status=0
-for run in $runs; do
-    case_name=${run%%:*}
-    solver=${run#*:}
-    log="$tmp/$case_name-$solver.log"
-    if ! valgrind --leak-check=full --errors-for-leak-kinds=definite --error-exitcode=3 \
+# The runs are independent: two at a time (the machines here have two cores).
+check() {
+    local case_name=${1%%:*} solver=${1#*:}
+    local log="$tmp/$case_name-$solver.log"
+    if valgrind --leak-check=full --errors-for-leak-kinds=definite --error-exitcode=3 \
         --suppressions=scripts/valgrind.supp \
         target/release/cellsim run "$tmp/$case_name.ron" --out "$tmp/out-$case_name-$solver" \
         --quiet --linear-solver "$solver" >/dev/null 2>"$log"; then
+        echo "memcheck: $case_name ($solver): $(grep -o 'definitely lost: .*' "$log"); $(grep -o 'ERROR SUMMARY: [0-9]* errors' "$log")"
+    else
         echo "memcheck: $case_name with $solver FAILED:"
         cat "$log"
-        status=1
+        return 1
     fi
-    echo "memcheck: $case_name ($solver): $(grep -o 'definitely lost: .*' "$log"); $(grep -o 'ERROR SUMMARY: [0-9]* errors' "$log")"
+}
+status=0
+pids=()
+for run in $runs; do
+    check "$run" &
+    pids+=($!)
+    if [ ${#pids[@]} -ge 2 ]; then
+        wait "${pids[0]}" || status=1
+        pids=("${pids[@]:1}")
+    fi
+done
+for pid in "${pids[@]}"; do
+    wait "$pid" || status=1
 done
 exit $status
