@@ -618,7 +618,7 @@ fn table_command(run_dirs: &[PathBuf]) -> ExitCode {
     out!("{}", output::table::HEADER);
     let mut status = ExitCode::SUCCESS;
     for dir in run_dirs {
-        match output::table::read_summary(dir) {
+        match cellsim::record::read::read_summary(dir) {
             Ok(s) => out!("{}", output::table::row(&s)),
             Err(e) => {
                 err!("error: {e}");

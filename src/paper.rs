@@ -209,14 +209,15 @@ fn run_one(
 /// `comparison.md` into `opts.out`.
 pub fn run_paper(opts: &PaperOptions) -> Result<PaperReport, OutputError> {
     crate::output::create_dir(&opts.out)?;
-    let cases = paper_cases(opts.cases.as_deref()).map_err(|m| OutputError::Malformed {
-        path: opts
-            .cases
-            .as_ref()
-            .map(|p| p.display().to_string())
-            .unwrap_or_else(|| "cases (compiled in)".into()),
-        message: m,
-    })?;
+    let cases =
+        paper_cases(opts.cases.as_deref()).map_err(|m| crate::record::ReadError::Malformed {
+            path: opts
+                .cases
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|| "cases (compiled in)".into()),
+            message: m,
+        })?;
     let runs = run_cases(&cases, opts);
     let mut report = draw_paper(&opts.out, &runs);
     report.runs = runs;

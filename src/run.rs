@@ -16,11 +16,11 @@ use serde::Serialize;
 
 use crate::case::{self, Case, InertiaMode};
 use crate::dae::bdf2::{Bdf2, Bdf2Options};
-use crate::dae::{Atol, Dae, Integrator, IntegratorError, Stats, consistent_init};
+use crate::dae::{Atol, Dae, Integrator, IntegratorError, Stats};
 use crate::fem::{Mesh, MeshError};
-use crate::model::observe::Observables;
-use crate::model::{CellModel, ModelParams};
+use crate::model::{CellModel, Restart};
 use crate::output::{SnapshotOptions, SnapshotWriter};
+use crate::record::Observables;
 use crate::record::{
     self, Failure, FailureKind, MeshFile, RunSettings, Snapshot, StateFile, Summary, TimeBreakdown,
     Unknowns,
@@ -919,17 +919,10 @@ const SWITCH_PROBE_DT: f64 = 0.01;
 
 /// Advances towards `tout` in steps of [`SWITCH_PROBE_DT`] (never past `tout`), and at the
 /// first moment the contact carries the cell's current weight switches inertia off: the
-/// same model on (u, μ_as), restarted there from the current state. Without
-/// inertia the rigid vertical mode has no damping and only the contact's stiffness, so the
-/// switch must wait for contact (the cell may be in the air between bounces). There the
-/// cell is placed at rest in equilibrium: u̇ = 0 and u solved from F(u, u̇ = 0, μ_as) = 0
-/// (the μ_as ODEs keep μ_as and get a consistent μ̇_as), a state at which u̇ = 0 is the
-/// consistent rate up to the slow load ramp. Keeping u̇ = v instead carried the elastic
-/// ringing of the landing into a system where the rigid vertical mode is algebraic, and
-/// IDA resolved an inconsistent transient: at rtol 1e-8 its step fell to 1e-13 s right
-/// after the switch and stayed there (measured on `cases/hard/rtol-tight.ron`). Returns the
-/// old integrator's statistics and the switch time once switched, `None` if `tout` came
-/// first.
+/// same model on (u, μ_as), restarted there at rest in equilibrium
+/// ([`CellModel::without_inertia_at_rest`]; the cell may be in the air between bounces
+/// before). Returns the old integrator's statistics and the switch time once switched,
+/// `None` if `tout` came first.
 fn advance_switching(
     solver: &mut Solver,
     tout: f64,
@@ -937,31 +930,18 @@ fn advance_switching(
     on_step: &mut dyn FnMut(f64, &Stats) -> bool,
 ) -> Result<Option<(Stats, f64)>, String> {
     loop {
-        let t = solver.integ_ref().t();
-        let y = solver.integ_ref().y();
-        let model = solver.model();
-        let ph = &model.params.phases;
-        let load = model.weight() * ph.t_g(t) * ph.gravity_sign(t);
-        if load > 0.0 && model.contact_force_total(y).y >= load {
-            let (mut y2, mut yp2) = model.drop_inertia_state(y, solver.integ_ref().yp());
-            yp2[..model.dofs.n_u].iter_mut().for_each(|v| *v = 0.0);
-            let mut p2: ModelParams = model.params.clone();
-            p2.inertia = false;
-            let mut m2 = CellModel::new(p2, model.mesh.clone()).map_err(|e| e.to_string())?;
-            let atol = Atol::Vector(m2.atol_vector(settings.atol));
-            let for_y: Vec<bool> = (0..m2.dofs.n).map(|i| i < m2.dofs.n_u).collect();
-            consistent_init(
-                &mut m2,
-                t,
-                &mut y2,
-                &mut yp2,
-                &for_y,
-                &settings.linear_solver.uncondensed(),
-                settings.rtol,
-                &atol,
-            )
-            .map_err(|e| format!("switching inertia off at t = {t}: {e}"))?;
-            m2.set_initial(t, y2, yp2);
+        let integ = solver.integ_ref();
+        let (t, y) = (integ.t(), integ.y());
+        if solver.model().contact_carries_weight(t, y) {
+            let restart = Restart {
+                linear_solver: &settings.linear_solver.uncondensed(),
+                rtol: settings.rtol,
+                atol: settings.atol,
+            };
+            let m2 = solver
+                .model()
+                .without_inertia_at_rest(t, y, integ.yp(), &restart)
+                .map_err(|e| e.to_string())?;
             let new = Solver::new(m2, settings)
                 .map_err(|e| format!("restart without inertia at t = {t}: {e}"))?;
             let old = std::mem::replace(solver, new);

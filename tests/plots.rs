@@ -8,6 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use cellsim::output::RunData;
 use cellsim::output::figures::{
     self, CYTOPLASM, LAYER, MEMBRANE, NUCLEUS, SHAPE_SIZE, SUBSTRATE, StrainBars, TIME_SIZE,
     UPSIDE_DOWN_SIZE,
@@ -15,12 +16,11 @@ use cellsim::output::figures::{
 use cellsim::output::geometry::{Backdrop, CellShape};
 use cellsim::output::movie::{FRAME_SIZE, MAX_FRAMES, Movie};
 use cellsim::output::paper::{self, Quantity, SceneOutcome, When};
-use cellsim::output::read::parse_timeseries;
 use cellsim::output::vtu::{QUADRATIC_TRIANGLE, VtuSeries, read_vtu, write_vtu};
-use cellsim::output::{OutputError, RunData};
 use cellsim::physics::Substrate;
 use cellsim::record::Snapshot;
 use cellsim::record::StateFile;
+use cellsim::record::read::{ReadError, parse_timeseries};
 
 fn fixture() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/small-push-pull")
@@ -407,7 +407,7 @@ fn malformed_files_are_named() {
     }
     std::fs::write(d.join("state_gravity.json"), v.to_string()).expect("write");
     let e = RunData::load(&d).expect_err("short state");
-    assert!(matches!(e, OutputError::Malformed { .. }));
+    assert!(matches!(e, ReadError::Malformed { .. }));
     assert!(e.to_string().contains("state_gravity.json"), "{e}");
 
     // A mesh with an element pointing past the nodes.

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::process::Command;
 
 use cellsim::case::{Case, InertiaMode};
-use cellsim::model::observe::Observables;
+use cellsim::record::Observables;
 use cellsim::study::{
     Quantity, default_dt_inertia, errors_against, fit_loglog, interp_loglog, wall_at,
 };

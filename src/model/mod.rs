@@ -32,6 +32,7 @@ mod kernels;
 pub mod kinematics;
 pub mod observe;
 mod plan;
+mod switch;
 
 use crate::dae::{Dae, DaeError, FirstOrderBlocks, Pattern};
 use crate::fem::p2::{P2Error, P2Tabulation};
@@ -43,6 +44,7 @@ use kernels::{ElementTangent, Switches};
 pub(crate) use kinematics::deformation;
 use kinematics::{DIM, Vector};
 use plan::AssemblyPlan;
+pub use switch::Restart;
 
 /// Physical parameters of a scene in solver units (µm, s, pN).
 #[derive(Debug, Clone)]
@@ -115,7 +117,7 @@ impl ModelParams {
 }
 
 /// Why a model cannot be built.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, thiserror::Error)]
 pub enum ModelError {
     /// An element's reference geometry is invalid (inverted or degenerate).
     #[error("element {element}: {source}")]
@@ -124,6 +126,16 @@ pub enum ModelError {
         element: usize,
         /// What is wrong with it.
         source: P2Error,
+    },
+    /// A system rebuilt during a run could not be made consistent with the old state.
+    #[error("{what} at t = {t}: {source}")]
+    Restart {
+        /// The change of system (e.g. "switching inertia off").
+        what: &'static str,
+        /// Time of the change [s].
+        t: f64,
+        /// The consistent-initialisation failure.
+        source: Box<crate::dae::IntegratorError>,
     },
 }
 

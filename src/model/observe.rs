@@ -1,61 +1,13 @@
 //! What a scene reports (MODEL.md §7), computed from a state y alone.
 
 use nalgebra::{Matrix2, Vector2};
-use serde::{Deserialize, Serialize};
 
 use super::dofs::NONE;
 use super::{CellModel, deformation};
 use crate::fem::Domain;
 use crate::fem::p2::edge_shape;
 use crate::physics::contact_force;
-
-/// The quantities of one output row, in the units of `timeseries.csv`.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-pub struct Observables {
-    /// Time [s].
-    pub t: f64,
-    /// Deformed length of the cell boundary within ε_ct of the substrate [µm] (half cell).
-    pub contact_radius: f64,
-    /// Vertical displacement of the nucleus top p_t [µm] (negative = down).
-    pub uy_top: f64,
-    /// Vertical displacement of the cell centre c [µm].
-    pub uy_centre: f64,
-    /// Vertical displacement of the nucleus bottom p_b [µm].
-    pub uy_bottom: f64,
-    /// Reference-area mean of ‖E‖_F over the nucleus (fraction).
-    pub strain_nucleus: f64,
-    /// Reference-area mean of ‖E‖_F over the cytoplasm (fraction).
-    pub strain_cytoplasm: f64,
-}
-
-impl Observables {
-    /// The CSV header, exactly as the run writes it.
-    pub const CSV_HEADER: &'static str =
-        "t,contact_radius,uy_top,uy_centre,uy_bottom,strain_nucleus,strain_cytoplasm";
-
-    /// The values in CSV column order.
-    pub fn values(&self) -> [f64; 7] {
-        [
-            self.t,
-            self.contact_radius,
-            self.uy_top,
-            self.uy_centre,
-            self.uy_bottom,
-            self.strain_nucleus,
-            self.strain_cytoplasm,
-        ]
-    }
-
-    /// Whether every value is finite (a run never writes NaN or infinity).
-    pub fn is_finite(&self) -> bool {
-        self.values().iter().all(|v| v.is_finite())
-    }
-
-    /// One CSV row (full precision).
-    pub fn csv_row(&self) -> String {
-        self.values().map(|v| v.to_string()).join(",")
-    }
-}
+use crate::record::Observables;
 
 /// Sub-segments per boundary edge when measuring the contact length.
 const EDGE_SAMPLES: usize = 64;

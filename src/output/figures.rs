@@ -20,9 +20,9 @@ use plotters::prelude::*;
 
 use super::OutputError;
 use super::geometry::{Backdrop, Bounds, CellShape, Pt, Rect, substrate_floor};
-use super::read::RunData;
 use crate::fem::Domain;
-use crate::model::observe::Observables;
+use crate::record::Observables;
+use crate::record::RunData;
 use crate::record::{MeshFile, StateFile};
 
 /// Pixel size of the time-series and bar figures.
@@ -515,7 +515,8 @@ pub fn upside_down_figure(
         .series
         .iter()
         .filter_map(|o| {
-            super::read::interpolate(&control.series, o.t).map(|c| (o.t, o.uy_top - c.uy_top))
+            crate::record::observables::interpolate(&control.series, o.t)
+                .map(|c| (o.t, o.uy_top - c.uy_top))
         })
         .collect();
     let mut marks = vec![];

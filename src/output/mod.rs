@@ -2,14 +2,14 @@
 //! comparison, ParaView files and animations.
 //!
 //! The rule of this module: **plotting reads only files a run wrote** (`timeseries.csv`,
-//! `mesh.json`, `state_<phase>.json`, `summary.json`, see [`crate::record`]), never the
+//! `mesh.json`, `state_<phase>.json`, `summary.json`, loaded by [`crate::record::read`] as a [`RunData`], tolerant of
+//! partial files), never the
 //! solver's memory, so every figure can be redrawn from a finished or an interrupted run.
 //! The per-output-time writers ([`snapshot`]: VTU and GIF) are handed a
 //! [`crate::record::Snapshot`], the
 //! same kind of plain data a state file holds, by the run loop.
 //!
 //! Module map:
-//! - [`read`]: loading a run directory ([`RunData`]), tolerant of partial files;
 //! - [`geometry`]: the deformed cell as polygons (curved P2 edges), active-region outlines,
 //!   substrate and fibronectin-layer profiles — pure geometry, no drawing;
 //! - [`figures`]: the PNG figures (time series, strain bars, shapes);
@@ -25,12 +25,11 @@ pub mod figures;
 pub mod geometry;
 pub mod movie;
 pub mod paper;
-pub mod read;
 pub mod snapshot;
 pub mod table;
 pub mod vtu;
 
-pub use read::RunData;
+pub use crate::record::RunData;
 pub use snapshot::{SnapshotOptions, SnapshotWriter};
 
 use std::path::Path;
@@ -38,22 +37,9 @@ use std::path::Path;
 /// Why an output could not be read, drawn or written. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
-    /// A file could not be read (missing, unreadable).
-    #[error("cannot read {path}: {source}")]
-    Read {
-        /// The file.
-        path: String,
-        /// Cause.
-        source: std::io::Error,
-    },
-    /// A file was read but its content is not what a run writes.
-    #[error("{path}: {message}")]
-    Malformed {
-        /// The file.
-        path: String,
-        /// What is wrong, with the line or field where known.
-        message: String,
-    },
+    /// A run's file could not be loaded (missing, unreadable or not what a run writes).
+    #[error(transparent)]
+    Read(#[from] crate::record::ReadError),
     /// A file could not be written.
     #[error("cannot write {path}: {source}")]
     Write {
@@ -81,14 +67,6 @@ pub enum OutputError {
 }
 
 impl OutputError {
-    /// A [`OutputError::Malformed`] for `path`.
-    pub fn malformed(path: &Path, message: impl Into<String>) -> Self {
-        OutputError::Malformed {
-            path: path.display().to_string(),
-            message: message.into(),
-        }
-    }
-
     /// A [`OutputError::Write`] for `path`.
     pub fn write(path: &Path, source: std::io::Error) -> Self {
         OutputError::Write {

@@ -18,7 +18,7 @@ use super::figures::{
     StrainBars, contact_radius_figure, displacement_figure, shape_figure, shape_view,
     strain_bars_figure, strain_time_figure, upside_down_figure,
 };
-use super::read::RunData;
+use crate::record::RunData;
 use crate::record::StateFile;
 
 /// One of the paper's scenes: its name and case file.

@@ -3,23 +3,11 @@
 //! Used for the README's hard-case table; works on finished, failed and interrupted runs.
 
 use std::fmt::Write as _;
-use std::path::Path;
 
-use super::OutputError;
 use crate::record::Summary;
 
 /// The table's header (markdown).
 pub const HEADER: &str = "| run | outcome | unknowns | wall [s] | steps | Jacobians | t reached [s] | contact radius [µm] | uy_top [µm] | ‖E‖ nucleus | ‖E‖ cytoplasm |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|";
-
-/// Reads `dir/summary.json`.
-pub fn read_summary(dir: &Path) -> Result<Summary, OutputError> {
-    let path = dir.join("summary.json");
-    let text = std::fs::read_to_string(&path).map_err(|source| OutputError::Read {
-        path: path.display().to_string(),
-        source,
-    })?;
-    serde_json::from_str(&text).map_err(|e| OutputError::malformed(&path, e.to_string()))
-}
 
 /// One markdown row for a run: "finished", or "stopped: <reason>" (shortened to its
 /// first sentence and the callback's report, if any).

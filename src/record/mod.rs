@@ -1,12 +1,18 @@
 //! The files a run writes, as types: the one place that says what is on disk.
 //!
 //! `cellsim run` writes, into its directory and as it goes: `mesh.json` ([`MeshFile`])
-//! first, `timeseries.csv` row by row (the observables, [`crate::model::observe`]), a
+//! first, `timeseries.csv` row by row (one [`Observables`] per output time), a
 //! `state_<phase>.json` ([`StateFile`]) at each phase end and `summary.json`
 //! ([`Summary`], with [`RunSettings`], [`Unknowns`], the integrator statistics and, for a
 //! run that stopped early, a typed [`Failure`]) after every row. The drivers (run, study,
 //! paper) write these records and the figures read them back, so neither side imports the
-//! other: this module sits below both.
+//! other: this module sits below both. [`read`] loads a run directory back ([`RunData`]).
+
+pub mod observables;
+pub mod read;
+
+pub use observables::Observables;
+pub use read::{ReadError, RunData};
 
 use std::path::Path;
 
@@ -16,7 +22,6 @@ use crate::case::{self, Case};
 use crate::dae::Stats;
 use crate::fem::Domain;
 use crate::lu::LinearSolverKind;
-use crate::model::observe::Observables;
 use crate::physics::{ActiveStrain, Substrate};
 
 /// Integration settings of one run: the case's `solver` section, possibly overridden on

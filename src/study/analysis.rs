@@ -8,7 +8,7 @@ use super::report::{
 };
 use super::{ORDER_QUANTITY, StudyOptions, TARGET_ERROR};
 use crate::case::Case;
-use crate::model::observe::Observables;
+use crate::record::Observables;
 
 /// A least-squares line through (ln x, ln y).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -50,8 +50,8 @@ use std::path::{Path, PathBuf};
 
 use crate::case::{self, Case};
 use crate::dae::Stats;
-use crate::model::observe::Observables;
-use crate::output::read::parse_timeseries;
+use crate::record::Observables;
+use crate::record::read::parse_timeseries;
 use crate::record::{FailureKind, RunSettings, Summary};
 use crate::run::{self, Progress, RunError, RunOptions};
 use crate::stop::StopFlag;
@@ -137,6 +137,9 @@ pub enum StudyError {
         /// Cause.
         source: std::io::Error,
     },
+    /// A run's file could not be read back.
+    #[error(transparent)]
+    Read(#[from] crate::record::ReadError),
     /// A figure could not be drawn.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),

@@ -13,8 +13,8 @@ use super::{
 };
 use crate::case::Case;
 use crate::dae::Stats;
-use crate::model::observe::Observables;
 use crate::record::FailureKind;
+use crate::record::Observables;
 
 /// A quantity of interest.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -13,9 +13,39 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
-use super::OutputError;
-use crate::model::observe::Observables;
-use crate::record::{MeshFile, StateFile, Summary};
+use super::observables::{Observables, interpolate};
+use super::{MeshFile, StateFile, Summary};
+
+/// Why a run directory's file could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    /// A file could not be read (missing, unreadable).
+    #[error("cannot read {path}: {source}")]
+    Read {
+        /// The file.
+        path: String,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// A file was read but its content is not what a run writes.
+    #[error("{path}: {message}")]
+    Malformed {
+        /// The file.
+        path: String,
+        /// What is wrong, with the line or field where known.
+        message: String,
+    },
+}
+
+impl ReadError {
+    /// A [`ReadError::Malformed`] for `path`.
+    pub fn malformed(path: &Path, message: impl Into<String>) -> Self {
+        ReadError::Malformed {
+            path: path.display().to_string(),
+            message: message.into(),
+        }
+    }
+}
 
 /// The phases whose end a state file records, in time order (`state_<phase>.json`).
 pub const PHASES: [&str; 4] = ["gravity", "spreading", "active", "end"];
@@ -39,23 +69,28 @@ pub struct RunData {
     pub notes: Vec<String>,
 }
 
-fn read_text(path: &Path) -> Result<String, OutputError> {
-    std::fs::read_to_string(path).map_err(|source| OutputError::Read {
+fn read_text(path: &Path) -> Result<String, ReadError> {
+    std::fs::read_to_string(path).map_err(|source| ReadError::Read {
         path: path.display().to_string(),
         source,
     })
 }
 
-fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, OutputError> {
+fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, ReadError> {
     let text = read_text(path)?;
-    serde_json::from_str(&text).map_err(|e| OutputError::malformed(path, e.to_string()))
+    serde_json::from_str(&text).map_err(|e| ReadError::malformed(path, e.to_string()))
+}
+
+/// Reads `dir/summary.json`.
+pub fn read_summary(dir: &Path) -> Result<Summary, ReadError> {
+    read_json(&dir.join("summary.json"))
 }
 
 /// Reads `mesh.json` and checks that every index it holds is in range.
-pub fn read_mesh(path: &Path) -> Result<MeshFile, OutputError> {
+pub fn read_mesh(path: &Path) -> Result<MeshFile, ReadError> {
     let mesh: MeshFile = read_json(path)?;
     let n = mesh.nodes.len();
-    let bad = |what: &str| OutputError::malformed(path, what.to_string());
+    let bad = |what: &str| ReadError::malformed(path, what.to_string());
     if mesh.elements.is_empty() {
         return Err(bad("no elements"));
     }
@@ -94,14 +129,14 @@ pub fn read_mesh(path: &Path) -> Result<MeshFile, OutputError> {
 pub fn parse_timeseries(
     path: &Path,
     text: &str,
-) -> Result<(Vec<Observables>, Option<String>), OutputError> {
+) -> Result<(Vec<Observables>, Option<String>), ReadError> {
     let mut lines = text.split_inclusive('\n').enumerate();
     let header = match lines.next() {
         Some((_, h)) => h.trim_end(),
-        None => return Err(OutputError::malformed(path, "empty file (no header)")),
+        None => return Err(ReadError::malformed(path, "empty file (no header)")),
     };
     if header != Observables::CSV_HEADER {
-        return Err(OutputError::malformed(
+        return Err(ReadError::malformed(
             path,
             format!(
                 "line 1: header is `{header}`, expected `{}`",
@@ -117,7 +152,7 @@ pub fn parse_timeseries(
         if line.is_empty() {
             continue;
         }
-        match parse_row(line) {
+        match Observables::parse_csv_row(line) {
             Ok(o) => rows.push(o),
             Err(msg) if !complete => {
                 cut = Some(format!(
@@ -127,70 +162,44 @@ pub fn parse_timeseries(
                 ));
             }
             Err(msg) => {
-                return Err(OutputError::malformed(
-                    path,
-                    format!("line {}: {msg}", k + 1),
-                ));
+                return Err(ReadError::malformed(path, format!("line {}: {msg}", k + 1)));
             }
         }
     }
     if rows.windows(2).any(|w| !(w[1].t >= w[0].t)) {
-        return Err(OutputError::malformed(path, "times are not increasing"));
+        return Err(ReadError::malformed(path, "times are not increasing"));
     }
     Ok((rows, cut))
 }
 
-fn parse_row(line: &str) -> Result<Observables, String> {
-    let v: Vec<f64> = line
-        .split(',')
-        .map(|f| {
-            f.trim()
-                .parse::<f64>()
-                .map_err(|_| format!("`{f}` is not a number"))
-        })
-        .collect::<Result<_, _>>()?;
-    if v.len() != 7 {
-        return Err(format!("{} fields, expected 7", v.len()));
-    }
-    Ok(Observables {
-        t: v[0],
-        contact_radius: v[1],
-        uy_top: v[2],
-        uy_centre: v[3],
-        uy_bottom: v[4],
-        strain_nucleus: v[5],
-        strain_cytoplasm: v[6],
-    })
-}
-
 /// Reads a state file and checks its sizes against the mesh.
-pub fn read_state(path: &Path, mesh: &MeshFile) -> Result<StateFile, OutputError> {
+pub fn read_state(path: &Path, mesh: &MeshFile) -> Result<StateFile, ReadError> {
     let s: StateFile = read_json(path)?;
     let (nn, ne) = (mesh.nodes.len(), mesh.elements.len());
     if s.u.len() != nn {
-        return Err(OutputError::malformed(
+        return Err(ReadError::malformed(
             path,
             format!("{} displacements for the mesh's {nn} nodes", s.u.len()),
         ));
     }
     if s.element_strain.len() != ne || s.element_jacobian.len() != ne {
-        return Err(OutputError::malformed(
+        return Err(ReadError::malformed(
             path,
             format!("per-element arrays do not match the mesh's {ne} elements"),
         ));
     }
     if s.u.iter().flatten().any(|v| !v.is_finite()) {
-        return Err(OutputError::malformed(path, "non-finite displacement"));
+        return Err(ReadError::malformed(path, "non-finite displacement"));
     }
     Ok(s)
 }
 
 impl RunData {
     /// Loads the run in `dir`; see the module documentation for what may be missing.
-    pub fn load(dir: impl AsRef<Path>) -> Result<RunData, OutputError> {
+    pub fn load(dir: impl AsRef<Path>) -> Result<RunData, ReadError> {
         let dir = dir.as_ref().to_path_buf();
         if !dir.is_dir() {
-            return Err(OutputError::Read {
+            return Err(ReadError::Read {
                 path: dir.display().to_string(),
                 source: std::io::Error::new(
                     std::io::ErrorKind::NotFound,
@@ -275,41 +284,4 @@ impl RunData {
     pub fn state(&self, phase: &str) -> Option<&StateFile> {
         self.states.iter().find(|s| s.phase == phase)
     }
-}
-
-/// The row of `rows` (sorted by time) at time `t`, linearly interpolated, or `None` when
-/// `t` lies outside the rows (with a relative slack of 1e-9 of the last time).
-pub fn interpolate(rows: &[Observables], t: f64) -> Option<Observables> {
-    let first = rows.first()?;
-    let last = rows.last()?;
-    let slack = 1e-9 * last.t.abs().max(1.0);
-    if t < first.t - slack || t > last.t + slack {
-        return None;
-    }
-    let k = rows.partition_point(|o| o.t < t);
-    if k == 0 {
-        return Some(*first);
-    }
-    if k >= rows.len() {
-        return Some(*last);
-    }
-    let (a, b) = (rows[k - 1], rows[k]);
-    if (b.t - t).abs() <= slack {
-        return Some(b);
-    }
-    let w = if b.t > a.t {
-        (t - a.t) / (b.t - a.t)
-    } else {
-        1.0
-    };
-    let mix = |x: f64, y: f64| x + w * (y - x);
-    Some(Observables {
-        t,
-        contact_radius: mix(a.contact_radius, b.contact_radius),
-        uy_top: mix(a.uy_top, b.uy_top),
-        uy_centre: mix(a.uy_centre, b.uy_centre),
-        uy_bottom: mix(a.uy_bottom, b.uy_bottom),
-        strain_nucleus: mix(a.strain_nucleus, b.strain_nucleus),
-        strain_cytoplasm: mix(a.strain_cytoplasm, b.strain_cytoplasm),
-    })
 }

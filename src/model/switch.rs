@@ -1,0 +1,71 @@
+//! Changing the system during a run: the same cell rebuilt with fewer unknowns and
+//! restarted, consistently, from the state of the old one.
+
+use super::{CellModel, ModelError};
+use crate::dae::{Atol, LinearSolverFactory, consistent_init};
+
+/// How a restarted system is made consistent: the linear solver of its Newton solve
+/// (a full-size one: the new system may have no (u, v) pairs to condense) and the
+/// tolerances that weight its convergence test (those of the run).
+pub struct Restart<'a> {
+    /// Builds the linear solver of the Newton solve.
+    pub linear_solver: &'a dyn LinearSolverFactory,
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance on displacements [µm] (scaled per block by
+    /// [`CellModel::atol_vector`]).
+    pub atol: f64,
+}
+
+impl CellModel {
+    /// Whether at time `t` the contact carries the cell's current weight (gravity ramped
+    /// and signed as at `t`; false while there is no downward load).
+    pub fn contact_carries_weight(&self, t: f64, y: &[f64]) -> bool {
+        let ph = &self.params.phases;
+        let load = self.weight() * ph.t_g(t) * ph.gravity_sign(t);
+        load > 0.0 && self.contact_force_total(y).y >= load
+    }
+
+    /// The same cell without inertia, on (u, μ_as), set to restart at time `t` from the
+    /// state (`y`, `yp`) of this model, placed at rest in equilibrium: u̇ = 0 and u solved
+    /// from F(u, u̇ = 0, μ_as) = 0, while the μ_as ODEs keep μ_as and get a consistent
+    /// μ̇_as. That is the consistent state up to the slow load ramp. Keeping u̇ = v
+    /// instead carries the elastic ringing of the landing into a system whose rigid
+    /// vertical mode is algebraic, and IDA then resolves an inconsistent transient: at
+    /// rtol 1e-8 its step fell to 1e-13 s right after the switch and stayed there
+    /// (measured on `cases/hard/rtol-tight.ron`). Without inertia that mode has no
+    /// damping and only the contact's stiffness, so call this once the contact carries
+    /// the cell ([`Self::contact_carries_weight`]).
+    pub fn without_inertia_at_rest(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        restart: &Restart,
+    ) -> Result<CellModel, ModelError> {
+        let (mut y2, mut yp2) = self.drop_inertia_state(y, yp);
+        yp2[..self.dofs.n_u].iter_mut().for_each(|v| *v = 0.0);
+        let mut params = self.params.clone();
+        params.inertia = false;
+        let mut m = CellModel::new(params, self.mesh.clone())?;
+        let atol = Atol::Vector(m.atol_vector(restart.atol));
+        let for_y: Vec<bool> = (0..m.dofs.n).map(|i| i < m.dofs.n_u).collect();
+        consistent_init(
+            &mut m,
+            t,
+            &mut y2,
+            &mut yp2,
+            &for_y,
+            restart.linear_solver,
+            restart.rtol,
+            &atol,
+        )
+        .map_err(|source| ModelError::Restart {
+            what: "switching inertia off",
+            t,
+            source: Box::new(source),
+        })?;
+        m.set_initial(t, y2, yp2);
+        Ok(m)
+    }
+}

@@ -1,0 +1,182 @@
+//! One row of `timeseries.csv`: what a scene reports at an output time (MODEL.md §7).
+//!
+//! The model computes the values ([`crate::model::CellModel::observe`]); this module owns
+//! their file format: the column names and order, a row's text, parsing a row back, and
+//! interpolation between rows. A new column is added here once (field, [`COLUMNS`],
+//! [`Observables::values`], [`Observables::from_values`]) and every reader follows.
+
+use serde::{Deserialize, Serialize};
+
+/// Number of columns of `timeseries.csv`.
+pub const N_COLUMNS: usize = 7;
+
+/// The column names of `timeseries.csv`, in order.
+pub const COLUMNS: [&str; N_COLUMNS] = [
+    "t",
+    "contact_radius",
+    "uy_top",
+    "uy_centre",
+    "uy_bottom",
+    "strain_nucleus",
+    "strain_cytoplasm",
+];
+
+/// The quantities of one output row, in the units of `timeseries.csv`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Observables {
+    /// Time [s].
+    pub t: f64,
+    /// Deformed length of the cell boundary within ε_ct of the substrate [µm] (half cell).
+    pub contact_radius: f64,
+    /// Vertical displacement of the nucleus top p_t [µm] (negative = down).
+    pub uy_top: f64,
+    /// Vertical displacement of the cell centre c [µm].
+    pub uy_centre: f64,
+    /// Vertical displacement of the nucleus bottom p_b [µm].
+    pub uy_bottom: f64,
+    /// Reference-area mean of ‖E‖_F over the nucleus (fraction).
+    pub strain_nucleus: f64,
+    /// Reference-area mean of ‖E‖_F over the cytoplasm (fraction).
+    pub strain_cytoplasm: f64,
+}
+
+impl Observables {
+    /// The CSV header, exactly as the run writes it ([`COLUMNS`] joined by commas).
+    pub const CSV_HEADER: &'static str =
+        "t,contact_radius,uy_top,uy_centre,uy_bottom,strain_nucleus,strain_cytoplasm";
+
+    /// The values in CSV column order.
+    pub fn values(&self) -> [f64; N_COLUMNS] {
+        [
+            self.t,
+            self.contact_radius,
+            self.uy_top,
+            self.uy_centre,
+            self.uy_bottom,
+            self.strain_nucleus,
+            self.strain_cytoplasm,
+        ]
+    }
+
+    /// The row whose values in CSV column order are `v` (inverse of [`Self::values`]).
+    pub fn from_values(v: [f64; N_COLUMNS]) -> Self {
+        let [
+            t,
+            contact_radius,
+            uy_top,
+            uy_centre,
+            uy_bottom,
+            strain_nucleus,
+            strain_cytoplasm,
+        ] = v;
+        Observables {
+            t,
+            contact_radius,
+            uy_top,
+            uy_centre,
+            uy_bottom,
+            strain_nucleus,
+            strain_cytoplasm,
+        }
+    }
+
+    /// The value of column `name`, if it is one of [`COLUMNS`].
+    pub fn get(&self, name: &str) -> Option<f64> {
+        COLUMNS
+            .iter()
+            .position(|c| *c == name)
+            .map(|k| self.values()[k])
+    }
+
+    /// Whether every value is finite (a run never writes NaN or infinity).
+    pub fn is_finite(&self) -> bool {
+        self.values().iter().all(|v| v.is_finite())
+    }
+
+    /// One CSV row (full precision).
+    pub fn csv_row(&self) -> String {
+        self.values().map(|v| v.to_string()).join(",")
+    }
+
+    /// Parses one CSV row (without its newline); the message says what is wrong.
+    pub fn parse_csv_row(line: &str) -> Result<Self, String> {
+        let v: Vec<f64> = line
+            .split(',')
+            .map(|f| {
+                f.trim()
+                    .parse::<f64>()
+                    .map_err(|_| format!("`{f}` is not a number"))
+            })
+            .collect::<Result<_, _>>()?;
+        let v: [f64; N_COLUMNS] = v
+            .try_into()
+            .map_err(|v: Vec<f64>| format!("{} fields, expected {N_COLUMNS}", v.len()))?;
+        Ok(Self::from_values(v))
+    }
+}
+
+/// The row of `rows` (sorted by time) at time `t`, linearly interpolated, or `None` when
+/// `t` lies outside the rows (with a relative slack of 1e-9 of the last time).
+pub fn interpolate(rows: &[Observables], t: f64) -> Option<Observables> {
+    let first = rows.first()?;
+    let last = rows.last()?;
+    let slack = 1e-9 * last.t.abs().max(1.0);
+    if t < first.t - slack || t > last.t + slack {
+        return None;
+    }
+    let k = rows.partition_point(|o| o.t < t);
+    if k == 0 {
+        return Some(*first);
+    }
+    if k >= rows.len() {
+        return Some(*last);
+    }
+    let (a, b) = (rows[k - 1], rows[k]);
+    if (b.t - t).abs() <= slack {
+        return Some(b);
+    }
+    let w = if b.t > a.t {
+        (t - a.t) / (b.t - a.t)
+    } else {
+        1.0
+    };
+    let (va, vb) = (a.values(), b.values());
+    let mut v: [f64; N_COLUMNS] = std::array::from_fn(|i| va[i] + w * (vb[i] - va[i]));
+    v[0] = t;
+    Some(Observables::from_values(v))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_is_the_columns_joined() {
+        assert_eq!(Observables::CSV_HEADER, COLUMNS.join(","));
+    }
+
+    #[test]
+    fn a_row_round_trips_through_its_text() {
+        let v: [f64; N_COLUMNS] = std::array::from_fn(|i| (i as f64 + 0.1) * -1.7e-3);
+        let o = Observables::from_values(v);
+        assert_eq!(o.values(), v);
+        assert_eq!(Observables::parse_csv_row(&o.csv_row()), Ok(o));
+        assert_eq!(o.get("uy_top"), Some(v[2]));
+        assert_eq!(o.get("nope"), None);
+        let err = Observables::parse_csv_row("1,2,3").unwrap_err();
+        assert_eq!(err, "3 fields, expected 7");
+        let err = Observables::parse_csv_row("1,2,x,4,5,6,7").unwrap_err();
+        assert_eq!(err, "`x` is not a number");
+    }
+
+    #[test]
+    fn interpolation_is_linear_between_rows_and_none_outside() {
+        let a = Observables::from_values([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        let b = Observables::from_values([10.0, 3.0, 2.0, 1.0, 0.0, -1.0, -2.0]);
+        let m = interpolate(&[a, b], 2.5).unwrap();
+        assert_eq!(m.values(), [2.5, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0]);
+        assert_eq!(interpolate(&[a, b], 10.0), Some(b));
+        assert_eq!(interpolate(&[a, b], 10.1), None);
+        assert_eq!(interpolate(&[a, b], -0.1), None);
+    }
+}
