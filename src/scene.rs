@@ -24,6 +24,12 @@ pub fn starts_with_inertia(case: &Case) -> bool {
     !matches!(case.inertia.mode, InertiaMode::Off)
 }
 
+/// The model parameters of [`Case::reference`]: MODEL.md's defaults in solver units
+/// (flat substrate, adhesion, no active strain, inertia on, no drag).
+pub fn reference_params() -> ModelParams {
+    model_params(&Case::reference(), "reference", true).expect("the reference case is valid")
+}
+
 /// Physical parameters of a case in solver units; `inertia` selects the (u, v, μ_as) or
 /// (u, μ_as) system. Runs the physics checks of [`layer_checks`] first; a refusal names
 /// the case field.

@@ -1,26 +1,18 @@
 //! The cell model's derivatives, patch test and closed forms.
 
+use cellsim::case::{self, Case, terms};
 use cellsim::dae::Dae;
 use cellsim::fem::{Mesh, MeshParams};
 use cellsim::model::{CellModel, ModelParams};
-use cellsim::physics::{ActiveStrain, Bottom, Pac, Pillars, Substrate};
+use cellsim::physics::Substrate;
+use cellsim::scene;
+use oorandom::Rand64;
 
-/// Deterministic pseudo-random numbers in [0, 1).
-pub struct Lcg(pub u64);
-impl Lcg {
-    pub fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
+/// The reference case's mesh at refine 0.5.
 pub fn coarse_mesh() -> Mesh {
     Mesh::generate(&MeshParams {
         refine: 0.5,
-        ..Default::default()
+        ..terms::mesh_params(&Case::reference())
     })
     .unwrap()
 }
@@ -28,11 +20,11 @@ pub fn coarse_mesh() -> Mesh {
 /// A deformed state where the cell bottom has sunk into the contact and adhesion bands:
 /// a rigid shift down by `sink` plus a smooth random field, random velocities and μ_as.
 pub fn deformed_state(m: &CellModel, sink: f64, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    let mut rng = Lcg(seed);
+    let mut rng = Rand64::new(seed as u128);
     let n = m.size();
     let mut y = vec![0.0; n];
     let mut yp = vec![0.0; n];
-    let (a, b, c) = (rng.next(), rng.next(), rng.next());
+    let (a, b, c) = (rng.rand_float(), rng.rand_float(), rng.rand_float());
     for (i, x) in m.mesh.nodes.iter().enumerate() {
         let du = [
             0.05 * (0.3 * x[1] + a).sin() * x[0] / 10.0,
@@ -42,19 +34,19 @@ pub fn deformed_state(m: &CellModel, sink: f64, seed: u64) -> (Vec<f64>, Vec<f64
             let d = m.dofs.u[i][k];
             if d != usize::MAX {
                 y[d] = du[k];
-                yp[d] = 1e-3 * (rng.next() - 0.5);
+                yp[d] = 1e-3 * (rng.rand_float() - 0.5);
                 let v = m.dofs.v[i][k];
                 if v != usize::MAX {
-                    y[v] = 1e-2 * (rng.next() - 0.5);
-                    yp[v] = 1e-1 * (rng.next() - 0.5);
+                    y[v] = 1e-2 * (rng.rand_float() - 0.5);
+                    yp[v] = 1e-1 * (rng.rand_float() - 0.5);
                 }
             }
         }
     }
     let off = m.dofs.mu_offset();
     for k in 0..m.dofs.n_mu() {
-        y[off + k] = 1.4e3 * rng.next();
-        yp[off + k] = rng.next();
+        y[off + k] = 1.4e3 * rng.rand_float();
+        yp[off + k] = rng.rand_float();
     }
     (y, yp)
 }
@@ -131,22 +123,9 @@ fn jacobian_fd_error(
 
 /// Pillars, adhesion (μ_as unknowns) and both active regions: every block of J present.
 pub fn active_pillars_params(inertia: bool) -> ModelParams {
-    let mut p = ModelParams::defaults();
-    p.substrate = Substrate::Pillars(Pillars::default());
-    p.active = Some(ActiveStrain {
-        pac: Some(Pac {
-            e: 0.7,
-            theta_deg: -18.0,
-            inner_axes: [5.0, 4.5],
-            outer_axes: [7.5, 7.0],
-        }),
-        bottom: Some(Bottom {
-            e: 0.7,
-            theta_deg: -35.0,
-        }),
-        ..Default::default()
-    });
-    p.inertia = inertia;
+    let mut c = Case::reference_active();
+    c.substrate = case::Substrate::pillars();
+    let mut p = scene::model_params(&c, "pillars", inertia).expect("a valid case");
     p.drag = if inertia { 0.0 } else { 1e-3 };
     p
 }
@@ -154,7 +133,7 @@ pub fn active_pillars_params(inertia: bool) -> ModelParams {
 #[test]
 fn global_jacobian_matches_finite_differences() {
     for (params, sink) in [
-        (ModelParams::defaults(), 0.45),
+        (scene::reference_params(), 0.5),
         (active_pillars_params(true), 0.5),
         (active_pillars_params(false), 0.5),
     ] {
@@ -167,8 +146,10 @@ fn global_jacobian_matches_finite_differences() {
         let f = m.contact_force_total(&y);
         assert!(f.y > 1e-3, "no contact in the test state (force {f:?})");
         let n = m.size();
-        let mut rng = Lcg(3);
-        let mut cols: Vec<usize> = (0..150).map(|_| (rng.next() * n as f64) as usize).collect();
+        let mut rng = Rand64::new(3);
+        let mut cols: Vec<usize> = (0..150)
+            .map(|_| (rng.rand_float() * n as f64) as usize)
+            .collect();
         // All unknowns of the lowest nodes (in contact) and some μ_as columns.
         for (i, x) in m.mesh.nodes.iter().enumerate() {
             if x[1] < -1.0 {
@@ -203,7 +184,7 @@ use nalgebra::{Matrix2, Vector2};
 /// Parameters with every load switched off (no gravity, substrate far away, no adhesion,
 /// no viscosity): the residual at rest velocities is the internal force vector alone.
 fn unloaded(inertia: bool, solids: [Yeoh; 3]) -> ModelParams {
-    let mut p = ModelParams::defaults();
+    let mut p = scene::reference_params();
     p.gravity = 0.0;
     p.substrate = Substrate::Flat { y_s: -100.0 };
     p.adhesion = None;
@@ -372,7 +353,7 @@ fn free_fall_under_the_ramped_gravity_matches_the_closed_form() {
     // Before contact the cell falls as a rigid body: ü = −g S(t; 0, T) with the C² step
     // S = 10ξ³ − 15ξ⁴ + 6ξ⁵, ξ = t/T, so u(t) = −g T² (ξ⁷/7 − ξ⁶/2 + ξ⁵/2). (The issue's
     // g t³/(6T) is the same fall under a linear ramp; MODEL.md's ramp is this C² step.)
-    let mut p = ModelParams::defaults();
+    let mut p = scene::reference_params();
     p.substrate = Substrate::Flat { y_s: -100.0 };
     let (g, t_ramp) = (p.gravity, p.phases.t_g0);
     let m = CellModel::new(p, coarse_mesh()).unwrap();
@@ -460,7 +441,7 @@ fn kelvin_voigt_creep_follows_its_exponential() {
     // η = λ_f + 2μ_f, so ε(t) = (σ₀/M)(1 − e^{−t/τ}), τ = η/M.
     let (e, nu) = (100.0, 0.485);
     let yeoh = Yeoh::from_engineering(e, nu, 0.1, 0.2).unwrap();
-    let visc = Viscosity::default();
+    let visc = scene::reference_params().viscosity;
     let (mu, lam) = (
         e / (2.0 * (1.0 + nu)),
         e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),

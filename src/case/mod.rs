@@ -132,6 +132,24 @@ impl Case {
         }
     }
 
+    /// MODEL.md's scene with every default: the flat substrate, adhesion, no active
+    /// region, the paper's phases to T_a0 = 50 000 s. The one source of the model's default
+    /// numbers: the layers below the case (physics, mesh, model) hold none, and their
+    /// tests take them from here through [`terms`] (e.g. `terms::contact(&Case::reference())`).
+    pub fn reference() -> Self {
+        let mut c = Case::new("reference", Substrate::flat(), 50_000.0);
+        c.adhesion = Some(Adhesion::default());
+        c
+    }
+
+    /// [`Case::reference`] with both active regions at their defaults.
+    pub fn reference_active() -> Self {
+        let mut c = Case::reference();
+        c.active.pac = Some(Pac::default());
+        c.active.bottom = Some(Bottom::default());
+        c
+    }
+
     /// Reads, parses and validates the case file at `path`.
     pub fn load(path: impl AsRef<Path>) -> Result<Case, CaseError> {
         let path = path.as_ref();

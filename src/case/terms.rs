@@ -18,7 +18,7 @@ pub fn mesh_params(case: &Case) -> MeshParams {
         h_bottom: case.mesh.h_bottom,
         h_nucleus: case.mesh.h_nucleus,
         refine: case.mesh.refine,
-        ..MeshParams::default()
+        min_angle_deg: crate::fem::mesh::MIN_ANGLE_DEG,
     }
 }
 

@@ -741,10 +741,10 @@ fn case_check_finds_what_the_run_refuses() {
     // The estimate the check uses is the mesh generator's.
     let fine = crate::fem::MeshParams {
         refine: 1e6,
-        ..crate::fem::MeshParams::default()
+        ..crate::fem::reference::mesh_params()
     };
     assert!(fine.estimated_elements() > crate::fem::mesh::MAX_ELEMENTS);
-    assert!(crate::fem::MeshParams::default().estimated_elements() < 1e4);
+    assert!(crate::fem::reference::mesh_params().estimated_elements() < 1e4);
 }
 
 #[test]

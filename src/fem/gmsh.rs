@@ -536,7 +536,7 @@ mod tests {
 
     #[test]
     fn round_trip_through_gmsh_text() {
-        let p = MeshParams::default();
+        let p = crate::fem::reference::mesh_params();
         let m = Mesh::generate(&p).expect("mesh");
         let text = m.to_gmsh();
         let r = Mesh::parse_gmsh(&text, "mem.msh", &p).expect("read back");
@@ -569,7 +569,7 @@ mod tests {
 
     #[test]
     fn clockwise_elements_are_reoriented() {
-        let p = MeshParams::default();
+        let p = crate::fem::reference::mesh_params();
         let m = Mesh::generate(&p).expect("mesh");
         // Flip every element's orientation in the file.
         let text = m.to_gmsh();
@@ -599,7 +599,7 @@ mod tests {
 
     #[test]
     fn malformed_files_are_refused_with_a_line_number() {
-        let p = MeshParams::default();
+        let p = crate::fem::reference::mesh_params();
         let m = Mesh::generate(&p).expect("mesh");
         let good = m.to_gmsh();
         // Wrong version.
@@ -635,7 +635,10 @@ mod tests {
         assert!(Mesh::parse_gmsh(&good, "o.msh", &other).is_err());
         // Missing file.
         assert!(matches!(
-            Mesh::read_gmsh(Path::new("/nonexistent/cell.msh"), &MeshParams::default()),
+            Mesh::read_gmsh(
+                Path::new("/nonexistent/cell.msh"),
+                &crate::fem::reference::mesh_params()
+            ),
             Err(MeshError::Io { .. })
         ));
     }

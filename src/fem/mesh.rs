@@ -32,7 +32,7 @@
 //!    along a row, alternate rows shifted by h/2), keeping only points at least 0.6 h from
 //!    the circles and from x = c_x so that no lattice point encroaches a boundary segment.
 //! 5. spade builds the constrained Delaunay triangulation (circles and x = c_x as
-//!    constraint edges) and refines it to the angle limit `min_angle_deg` (default 28°),
+//!    constraint edges) and refines it to the angle limit `min_angle_deg` ([`MIN_ANGLE_DEG`] = 28°),
 //!    never splitting a constraint edge — so every vertex on a circle stays exactly on it.
 //!    The achieved minimum angle is ≥ 26.9° for the default cell at refine 0.5, 1, 2.
 //! 6. Elements are classified by the side of the circle polygons their centroid lies on,
@@ -61,44 +61,34 @@ use super::quadrature::TriangleRule;
 /// The three material sub-domains of the cell (defined with the physics it selects).
 pub use crate::physics::Domain;
 
-/// Geometry and mesh-size parameters of the half cell (µm). The defaults are the paper's
-/// cell and mesh (MODEL.md §2, §9).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+/// Geometry and mesh-size parameters of the half cell (µm). A case's are built by
+/// [`crate::case::terms::mesh_params`], which holds the defaults (the paper's cell and
+/// mesh, MODEL.md §2, §9).
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MeshParams {
-    /// Cell centre c; the symmetry line is x = c_x. Default (0, 8.5).
+    /// Cell centre c; the symmetry line is x = c_x.
     pub center: [f64; 2],
-    /// Nucleus radius r_n. Default 5.
+    /// Nucleus radius r_n.
     pub r_n: f64,
-    /// Inner radius of the membrane r_cp. Default 9.75.
+    /// Inner radius of the membrane r_cp.
     pub r_cp: f64,
-    /// Cell radius r_c. Default 10.
+    /// Cell radius r_c.
     pub r_c: f64,
-    /// Element size at the cell bottom (before `refine`). Default 0.3.
+    /// Element size at the cell bottom (before `refine`).
     pub h_bottom: f64,
-    /// Element size in the nucleus and above (before `refine`). Default 1.0.
+    /// Element size in the nucleus and above (before `refine`).
     pub h_nucleus: f64,
     /// Refinement factor: every size is divided by it (2 halves all sizes, ≈ 4× the
-    /// elements). Default 1.
+    /// elements).
     pub refine: f64,
-    /// Angle limit (degrees) of the Delaunay refinement, in (0, 33]. Default 28.
+    /// Angle limit (degrees) of the Delaunay refinement, in (0, 33]
+    /// ([`MIN_ANGLE_DEG`] unless a test asks otherwise).
     pub min_angle_deg: f64,
 }
 
-impl Default for MeshParams {
-    fn default() -> Self {
-        Self {
-            center: [0.0, 8.5],
-            r_n: 5.0,
-            r_cp: 9.75,
-            r_c: 10.0,
-            h_bottom: 0.3,
-            h_nucleus: 1.0,
-            refine: 1.0,
-            min_angle_deg: 28.0,
-        }
-    }
-}
+/// The generator's angle limit for the Delaunay refinement (degrees): the largest that
+/// terminates reliably with the graded sizes.
+pub const MIN_ANGLE_DEG: f64 = 28.0;
 
 /// Largest number of elements [`Mesh::generate`] accepts to build (estimated from the
 /// sizes before meshing), so that a typo in a case file fails fast instead of exhausting
@@ -1093,7 +1083,7 @@ mod tests {
     fn params(refine: f64) -> MeshParams {
         MeshParams {
             refine,
-            ..MeshParams::default()
+            ..crate::fem::reference::mesh_params()
         }
     }
 
@@ -1506,7 +1496,7 @@ mod tests {
     /// angles, so the bound here is 15°).
     #[test]
     fn unusual_parameters_give_valid_meshes() {
-        let d = MeshParams::default();
+        let d = crate::fem::reference::mesh_params();
         let cases = [
             MeshParams {
                 refine: 0.1,
@@ -1585,7 +1575,7 @@ mod tests {
             Err(MeshError::InvalidParam { field, .. }) => field,
             other => panic!("expected InvalidParam, got {other:?}"),
         };
-        let d = MeshParams::default();
+        let d = crate::fem::reference::mesh_params();
         assert_eq!(
             field_of(MeshParams {
                 r_cp: 5.0,
@@ -1660,19 +1650,6 @@ mod tests {
             .expect_err("invalid")
             .to_string();
         assert!(msg.contains("r_cp") && msg.contains("r_n"), "{msg}");
-    }
-
-    #[test]
-    fn params_deserialize_with_defaults_and_reject_unknown_fields() {
-        let p: MeshParams = serde_json::from_str(r#"{"refine": 2.0}"#).expect("valid");
-        assert_eq!(
-            p,
-            MeshParams {
-                refine: 2.0,
-                ..MeshParams::default()
-            }
-        );
-        assert!(serde_json::from_str::<MeshParams>(r#"{"refin": 2.0}"#).is_err());
     }
 
     #[test]

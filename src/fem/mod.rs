@@ -16,6 +16,15 @@ pub mod mesh;
 pub mod p2;
 pub mod quadrature;
 
+/// The paper's cell and mesh for this layer's tests, taken from the case schema (the one
+/// place the defaults live).
+#[cfg(test)]
+pub(crate) mod reference {
+    pub fn mesh_params() -> super::MeshParams {
+        crate::case::terms::mesh_params(&crate::case::Case::reference())
+    }
+}
+
 pub use mesh::{Domain, Mesh, MeshError, MeshParams, MeshQuality, NamedPoints};
 pub use p2::{EdgeTabulation, ElementGeometry, P2Error, P2Tabulation};
 pub use quadrature::{EdgeRule, TriangleRule, gauss_legendre};

@@ -82,31 +82,6 @@ pub struct ModelParams {
 }
 
 impl ModelParams {
-    /// MODEL.md's defaults: the paper's materials, flat substrate at y = −2 µm, adhesion,
-    /// no active strain, inertia on, no drag, contact rule of degree 10.
-    pub fn defaults() -> Self {
-        let yeoh = |e: f64| {
-            Yeoh::from_engineering(e, 0.485, 0.1, 0.2).expect("MODEL.md defaults are valid")
-        };
-        Self {
-            center: [0.0, 8.5],
-            solids: [yeoh(500.0), yeoh(100.0), yeoh(100.0)],
-            densities: [1.4e-9, 1.0e-9, 1.0e-9],
-            viscosity: Viscosity::default(),
-            gravity: 9.81e6,
-            phases: Phases::default(),
-            substrate: Substrate::Flat { y_s: -2.0 },
-            contact: Contact::default(),
-            adhesion: Some(Adhesion::default()),
-            active: None,
-            inertia: true,
-            drag: 0.0,
-            contact_degree: 10,
-            contact_subdivisions: 0,
-            extra_breakpoints: Vec::new(),
-        }
-    }
-
     pub(crate) fn domain_index(d: Domain) -> usize {
         match d {
             Domain::Nucleus => 0,

@@ -202,13 +202,13 @@ mod tests {
     fn every_element_entry_has_its_place_in_the_pattern() {
         let mesh = Mesh::generate(&MeshParams {
             refine: 0.5,
-            ..Default::default()
+            ..crate::fem::reference::mesh_params()
         })
         .expect("mesh");
         for inertia in [true, false] {
             let params = ModelParams {
                 inertia,
-                ..ModelParams::defaults()
+                ..crate::scene::reference_params()
             };
             let m = CellModel::new(params, mesh.clone()).expect("model");
             let nnz = m.plan.pattern.compute_nnz();

@@ -56,18 +56,6 @@ pub struct Pac {
     pub outer_axes: [f64; 2],
 }
 
-impl Default for Pac {
-    /// MODEL.md: `e = 0.7`, `θ = −18°`, inner semi-axes (5, 4.5) µm, outer (7.5, 7) µm.
-    fn default() -> Self {
-        Self {
-            e: 0.7,
-            theta_deg: -18.0,
-            inner_axes: [5.0, 4.5],
-            outer_axes: [7.5, 7.0],
-        }
-    }
-}
-
 /// Bottom fibres ("pull"): radial contraction in the cytoplasm and membrane for
 /// `θ ≤ θ_bot`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -76,16 +64,6 @@ pub struct Bottom {
     pub e: f64,
     /// Bounding angle `θ_bot` [degrees]; the bottom region is `θ ≤ θ_bot`.
     pub theta_deg: f64,
-}
-
-impl Default for Bottom {
-    /// MODEL.md: `e = 0.7`, `θ = −35°`.
-    fn default() -> Self {
-        Self {
-            e: 0.7,
-            theta_deg: -35.0,
-        }
-    }
 }
 
 /// The active-strain field: which fibre sets are active, the smoothing width and the
@@ -100,18 +78,6 @@ pub struct ActiveStrain {
     pub eps: f64,
     /// Cell centre `c` [µm] (MODEL.md: (0, 8.5)).
     pub center: [f64; 2],
-}
-
-impl Default for ActiveStrain {
-    /// No active fibres, `ε_a = 0.25 µm`, `c = (0, 8.5) µm`.
-    fn default() -> Self {
-        Self {
-            pac: None,
-            bottom: None,
-            eps: 0.25,
-            center: [0.0, 8.5],
-        }
-    }
 }
 
 /// Signed distance to the line through the origin at angle `theta` (radians) from the
@@ -261,12 +227,10 @@ impl ActiveStrain {
 mod tests {
     use super::*;
 
+    /// Both regions at the case's defaults (the one source of MODEL.md's numbers).
     fn both() -> ActiveStrain {
-        ActiveStrain {
-            pac: Some(Pac::default()),
-            bottom: Some(Bottom::default()),
-            ..ActiveStrain::default()
-        }
+        crate::case::terms::active(&crate::case::Case::reference_active())
+            .expect("the reference case has both regions")
     }
 
     fn at(r: f64, deg: f64) -> Vector2<f64> {
@@ -283,7 +247,12 @@ mod tests {
         assert_eq!(a.fa(&at(3.0, -60.0), Domain::Nucleus, 1.0), I);
         assert_eq!(a.fa(&at(6.2, 45.0), Domain::Cytoplasm, 0.0), I);
         assert_eq!(
-            ActiveStrain::default().fa(&at(6.2, 45.0), Domain::Cytoplasm, 1.0),
+            ActiveStrain {
+                pac: None,
+                bottom: None,
+                ..both()
+            }
+            .fa(&at(6.2, 45.0), Domain::Cytoplasm, 1.0),
             I
         );
         // PAC does not act in the membrane
@@ -375,19 +344,19 @@ mod tests {
         let mut a = both();
         a.pac = Some(Pac {
             e: 1.0,
-            ..Pac::default()
+            ..both().pac.unwrap()
         });
         assert!(a.validate().is_err());
         let mut a = both();
         a.pac = Some(Pac {
             outer_axes: [4.0, 7.0],
-            ..Pac::default()
+            ..both().pac.unwrap()
         });
         assert!(a.validate().is_err());
         let mut a = both();
         a.bottom = Some(Bottom {
             theta_deg: -90.0,
-            ..Bottom::default()
+            ..both().bottom.unwrap()
         });
         assert!(a.validate().is_err());
     }

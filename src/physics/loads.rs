@@ -21,16 +21,6 @@ pub struct Contact {
     pub eps: f64,
 }
 
-impl Default for Contact {
-    /// MODEL.md: `μ_ct = 2e3 pN/µm³`, `ε_ct = 0.1 µm`.
-    fn default() -> Self {
-        Self {
-            mu_ct: 2.0e3,
-            eps: 0.1,
-        }
-    }
-}
-
 impl Contact {
     /// Checks `μ_ct ≥ 0`, `ε > 0`, finite.
     pub fn validate(&self) -> Result<(), PhysicsError> {
@@ -62,19 +52,6 @@ pub struct Adhesion {
     pub mu_as0: f64,
     /// Cap `μ_as,max` [pN/µm³] (MODEL.md: 1.4e9 N/m³ = 1.4e3 pN/µm³).
     pub mu_as_max: f64,
-}
-
-impl Default for Adhesion {
-    /// MODEL.md: `e_f = 1.5 µm`, `μ_as0 = 1 pN/(µm³·s)`, `μ_as,max = 1.4e3 pN/µm³`;
-    /// layer smoothing `ε = 0.1 µm` (choice: MODEL.md gives none).
-    fn default() -> Self {
-        Self {
-            e_f: 1.5,
-            eps: 0.1,
-            mu_as0: 1.0,
-            mu_as_max: 1.4e3,
-        }
-    }
 }
 
 impl Adhesion {
@@ -163,13 +140,12 @@ pub fn gravity_force(rho: f64, g: f64, t_g: f64, sign: f64) -> Vector2<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::substrate::Pillars;
     use num_dual::DualSVec64;
 
     fn substrates() -> [Substrate; 2] {
         [
             Substrate::Flat { y_s: -2.0 },
-            Substrate::Pillars(Pillars::default()),
+            Substrate::Pillars(crate::physics::reference::pillars()),
         ]
     }
 
@@ -180,7 +156,7 @@ mod tests {
 
     #[test]
     fn contact_is_zero_outside_and_full_inside() {
-        let c = Contact::default();
+        let c = crate::physics::reference::contact();
         let s = Substrate::Flat { y_s: -2.0 };
         let J = 1.3;
         // above the band (d < −ε)
@@ -195,8 +171,8 @@ mod tests {
         let f = contact_force(&s, &c, &Vector2::new(0.0, -2.0), J);
         assert!((f.y - 0.5 * J * c.mu_ct).abs() < 1e-12);
         // pillars: on a side, deep inside → along the outward side normal
-        let p = Substrate::Pillars(Pillars::default());
-        let mid = Pillars::default().y_top - 4.0; // mid-height of the pillars
+        let p = Substrate::Pillars(crate::physics::reference::pillars());
+        let mid = crate::physics::reference::pillars().y_top - 4.0; // mid-height of the pillars
         let f = contact_force(&p, &c, &Vector2::new(11.7, mid), 1.0);
         assert!((f - Vector2::new(c.mu_ct, 0.0)).norm() < 1e-9, "f = {f}");
         let f = contact_force(&p, &c, &Vector2::new(12.2, mid), 1.0);
@@ -206,7 +182,7 @@ mod tests {
     #[test]
     fn contact_force_derivatives_match_finite_differences() {
         type D = DualSVec64<3>;
-        let c = Contact::default();
+        let c = crate::physics::reference::contact();
         let h = 1e-7;
         for s in substrates() {
             // points inside the contact band of the flat surface and of the pillars
@@ -247,7 +223,7 @@ mod tests {
     fn adhesion_force_and_rate_derivatives_match_finite_differences() {
         // variables: x (2), F (4), μ_as (1)
         type D = DualSVec64<7>;
-        let ad = Adhesion::default();
+        let ad = crate::physics::reference::adhesion();
         let h = 1e-6;
         let N = Vector2::new(0.6, -0.8);
         let F0 = Matrix2::new(1.1, 0.2, -0.3, 0.9);
@@ -303,7 +279,7 @@ mod tests {
 
     #[test]
     fn adhesion_values() {
-        let ad = Adhesion::default();
+        let ad = crate::physics::reference::adhesion();
         let s = Substrate::Flat { y_s: -2.0 };
         let F = Matrix2::new(1.2, 0.1, 0.0, 0.8);
         let N = Vector2::new(0.0, -1.0);
@@ -340,12 +316,12 @@ mod tests {
 
     #[test]
     fn parameter_validation() {
-        assert!(Contact::default().validate().is_ok());
-        assert!(Adhesion::default().validate().is_ok());
+        assert!(crate::physics::reference::contact().validate().is_ok());
+        assert!(crate::physics::reference::adhesion().validate().is_ok());
         assert!(
             Contact {
                 eps: 0.0,
-                ..Contact::default()
+                ..crate::physics::reference::contact()
             }
             .validate()
             .is_err()
@@ -353,7 +329,7 @@ mod tests {
         assert!(
             Adhesion {
                 mu_as_max: 0.0,
-                ..Adhesion::default()
+                ..crate::physics::reference::adhesion()
             }
             .validate()
             .is_err()
@@ -361,7 +337,7 @@ mod tests {
         assert!(
             Adhesion {
                 e_f: f64::NAN,
-                ..Adhesion::default()
+                ..crate::physics::reference::adhesion()
             }
             .validate()
             .is_err()

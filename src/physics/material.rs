@@ -281,16 +281,6 @@ pub struct Viscosity {
     pub mu_f: f64,
 }
 
-impl Default for Viscosity {
-    /// MODEL.md values: `λ_f = 1000 Pa·s`, `μ_f = 2e-3 Pa·s`.
-    fn default() -> Self {
-        Self {
-            lambda_f: 1.0e3,
-            mu_f: 2.0e-3,
-        }
-    }
-}
-
 impl Viscosity {
     /// Checks `λ_f ≥ 0`, `μ_f ≥ 0`, finite.
     pub fn validate(&self) -> Result<(), PhysicsError> {
@@ -444,20 +434,17 @@ pub fn material_point(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::{SMatrix, SVector, Vector1, Vector4};
 
-    /// Deterministic pseudo-random numbers in [0, 1) (64-bit LCG, high bits).
-    pub(crate) struct Lcg(pub u64);
-    impl Lcg {
-        pub fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    /// Seeded random inputs for the derivative tests.
+    pub(crate) struct Rng(oorandom::Rand64);
+    impl Rng {
+        pub fn new(seed: u128) -> Self {
+            Rng(oorandom::Rand64::new(seed))
         }
         /// Uniform in [a, b).
         pub fn uniform(&mut self, a: f64, b: f64) -> f64 {
-            a + (b - a) * self.next()
+            a + (b - a) * self.0.rand_float()
         }
         /// A random F with entries I + U(−s, s), det F ≥ 0.3.
         pub fn deformation(&mut self, s: f64) -> Matrix2<f64> {
@@ -473,6 +460,27 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The entries of a 2×2 tensor, row-major (index 2k + l), the layout of the tangents.
+    fn flat(m: &Matrix2<f64>) -> Vector4<f64> {
+        Vector4::new(m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)])
+    }
+
+    /// Central differences of `f` with respect to each entry of `x`, step `h`: column
+    /// 2k + l holds ∂f/∂x_kl.
+    fn central_differences<const R: usize>(
+        x: &Matrix2<f64>,
+        h: f64,
+        f: impl Fn(&Matrix2<f64>) -> SVector<f64, R>,
+    ) -> SMatrix<f64, R, 4> {
+        let columns: [SVector<f64, R>; 4] = std::array::from_fn(|col| {
+            let (mut xp, mut xm) = (*x, *x);
+            xp[(col / 2, col % 2)] += h;
+            xm[(col / 2, col % 2)] -= h;
+            (f(&xp) - f(&xm)) / (2.0 * h)
+        });
+        SMatrix::from_columns(&columns)
     }
 
     fn cytoplasm() -> Yeoh {
@@ -514,7 +522,7 @@ mod tests {
     fn stress_is_the_derivative_of_the_energy() {
         // Central differences of Ψ(F) = J_a W(C_e) against the closed-form P_s.
         // Step h = 1e-5: truncation ~h²|Ψ'''| ≈ 1e-10·E, round-off ~1e-16·Ψ/h ≈ 1e-11·E.
-        let mut rng = Lcg(7);
+        let mut rng = Rng::new(7);
         let h = 1e-5;
         for mat in [
             cytoplasm(),
@@ -532,16 +540,8 @@ mod tests {
                     )
                 };
                 let P = mat.piola_solid(&F, &Fa);
-                let mut Pfd = Matrix2::zeros();
-                for k in 0..2 {
-                    for l in 0..2 {
-                        let mut Fp = F;
-                        let mut Fm = F;
-                        Fp[(k, l)] += h;
-                        Fm[(k, l)] -= h;
-                        Pfd[(k, l)] = (mat.energy(&Fp, &Fa) - mat.energy(&Fm, &Fa)) / (2.0 * h);
-                    }
-                }
+                let g = central_differences(&F, h, |F| Vector1::new(mat.energy(F, &Fa)));
+                let Pfd = Matrix2::new(g[0], g[1], g[2], g[3]);
                 let e = rel(&Pfd, &P);
                 assert!(
                     e < 1e-8,
@@ -553,11 +553,11 @@ mod tests {
 
     #[test]
     fn tangents_equal_finite_differences_of_the_stress() {
-        let mut rng = Lcg(11);
+        let mut rng = Rng::new(11);
         let h = 1e-6;
         // Two viscosities: the model's (λ_f ≫ μ_f) and one where the shear part matters.
         for visc in [
-            Viscosity::default(),
+            crate::physics::reference::viscosity(),
             Viscosity {
                 lambda_f: 3.0,
                 mu_f: 2.0,
@@ -579,34 +579,12 @@ mod tests {
                 let mp = material_point(&mat, &visc, &F, &Fdot, &Fa);
                 let P = piola_total(&mat, &visc, &F, &Fdot, &Fa);
                 assert!(rel(&mp.P, &P) < 1e-14);
-                let mut fd_F = Matrix4::zeros();
-                let mut fd_Fdot = Matrix4::zeros();
-                for k in 0..2 {
-                    for l in 0..2 {
-                        let col = 2 * k + l;
-                        let (mut Fp, mut Fm) = (F, F);
-                        Fp[(k, l)] += h;
-                        Fm[(k, l)] -= h;
-                        let dP = (piola_total(&mat, &visc, &Fp, &Fdot, &Fa)
-                            - piola_total(&mat, &visc, &Fm, &Fdot, &Fa))
-                            / (2.0 * h);
-                        // P is linear in Ḟ: a large step has no truncation error and
-                        // less round-off.
-                        let hv = 1e-2;
-                        let (mut Gp, mut Gm) = (Fdot, Fdot);
-                        Gp[(k, l)] += hv;
-                        Gm[(k, l)] -= hv;
-                        let dPv = (piola_total(&mat, &visc, &F, &Gp, &Fa)
-                            - piola_total(&mat, &visc, &F, &Gm, &Fa))
-                            / (2.0 * hv);
-                        for i in 0..2 {
-                            for j in 0..2 {
-                                fd_F[(2 * i + j, col)] = dP[(i, j)];
-                                fd_Fdot[(2 * i + j, col)] = dPv[(i, j)];
-                            }
-                        }
-                    }
-                }
+                let fd_F =
+                    central_differences(&F, h, |F| flat(&piola_total(&mat, &visc, F, &Fdot, &Fa)));
+                // P is linear in Ḟ: a large step has no truncation error and less round-off.
+                let fd_Fdot = central_differences(&Fdot, 1e-2, |G| {
+                    flat(&piola_total(&mat, &visc, &F, G, &Fa))
+                });
                 let eF = (fd_F - mp.dP_dF).norm() / mp.dP_dF.norm();
                 let eV = (fd_Fdot - mp.dP_dFdot).norm() / mp.dP_dFdot.norm();
                 assert!(eF < 1e-7, "dP/dF case {case}: {eF:e}");
@@ -619,7 +597,7 @@ mod tests {
     fn tangent_matches_a_single_8_variable_pass() {
         // Independent derivation of the same tangents: one DualSVec64<8> pass over (F, Ḟ).
         type D8 = DualSVec64<8>;
-        let mut rng = Lcg(3);
+        let mut rng = Rng::new(3);
         let mat = cytoplasm();
         let visc = Viscosity {
             lambda_f: 5.0,
@@ -651,7 +629,7 @@ mod tests {
     #[test]
     fn reference_and_pure_active_states_are_stress_free() {
         let mat = cytoplasm();
-        let visc = Viscosity::default();
+        let visc = crate::physics::reference::viscosity();
         let I = Matrix2::identity();
         let P = piola_total(&mat, &visc, &I, &Matrix2::zeros(), &I);
         assert!(P.norm() < 1e-13, "P(I) = {P}");
@@ -678,7 +656,7 @@ mod tests {
         let mat = Yeoh::from_engineering(e, nu, 0.1, 0.2).unwrap();
         let mu = e / (2.0 * (1.0 + nu));
         let lam = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-        let mut rng = Lcg(5);
+        let mut rng = Rng::new(5);
         for _ in 0..5 {
             let H = Matrix2::from_fn(|_, _| rng.uniform(-1.0, 1.0));
             let lin = Matrix2::identity() * (lam * H.trace()) + (H + H.transpose()) * mu;
@@ -737,7 +715,7 @@ mod tests {
     fn solid_stress_is_frame_indifferent() {
         // P(QF) = Q P(F) for rotations Q (with and without F_a).
         let mat = cytoplasm();
-        let mut rng = Lcg(9);
+        let mut rng = Rng::new(9);
         for case in 0..10 {
             let F = rng.deformation(0.5);
             let Fa = if case % 2 == 0 {
@@ -753,9 +731,9 @@ mod tests {
 
     #[test]
     fn viscous_stress_vanishes_for_rigid_rotation_rates() {
-        let mut rng = Lcg(13);
+        let mut rng = Rng::new(13);
         for visc in [
-            Viscosity::default(),
+            crate::physics::reference::viscosity(),
             Viscosity {
                 lambda_f: 1.0,
                 mu_f: 1.0,
@@ -783,7 +761,7 @@ mod tests {
             lambda_f: 3.0,
             mu_f: 2.0,
         };
-        let mut rng = Lcg(17);
+        let mut rng = Rng::new(17);
         for _ in 0..10 {
             let F = rng.deformation(0.5);
             let G1 = Matrix2::from_fn(|_, _| rng.uniform(-1.0, 1.0));
@@ -818,8 +796,8 @@ mod tests {
         use std::time::Instant;
         type D8 = DualSVec64<8>;
         let mat = cytoplasm();
-        let visc = Viscosity::default();
-        let mut rng = Lcg(21);
+        let visc = crate::physics::reference::viscosity();
+        let mut rng = Rng::new(21);
         let n = 1000;
         let inputs: Vec<_> = (0..n)
             .map(|i| {

@@ -29,18 +29,6 @@ pub struct Phases {
     pub flip: Option<Flip>,
 }
 
-impl Default for Phases {
-    /// MODEL.md defaults: `T_g0 = 10 000 s`, `T_as0 = 40 000 s`, `T_a0 = 50 000 s`, no flip.
-    fn default() -> Self {
-        Self {
-            t_g0: 1.0e4,
-            t_as0: 4.0e4,
-            t_a0: 5.0e4,
-            flip: None,
-        }
-    }
-}
-
 impl Phases {
     /// Checks `0 < T_g0 < T_as0 < T_a0` (each ramp has positive length), and for a flip
     /// `start ≥ 0`, `duration > 0`, all finite.
@@ -124,7 +112,7 @@ mod tests {
 
     #[test]
     fn switches_have_the_right_ends() {
-        let p = Phases::default();
+        let p = crate::physics::reference::phases();
         p.validate().unwrap();
         assert_eq!(p.t_g(0.0), 0.0);
         assert_eq!(p.t_g(1.0e4), 1.0);
@@ -149,7 +137,7 @@ mod tests {
                 start: 5.0e4,
                 duration: 1.0e4,
             }),
-            ..Phases::default()
+            ..crate::physics::reference::phases()
         };
         p.validate().unwrap();
         assert_eq!(p.gravity_sign(4.0e4), 1.0);
@@ -162,12 +150,12 @@ mod tests {
     fn rejects_bad_orders() {
         let p = Phases {
             t_as0: 5.0e3,
-            ..Phases::default()
+            ..crate::physics::reference::phases()
         };
         assert!(p.validate().is_err());
         let p = Phases {
             t_g0: 0.0,
-            ..Phases::default()
+            ..crate::physics::reference::phases()
         };
         assert!(p.validate().is_err());
         let p = Phases {
@@ -175,7 +163,7 @@ mod tests {
                 start: 1.0,
                 duration: 0.0,
             }),
-            ..Phases::default()
+            ..crate::physics::reference::phases()
         };
         assert!(p.validate().is_err());
     }

@@ -51,24 +51,6 @@ pub struct Pillars {
     pub y_top: f64,
 }
 
-impl Default for Pillars {
-    /// MODEL.md geometry: w = s = h = 8 µm, first axis at x = 8 µm, q = 4, and `y_top`
-    /// placed for a 0.5 µm smallest gap below the default cell (centre (0, 8.5), radius 10).
-    fn default() -> Self {
-        let mut p = Self {
-            width: 8.0,
-            spacing: 8.0,
-            height: 8.0,
-            first_center: 8.0,
-            q: 4.0,
-            y_top: 0.0,
-        };
-        // The geometry above is valid, so this cannot fail; keep a sane value regardless.
-        p.y_top = p.y_top_for_gap(0.5, [0.0, 8.5], 10.0).unwrap_or(-0.3);
-        p
-    }
-}
-
 /// The substrate: a flat half-plane or a periodic row of pillars on a floor.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum Substrate {
@@ -79,13 +61,6 @@ pub enum Substrate {
     },
     /// Micropillars on a floor.
     Pillars(Pillars),
-}
-
-impl Default for Substrate {
-    /// The flat substrate at `y_s = −2 µm`.
-    fn default() -> Self {
-        Substrate::Flat { y_s: -2.0 }
-    }
 }
 
 /// `(|u|^q, |u|^{q−1} sgn u)`, exact integer powers for integer `q` (derivatives are then
@@ -391,7 +366,7 @@ mod tests {
 
     #[test]
     fn pillar_surface_has_zero_depth_and_unit_normal() {
-        let p = Pillars::default();
+        let p = crate::physics::reference::pillars();
         let s = Substrate::Pillars(p);
         for axis in [8.0, 24.0, -8.0, -40.0] {
             // upper half of the boundary (the lower half is below the floor level only at
@@ -411,7 +386,7 @@ mod tests {
 
     #[test]
     fn pillar_distance_is_exact_on_flat_faces_and_first_order_near_corners() {
-        let p = Pillars::default();
+        let p = crate::physics::reference::pillars();
         let s = Substrate::Pillars(p);
         // above the middle of a top: exact
         for dy in [-0.7, -0.1, 0.0, 0.05, 0.5, 1.5, 3.0] {
@@ -439,7 +414,7 @@ mod tests {
 
     #[test]
     fn pillar_floor_and_periodicity() {
-        let p = Pillars::default();
+        let p = crate::physics::reference::pillars();
         let s = Substrate::Pillars(p);
         // mid-gap above the floor: the floor is nearer (gap half-width 4 µm)
         let floor = p.y_top - p.height;
@@ -470,14 +445,14 @@ mod tests {
     fn dual_derivatives_of_depth_and_normal_match_finite_differences() {
         let h = 1e-6;
         let subs = [
-            Substrate::Pillars(Pillars::default()),
+            Substrate::Pillars(crate::physics::reference::pillars()),
             Substrate::Pillars(Pillars {
                 q: 3.0,
-                ..Pillars::default()
+                ..crate::physics::reference::pillars()
             }),
             Substrate::Pillars(Pillars {
                 q: 4.5,
-                ..Pillars::default()
+                ..crate::physics::reference::pillars()
             }),
         ];
         // points near the top, the rounded corners, and the sides (away from the
@@ -527,7 +502,7 @@ mod tests {
 
     #[test]
     fn y_top_for_gap_gives_the_requested_gap() {
-        let p = Pillars::default();
+        let p = crate::physics::reference::pillars();
         let c = [0.0, 8.5];
         // MODEL.md: y_top ≈ −0.3 µm for a 0.5 µm gap, smallest gap near x ≈ 5 µm
         let y_top = p.y_top_for_gap(0.5, c, 10.0).unwrap();
@@ -561,7 +536,7 @@ mod tests {
 
     #[test]
     fn outline_runs_along_the_surface() {
-        let p = Pillars::default();
+        let p = crate::physics::reference::pillars();
         let s = Substrate::Pillars(p);
         let pts = s.outline(0.0, 20.0, 64);
         // pillars at 8 and 24 (24 − 4 = 20 ≤ x_max): two closed curves of 65 points + ends
