@@ -8,7 +8,10 @@
 use std::fmt;
 
 use super::Case;
-use super::sections::{InertiaMode, Output, Substrate};
+use super::sections::{
+    Active, Adhesion, Contact, Geometry, Gravity, Inertia, InertiaMode, Materials, Mesh, Output,
+    Phases, Solver, Substrate, Viscosity,
+};
 
 /// What rule a value broke.
 #[derive(Debug, Clone, PartialEq)]
@@ -244,18 +247,41 @@ fn short(field: &str) -> &str {
 
 impl Case {
     /// All violations of the schema's ranges and consistency rules, blaming the written
-    /// side of two-field rules according to `written`.
+    /// side of two-field rules according to `written`: section by section, then what the
+    /// lower layers (mesh generator, material law, physics validators) would refuse when
+    /// the run sets up.
     pub(crate) fn violations(&self, written: &dyn Fn(&str) -> bool) -> Vec<Violation> {
         let mut c = Checker {
             out: Vec::new(),
             written,
             invalid: Vec::new(),
         };
+        let g = &self.geometry;
+        c.name(self);
+        c.geometry(g);
+        c.mesh(&self.mesh, g);
+        c.materials(&self.materials);
+        c.loads(&self.viscosity, &self.gravity);
+        c.substrate(&self.substrate, g);
+        c.contact(&self.contact);
+        c.adhesion(self.adhesion.as_ref());
+        c.active(&self.active, g);
+        c.phases(&self.phases);
+        c.inertia(&self.inertia);
+        c.solver_and_output(&self.solver, &self.output);
+        c.layers(self);
+        c.out
+    }
+}
 
-        if !is_single_path_component(&self.name) {
-            c.push(
+/// The checks of each section.
+impl Checker<'_> {
+    /// The name is one path component (it names the output directory).
+    fn name(&mut self, case: &Case) {
+        if !is_single_path_component(&case.name) {
+            self.push(
                 "name",
-                format!("{:?}", self.name),
+                format!("{:?}", case.name),
                 Rule::Conflict(
                     "the name labels the outputs and names their directory, so it must be a \
                      single path component: not empty, no `/` or `\\`, not `.` or `..`, no \
@@ -264,76 +290,87 @@ impl Case {
                 ),
             );
         }
+    }
 
-        // Geometry: 0 < r_n < r_cp < r_c.
-        let g = &self.geometry;
-        c.finite("geometry.centre_y", g.centre_y);
-        c.range(
+    /// Geometry: 0 < r_n < r_cp < r_c.
+    fn geometry(&mut self, g: &Geometry) {
+        self.finite("geometry.centre_y", g.centre_y);
+        self.range(
             "geometry.r_n",
             g.r_n,
             g.r_n > 0.0,
             format!("0 < r_n < r_cp = {}", num(g.r_cp)),
         );
-        c.less("geometry.r_n", g.r_n, "geometry.r_cp", g.r_cp);
-        c.less("geometry.r_cp", g.r_cp, "geometry.r_c", g.r_c);
+        self.less("geometry.r_n", g.r_n, "geometry.r_cp", g.r_cp);
+        self.less("geometry.r_cp", g.r_cp, "geometry.r_c", g.r_c);
+    }
 
-        // Mesh.
-        let m = &self.mesh;
+    /// Mesh sizes (at most the cell radius) and the band quadrature.
+    fn mesh(&mut self, m: &Mesh, g: &Geometry) {
         for (field, h) in [
             ("mesh.h_bottom", m.h_bottom),
             ("mesh.h_nucleus", m.h_nucleus),
         ] {
             let rule = format!("0 < {} <= r_c = {}", short(field), num(g.r_c));
-            c.range_given(field, &["geometry.r_c"], h, h > 0.0 && h <= g.r_c, rule);
+            self.range_given(field, &["geometry.r_c"], h, h > 0.0 && h <= g.r_c, rule);
         }
-        c.positive("mesh.refine", m.refine);
-        c.int_range(
+        self.positive("mesh.refine", m.refine);
+        self.int_range(
             "mesh.contact_quadrature_degree",
             m.contact_quadrature_degree.into(),
             2,
             Some(20),
         );
-        c.int_range(
+        self.int_range(
             "mesh.contact_subdivisions",
             m.contact_subdivisions.into(),
             0,
             Some(4),
         );
+    }
 
-        // Materials.
-        let mat = &self.materials;
+    /// Materials: moduli, Poisson ratios, densities, Yeoh's γ and β.
+    fn materials(&mut self, mat: &Materials) {
         for (domain, d) in [
             ("nucleus", &mat.nucleus),
             ("cytoplasm", &mat.cytoplasm),
             ("membrane", &mat.membrane),
         ] {
-            c.positive(&format!("materials.{domain}.e"), d.e);
-            c.interval(&format!("materials.{domain}.nu"), d.nu, -1.0, 0.5, true);
-            c.non_negative(&format!("materials.{domain}.rho_kg_m3"), d.rho_kg_m3);
+            self.positive(&format!("materials.{domain}.e"), d.e);
+            self.interval(&format!("materials.{domain}.nu"), d.nu, -1.0, 0.5, true);
+            self.non_negative(&format!("materials.{domain}.rho_kg_m3"), d.rho_kg_m3);
         }
-        c.interval("materials.gamma", mat.gamma, 0.0, 3.0, false);
-        c.interval(
+        self.interval("materials.gamma", mat.gamma, 0.0, 3.0, false);
+        self.interval(
             "materials.beta_fraction",
             mat.beta_fraction,
             0.0,
             1.0,
             false,
         );
+    }
 
-        // Viscosity.
-        c.non_negative("viscosity.lambda_f", self.viscosity.lambda_f);
-        c.non_negative("viscosity.mu_f", self.viscosity.mu_f);
+    /// Viscosity and gravity: signs.
+    fn loads(&mut self, v: &Viscosity, gr: &Gravity) {
+        self.non_negative("viscosity.lambda_f", v.lambda_f);
+        self.non_negative("viscosity.mu_f", v.mu_f);
+        self.non_negative("gravity.g_m_s2", gr.g_m_s2);
+        self.positive("gravity.flip_duration", gr.flip_duration);
+    }
 
-        // Gravity.
-        c.non_negative("gravity.g_m_s2", self.gravity.g_m_s2);
-        c.positive("gravity.flip_duration", self.gravity.flip_duration);
+    /// Contact: positive penalty and band.
+    fn contact(&mut self, ct: &Contact) {
+        self.positive("contact.mu_ct_n_m3", ct.mu_ct_n_m3);
+        self.positive("contact.eps_ct", ct.eps_ct);
+    }
 
-        // Substrate: below the cell.
-        match &self.substrate {
+    /// Substrate: below the cell; pillars mirror symmetric about x = 0.
+    fn substrate(&mut self, substrate: &Substrate, g: &Geometry) {
+        match substrate {
             Substrate::Flat(f) => {
                 let bottom = g.bottom_y();
                 let rule = format!("y_s < centre_y - r_c = {}", num(bottom));
-                c.range_given(
+                self.range_given(
                     "substrate.y_s",
                     &["geometry.centre_y", "geometry.r_c"],
                     f.y_s,
@@ -342,11 +379,11 @@ impl Case {
                 );
             }
             Substrate::Pillars(p) => {
-                c.positive("substrate.width", p.width);
-                c.positive("substrate.spacing", p.spacing);
-                c.positive("substrate.height", p.height);
-                c.range("substrate.q", p.q, p.q >= 2.0, "q >= 2");
-                c.positive("substrate.gap", p.gap);
+                self.positive("substrate.width", p.width);
+                self.positive("substrate.spacing", p.spacing);
+                self.positive("substrate.height", p.height);
+                self.range("substrate.q", p.q, p.q >= 2.0, "q >= 2");
+                self.positive("substrate.gap", p.gap);
                 let period = p.period();
                 // Mirror symmetry about x = 0: pillar axes at first_center + k·period must
                 // map onto each other under x → −x.
@@ -358,7 +395,7 @@ impl Case {
                     num(half)
                 );
                 let symmetric = period.is_finite() && r.abs() <= 1e-9 * period;
-                c.range_given(
+                self.range_given(
                     "substrate.first_center",
                     &["substrate.width", "substrate.spacing"],
                     p.first_center,
@@ -366,12 +403,12 @@ impl Case {
                     rule,
                 );
                 if let Some(y_top) = p.y_top {
-                    c.finite("substrate.y_top", y_top);
+                    self.finite("substrate.y_top", y_top);
                 }
                 // The pillars must start below the cell: needs a well-formed pillar array
                 // and cell, so it reads both sections.
                 let reads = ["substrate", "geometry"];
-                if !c.any_invalid(&reads) {
+                if !self.any_invalid(&reads) {
                     let y_top = p.resolved_y_top(g);
                     let gap = p.smallest_gap(g, y_top);
                     if gap.is_nan() || gap <= 0.0 {
@@ -379,7 +416,7 @@ impl Case {
                             Some(y) => ("substrate.y_top", y),
                             None => ("substrate.gap", p.gap),
                         };
-                        c.report(
+                        self.report(
                             field,
                             &reads,
                             num(value),
@@ -392,45 +429,44 @@ impl Case {
                 }
             }
         }
+    }
 
-        // Contact.
-        c.positive("contact.mu_ct_n_m3", self.contact.mu_ct_n_m3);
-        c.positive("contact.eps_ct", self.contact.eps_ct);
-
-        // Adhesion.
-        if let Some(a) = &self.adhesion {
-            c.positive("adhesion.e_f", a.e_f);
-            c.positive("adhesion.eps", a.eps);
-            c.positive("adhesion.mu_as0_n_m3s", a.mu_as0_n_m3s);
-            c.positive("adhesion.mu_as_max_n_m3", a.mu_as_max_n_m3);
+    /// Adhesion: positive coefficients.
+    fn adhesion(&mut self, adhesion: Option<&Adhesion>) {
+        if let Some(a) = adhesion {
+            self.positive("adhesion.e_f", a.e_f);
+            self.positive("adhesion.eps", a.eps);
+            self.positive("adhesion.mu_as0_n_m3s", a.mu_as0_n_m3s);
+            self.positive("adhesion.mu_as_max_n_m3", a.mu_as_max_n_m3);
         }
+    }
 
-        // Active strain.
-        let act = &self.active;
-        c.positive("active.eps_a", act.eps_a);
+    /// Active regions: amplitudes, angles, nested ellipses inside the cell.
+    fn active(&mut self, act: &Active, g: &Geometry) {
+        self.positive("active.eps_a", act.eps_a);
         if let Some(pac) = &act.pac {
-            c.interval("active.pac.e", pac.e, 0.0, 1.0, false);
-            c.interval("active.pac.theta_deg", pac.theta_deg, -90.0, 90.0, true);
+            self.interval("active.pac.e", pac.e, 0.0, 1.0, false);
+            self.interval("active.pac.theta_deg", pac.theta_deg, -90.0, 90.0, true);
             let (inner, outer) = (pac.inner_semi_axes, pac.outer_semi_axes);
             let (inner_path, outer_path) =
                 ("active.pac.inner_semi_axes", "active.pac.outer_semi_axes");
             let finite_positive =
                 |(a, b): (f64, f64)| a.is_finite() && b.is_finite() && a > 0.0 && b > 0.0;
             if !finite_positive(inner) {
-                c.push(
+                self.push(
                     inner_path,
                     axes(inner),
                     Rule::Range("both inner semi-axes > 0".into()),
                 );
             } else if !(outer.0.is_finite() && outer.1.is_finite()) {
-                c.push(
+                self.push(
                     outer_path,
                     axes(outer),
                     Rule::Range("both outer semi-axes finite".into()),
                 );
             } else if !(inner.0 < outer.0 && inner.1 < outer.1) {
                 // Blame the outer ellipse only if the file writes it and not the inner one.
-                let blame_outer = (c.written)(outer_path) && !(c.written)(inner_path);
+                let blame_outer = (self.written)(outer_path) && !(self.written)(inner_path);
                 let (field, value, rule) = if blame_outer {
                     let rule = format!("outer > inner = {}, each axis", axes(inner));
                     (outer_path, axes(outer), rule)
@@ -438,11 +474,11 @@ impl Case {
                     let rule = format!("inner < outer = {}, each axis", axes(outer));
                     (inner_path, axes(inner), rule)
                 };
-                c.push(field, value, Rule::Range(rule));
-                c.invalid
+                self.push(field, value, Rule::Range(rule));
+                self.invalid
                     .extend([inner_path.to_string(), outer_path.to_string()]);
             } else if !(outer.0 < g.r_c && outer.1 < g.r_c) {
-                c.report(
+                self.report(
                     outer_path,
                     &["geometry.r_c"],
                     axes(outer),
@@ -454,8 +490,8 @@ impl Case {
             }
         }
         if let Some(bottom) = &act.bottom {
-            c.interval("active.bottom.e", bottom.e, 0.0, 1.0, false);
-            c.interval(
+            self.interval("active.bottom.e", bottom.e, 0.0, 1.0, false);
+            self.interval(
                 "active.bottom.theta_deg",
                 bottom.theta_deg,
                 -90.0,
@@ -463,22 +499,24 @@ impl Case {
                 true,
             );
         }
+    }
 
-        // Phases: 0 < T_g0 < T_as0 < T_a0, t_end > 0.
-        let ph = &self.phases;
-        c.positive("phases.t_g0", ph.t_g0);
-        c.less("phases.t_g0", ph.t_g0, "phases.t_as0", ph.t_as0);
-        c.less("phases.t_as0", ph.t_as0, "phases.t_a0", ph.t_a0);
-        c.positive("phases.t_end", ph.t_end);
+    /// Phases: 0 < T_g0 < T_as0 < T_a0, t_end > 0.
+    fn phases(&mut self, ph: &Phases) {
+        self.positive("phases.t_g0", ph.t_g0);
+        self.less("phases.t_g0", ph.t_g0, "phases.t_as0", ph.t_as0);
+        self.less("phases.t_as0", ph.t_as0, "phases.t_a0", ph.t_a0);
+        self.positive("phases.t_end", ph.t_end);
+    }
 
-        // Inertia.
-        let inertia = &self.inertia;
-        c.non_negative("inertia.drag", inertia.drag);
+    /// Inertia: drag, and a mode the cell can be integrated with.
+    fn inertia(&mut self, inertia: &Inertia) {
+        self.non_negative("inertia.drag", inertia.drag);
         match inertia.mode {
             InertiaMode::On => {}
             InertiaMode::Off => {
                 if inertia.drag == 0.0 {
-                    c.report(
+                    self.report(
                         "inertia.mode",
                         &["inertia.drag"],
                         "Off".into(),
@@ -493,39 +531,32 @@ impl Case {
                 }
             }
             InertiaMode::OffAfter(t) => {
-                c.range("inertia.mode", t, t > 0.0, "OffAfter(t) with t > 0");
+                self.range("inertia.mode", t, t > 0.0, "OffAfter(t) with t > 0");
             }
         }
+    }
 
-        // Solver.
-        let s = &self.solver;
-        c.range(
+    /// Solver tolerances, steps and order; output times.
+    fn solver_and_output(&mut self, s: &Solver, output: &Output) {
+        self.range(
             "solver.rtol",
             s.rtol,
             s.rtol > 0.0 && s.rtol < 1.0,
             "0 < rtol < 1",
         );
-        c.positive("solver.atol", s.atol);
-        c.positive("solver.bdf2_dt", s.bdf2_dt);
-        c.int_range("solver.max_order", s.max_order.into(), 1, Some(5));
-        c.int_range("solver.max_steps", s.max_steps, 1, None);
+        self.positive("solver.atol", s.atol);
+        self.positive("solver.bdf2_dt", s.bdf2_dt);
+        self.int_range("solver.max_order", s.max_order.into(), 1, Some(5));
+        self.int_range("solver.max_steps", s.max_steps, 1, None);
         if let Some(h0) = s.initial_step {
-            c.positive("solver.initial_step", h0);
+            self.positive("solver.initial_step", h0);
         }
-
-        // Output.
-        c.int_range(
+        self.int_range(
             "output.n_times",
-            self.output.n_times.into(),
+            output.n_times.into(),
             Output::MIN_TIMES.into(),
             Some(Output::MAX_TIMES.into()),
         );
-
-        // What the mesh generator, the material law and the physics validators would
-        // refuse when the run sets up.
-        c.layers(self);
-
-        c.out
     }
 }
 

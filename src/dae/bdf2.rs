@@ -115,21 +115,15 @@ impl<D: Dae> Bdf2<D> {
             )));
         }
         let n = dae.size();
-        let Setup {
-            t0,
-            y0,
-            yp0,
-            solver,
-            nnz,
-            breakpoints,
-        } = Setup::new(&dae, opts.linear_solver.as_ref(), &opts.atol)?;
+        let setup = Setup::new(&dae, opts.linear_solver.as_ref(), &opts.atol)?;
+        let (t0, y0, yp0) = (setup.t0, setup.y0, setup.yp0);
         Ok(Self {
             dae,
             opts,
-            solver,
-            values: vec![0.0; nnz],
+            solver: setup.solver,
+            values: vec![0.0; setup.nnz],
             factor_cj: None,
-            breakpoints,
+            breakpoints: setup.breakpoints,
             tn: t0,
             yn: y0.clone(),
             ypn: yp0.clone(),

@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::mesh::{Domain, Mesh, MeshError, MeshParams, NamedPoints};
+use super::mesh::{Domain, Mesh, MeshError, MeshParams, MeshParts};
 use super::p2::EDGES;
 
 /// gmsh element type of the 6-node triangle.
@@ -70,34 +70,23 @@ impl<'a> Tokens<'a> {
     }
 }
 
-impl Mesh {
-    /// Reads a gmsh 4.1 ASCII mesh of 6-node triangles with physical surface groups named
-    /// `nucleus`, `cytoplasm`, `membrane`.
-    ///
-    /// `params` gives the geometry the mesh is meant to fit (centre and radii; the size
-    /// fields are not used): the outer edges are the boundary edges with both end vertices
-    /// within 1e-6 · r_c of the circle r = r_c; the symmetry nodes are those within that
-    /// tolerance of x = c_x, and are snapped onto it exactly; the named points must be
-    /// vertices within that tolerance of their positions. Elements given clockwise are
-    /// reordered; every element's Jacobian is checked.
-    pub fn read_gmsh(path: &Path, params: &MeshParams) -> Result<Mesh, MeshError> {
-        params.validate()?;
-        let pstr = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| MeshError::Io {
-            path: pstr.clone(),
-            source,
-        })?;
-        Self::parse_gmsh(&text, &pstr, params)
-    }
+/// A gmsh file split into its sections, with what the cell model reads from each.
+struct MshFile<'a> {
+    path: &'a str,
+    sections: Vec<Section<'a>>,
+}
 
-    /// As [`Mesh::read_gmsh`], from the file's text (`path` is only used in messages).
-    pub fn parse_gmsh(text: &str, path: &str, params: &MeshParams) -> Result<Mesh, MeshError> {
-        let ferr = |line: usize, message: String| MeshError::Format {
+/// A cell triangle as read: its six node tags, its domain and the line it is on.
+type TaggedTriangle = ([usize; 6], Domain, usize);
+
+impl<'a> MshFile<'a> {
+    /// Splits `text` into `$Name … $EndName` sections.
+    fn split(text: &'a str, path: &'a str) -> Result<Self, MeshError> {
+        let err = |line: usize, message: String| MeshError::Format {
             path: path.to_string(),
             line,
             message,
         };
-        // Split into sections.
         let mut sections: Vec<Section> = Vec::new();
         let mut cur: Option<Section> = None;
         for (i, raw) in text.lines().enumerate() {
@@ -105,11 +94,11 @@ impl Mesh {
             if let Some(name) = l.strip_prefix("$End") {
                 match cur.take() {
                     Some(s) if s.name == name => sections.push(s),
-                    _ => return Err(ferr(i + 1, format!("unexpected `{l}`"))),
+                    _ => return Err(err(i + 1, format!("unexpected `{l}`"))),
                 }
             } else if let Some(name) = l.strip_prefix('$') {
                 if let Some(s) = &cur {
-                    return Err(ferr(i + 1, format!("section ${} not closed", s.name)));
+                    return Err(err(i + 1, format!("section ${} not closed", s.name)));
                 }
                 cur = Some(Section {
                     name,
@@ -121,25 +110,44 @@ impl Mesh {
             }
         }
         if let Some(s) = cur {
-            return Err(ferr(0, format!("section ${} not closed", s.name)));
+            return Err(err(0, format!("section ${} not closed", s.name)));
         }
-        let find = |name: &str| sections.iter().find(|s| s.name == name);
+        Ok(MshFile { path, sections })
+    }
 
-        // $MeshFormat: version 4.1, ASCII.
-        let fmt = find("MeshFormat").ok_or_else(|| ferr(0, "no $MeshFormat".into()))?;
-        let mut t = Tokens::new(path, fmt);
+    fn err(&self, line: usize, message: String) -> MeshError {
+        MeshError::Format {
+            path: self.path.to_string(),
+            line,
+            message,
+        }
+    }
+
+    fn find(&self, name: &str) -> Option<&Section<'a>> {
+        self.sections.iter().find(|s| s.name == name)
+    }
+
+    /// `$MeshFormat`: version 4.1, ASCII.
+    fn check_format(&self) -> Result<(), MeshError> {
+        let fmt = self
+            .find("MeshFormat")
+            .ok_or_else(|| self.err(0, "no $MeshFormat".into()))?;
+        let mut t = Tokens::new(self.path, fmt);
         let version: String = t.next("the format version")?;
         let file_type: u32 = t.next("the file type")?;
         if !version.starts_with("4.1") || file_type != 0 {
-            return Err(ferr(
+            return Err(self.err(
                 fmt.first_line,
                 format!("need gmsh format 4.1 ASCII, found {version} type {file_type}"),
             ));
         }
+        Ok(())
+    }
 
-        // $PhysicalNames: dim tag "name".
+    /// `$PhysicalNames` (dim tag "name"): the 2-D physical tags of the three domains.
+    fn physical_domains(&self) -> Result<HashMap<i64, Domain>, MeshError> {
         let mut phys_domain: HashMap<i64, Domain> = HashMap::new();
-        if let Some(sec) = find("PhysicalNames") {
+        if let Some(sec) = self.find("PhysicalNames") {
             for (i, l) in sec.lines.iter().enumerate().skip(1) {
                 let line = sec.first_line + i;
                 let mut parts = l.splitn(3, char::is_whitespace);
@@ -149,7 +157,7 @@ impl Mesh {
                     .next()
                     .map(|s| s.trim().trim_matches('"').to_lowercase());
                 let (Some(dim), Some(tag), Some(name)) = (dim, tag, name) else {
-                    return Err(ferr(line, format!("cannot read physical name `{l}`")));
+                    return Err(self.err(line, format!("cannot read physical name `{l}`")));
                 };
                 let d = match name.as_str() {
                     "nucleus" => Some(Domain::Nucleus),
@@ -163,15 +171,23 @@ impl Mesh {
             }
         }
         if phys_domain.len() < 3 {
-            return Err(ferr(
+            return Err(self.err(
                 0,
                 "need 2-D physical groups named nucleus, cytoplasm and membrane".into(),
             ));
         }
+        Ok(phys_domain)
+    }
 
-        // $Entities: surface tag → domain (through its physical tags).
-        let ent = find("Entities").ok_or_else(|| ferr(0, "no $Entities".into()))?;
-        let mut t = Tokens::new(path, ent);
+    /// `$Entities`: surface tag → domain (through its physical tags).
+    fn surface_domains(
+        &self,
+        phys_domain: &HashMap<i64, Domain>,
+    ) -> Result<HashMap<i64, Domain>, MeshError> {
+        let ent = self
+            .find("Entities")
+            .ok_or_else(|| self.err(0, "no $Entities".into()))?;
+        let mut t = Tokens::new(self.path, ent);
         let counts: [usize; 4] = [
             t.next("the number of points")?,
             t.next("the number of curves")?,
@@ -208,7 +224,7 @@ impl Mesh {
                         }
                         [] => {}
                         _ => {
-                            return Err(ferr(
+                            return Err(self.err(
                                 line,
                                 format!("surface {tag} is in more than one cell domain"),
                             ));
@@ -217,10 +233,15 @@ impl Mesh {
                 }
             }
         }
+        Ok(surface_domain)
+    }
 
-        // $Nodes.
-        let sec = find("Nodes").ok_or_else(|| ferr(0, "no $Nodes".into()))?;
-        let mut t = Tokens::new(path, sec);
+    /// `$Nodes`: node tag → (x, y).
+    fn node_coordinates(&self) -> Result<HashMap<usize, [f64; 2]>, MeshError> {
+        let sec = self
+            .find("Nodes")
+            .ok_or_else(|| self.err(0, "no $Nodes".into()))?;
+        let mut t = Tokens::new(self.path, sec);
         let n_blocks: usize = t.next("the number of node blocks")?;
         let _n_nodes: usize = t.next("the number of nodes")?;
         let _min_tag: usize = t.next("the minimum node tag")?;
@@ -240,21 +261,28 @@ impl Mesh {
                 let y: f64 = t.next("a node y")?;
                 let _z: f64 = t.next("a node z")?;
                 if parametric == 1 {
-                    return Err(ferr(t.line(), "parametric nodes are not supported".into()));
+                    return Err(self.err(t.line(), "parametric nodes are not supported".into()));
                 }
                 if !(x.is_finite() && y.is_finite()) {
-                    return Err(ferr(
-                        t.line(),
-                        format!("node {tag} has a non-finite coordinate"),
-                    ));
+                    return Err(
+                        self.err(t.line(), format!("node {tag} has a non-finite coordinate"))
+                    );
                 }
                 coord.insert(tag, [x, y]);
             }
         }
+        Ok(coord)
+    }
 
-        // $Elements: 6-node triangles on cell surfaces.
-        let sec = find("Elements").ok_or_else(|| ferr(0, "no $Elements".into()))?;
-        let mut t = Tokens::new(path, sec);
+    /// `$Elements`: the 6-node triangles on cell surfaces.
+    fn cell_triangles(
+        &self,
+        surface_domain: &HashMap<i64, Domain>,
+    ) -> Result<Vec<TaggedTriangle>, MeshError> {
+        let sec = self
+            .find("Elements")
+            .ok_or_else(|| self.err(0, "no $Elements".into()))?;
+        let mut t = Tokens::new(self.path, sec);
         let n_blocks: usize = t.next("the number of element blocks")?;
         for _ in 0..3 {
             t.next::<usize>("an element count or tag")?;
@@ -273,17 +301,14 @@ impl Mesh {
                 8 => 3,
                 9 => 6,
                 15 => 1,
-                _ => return Err(ferr(line, format!("unsupported element type {etype}"))),
+                _ => return Err(self.err(line, format!("unsupported element type {etype}"))),
             };
             if etype == TRIANGLE3 {
-                return Err(ferr(
-                    line,
-                    "3-node triangles: the model needs 6-node (P2)".into(),
-                ));
+                return Err(self.err(line, "3-node triangles: the model needs 6-node (P2)".into()));
             }
             let dom = if dim == 2 && etype == TRIANGLE6 {
                 Some(*surface_domain.get(&tag).ok_or_else(|| {
-                    ferr(
+                    self.err(
                         line,
                         format!("surface {tag} is in no cell domain physical group"),
                     )
@@ -307,10 +332,19 @@ impl Mesh {
             }
         }
         if tri_tags.is_empty() {
-            return Err(ferr(0, "no 6-node triangles".into()));
+            return Err(self.err(0, "no 6-node triangles".into()));
         }
+        Ok(tri_tags)
+    }
 
-        // Renumber: vertices first, then mid-nodes, in order of first use.
+    /// Renumbers the triangles' nodes: vertices first, then mid-nodes, in order of first
+    /// use. Returns (nodes, number of vertices, elements, domains).
+    #[allow(clippy::type_complexity)]
+    fn renumber(
+        &self,
+        tri_tags: &[TaggedTriangle],
+        coord: &HashMap<usize, [f64; 2]>,
+    ) -> Result<(Vec<[f64; 2]>, usize, Vec<[usize; 6]>, Vec<Domain>), MeshError> {
         let mut vid: HashMap<usize, usize> = HashMap::new();
         let mut nodes: Vec<[f64; 2]> = Vec::new();
         let mut get = |tag: usize, line: usize, nodes: &mut Vec<[f64; 2]>| {
@@ -319,14 +353,14 @@ impl Mesh {
             }
             let p = coord
                 .get(&tag)
-                .ok_or_else(|| ferr(line, format!("element uses unknown node {tag}")))?;
+                .ok_or_else(|| self.err(line, format!("element uses unknown node {tag}")))?;
             nodes.push(*p);
             vid.insert(tag, nodes.len() - 1);
             Ok(nodes.len() - 1)
         };
         let mut elements = Vec::with_capacity(tri_tags.len());
         let mut domains = Vec::with_capacity(tri_tags.len());
-        for (tags, _, line) in &tri_tags {
+        for (tags, _, line) in tri_tags {
             let mut el = [0usize; 6];
             for k in 0..3 {
                 el[k] = get(tags[k], *line, &mut nodes)?;
@@ -338,7 +372,7 @@ impl Mesh {
             for k in 3..6 {
                 let i = get(tags[k], *line, &mut nodes)?;
                 if i < n_vertices {
-                    return Err(ferr(
+                    return Err(self.err(
                         *line,
                         format!("node {} is both vertex and mid-node", tags[k]),
                     ));
@@ -347,7 +381,38 @@ impl Mesh {
             }
             domains.push(*d);
         }
+        Ok((nodes, n_vertices, elements, domains))
+    }
+}
 
+impl Mesh {
+    /// Reads a gmsh 4.1 ASCII mesh of 6-node triangles with physical surface groups named
+    /// `nucleus`, `cytoplasm`, `membrane`.
+    ///
+    /// `params` gives the geometry the mesh is meant to fit (centre and radii; the size
+    /// fields are not used): the outer edges are the boundary edges with both end vertices
+    /// within 1e-6 · r_c of the circle r = r_c; the symmetry nodes are those within that
+    /// tolerance of x = c_x, and are snapped onto it exactly; the named points must be
+    /// vertices within that tolerance of their positions. Elements given clockwise are
+    /// reordered; every element's Jacobian is checked.
+    pub fn read_gmsh(path: &Path, params: &MeshParams) -> Result<Mesh, MeshError> {
+        params.validate()?;
+        let pstr = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| MeshError::Io {
+            path: pstr.clone(),
+            source,
+        })?;
+        Self::parse_gmsh(&text, &pstr, params)
+    }
+
+    /// As [`Mesh::read_gmsh`], from the file's text (`path` is only used in messages).
+    pub fn parse_gmsh(text: &str, path: &str, params: &MeshParams) -> Result<Mesh, MeshError> {
+        let file = MshFile::split(text, path)?;
+        file.check_format()?;
+        let surface_domain = file.surface_domains(&file.physical_domains()?)?;
+        let coord = file.node_coordinates()?;
+        let triangles = file.cell_triangles(&surface_domain)?;
+        let (nodes, n_vertices, elements, domains) = file.renumber(&triangles, &coord)?;
         Self::assemble_from_elements(params, nodes, n_vertices, elements, domains, path)
     }
 
@@ -427,37 +492,25 @@ impl Mesh {
                 inner.push(e);
             }
         }
-        let mut symmetry_nodes: Vec<usize> =
-            (0..nodes.len()).filter(|&n| nodes[n][0] == c[0]).collect();
-        symmetry_nodes.sort_by(|&a, &b| nodes[a][1].total_cmp(&nodes[b][1]));
-        let vertex_at = |y: f64, what: &str| {
-            (0..n_vertices)
-                .find(|&n| (nodes[n][0] - c[0]).abs() <= tol && (nodes[n][1] - y).abs() <= tol)
-                .ok_or_else(|| ferr(format!("no vertex at the {what} (x = {}, y = {y})", c[0])))
-        };
-        let points = NamedPoints {
-            centre: vertex_at(c[1], "centre")?,
-            nucleus_top: vertex_at(c[1] + params.r_n, "nucleus top")?,
-            nucleus_bottom: vertex_at(c[1] - params.r_n, "nucleus bottom")?,
-            cell_bottom: vertex_at(c[1] - params.r_c, "cell bottom")?,
-            cell_top: vertex_at(c[1] + params.r_c, "cell top")?,
-        };
         let (outer_edges, nucleus_edges, membrane_inner_edges) =
             (ordered(outer), ordered(nucleus), ordered(inner));
-        let mesh = Mesh {
-            params: params.clone(),
-            nodes,
-            n_vertices,
-            elements,
-            domains,
-            outer_edges,
-            nucleus_edges,
-            membrane_inner_edges,
-            symmetry_nodes,
-            points,
-        };
-        mesh.check_jacobians()?;
-        Ok(mesh)
+        Mesh::assemble(
+            MeshParts {
+                params: params.clone(),
+                nodes,
+                n_vertices,
+                elements,
+                domains,
+                outer_edges,
+                nucleus_edges,
+                membrane_inner_edges,
+            },
+            |nodes, y, what| {
+                (0..n_vertices)
+                    .find(|&n| (nodes[n][0] - c[0]).abs() <= tol && (nodes[n][1] - y).abs() <= tol)
+                    .ok_or_else(|| ferr(format!("no vertex at the {what} (x = {}, y = {y})", c[0])))
+            },
+        )
     }
 
     /// The mesh as gmsh 4.1 ASCII text: one surface per domain (tags 1, 2, 3 for nucleus,

@@ -316,6 +316,116 @@ pub struct Mesh {
     pub points: NamedPoints,
 }
 
+/// Steps 6 and 7 of [`Mesh::generate`]: the domain of each triangle (by its centroid
+/// against the nucleus and cytoplasm rings), the mid-nodes (on the circle for the curved
+/// rings' chords), and the edges along the three circles.
+fn quadratic_elements(
+    prm: &MeshParams,
+    rings: &[Ring],
+    mut verts: Vec<[f64; 2]>,
+    tris: &[[usize; 3]],
+) -> Result<MeshParts, MeshError> {
+    let c = prm.center;
+    // 6. Domains.
+    let (nuc_ring, cp_ring) = (&rings[0], &rings[1]);
+    let mut domains = Vec::with_capacity(tris.len());
+    for t in tris {
+        let p = [
+            (verts[t[0]][0] + verts[t[1]][0] + verts[t[2]][0]) / 3.0,
+            (verts[t[0]][1] + verts[t[1]][1] + verts[t[2]][1]) / 3.0,
+        ];
+        let d = if nuc_ring.contains(&verts, c, p) {
+            Domain::Nucleus
+        } else if cp_ring.contains(&verts, c, p) {
+            Domain::Cytoplasm
+        } else {
+            Domain::Membrane
+        };
+        domains.push(d);
+    }
+
+    // 7. Mid-nodes.
+    let n_vertices = verts.len();
+    let mut curved: HashMap<(usize, usize), (f64, f64)> = HashMap::new();
+    for ring in rings.iter().filter(|r| r.curved) {
+        for i in 1..ring.vertices.len() {
+            let (a, bb) = (ring.vertices[i - 1], ring.vertices[i]);
+            let phi = 0.5 * (ring.angles[i - 1] + ring.angles[i]);
+            curved.insert((a.min(bb), a.max(bb)), (ring.radius, phi));
+        }
+    }
+    let mut mid_of: HashMap<(usize, usize), usize> = HashMap::new();
+    let mut elements = Vec::with_capacity(tris.len());
+    for t in tris {
+        let mut el = [t[0], t[1], t[2], 0, 0, 0];
+        for (k, e) in EDGES.iter().enumerate() {
+            let (a, bb) = (el[e[0]], el[e[2]]);
+            let key = (a.min(bb), a.max(bb));
+            let id = *mid_of.entry(key).or_insert_with(|| {
+                let p = match curved.get(&key) {
+                    Some(&(r, phi)) => [c[0] + r * phi.cos(), c[1] + r * phi.sin()],
+                    None => [
+                        0.5 * (verts[a][0] + verts[bb][0]),
+                        0.5 * (verts[a][1] + verts[bb][1]),
+                    ],
+                };
+                verts.push(p);
+                verts.len() - 1
+            });
+            el[3 + k] = id;
+        }
+        elements.push(el);
+    }
+    let nodes = verts;
+
+    let ring_edges = |ring: &Ring| -> Vec<[usize; 3]> {
+        ring.vertices
+            .windows(2)
+            .map(|w| {
+                let key = (w[0].min(w[1]), w[0].max(w[1]));
+                [w[0], mid_of.get(&key).copied().unwrap_or(usize::MAX), w[1]]
+            })
+            .collect()
+    };
+    let outer_edges = ring_edges(&rings[rings.len() - 1]);
+    let nucleus_edges = ring_edges(&rings[0]);
+    let membrane_inner_edges = ring_edges(&rings[1]);
+    for (name, edges) in [
+        ("outer", &outer_edges),
+        ("nucleus", &nucleus_edges),
+        ("membrane inner", &membrane_inner_edges),
+    ] {
+        if let Some(e) = edges.iter().find(|e| e[1] == usize::MAX) {
+            return Err(MeshError::Inconsistent(format!(
+                "{name} circle edge {:?}–{:?} is not an element edge",
+                nodes[e[0]], nodes[e[2]]
+            )));
+        }
+    }
+    Ok(MeshParts {
+        params: prm.clone(),
+        nodes,
+        n_vertices,
+        elements,
+        domains,
+        outer_edges,
+        nucleus_edges,
+        membrane_inner_edges,
+    })
+}
+
+/// What a mesh builder makes; [`Mesh::assemble`] adds the rest.
+pub(crate) struct MeshParts {
+    pub params: MeshParams,
+    pub nodes: Vec<[f64; 2]>,
+    pub n_vertices: usize,
+    pub elements: Vec<[usize; 6]>,
+    pub domains: Vec<Domain>,
+    pub outer_edges: Vec<[usize; 3]>,
+    pub nucleus_edges: Vec<[usize; 3]>,
+    pub membrane_inner_edges: Vec<[usize; 3]>,
+}
+
 /// Size and shape statistics of a mesh.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MeshQuality {
@@ -672,98 +782,45 @@ impl Mesh {
         }
 
         // 5. Constrained Delaunay triangulation and refinement.
-        let (mut verts, tris) = triangulate(&b.verts, &b.constraints, prm.min_angle_deg)?;
+        let (verts, tris) = triangulate(&b.verts, &b.constraints, prm.min_angle_deg)?;
 
-        // 6. Domains.
-        let (nuc_ring, cp_ring) = (&rings[0], &rings[1]);
-        let mut domains = Vec::with_capacity(tris.len());
-        for t in &tris {
-            let p = [
-                (verts[t[0]][0] + verts[t[1]][0] + verts[t[2]][0]) / 3.0,
-                (verts[t[0]][1] + verts[t[1]][1] + verts[t[2]][1]) / 3.0,
-            ];
-            let d = if nuc_ring.contains(&verts, c, p) {
-                Domain::Nucleus
-            } else if cp_ring.contains(&verts, c, p) {
-                Domain::Cytoplasm
-            } else {
-                Domain::Membrane
-            };
-            domains.push(d);
-        }
+        // 6.–7. Domains, mid-nodes and the circles' edges.
+        let parts = quadratic_elements(prm, &rings, verts, &tris)?;
+        Mesh::assemble(parts, |_, y, _| key_of(y))
+    }
 
-        // 7. Mid-nodes.
-        let n_vertices = verts.len();
-        let mut curved: HashMap<(usize, usize), (f64, f64)> = HashMap::new();
-        for ring in rings.iter().filter(|r| r.curved) {
-            for i in 1..ring.vertices.len() {
-                let (a, bb) = (ring.vertices[i - 1], ring.vertices[i]);
-                let phi = 0.5 * (ring.angles[i - 1] + ring.angles[i]);
-                curved.insert((a.min(bb), a.max(bb)), (ring.radius, phi));
-            }
-        }
-        let mut mid_of: HashMap<(usize, usize), usize> = HashMap::new();
-        let mut elements = Vec::with_capacity(tris.len());
-        for t in &tris {
-            let mut el = [t[0], t[1], t[2], 0, 0, 0];
-            for (k, e) in EDGES.iter().enumerate() {
-                let (a, bb) = (el[e[0]], el[e[2]]);
-                let key = (a.min(bb), a.max(bb));
-                let id = *mid_of.entry(key).or_insert_with(|| {
-                    let p = match curved.get(&key) {
-                        Some(&(r, phi)) => [c[0] + r * phi.cos(), c[1] + r * phi.sin()],
-                        None => [
-                            0.5 * (verts[a][0] + verts[bb][0]),
-                            0.5 * (verts[a][1] + verts[bb][1]),
-                        ],
-                    };
-                    verts.push(p);
-                    verts.len() - 1
-                });
-                el[3 + k] = id;
-            }
-            elements.push(el);
-        }
-        let nodes = verts;
-
-        let ring_edges = |ring: &Ring| -> Vec<[usize; 3]> {
-            ring.vertices
-                .windows(2)
-                .map(|w| {
-                    let key = (w[0].min(w[1]), w[0].max(w[1]));
-                    [w[0], mid_of.get(&key).copied().unwrap_or(usize::MAX), w[1]]
-                })
-                .collect()
-        };
-        let outer_edges = ring_edges(&rings[rings.len() - 1]);
-        let nucleus_edges = ring_edges(&rings[0]);
-        let membrane_inner_edges = ring_edges(&rings[1]);
-        for (name, edges) in [
-            ("outer", &outer_edges),
-            ("nucleus", &nucleus_edges),
-            ("membrane inner", &membrane_inner_edges),
-        ] {
-            if let Some(e) = edges.iter().find(|e| e[1] == usize::MAX) {
-                return Err(MeshError::Inconsistent(format!(
-                    "{name} circle edge {:?}–{:?} is not an element edge",
-                    nodes[e[0]], nodes[e[2]]
-                )));
-            }
-        }
+    /// Completes a mesh from the parts a builder (the generator, the gmsh reader) made:
+    /// the symmetry nodes (coordinate exactly c_x, sorted by y), the named points found by
+    /// `vertex_at(nodes, y, name)` on the symmetry line, and a check of every element's
+    /// Jacobian.
+    pub(crate) fn assemble(
+        parts: MeshParts,
+        vertex_at: impl Fn(&[[f64; 2]], f64, &str) -> Result<usize, MeshError>,
+    ) -> Result<Mesh, MeshError> {
+        let MeshParts {
+            params,
+            nodes,
+            n_vertices,
+            elements,
+            domains,
+            outer_edges,
+            nucleus_edges,
+            membrane_inner_edges,
+        } = parts;
+        let c = params.center;
         let mut symmetry_nodes: Vec<usize> =
             (0..nodes.len()).filter(|&i| nodes[i][0] == c[0]).collect();
         symmetry_nodes.sort_by(|&a, &b| nodes[a][1].total_cmp(&nodes[b][1]));
-
+        let at = |y: f64, name: &str| vertex_at(&nodes, y, name);
         let points = NamedPoints {
-            centre: key_of(c[1])?,
-            nucleus_top: key_of(c[1] + prm.r_n)?,
-            nucleus_bottom: key_of(c[1] - prm.r_n)?,
-            cell_bottom: key_of(c[1] - prm.r_c)?,
-            cell_top: key_of(c[1] + prm.r_c)?,
+            centre: at(c[1], "centre")?,
+            nucleus_top: at(c[1] + params.r_n, "nucleus top")?,
+            nucleus_bottom: at(c[1] - params.r_n, "nucleus bottom")?,
+            cell_bottom: at(c[1] - params.r_c, "cell bottom")?,
+            cell_top: at(c[1] + params.r_c, "cell top")?,
         };
-
         let mesh = Mesh {
-            params: prm.clone(),
+            params,
             nodes,
             n_vertices,
             elements,

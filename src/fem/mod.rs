@@ -16,6 +16,10 @@ pub mod mesh;
 pub mod p2;
 pub mod quadrature;
 
+pub use mesh::{Domain, Mesh, MeshError, MeshParams, MeshQuality, NamedPoints};
+pub use p2::{EdgeTabulation, ElementGeometry, P2Error, P2Tabulation};
+pub use quadrature::{EdgeRule, TriangleRule, gauss_legendre};
+
 /// The paper's cell and mesh for this layer's tests, taken from the case schema (the one
 /// place the defaults live).
 #[cfg(test)]
@@ -24,7 +28,3 @@ pub(crate) mod reference {
         crate::case::terms::mesh_params(&crate::case::Case::reference())
     }
 }
-
-pub use mesh::{Domain, Mesh, MeshError, MeshParams, MeshQuality, NamedPoints};
-pub use p2::{EdgeTabulation, ElementGeometry, P2Error, P2Tabulation};
-pub use quadrature::{EdgeRule, TriangleRule, gauss_legendre};

@@ -25,39 +25,6 @@ pub mod phases;
 pub mod smooth;
 pub mod substrate;
 
-/// MODEL.md's parameters for this layer's tests, taken from the case schema (the one
-/// place the defaults live; this layer holds no default numbers of its own).
-#[cfg(test)]
-pub(crate) mod reference {
-    use crate::case::{Case, terms};
-
-    pub fn contact() -> super::Contact {
-        terms::contact(&Case::reference())
-    }
-
-    pub fn adhesion() -> super::Adhesion {
-        terms::adhesion(&Case::reference()).expect("the reference case has adhesion")
-    }
-
-    pub fn viscosity() -> super::Viscosity {
-        terms::viscosity(&Case::reference())
-    }
-
-    pub fn phases() -> super::Phases {
-        terms::phases(&Case::reference())
-    }
-
-    /// The default pillars, placed 0.5 µm below the default cell.
-    pub fn pillars() -> super::substrate::Pillars {
-        let mut c = Case::reference();
-        c.substrate = crate::case::Substrate::pillars();
-        match terms::substrate(&c) {
-            super::Substrate::Pillars(p) => p,
-            super::Substrate::Flat { .. } => unreachable!("a pillar case"),
-        }
-    }
-}
-
 pub use active::{ActiveStrain, Bottom, Domain, Pac};
 pub use loads::{
     Adhesion, Contact, adhesion_force, adhesion_rate, cofactor, contact_force, gravity_force, layer,
@@ -160,4 +127,37 @@ pub(crate) fn ln<T: Real>(x: T) -> T {
 #[inline(always)]
 pub(crate) fn abs<T: Real>(x: T) -> T {
     if x.re() < 0.0 { -x } else { x }
+}
+
+/// MODEL.md's parameters for this layer's tests, taken from the case schema (the one
+/// place the defaults live; this layer holds no default numbers of its own).
+#[cfg(test)]
+pub(crate) mod reference {
+    use crate::case::{Case, terms};
+
+    pub fn contact() -> super::Contact {
+        terms::contact(&Case::reference())
+    }
+
+    pub fn adhesion() -> super::Adhesion {
+        terms::adhesion(&Case::reference()).expect("the reference case has adhesion")
+    }
+
+    pub fn viscosity() -> super::Viscosity {
+        terms::viscosity(&Case::reference())
+    }
+
+    pub fn phases() -> super::Phases {
+        terms::phases(&Case::reference())
+    }
+
+    /// The default pillars, placed 0.5 µm below the default cell.
+    pub fn pillars() -> super::substrate::Pillars {
+        let mut c = Case::reference();
+        c.substrate = crate::case::Substrate::pillars();
+        match terms::substrate(&c) {
+            super::Substrate::Pillars(p) => p,
+            super::Substrate::Flat { .. } => unreachable!("a pillar case"),
+        }
+    }
 }

@@ -156,14 +156,8 @@ impl<D: Dae> Ida<D> {
     /// Sets IDA up on `dae` from its consistent initial values; with `opts.calc_ic` the
     /// initial conditions are corrected by IDACalcIC first.
     pub fn new(dae: D, opts: IdaOptions) -> Result<Self, IntegratorError> {
-        let Setup {
-            t0,
-            y0,
-            yp0,
-            solver,
-            nnz,
-            breakpoints,
-        } = Setup::new(&dae, opts.linear_solver.as_ref(), &opts.atol)?;
+        let setup = Setup::new(&dae, opts.linear_solver.as_ref(), &opts.atol)?;
+        let (t0, y0, yp0) = (setup.t0, setup.y0, setup.yp0);
         if !(opts.rtol >= 0.0) || !(1..=5).contains(&opts.max_order) {
             return Err(IntegratorError::Input(format!(
                 "rtol = {} must be ≥ 0 and max_order = {} in 1..=5",
@@ -177,8 +171,8 @@ impl<D: Dae> Ida<D> {
         let user = Box::new(UserData {
             dae,
             ls: LsState {
-                solver,
-                values: vec![0.0; nnz],
+                solver: setup.solver,
+                values: vec![0.0; setup.nnz],
                 factorizations: 0,
                 last_error: None,
             },
@@ -194,7 +188,7 @@ impl<D: Dae> Ida<D> {
             out_y,
             out_yp,
             user,
-            breakpoints,
+            breakpoints: setup.breakpoints,
             tstop: None,
             t_internal: t0,
             t_out: t0,
