@@ -385,12 +385,15 @@ impl<D: Dae> Bdf2<D> {
 }
 
 impl<D: Dae> Integrator for Bdf2<D> {
-    fn advance_to(
+    fn t(&self) -> f64 {
+        self.t_out
+    }
+
+    fn advance(
         &mut self,
         tout: f64,
         on_step: &mut dyn FnMut(f64, &Stats) -> bool,
     ) -> Result<(), IntegratorError> {
-        crate::dae::check_output_time(tout, self.t_out)?;
         let eps = 8.0 * f64::EPSILON * tout.abs().max(1.0);
         while self.tn < tout - eps {
             let mut h = self.planned_step();
@@ -430,10 +433,6 @@ impl<D: Dae> Integrator for Bdf2<D> {
         }
         self.t_out = tout;
         Ok(())
-    }
-
-    fn t(&self) -> f64 {
-        self.t_out
     }
 
     fn y(&self) -> &[f64] {

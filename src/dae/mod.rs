@@ -341,25 +341,29 @@ impl Setup {
     }
 }
 
-/// The check that opens every [`Integrator::advance_to`]: output times only move forward
-/// from the current one, `t_out` (NaN is refused as well).
-pub fn check_output_time(tout: f64, t_out: f64) -> Result<(), IntegratorError> {
-    if tout >= t_out {
-        Ok(())
-    } else {
-        Err(IntegratorError::Input(format!(
-            "output time {tout} is before the current time {t_out}"
-        )))
-    }
-}
-
 /// What every integrator offers to a driver: advance to a time, look at the state.
 pub trait Integrator {
     /// Advances the solution to `tout` (never past the next breakpoint without stopping
     /// there) and returns the state at `tout`. `on_step` is called after every internal
     /// step with (t, stats) so a driver can show progress; returning `false` stops the
     /// integration with [`IntegratorError::Interrupted`].
+    /// Output times only move forward from the current one (NaN is refused as well).
     fn advance_to(
+        &mut self,
+        tout: f64,
+        on_step: &mut dyn FnMut(f64, &Stats) -> bool,
+    ) -> Result<(), IntegratorError> {
+        if tout >= self.t() {
+            self.advance(tout, on_step)
+        } else {
+            Err(IntegratorError::Input(format!(
+                "output time {tout} is before the current time {}",
+                self.t()
+            )))
+        }
+    }
+    /// [`Integrator::advance_to`] for a `tout` at or after the current output time.
+    fn advance(
         &mut self,
         tout: f64,
         on_step: &mut dyn FnMut(f64, &Stats) -> bool,

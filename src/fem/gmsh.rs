@@ -492,19 +492,9 @@ impl Mesh {
                 inner.push(e);
             }
         }
-        let (outer_edges, nucleus_edges, membrane_inner_edges) =
-            (ordered(outer), ordered(nucleus), ordered(inner));
+        let circles = [ordered(outer), ordered(nucleus), ordered(inner)];
         Mesh::assemble(
-            MeshParts {
-                params: params.clone(),
-                nodes,
-                n_vertices,
-                elements,
-                domains,
-                outer_edges,
-                nucleus_edges,
-                membrane_inner_edges,
-            },
+            MeshParts::new(params, nodes, n_vertices, elements, domains, circles),
             |nodes, y, what| {
                 (0..n_vertices)
                     .find(|&n| (nodes[n][0] - c[0]).abs() <= tol && (nodes[n][1] - y).abs() <= tol)

@@ -402,28 +402,41 @@ fn quadratic_elements(
             )));
         }
     }
-    Ok(MeshParts {
-        params: prm.clone(),
-        nodes,
-        n_vertices,
-        elements,
-        domains,
-        outer_edges,
-        nucleus_edges,
-        membrane_inner_edges,
-    })
+    let circles = [outer_edges, nucleus_edges, membrane_inner_edges];
+    Ok(MeshParts::new(
+        prm, nodes, n_vertices, elements, domains, circles,
+    ))
 }
 
 /// What a mesh builder makes; [`Mesh::assemble`] adds the rest.
 pub(crate) struct MeshParts {
-    pub params: MeshParams,
-    pub nodes: Vec<[f64; 2]>,
-    pub n_vertices: usize,
-    pub elements: Vec<[usize; 6]>,
-    pub domains: Vec<Domain>,
-    pub outer_edges: Vec<[usize; 3]>,
-    pub nucleus_edges: Vec<[usize; 3]>,
-    pub membrane_inner_edges: Vec<[usize; 3]>,
+    params: MeshParams,
+    nodes: Vec<[f64; 2]>,
+    n_vertices: usize,
+    elements: Vec<[usize; 6]>,
+    domains: Vec<Domain>,
+    /// Edges on the outer, nucleus and membrane-inner circles, in that order.
+    circles: [Vec<[usize; 3]>; 3],
+}
+
+impl MeshParts {
+    pub(crate) fn new(
+        params: &MeshParams,
+        nodes: Vec<[f64; 2]>,
+        n_vertices: usize,
+        elements: Vec<[usize; 6]>,
+        domains: Vec<Domain>,
+        circles: [Vec<[usize; 3]>; 3],
+    ) -> Self {
+        MeshParts {
+            params: params.clone(),
+            nodes,
+            n_vertices,
+            elements,
+            domains,
+            circles,
+        }
+    }
 }
 
 /// Size and shape statistics of a mesh.
@@ -803,9 +816,7 @@ impl Mesh {
             n_vertices,
             elements,
             domains,
-            outer_edges,
-            nucleus_edges,
-            membrane_inner_edges,
+            circles: [outer_edges, nucleus_edges, membrane_inner_edges],
         } = parts;
         let c = params.center;
         let mut symmetry_nodes: Vec<usize> =

@@ -670,24 +670,16 @@ fn draw_bars<DB: DrawingBackend>(
             texts.push((label.0, (0.5 * (a + z), label.1 + 0.01 * top)));
         }
     }
-    chart
-        .draw_series(
-            paper_rects
-                .iter()
-                .map(|r| Rectangle::new(*r, paper_color.filled())),
-        )
-        .map_err(e)?
-        .label(paper_label)
-        .legend(move |(x, y)| Rectangle::new([(x, y - 8), (x + 24, y + 8)], paper_color.filled()));
-    chart
-        .draw_series(
-            ours_rects
-                .iter()
-                .map(|r| Rectangle::new(*r, ours_color.filled())),
-        )
-        .map_err(e)?
-        .label(ours_label)
-        .legend(move |(x, y)| Rectangle::new([(x, y - 8), (x + 24, y + 8)], ours_color.filled()));
+    for (rects, color, label) in [
+        (&paper_rects, paper_color, paper_label),
+        (&ours_rects, ours_color, ours_label),
+    ] {
+        chart
+            .draw_series(rects.iter().map(|r| Rectangle::new(*r, color.filled())))
+            .map_err(e)?
+            .label(label)
+            .legend(move |(x, y)| Rectangle::new([(x, y - 8), (x + 24, y + 8)], color.filled()));
+    }
     chart
         .draw_series(
             texts

@@ -446,6 +446,14 @@ mod tests {
         pub fn uniform(&mut self, a: f64, b: f64) -> f64 {
             a + (b - a) * self.0.rand_float()
         }
+        /// A random active strain like the model's ([`active`]), or I when not `on`.
+        pub fn active_strain(&mut self, on: bool) -> Matrix2<f64> {
+            if !on {
+                return Matrix2::identity();
+            }
+            let (a, b) = (self.uniform(0.0, 0.7), self.uniform(0.0, 0.7));
+            active(a, b, self.uniform(-3.0, 3.0))
+        }
         /// A random F with entries I + U(−s, s), det F ≥ 0.3.
         pub fn deformation(&mut self, s: f64) -> Matrix2<f64> {
             loop {
@@ -530,15 +538,7 @@ mod tests {
         ] {
             for case in 0..20 {
                 let F = rng.deformation(0.5);
-                let Fa = if case % 2 == 0 {
-                    Matrix2::identity()
-                } else {
-                    active(
-                        rng.uniform(0.0, 0.7),
-                        rng.uniform(0.0, 0.7),
-                        rng.uniform(-3.0, 3.0),
-                    )
-                };
+                let Fa = rng.active_strain(case % 2 == 1);
                 let P = mat.piola_solid(&F, &Fa);
                 let g = central_differences(&F, h, |F| Vector1::new(mat.energy(F, &Fa)));
                 let Pfd = Matrix2::new(g[0], g[1], g[2], g[3]);
@@ -567,15 +567,7 @@ mod tests {
             for case in 0..20 {
                 let F = rng.deformation(0.5);
                 let Fdot = Matrix2::from_fn(|_, _| rng.uniform(-1.0, 1.0));
-                let Fa = if case % 2 == 0 {
-                    Matrix2::identity()
-                } else {
-                    active(
-                        rng.uniform(0.0, 0.7),
-                        rng.uniform(0.0, 0.7),
-                        rng.uniform(-3.0, 3.0),
-                    )
-                };
+                let Fa = rng.active_strain(case % 2 == 1);
                 let mp = material_point(&mat, &visc, &F, &Fdot, &Fa);
                 let P = piola_total(&mat, &visc, &F, &Fdot, &Fa);
                 assert!(rel(&mp.P, &P) < 1e-14);

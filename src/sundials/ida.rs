@@ -401,12 +401,15 @@ impl<D: Dae> Ida<D> {
 }
 
 impl<D: Dae> Integrator for Ida<D> {
-    fn advance_to(
+    fn t(&self) -> f64 {
+        self.t_out
+    }
+
+    fn advance(
         &mut self,
         tout: f64,
         on_step: &mut dyn FnMut(f64, &Stats) -> bool,
     ) -> Result<(), IntegratorError> {
-        crate::dae::check_output_time(tout, self.t_out)?;
         let mut tret = self.t_internal;
         while self.t_internal < tout {
             let eps = 8.0 * f64::EPSILON * tout.abs().max(1.0);
@@ -467,10 +470,6 @@ impl<D: Dae> Integrator for Ida<D> {
         }
         self.t_out = tout;
         Ok(())
-    }
-
-    fn t(&self) -> f64 {
-        self.t_out
     }
 
     fn y(&self) -> &[f64] {
