@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
-use cellsim::case::{self, Case};
+use cellsim::case::{self, Case, Override};
 use cellsim::fem::Mesh;
 use cellsim::lu::LinearSolverKind;
 use cellsim::output::{self, RunData, SnapshotOptions};
@@ -167,6 +167,11 @@ enum Command {
     Check {
         /// The case file (RON).
         case: PathBuf,
+        /// Change a field of the case before it is validated: a dotted path and a RON value,
+        /// e.g. --set substrate.spacing=6.0 --set active.bottom.e=0.5 (repeatable; later ones
+        /// win).
+        #[arg(long = "set", value_name = "PATH=VALUE", allow_hyphen_values = true)]
+        set: Vec<Override>,
     },
     /// Print a markdown table of runs (outcome, cost, final values) from their summaries.
     Table {
@@ -181,6 +186,11 @@ enum Command {
 struct RunArgs {
     /// The case file (RON), e.g. cases/flat.ron.
     case: PathBuf,
+    /// Change a field of the case before it is validated: a dotted path and a RON value,
+    /// e.g. --set substrate.spacing=6.0 --set active.bottom.e=0.5 (repeatable; later ones
+    /// win).
+    #[arg(long = "set", value_name = "PATH=VALUE", allow_hyphen_values = true)]
+    set: Vec<Override>,
     /// Output directory [default: runs/<case name>].
     #[arg(long)]
     out: Option<PathBuf>,
@@ -252,6 +262,11 @@ struct PaperArgs {
 struct StudyArgs {
     /// The case file (RON).
     case: PathBuf,
+    /// Change a field of the case before it is validated: a dotted path and a RON value,
+    /// e.g. --set substrate.spacing=6.0 --set active.bottom.e=0.5 (repeatable; later ones
+    /// win).
+    #[arg(long = "set", value_name = "PATH=VALUE", allow_hyphen_values = true)]
+    set: Vec<Override>,
     /// Output directory [default: runs/study/<case name>].
     #[arg(long)]
     out: Option<PathBuf>,
@@ -291,9 +306,10 @@ struct StudyArgs {
     quiet: bool,
 }
 
-/// Loads a case; a bad case prints its located error and exits with status 2.
-fn load_case(path: &Path) -> Result<Case, ExitCode> {
-    Case::load(path).map_err(|e| {
+/// Loads a case with its `--set` overrides; a bad case prints its located error and exits
+/// with status 2.
+fn load_case(path: &Path, set: &[Override]) -> Result<Case, ExitCode> {
+    Case::load_with_overrides(path, set).map_err(|e| {
         err!("error: {e}");
         ExitCode::from(2)
     })
@@ -354,7 +370,7 @@ fn main() -> ExitCode {
         Command::Study(args) => study_command(args),
         Command::Plot { run_dir, out } => plot_command(&run_dir, out),
         Command::Mesh { case, svg } => mesh_command(&case, svg.as_deref()),
-        Command::Check { case } => check_command(&case),
+        Command::Check { case, set } => check_command(&case, &set),
         Command::Table { run_dirs } => table_command(&run_dirs),
     }
 }
@@ -370,7 +386,7 @@ macro_rules! tryc {
 }
 
 fn run_command(a: RunArgs) -> ExitCode {
-    let case = tryc!(load_case(&a.case));
+    let case = tryc!(load_case(&a.case, &a.set));
     for (name, v, upper) in [
         ("rtol", a.rtol, Some(1.0)),
         ("atol", a.atol, None),
@@ -493,7 +509,7 @@ fn paper_command(a: PaperArgs) -> ExitCode {
 }
 
 fn study_command(a: StudyArgs) -> ExitCode {
-    let case = tryc!(load_case(&a.case));
+    let case = tryc!(load_case(&a.case, &a.set));
     let mut checks = vec![
         ("ref-rtol", Some(a.ref_rtol), Some(1.0)),
         ("bdf2-rtol", Some(a.bdf2_rtol), Some(1.0)),
@@ -581,7 +597,7 @@ fn plot_command(run_dir: &Path, out: Option<PathBuf>) -> ExitCode {
 }
 
 fn mesh_command(path: &Path, svg: Option<&Path>) -> ExitCode {
-    let case = tryc!(load_case(path));
+    let case = tryc!(load_case(path, &[]));
     match Mesh::generate(&scene::mesh_params(&case)) {
         Ok(mesh) => {
             out!("{}", mesh.quality());
@@ -600,8 +616,8 @@ fn mesh_command(path: &Path, svg: Option<&Path>) -> ExitCode {
     }
 }
 
-fn check_command(path: &Path) -> ExitCode {
-    let case = tryc!(load_case(path));
+fn check_command(path: &Path, set: &[Override]) -> ExitCode {
+    let case = tryc!(load_case(path, set));
     match case.to_ron() {
         Ok(text) => {
             out!("{text}");
