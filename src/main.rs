@@ -359,6 +359,9 @@ struct SweepArgs {
     /// With --slurm: submit the script with sbatch and print the job id.
     #[arg(long)]
     submit: bool,
+    /// Do not run: print each point (id, axis values, valid or the validation message).
+    #[arg(long)]
+    list: bool,
 }
 
 #[derive(Subcommand)]
@@ -709,6 +712,26 @@ fn sweep_command(a: SweepArgs) -> ExitCode {
         Ok(p) => p,
         Err(e) => return sweep_error(&e),
     };
+    if a.list {
+        let axes: Vec<&str> = plan.design.axes.iter().map(|x| x.path.as_str()).collect();
+        for p in &plan.points {
+            let at: Vec<String> = axes
+                .iter()
+                .zip(&p.values)
+                .map(|(a, v)| format!("{a}={v}"))
+                .collect();
+            match &p.case {
+                Ok(_) => out!("{} {}: valid", p.id, at.join(" ")),
+                Err(m) => out!(
+                    "{} {}: invalid: {}",
+                    p.id,
+                    at.join(" "),
+                    m.replace('\n', "; ")
+                ),
+            }
+        }
+        return ExitCode::SUCCESS;
+    }
     let out = a
         .out
         .unwrap_or_else(|| PathBuf::from("runs/sweep").join(&plan.name));
