@@ -23,3 +23,4 @@ pub mod scene;
 pub mod stop;
 pub mod study;
 pub mod sundials;
+pub mod sweep;

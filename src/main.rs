@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
-use cellsim::case::{self, Case};
+use cellsim::case::{self, Case, Override};
 use cellsim::fem::Mesh;
 use cellsim::lu::LinearSolverKind;
 use cellsim::output::{self, RunData, SnapshotOptions};
@@ -16,6 +16,7 @@ use cellsim::run::{self, Progress, RunOptions};
 use cellsim::scene;
 use cellsim::stop::{self, StopFlag};
 use cellsim::study;
+use cellsim::sweep;
 
 const LONG_ABOUT: &str = "\
 Finite-element simulation of a living cell that settles under gravity onto a flat or \
@@ -146,6 +147,11 @@ enum Command {
     /// a BDF2 dt ladder and an IDA rtol ladder; writes study.csv, study.json,
     /// work-precision.png, dt-sensitivity.png and each run in runs/<label>/.
     Study(StudyArgs),
+    /// Run a sweep: many runs of one base case with fields changed (a Grid, Zip,
+    /// OneAtATime or LatinHypercube design), in parallel and resumable, into
+    /// DIR/points/<id>/; writes sweep.csv, sweep.json and figures. `sweep plot DIR`
+    /// redraws the figures, `sweep collect DIR` assembles the shards of a Slurm array.
+    Sweep(SweepArgs),
     /// Redraw one run's figures from its files (works on a run that stopped early).
     Plot {
         /// The run directory (as written by `cellsim run`).
@@ -167,6 +173,11 @@ enum Command {
     Check {
         /// The case file (RON).
         case: PathBuf,
+        /// Change a field of the case before it is validated: a dotted path and a RON value,
+        /// e.g. --set substrate.spacing=6.0 --set active.bottom.e=0.5 (repeatable; later ones
+        /// win).
+        #[arg(long = "set", value_name = "PATH=VALUE", allow_hyphen_values = true)]
+        set: Vec<Override>,
     },
     /// Print a markdown table of runs (outcome, cost, final values) from their summaries.
     Table {
@@ -181,6 +192,11 @@ enum Command {
 struct RunArgs {
     /// The case file (RON), e.g. cases/flat.ron.
     case: PathBuf,
+    /// Change a field of the case before it is validated: a dotted path and a RON value,
+    /// e.g. --set substrate.spacing=6.0 --set active.bottom.e=0.5 (repeatable; later ones
+    /// win).
+    #[arg(long = "set", value_name = "PATH=VALUE", allow_hyphen_values = true)]
+    set: Vec<Override>,
     /// Output directory [default: runs/<case name>].
     #[arg(long)]
     out: Option<PathBuf>,
@@ -252,6 +268,11 @@ struct PaperArgs {
 struct StudyArgs {
     /// The case file (RON).
     case: PathBuf,
+    /// Change a field of the case before it is validated: a dotted path and a RON value,
+    /// e.g. --set substrate.spacing=6.0 --set active.bottom.e=0.5 (repeatable; later ones
+    /// win).
+    #[arg(long = "set", value_name = "PATH=VALUE", allow_hyphen_values = true)]
+    set: Vec<Override>,
     /// Output directory [default: runs/study/<case name>].
     #[arg(long)]
     out: Option<PathBuf>,
@@ -291,9 +312,80 @@ struct StudyArgs {
     quiet: bool,
 }
 
-/// Loads a case; a bad case prints its located error and exits with status 2.
-fn load_case(path: &Path) -> Result<Case, ExitCode> {
-    Case::load(path).map_err(|e| {
+#[derive(clap::Args)]
+#[command(
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    allow_negative_numbers = true
+)]
+struct SweepArgs {
+    #[command(subcommand)]
+    action: Option<SweepAction>,
+    /// The sweep file (RON), e.g. cases/sweeps/pillar-geometry.ron.
+    #[arg(required = true)]
+    sweep: Option<PathBuf>,
+    /// Output directory [default: runs/sweep/<sweep name>].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Runs at once [default: the number of cores].
+    #[arg(long)]
+    jobs: Option<usize>,
+    /// Rerun the points that failed (by default a rerun skips finished and failed points
+    /// whose case is unchanged, and reruns interrupted ones).
+    #[arg(long)]
+    retry_failed: bool,
+    /// Run only shard i of K: the points k with k mod K = i (0 <= i < K).
+    #[arg(long, value_name = "i/K")]
+    shard: Option<String>,
+    /// Wall-clock budget of each run, s [default: none].
+    #[arg(long, allow_hyphen_values = true)]
+    max_wall: Option<f64>,
+    /// No progress display (by default a progress bar on a terminal, a line per finished
+    /// point otherwise).
+    #[arg(long)]
+    quiet: bool,
+    /// Do not run: write DIR/sweep.sbatch, a Slurm job array whose tasks run the shards.
+    #[arg(long)]
+    slurm: bool,
+    /// Points per array task (with --slurm).
+    #[arg(long, default_value_t = 1)]
+    shard_size: usize,
+    /// At most this many array tasks at once (with --slurm: --array=0-K%M).
+    #[arg(long)]
+    throttle: Option<usize>,
+    /// An sbatch option for the script, e.g. --slurm-opt=--partition=short (repeatable).
+    #[arg(long = "slurm-opt", value_name = "OPTION", allow_hyphen_values = true)]
+    slurm_opt: Vec<String>,
+    /// With --slurm: submit the script with sbatch and print the job id.
+    #[arg(long)]
+    submit: bool,
+    /// Do not run: print each point (id, axis values, valid or the validation message).
+    #[arg(long)]
+    list: bool,
+}
+
+#[derive(Subcommand)]
+enum SweepAction {
+    /// Redraw a sweep's figures from DIR/sweep.csv.
+    Plot {
+        /// The sweep directory.
+        dir: PathBuf,
+        /// Column shown by the heat map, line or scatter plot [default: penetration_depth].
+        #[arg(long)]
+        quantity: Option<String>,
+    },
+    /// Assemble DIR/sweep.csv and the figures from the point directories (after the
+    /// shards of a Slurm array have run); lists the points without a run.
+    Collect {
+        /// The sweep directory.
+        dir: PathBuf,
+    },
+}
+
+/// Loads a case with its `--set` overrides; a bad case prints its located error and exits
+/// with status 2.
+fn load_case(path: &Path, set: &[Override]) -> Result<Case, ExitCode> {
+    Case::load_with_overrides(path, set).map_err(|e| {
         err!("error: {e}");
         ExitCode::from(2)
     })
@@ -352,9 +444,10 @@ fn main() -> ExitCode {
         Command::Run(args) => run_command(args),
         Command::Paper(args) => paper_command(args),
         Command::Study(args) => study_command(args),
+        Command::Sweep(args) => sweep_command(args),
         Command::Plot { run_dir, out } => plot_command(&run_dir, out),
         Command::Mesh { case, svg } => mesh_command(&case, svg.as_deref()),
-        Command::Check { case } => check_command(&case),
+        Command::Check { case, set } => check_command(&case, &set),
         Command::Table { run_dirs } => table_command(&run_dirs),
     }
 }
@@ -370,7 +463,7 @@ macro_rules! tryc {
 }
 
 fn run_command(a: RunArgs) -> ExitCode {
-    let case = tryc!(load_case(&a.case));
+    let case = tryc!(load_case(&a.case, &a.set));
     for (name, v, upper) in [
         ("rtol", a.rtol, Some(1.0)),
         ("atol", a.atol, None),
@@ -493,7 +586,7 @@ fn paper_command(a: PaperArgs) -> ExitCode {
 }
 
 fn study_command(a: StudyArgs) -> ExitCode {
-    let case = tryc!(load_case(&a.case));
+    let case = tryc!(load_case(&a.case, &a.set));
     let mut checks = vec![
         ("ref-rtol", Some(a.ref_rtol), Some(1.0)),
         ("bdf2-rtol", Some(a.bdf2_rtol), Some(1.0)),
@@ -554,6 +647,173 @@ fn study_command(a: StudyArgs) -> ExitCode {
     }
 }
 
+fn sweep_error(e: &sweep::SweepError) -> ExitCode {
+    err!("error: {e}");
+    ExitCode::from(if e.is_input() { 2 } else { 1 })
+}
+
+fn sweep_command(a: SweepArgs) -> ExitCode {
+    match a.action {
+        Some(SweepAction::Plot { dir, quantity }) => {
+            return match sweep::plot(&dir, quantity.as_deref()) {
+                Ok(files) => {
+                    for f in files {
+                        out!("{}", f.display());
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => sweep_error(&e),
+            };
+        }
+        Some(SweepAction::Collect { dir }) => {
+            return match sweep::collect(&dir) {
+                Ok(c) => {
+                    out!("{}: {}", dir.display(), sweep::counts(&c.rows));
+                    for f in &c.written {
+                        out!("{}", f.display());
+                    }
+                    let missing = c.missing();
+                    if missing.is_empty() {
+                        ExitCode::SUCCESS
+                    } else {
+                        err!(
+                            "{} points without a run: {}",
+                            missing.len(),
+                            missing.join(" ")
+                        );
+                        ExitCode::FAILURE
+                    }
+                }
+                Err(e) => sweep_error(&e),
+            };
+        }
+        None => {}
+    }
+    let Some(file) = a.sweep else {
+        err!("error: no sweep file given");
+        return ExitCode::from(2);
+    };
+    let jobs = a
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if jobs == 0 || a.shard_size == 0 || a.throttle == Some(0) {
+        err!("error: --jobs, --shard-size and --throttle must be at least 1");
+        return ExitCode::from(2);
+    }
+    tryc!(check_positive("max-wall", a.max_wall, None));
+    let shard = match a.shard.as_deref().map(sweep::parse_shard).transpose() {
+        Ok(s) => s,
+        Err(m) => {
+            err!("error: {m}");
+            return ExitCode::from(2);
+        }
+    };
+    let plan = match sweep::Plan::load(&file) {
+        Ok(p) => p,
+        Err(e) => return sweep_error(&e),
+    };
+    if a.list {
+        let axes: Vec<&str> = plan.design.axes.iter().map(|x| x.path.as_str()).collect();
+        for p in &plan.points {
+            let at: Vec<String> = axes
+                .iter()
+                .zip(&p.values)
+                .map(|(a, v)| format!("{a}={v}"))
+                .collect();
+            match &p.case {
+                Ok(_) => out!("{} {}: valid", p.id, at.join(" ")),
+                Err(m) => out!(
+                    "{} {}: invalid: {}",
+                    p.id,
+                    at.join(" "),
+                    m.replace('\n', "; ")
+                ),
+            }
+        }
+        return ExitCode::SUCCESS;
+    }
+    let out = a
+        .out
+        .unwrap_or_else(|| PathBuf::from("runs/sweep").join(&plan.name));
+    if a.slurm || a.submit {
+        let o = sweep::slurm::SlurmOptions {
+            shard_size: a.shard_size,
+            throttle: a.throttle,
+            sbatch_options: a.slurm_opt,
+            jobs: a.jobs,
+            retry_failed: a.retry_failed,
+            max_wall: a.max_wall,
+        };
+        let path = match sweep::slurm::write_script(&plan, &file, &out, &o) {
+            Ok(p) => p,
+            Err(e) => return sweep_error(&e),
+        };
+        out!(
+            "{}: {} points in {} array tasks",
+            path.display(),
+            plan.points.len(),
+            sweep::slurm::shards(plan.points.len(), a.shard_size)
+        );
+        if a.submit {
+            match sweep::slurm::submit(&path) {
+                Ok(id) => out!("submitted batch job {id}"),
+                Err(e) => return sweep_error(&e),
+            }
+        }
+        return ExitCode::SUCCESS;
+    }
+    let stop = stop_on_signals();
+    let opts = sweep::SweepOptions {
+        out: out.clone(),
+        jobs,
+        retry_failed: a.retry_failed,
+        shard,
+        max_wall: a.max_wall,
+        progress: !a.quiet,
+        interrupt: stop.clone(),
+    };
+    match sweep::run_sweep(&plan, &opts) {
+        Ok(report) => {
+            for r in &report.rows {
+                if r.status == sweep::Status::Invalid {
+                    err!("invalid point {}: {}", r.id, r.reason);
+                }
+            }
+            out!(
+                "{}: {} ({} run, {} reused) in {:.1} s wall; outputs in {}",
+                plan.name,
+                report.counts(),
+                report.ran,
+                report.reused,
+                report.wall_seconds,
+                out.display()
+            );
+            for f in &report.written {
+                out!("{}", f.display());
+            }
+            if let Some((i, k)) = shard {
+                out!(
+                    "shard {i}/{k} done; when every shard is: cellsim sweep collect {}",
+                    out.display()
+                );
+            }
+            match stop.exit_status() {
+                Some(s) => ExitCode::from(s),
+                None if report.count(sweep::Status::Failed) > 0 => ExitCode::FAILURE,
+                None => ExitCode::SUCCESS,
+            }
+        }
+        Err(e) => {
+            err!("error: {e}");
+            if e.is_input() {
+                ExitCode::from(2)
+            } else {
+                failure_status(&stop, 1)
+            }
+        }
+    }
+}
+
 fn plot_command(run_dir: &Path, out: Option<PathBuf>) -> ExitCode {
     let run = match RunData::load(run_dir) {
         Ok(r) => r,
@@ -581,7 +841,7 @@ fn plot_command(run_dir: &Path, out: Option<PathBuf>) -> ExitCode {
 }
 
 fn mesh_command(path: &Path, svg: Option<&Path>) -> ExitCode {
-    let case = tryc!(load_case(path));
+    let case = tryc!(load_case(path, &[]));
     match Mesh::generate(&scene::mesh_params(&case)) {
         Ok(mesh) => {
             out!("{}", mesh.quality());
@@ -600,8 +860,8 @@ fn mesh_command(path: &Path, svg: Option<&Path>) -> ExitCode {
     }
 }
 
-fn check_command(path: &Path) -> ExitCode {
-    let case = tryc!(load_case(path));
+fn check_command(path: &Path, set: &[Override]) -> ExitCode {
+    let case = tryc!(load_case(path, set));
     match case.to_ron() {
         Ok(text) => {
             out!("{text}");

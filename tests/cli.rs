@@ -387,3 +387,105 @@ fn a_mesh_drawing_that_cannot_be_written_says_so() {
     );
     assert!(!stderr.contains("read"), "{stderr}");
 }
+
+#[test]
+fn set_overrides_a_field_on_check_and_run() {
+    // check prints the case with the overrides applied, inside the substrate's variant.
+    let out = cellsim(&[
+        "check",
+        "cases/pillars-push-pull.ron",
+        "--set",
+        "substrate.width=6.0",
+        "--set",
+        "substrate.spacing=10.0",
+        "--set",
+        "solver.rtol=1e-3",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("width: 6.0,") && stdout.contains("spacing: 10.0,"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("rtol: 0.001,"), "{stdout}");
+    // run: the override reaches the integration (an end time of 12 s).
+    let dir = format!("{}/cli-set-run", env!("CARGO_TARGET_TMPDIR"));
+    let _ = std::fs::remove_dir_all(&dir);
+    let res = cellsim(&[
+        "run",
+        "cases/fast/flat-gravity.ron",
+        "--quiet",
+        "--out",
+        &dir,
+        "--set",
+        "phases.t_end=12.0",
+    ]);
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    let summary = summary_of(&dir);
+    assert_eq!(summary["final_values"]["t"].as_f64(), Some(12.0));
+}
+
+#[test]
+fn a_bad_override_exits_with_status_2_and_names_the_set_argument() {
+    for (args, expected) in [
+        (
+            vec![
+                "check",
+                "cases/pillars-push-pull.ron",
+                "--set",
+                "substrate.spacing=abc",
+            ],
+            "error: --set substrate.spacing=abc: substrate.spacing: Expected float",
+        ),
+        (
+            vec![
+                "run",
+                "cases/fast/flat-gravity.ron",
+                "--set",
+                "materials.nucleus.nu=0.5",
+            ],
+            "error: --set materials.nucleus.nu=0.5: materials.nucleus.nu = 0.5 is out of range \
+             (must satisfy -1 < nu < 0.5)",
+        ),
+        (
+            vec![
+                "study",
+                "cases/fast/flat-gravity.ron",
+                "--set",
+                "solver.rtool=1e-3",
+            ],
+            "error: --set solver.rtool=1e-3: solver.rtool: unknown field `rtool`; expected one \
+             of `integrator`, `rtol`, `atol`, `bdf2_dt`, `max_order`, `max_steps`, \
+             `linear_solver`, `initial_step`",
+        ),
+        (
+            // The file's own rule, located in the file, broken by the new spacing.
+            vec![
+                "check",
+                "cases/pillars-push-pull.ron",
+                "--set",
+                "substrate.spacing=9.0",
+            ],
+            "error: cases/pillars-push-pull.ron:19:9: substrate.first_center = 8 is out of range \
+             (must satisfy first_center = k (width + spacing)/2 = k 8.5 for an integer k, so \
+             that the pillars are mirror symmetric about the symmetry line x = 0)",
+        ),
+    ] {
+        let out = cellsim(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim_end(), expected, "{args:?}");
+    }
+    // Not PATH=VALUE: refused by the command line parser, also with status 2.
+    let out = cellsim(&["check", "cases/flat.ron", "--set", "substrate"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("is not PATH=VALUE"));
+}

@@ -9,3 +9,4 @@ mod model;
 mod plots;
 mod scenes;
 mod study;
+mod sweep;

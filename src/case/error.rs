@@ -35,6 +35,18 @@ pub enum CaseError {
         /// What is wrong.
         message: String,
     },
+    /// A `--set PATH=VALUE` override does not apply or gives a value of the wrong type.
+    #[error("--set {arg}: {}{message}", field_prefix(field))]
+    Override {
+        /// The file the override was applied to.
+        file: String,
+        /// The override as given, `PATH=VALUE`.
+        arg: String,
+        /// Dotted path of the field concerned, when it can be told.
+        field: Option<String>,
+        /// What is wrong.
+        message: String,
+    },
     /// The case parses, but values are out of range or inconsistent. Lists every problem
     /// found, one per line.
     #[error("{}", render(file, problems))]
@@ -54,14 +66,18 @@ pub struct Problem {
     /// Position of the field's name in the file; `None` if the file does not write the
     /// field (the value is a default).
     pub position: Option<Position>,
+    /// The `--set PATH=VALUE` argument that wrote the field, if an override did (then
+    /// `position` is `None`).
+    pub set: Option<String>,
 }
 
 impl Problem {
     /// Formats the problem as one line prefixed by the file and position.
     pub fn render(&self, file: &str) -> String {
-        match self.position {
-            Some(p) => format!("{file}:{p}: {}", self.violation.describe(false)),
-            None => format!("{file}: {}", self.violation.describe(true)),
+        match (&self.set, self.position) {
+            (Some(arg), _) => format!("--set {arg}: {}", self.violation.describe(false)),
+            (None, Some(p)) => format!("{file}:{p}: {}", self.violation.describe(false)),
+            (None, None) => format!("{file}: {}", self.violation.describe(true)),
         }
     }
 }
@@ -84,6 +100,7 @@ impl CaseError {
         match self {
             CaseError::Read { file, .. }
             | CaseError::Parse { file, .. }
+            | CaseError::Override { file, .. }
             | CaseError::Invalid { file, .. } => file,
         }
     }
@@ -92,7 +109,7 @@ impl CaseError {
     pub fn field(&self) -> Option<&str> {
         match self {
             CaseError::Read { .. } => None,
-            CaseError::Parse { field, .. } => field.as_deref(),
+            CaseError::Parse { field, .. } | CaseError::Override { field, .. } => field.as_deref(),
             CaseError::Invalid { problems, .. } => {
                 problems.first().map(|p| p.violation.field.as_str())
             }
@@ -102,7 +119,7 @@ impl CaseError {
     /// Position of the (first) error in the file, if it has one.
     pub fn position(&self) -> Option<Position> {
         match self {
-            CaseError::Read { .. } => None,
+            CaseError::Read { .. } | CaseError::Override { .. } => None,
             CaseError::Parse { position, .. } => Some(*position),
             CaseError::Invalid { problems, .. } => problems.first().and_then(|p| p.position),
         }
@@ -112,6 +129,7 @@ impl CaseError {
 /// The violation without the file name, noting when the value is a default.
 impl fmt::Display for Problem {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.violation.describe(self.position.is_none()))
+        let default = self.position.is_none() && self.set.is_none();
+        f.write_str(&self.violation.describe(default))
     }
 }

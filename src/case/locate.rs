@@ -61,8 +61,9 @@ pub struct FieldMap {
     blank: bool,
 }
 
+/// A token of the scanner (also walked by [`super::overrides`]).
 #[derive(Debug, Clone, PartialEq)]
-enum Tok {
+pub(crate) enum Tok {
     Ident(String),
     Open(char),
     Close,
@@ -72,11 +73,22 @@ enum Tok {
     Other,
 }
 
+/// A token with its span (`end` exclusive).
 #[derive(Debug, Clone)]
-struct Token {
-    tok: Tok,
-    start: Position,
-    end: Position,
+pub(crate) struct Token {
+    pub(crate) tok: Tok,
+    pub(crate) start: Position,
+    pub(crate) end: Position,
+}
+
+/// The tokens of `text` (comments and whitespace skipped). Never fails.
+pub(crate) fn tokens(text: &str) -> Vec<Token> {
+    let mut lexer = Lexer::new(text);
+    let mut tokens = Vec::new();
+    while let Some(t) = lexer.next_token() {
+        tokens.push(t);
+    }
+    tokens
 }
 
 /// Character cursor with line/column bookkeeping.
@@ -370,11 +382,7 @@ fn join(base: &str, name: &str) -> String {
 impl FieldMap {
     /// Scans `text` and records every `name: value` field. Never fails.
     pub fn scan(text: &str) -> FieldMap {
-        let mut lexer = Lexer::new(text);
-        let mut tokens = Vec::new();
-        while let Some(t) = lexer.next_token() {
-            tokens.push(t);
-        }
+        let tokens = tokens(text);
 
         let mut records: Vec<Record> = Vec::new();
         // The root is transparent: the top-level value has path "".

@@ -30,6 +30,7 @@
 
 mod error;
 mod locate;
+pub mod overrides;
 mod sections;
 pub mod terms;
 mod validate;
@@ -43,6 +44,7 @@ use serde::{Deserialize, Serialize};
 
 pub use error::{CaseError, Problem};
 pub use locate::Position;
+pub use overrides::Override;
 pub use sections::{
     Active, Adhesion, Bottom, Contact, Flat, Geometry, Gravity, Inertia, InertiaMode, Integrator,
     LinearSolver, Material, Materials, Mesh, Output, Pac, Phases, Pillars, Solver, Substrate,
@@ -205,6 +207,7 @@ impl Case {
                 .map(|violation| Problem {
                     position: fields.locate(&violation.field),
                     violation,
+                    set: None,
                 })
                 .collect();
             Err(CaseError::Invalid {

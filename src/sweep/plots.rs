@@ -1,0 +1,640 @@
+//! The figures of a sweep, drawn from the rows of `sweep.csv` (and the design in
+//! `sweep.json`) only:
+//!
+//! - a Grid over two axes: `heatmap-<quantity>.png`, the quantity (default: penetration
+//!   depth) on the grid, each cell labelled with its value; failed points crossed,
+//!   invalid ones grey and labelled "invalid", missing ones blank;
+//! - one axis (a Grid or a Zip; a Zip's first axis): `line-<quantity>.png`;
+//! - a Latin hypercube: `scatter-<quantity>.png`, the quantity against each axis;
+//! - one at a time: `tornado.png`, the normalised sensitivity S = (ΔQ/Q)/(Δp/p) of each
+//!   quantity to each parameter, from the lowest and highest value of the parameter
+//!   (central difference around the base), and `sensitivities.csv` with the numbers.
+
+use std::path::{Path, PathBuf};
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::Record;
+use super::design::Kind;
+use super::table::{Row, Status};
+use crate::output::OutputError;
+
+const FONT: &str = "sans-serif";
+const GREY: RGBColor = RGBColor(190, 190, 190);
+const RED: RGBColor = RGBColor(214, 39, 40);
+const BLUE: RGBColor = RGBColor(31, 119, 180);
+
+/// The quantities of the tornado chart.
+pub const TORNADO_QUANTITIES: [&str; 6] = [
+    "penetration_depth",
+    "uy_top",
+    "uy_bottom",
+    "contact_radius",
+    "strain_nucleus",
+    "strain_cytoplasm",
+];
+
+/// Draws the figures the design calls for into `dir`; returns their paths.
+pub fn draw(
+    dir: &Path,
+    record: &Record,
+    rows: &[Row],
+    quantity: Option<&str>,
+) -> Result<Vec<PathBuf>, OutputError> {
+    let q = quantity.unwrap_or("penetration_depth");
+    let axes = record.axes();
+    let mut out = Vec::new();
+    match record.design.kind {
+        Kind::Grid if axes.len() == 2 => {
+            let p = dir.join(format!("heatmap-{q}.png"));
+            heat_map(&p, record, rows, q)?;
+            out.push(p);
+        }
+        Kind::Zip => {
+            let p = dir.join(format!("line-{q}.png"));
+            line_plot(&p, &record.name, &axes[..1], rows, q, true)?;
+            out.push(p);
+        }
+        Kind::Grid if axes.len() == 1 => {
+            let p = dir.join(format!("line-{q}.png"));
+            line_plot(&p, &record.name, &axes[..1], rows, q, true)?;
+            out.push(p);
+        }
+        Kind::LatinHypercube => {
+            let p = dir.join(format!("scatter-{q}.png"));
+            line_plot(&p, &record.name, &axes, rows, q, false)?;
+            out.push(p);
+        }
+        Kind::OneAtATime => {
+            let s = sensitivities(&axes, rows);
+            let csv = dir.join("sensitivities.csv");
+            let mut text = String::from("quantity,parameter,p0,p_low,p_high,q0,q_low,q_high,s\n");
+            for x in &s {
+                text += &format!(
+                    "{},{},{},{},{},{},{},{},{}\n",
+                    x.quantity, x.axis, x.p0, x.p_lo, x.p_hi, x.q0, x.q_lo, x.q_hi, x.s
+                );
+            }
+            std::fs::write(&csv, text).map_err(|e| OutputError::write(&csv, e))?;
+            out.push(csv);
+            let p = dir.join("tornado.png");
+            tornado(&p, &record.name, &axes, &s)?;
+            out.push(p);
+        }
+        // Three or more grid axes: no figure (sweep.csv holds the numbers).
+        Kind::Grid => {}
+    }
+    Ok(out)
+}
+
+/// Viridis, through five anchors; `t` in [0, 1].
+fn colormap(t: f64) -> RGBColor {
+    const A: [(f64, f64, f64); 5] = [
+        (68.0, 1.0, 84.0),
+        (59.0, 82.0, 139.0),
+        (33.0, 145.0, 140.0),
+        (94.0, 201.0, 98.0),
+        (253.0, 231.0, 37.0),
+    ];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let x = t * (A.len() - 1) as f64;
+    let k = (x.floor() as usize).min(A.len() - 2);
+    let w = x - k as f64;
+    let (a, b) = (A[k], A[k + 1]);
+    let mix = |p: f64, q: f64| (p + w * (q - p)).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// A value for a cell label: 3 significant digits.
+fn fmt_value(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if (1e-2..1e4).contains(&a) {
+        let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
+fn quantity_label(q: &str) -> String {
+    match q {
+        "penetration_depth" => "penetration depth of p_b below the pillar tops [µm]".into(),
+        "uy_top" => "u_y(p_t) [µm]".into(),
+        "uy_bottom" => "u_y(p_b) [µm]".into(),
+        "uy_centre" => "u_y(c) [µm]".into(),
+        "contact_radius" => "contact radius [µm]".into(),
+        "strain_nucleus" => "mean ‖E‖ nucleus".into(),
+        "strain_cytoplasm" => "mean ‖E‖ cytoplasm".into(),
+        "wall_seconds" => "wall time [s]".into(),
+        "t" => "last output time [s]".into(),
+        other => other.into(),
+    }
+}
+
+fn draw_err(path: &Path) -> impl Fn(String) -> OutputError + '_ {
+    move |m| OutputError::draw(path, m)
+}
+
+fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), OutputError> {
+    let e = draw_err(path);
+    let xs = &record.design.axes[0].values;
+    let ys = &record.design.axes[1].values;
+    let (nx, ny) = (xs.len(), ys.len());
+    let cell = |r: &Row| {
+        let i = xs.iter().position(|v| *v == r.values[0])?;
+        let j = ys.iter().position(|v| *v == r.values[1])?;
+        Some((i, j))
+    };
+    let shown: Vec<f64> = rows
+        .iter()
+        .filter(|r| matches!(r.status, Status::Finished | Status::Failed))
+        .filter_map(|r| r.quantity(q))
+        .filter(|v| v.is_finite())
+        .collect();
+    let (mut lo, mut hi) = shown
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    if !(lo.is_finite() && hi.is_finite()) {
+        (lo, hi) = (0.0, 1.0);
+    }
+    if hi - lo < 1e-12 * (1.0 + hi.abs()) {
+        (lo, hi) = (lo - 0.5, hi + 0.5);
+    }
+    let w = (160 + 110 * nx as u32).max(700) + 150;
+    let h = (180 + 90 * ny as u32).max(520);
+    let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(x.to_string()))?;
+    let (main, side) = root.split_horizontally(w - 150);
+    let mut chart = ChartBuilder::on(&main)
+        .caption(
+            format!(
+                "{}: {}{}",
+                record.name,
+                quantity_label(q),
+                if rows.iter().any(|r| r.status == Status::Failed) {
+                    " (crossed: failed, last value written)"
+                } else {
+                    ""
+                }
+            ),
+            (FONT, 22),
+        )
+        .margin(16)
+        .x_label_area_size(60)
+        .y_label_area_size(90)
+        .build_cartesian_2d(
+            (0..nx.max(1) - 1).into_segmented(),
+            (0..ny.max(1) - 1).into_segmented(),
+        )
+        .map_err(|x| e(x.to_string()))?;
+    let label = |vals: &[String], v: &SegmentValue<usize>| match v {
+        SegmentValue::CenterOf(i) => vals.get(*i).cloned().unwrap_or_default(),
+        _ => String::new(),
+    };
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_labels(nx + 1)
+        .y_labels(ny + 1)
+        .x_label_formatter(&|v| label(xs, v))
+        .y_label_formatter(&|v| label(ys, v))
+        .x_desc(&record.design.axes[0].path)
+        .y_desc(&record.design.axes[1].path)
+        .axis_desc_style((FONT, 18))
+        .label_style((FONT, 16))
+        .draw()
+        .map_err(|x| e(x.to_string()))?;
+    let corners = |i: usize, j: usize| {
+        [
+            (SegmentValue::Exact(i), SegmentValue::Exact(j)),
+            (SegmentValue::Exact(i + 1), SegmentValue::Exact(j + 1)),
+        ]
+    };
+    for r in rows {
+        let Some((i, j)) = cell(r) else { continue };
+        let v = r.quantity(q).filter(|v| v.is_finite());
+        let (fill, text) = match (r.status, v) {
+            (Status::Finished | Status::Failed, Some(v)) => {
+                (colormap((v - lo) / (hi - lo)), fmt_value(v))
+            }
+            (Status::Invalid, _) => (GREY, "invalid".to_string()),
+            (Status::Missing, _) => (WHITE, "missing".to_string()),
+            (Status::Interrupted, _) => (WHITE, "interrupted".to_string()),
+            (_, None) => (WHITE, r.status.as_str().to_string()),
+        };
+        chart
+            .draw_series(std::iter::once(Rectangle::new(
+                corners(i, j),
+                fill.filled(),
+            )))
+            .map_err(|x| e(x.to_string()))?;
+        chart
+            .draw_series(std::iter::once(Rectangle::new(
+                corners(i, j),
+                WHITE.stroke_width(2),
+            )))
+            .map_err(|x| e(x.to_string()))?;
+        if r.status == Status::Failed {
+            // A cross over the cell: the value is the last one written before it stopped.
+            let (a, b) = (corners(i, j)[0].clone(), corners(i, j)[1].clone());
+            let style = RED.stroke_width(3);
+            chart
+                .draw_series([
+                    PathElement::new(vec![a.clone(), b.clone()], style),
+                    PathElement::new(vec![(a.0, b.1), (b.0, a.1)], style),
+                ])
+                .map_err(|x| e(x.to_string()))?;
+        }
+        let luminance = 0.299 * fill.0 as f64 + 0.587 * fill.1 as f64 + 0.114 * fill.2 as f64;
+        let color = if luminance < 140.0 { WHITE } else { BLACK };
+        let style = (FONT, 17)
+            .into_font()
+            .color(&color)
+            .pos(Pos::new(HPos::Center, VPos::Center));
+        chart
+            .draw_series(std::iter::once(Text::new(
+                text,
+                (SegmentValue::CenterOf(i), SegmentValue::CenterOf(j)),
+                style,
+            )))
+            .map_err(|x| e(x.to_string()))?;
+    }
+    colorbar(&side, lo, hi).map_err(&e)?;
+    root.present().map_err(|x| e(x.to_string()))?;
+    Ok(())
+}
+
+fn colorbar(area: &DrawingArea<BitMapBackend<'_>, Shift>, lo: f64, hi: f64) -> Result<(), String> {
+    let mut chart = ChartBuilder::on(area)
+        .margin_top(60)
+        .margin_bottom(76)
+        .margin_right(10)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..1.0, lo..hi)
+        .map_err(|x| x.to_string())?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_labels(8)
+        .y_label_formatter(&|v| fmt_value(*v))
+        .label_style((FONT, 14))
+        .draw()
+        .map_err(|x| x.to_string())?;
+    let n = 100;
+    chart
+        .draw_series((0..n).map(|k| {
+            let a = lo + (hi - lo) * k as f64 / n as f64;
+            let b = lo + (hi - lo) * (k + 1) as f64 / n as f64;
+            Rectangle::new(
+                [(0.0, a), (1.0, b)],
+                colormap((k as f64 + 0.5) / n as f64).filled(),
+            )
+        }))
+        .map_err(|x| x.to_string())?;
+    Ok(())
+}
+
+/// The quantity against the axes' values: one panel per axis; `joined` draws lines
+/// between the points (a Grid or Zip axis), else markers only (a sample).
+fn line_plot(
+    path: &Path,
+    name: &str,
+    axes: &[String],
+    rows: &[Row],
+    q: &str,
+    joined: bool,
+) -> Result<(), OutputError> {
+    let e = draw_err(path);
+    let panels = axes.len().max(1);
+    let root = BitMapBackend::new(path, (760 * panels as u32, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(x.to_string()))?;
+    let areas = root.split_evenly((1, panels));
+    for (j, (area, axis)) in areas.iter().zip(axes).enumerate() {
+        let mut pts: Vec<(f64, f64, Status)> = rows
+            .iter()
+            .filter(|r| matches!(r.status, Status::Finished | Status::Failed))
+            .filter_map(|r| {
+                let x = super::parse_number(r.values.get(j)?)?;
+                let y = r.quantity(q)?;
+                (x.is_finite() && y.is_finite()).then_some((x, y, r.status))
+            })
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let range = |v: &mut dyn Iterator<Item = f64>| {
+            let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(x), b.max(x))
+            });
+            if !lo.is_finite() {
+                return (0.0, 1.0);
+            }
+            let pad = ((hi - lo) * 0.08)
+                .max(1e-9 * (1.0 + hi.abs()))
+                .max(if hi == lo { 0.5 } else { 0.0 });
+            (lo - pad, hi + pad)
+        };
+        let (x0, x1) = range(&mut pts.iter().map(|p| p.0));
+        let (y0, y1) = range(&mut pts.iter().map(|p| p.1));
+        let not_run: Vec<&str> = rows
+            .iter()
+            .filter(|r| !matches!(r.status, Status::Finished | Status::Failed))
+            .map(|r| r.id.as_str())
+            .collect();
+        let mut caption = format!("{name}: {}", quantity_label(q));
+        if !not_run.is_empty() {
+            caption += &format!(" ({} not run or invalid)", not_run.len());
+        }
+        let mut chart = ChartBuilder::on(area)
+            .caption(caption, (FONT, 20))
+            .margin(16)
+            .x_label_area_size(55)
+            .y_label_area_size(80)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|x| e(x.to_string()))?;
+        chart
+            .configure_mesh()
+            .x_desc(axis.as_str())
+            .y_desc(quantity_label(q))
+            .axis_desc_style((FONT, 17))
+            .label_style((FONT, 15))
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()
+            .map_err(|x| e(x.to_string()))?;
+        if joined {
+            chart
+                .draw_series(LineSeries::new(
+                    pts.iter()
+                        .filter(|p| p.2 == Status::Finished)
+                        .map(|p| (p.0, p.1)),
+                    BLUE.stroke_width(2),
+                ))
+                .map_err(|x| e(x.to_string()))?;
+        }
+        chart
+            .draw_series(
+                pts.iter()
+                    .filter(|p| p.2 == Status::Finished)
+                    .map(|p| Circle::new((p.0, p.1), 5, BLUE.filled())),
+            )
+            .map_err(|x| e(x.to_string()))?;
+        chart
+            .draw_series(
+                pts.iter()
+                    .filter(|p| p.2 == Status::Failed)
+                    .map(|p| Cross::new((p.0, p.1), 7, RED.stroke_width(3))),
+            )
+            .map_err(|x| e(x.to_string()))?;
+    }
+    root.present().map_err(|x| e(x.to_string()))?;
+    Ok(())
+}
+
+/// A normalised sensitivity of one quantity to one parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sensitivity {
+    /// The quantity.
+    pub quantity: String,
+    /// The parameter (axis path).
+    pub axis: String,
+    /// Base value of the parameter and of the quantity.
+    pub p0: f64,
+    /// Lowest and highest parameter value run (one of them may be the base's).
+    pub p_lo: f64,
+    pub p_hi: f64,
+    /// Base value of the quantity.
+    pub q0: f64,
+    /// The quantity at p_lo and p_hi.
+    pub q_lo: f64,
+    pub q_hi: f64,
+    /// (ΔQ/Q0)/(Δp/p0) over [p_lo, p_hi]; NaN when Q0 or p0 is 0.
+    pub s: f64,
+}
+
+/// The sensitivities of a one-at-a-time sweep from its rows: the base row is the one with
+/// id `base`; a parameter's rows are the finished ones that differ from the base on its
+/// axis only.
+pub fn sensitivities(axes: &[String], rows: &[Row]) -> Vec<Sensitivity> {
+    let Some(base) = rows
+        .iter()
+        .find(|r| r.id == "base" && r.status == Status::Finished)
+    else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for q in TORNADO_QUANTITIES {
+        let Some(q0) = base.quantity(q) else { continue };
+        for (j, axis) in axes.iter().enumerate() {
+            let Some(p0) = base.values.get(j).and_then(|v| super::parse_number(v)) else {
+                continue;
+            };
+            let mut pts: Vec<(f64, f64)> = vec![(p0, q0)];
+            for r in rows {
+                let alone = r
+                    .values
+                    .iter()
+                    .enumerate()
+                    .all(|(k, v)| (k == j) != (*v == base.values[k]));
+                if r.status != Status::Finished || !alone {
+                    continue;
+                }
+                if let (Some(p), Some(v)) = (super::parse_number(&r.values[j]), r.quantity(q)) {
+                    pts.push((p, v));
+                }
+            }
+            if pts.len() < 2 {
+                continue;
+            }
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (lo, hi) = (pts[0], pts[pts.len() - 1]);
+            let s = if q0 != 0.0 && p0 != 0.0 && hi.0 != lo.0 {
+                ((hi.1 - lo.1) / q0) / ((hi.0 - lo.0) / p0)
+            } else {
+                f64::NAN
+            };
+            out.push(Sensitivity {
+                quantity: q.to_string(),
+                axis: axis.clone(),
+                p0,
+                p_lo: lo.0,
+                p_hi: hi.0,
+                q0,
+                q_lo: lo.1,
+                q_hi: hi.1,
+                s,
+            });
+        }
+    }
+    out
+}
+
+fn tornado(path: &Path, name: &str, axes: &[String], s: &[Sensitivity]) -> Result<(), OutputError> {
+    let e = draw_err(path);
+    let (cols, rows_n) = (2usize, 3usize);
+    let panel_h = (120 + 44 * axes.len() as u32).max(320);
+    let root = BitMapBackend::new(path, (1500, panel_h * rows_n as u32 + 50)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(x.to_string()))?;
+    let (title, body) = root.split_vertically(50);
+    title
+        .draw(&Text::new(
+            format!("{name}: normalised sensitivities S = (ΔQ/Q) / (Δp/p), central over each parameter's range"),
+            (20, 14),
+            (FONT, 22).into_font(),
+        ))
+        .map_err(|x| e(x.to_string()))?;
+    let areas = body.split_evenly((rows_n, cols));
+    for (area, q) in areas.iter().zip(TORNADO_QUANTITIES) {
+        let mut bars: Vec<&Sensitivity> = s.iter().filter(|x| x.quantity == q).collect();
+        // Largest |S| on top; undefined ones last.
+        bars.sort_by(|a, b| {
+            let key = |x: &Sensitivity| if x.s.is_finite() { x.s.abs() } else { -1.0 };
+            key(a).total_cmp(&key(b))
+        });
+        let m = bars
+            .iter()
+            .map(|b| b.s.abs())
+            .filter(|v| v.is_finite())
+            .fold(0.0_f64, f64::max)
+            .max(1e-3)
+            * 1.25;
+        let n = bars.len().max(1);
+        let labels: Vec<String> = bars.iter().map(|b| b.axis.clone()).collect();
+        let mut chart = ChartBuilder::on(area)
+            .caption(quantity_label(q), (FONT, 18))
+            .margin(10)
+            .margin_right(24)
+            .x_label_area_size(36)
+            .y_label_area_size(230)
+            .build_cartesian_2d(-m..m, (0..n - 1).into_segmented())
+            .map_err(|x| e(x.to_string()))?;
+        chart
+            .configure_mesh()
+            .y_labels(n + 1)
+            .y_label_formatter(&|v| match v {
+                SegmentValue::CenterOf(i) => labels.get(*i).cloned().unwrap_or_default(),
+                _ => String::new(),
+            })
+            .x_label_formatter(&|v| fmt_value(*v))
+            .label_style((FONT, 14))
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()
+            .map_err(|x| e(x.to_string()))?;
+        for (i, b) in bars.iter().enumerate() {
+            let y0 = SegmentValue::Exact(i);
+            let y1 = SegmentValue::Exact(i + 1);
+            if b.s.is_finite() {
+                let color = if b.s >= 0.0 { BLUE } else { RED };
+                chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [(0.0, y0), (b.s, y1)],
+                        color.mix(0.8).filled(),
+                    )))
+                    .map_err(|x| e(x.to_string()))?;
+            }
+            let text = if b.s.is_finite() {
+                fmt_value(b.s)
+            } else {
+                "n/a (Q = 0)".into()
+            };
+            let (x, anchor) = if b.s.is_finite() && b.s < 0.0 {
+                (b.s - 0.02 * m, HPos::Right)
+            } else {
+                (
+                    if b.s.is_finite() { b.s } else { 0.0 } + 0.02 * m,
+                    HPos::Left,
+                )
+            };
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    text,
+                    (x, SegmentValue::CenterOf(i)),
+                    (FONT, 14)
+                        .into_font()
+                        .color(&BLACK)
+                        .pos(Pos::new(anchor, VPos::Center)),
+                )))
+                .map_err(|x| e(x.to_string()))?;
+        }
+        // The zero line.
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(0.0, SegmentValue::Exact(0)), (0.0, SegmentValue::Exact(n))],
+                BLACK.stroke_width(1),
+            )))
+            .map_err(|x| e(x.to_string()))?;
+    }
+    root.present().map_err(|x| e(x.to_string()))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::Observables;
+
+    fn row(id: &str, values: &[&str], uy_top: f64) -> Row {
+        Row {
+            id: id.into(),
+            values: values.iter().map(|v| v.to_string()).collect(),
+            status: Status::Finished,
+            last: Some(Observables {
+                uy_top,
+                ..Default::default()
+            }),
+            penetration: Some(0.0),
+            wall_seconds: Some(1.0),
+            steps: Some(10),
+            reason: String::new(),
+        }
+    }
+
+    #[test]
+    fn sensitivities_are_central_differences_normalised_by_the_base() {
+        let axes = vec!["a".to_string(), "b".to_string()];
+        let rows = vec![
+            row("base", &["2.0", "10.0"], -4.0),
+            row("o0_0", &["1.0", "10.0"], -3.0),
+            row("o0_1", &["3.0", "10.0"], -6.0),
+            row("o1_0", &["2.0", "20.0"], -4.4),
+        ];
+        let s = sensitivities(&axes, &rows);
+        let a = s
+            .iter()
+            .find(|x| x.quantity == "uy_top" && x.axis == "a")
+            .unwrap();
+        // ((−6 − −3)/−4) / ((3 − 1)/2) = 0.75
+        assert!((a.s - 0.75).abs() < 1e-12, "{a:?}");
+        let b = s
+            .iter()
+            .find(|x| x.quantity == "uy_top" && x.axis == "b")
+            .unwrap();
+        // One-sided: ((−4.4 − −4)/−4) / ((20 − 10)/10) = 0.1
+        assert!((b.s - 0.1).abs() < 1e-12, "{b:?}");
+        // Penetration 0 at the base: undefined.
+        let p = s
+            .iter()
+            .find(|x| x.quantity == "penetration_depth")
+            .unwrap();
+        assert!(p.s.is_nan());
+    }
+
+    #[test]
+    fn labels_have_three_significant_digits() {
+        assert_eq!(fmt_value(1.23456), "1.23");
+        assert_eq!(fmt_value(-0.0123456), "-0.0123");
+        assert_eq!(fmt_value(123.456), "123");
+        assert_eq!(fmt_value(0.0), "0");
+        assert_eq!(colormap(0.0), RGBColor(68, 1, 84));
+        assert_eq!(colormap(1.0), RGBColor(253, 231, 37));
+    }
+}

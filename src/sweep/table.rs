@@ -1,0 +1,341 @@
+//! `sweep.csv`: one row per point, and the penetration depth derived from a run.
+//!
+//! Columns: `id`, one per axis (its dotted path; the value the point has on that axis),
+//! `status` (finished / failed / invalid / interrupted / missing), the last row of the
+//! point's `timeseries.csv` (`t`, `contact_radius`, `uy_top`, `uy_centre`, `uy_bottom`,
+//! `strain_nucleus`, `strain_cytoplasm`: the final values of a finished run, the last ones
+//! written for one that stopped), `penetration_depth` (µm), `wall_seconds` (set-up and
+//! integration), `steps` and `reason` (why the point failed, is invalid or interrupted).
+//! Numbers are written in full precision; fields with a comma or a quote are quoted as
+//! RFC 4180 says.
+
+use crate::case::{Case, Substrate};
+use crate::record::Observables;
+use crate::record::observables::{COLUMNS, N_COLUMNS};
+
+/// What became of a point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    /// The run reached its end time.
+    Finished,
+    /// The run stopped early: integration failure, step limit, stall, wall budget.
+    Failed,
+    /// The point's case is not valid (its validation message is the reason).
+    Invalid,
+    /// A signal stopped the run.
+    Interrupted,
+    /// Not run (yet): another shard's, or the sweep was stopped before it started.
+    Missing,
+}
+
+impl Status {
+    /// The word in the `status` column.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Finished => "finished",
+            Status::Failed => "failed",
+            Status::Invalid => "invalid",
+            Status::Interrupted => "interrupted",
+            Status::Missing => "missing",
+        }
+    }
+
+    fn parse(s: &str) -> Option<Status> {
+        Some(match s {
+            "finished" => Status::Finished,
+            "failed" => Status::Failed,
+            "invalid" => Status::Invalid,
+            "interrupted" => Status::Interrupted,
+            "missing" => Status::Missing,
+            _ => return None,
+        })
+    }
+}
+
+/// One row of `sweep.csv`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    /// Point id.
+    pub id: String,
+    /// The point's value on each axis (RON text).
+    pub values: Vec<String>,
+    /// What became of it.
+    pub status: Status,
+    /// The last output row written, if any.
+    pub last: Option<Observables>,
+    /// How far the nucleus bottom went below the pillar tops at the last output [µm].
+    pub penetration: Option<f64>,
+    /// Wall seconds of set-up and integration.
+    pub wall_seconds: Option<f64>,
+    /// Integrator steps.
+    pub steps: Option<u64>,
+    /// Why the point failed, is invalid or was interrupted (one line).
+    pub reason: String,
+}
+
+impl Row {
+    /// A row with only an id, values, a status and a reason.
+    pub fn bare(id: &str, values: Vec<String>, status: Status, reason: &str) -> Row {
+        Row {
+            id: id.to_string(),
+            values,
+            status,
+            last: None,
+            penetration: None,
+            wall_seconds: None,
+            steps: None,
+            reason: one_line(reason),
+        }
+    }
+
+    /// The value of a numeric column by name: a timeseries column, `penetration_depth`,
+    /// `wall_seconds` or `steps`.
+    pub fn quantity(&self, name: &str) -> Option<f64> {
+        match name {
+            "penetration_depth" => self.penetration,
+            "wall_seconds" => self.wall_seconds,
+            "steps" => self.steps.map(|s| s as f64),
+            _ => self.last.and_then(|o| o.get(name)),
+        }
+    }
+}
+
+/// The numeric columns a figure can show.
+pub fn quantities() -> Vec<&'static str> {
+    let mut q: Vec<&str> = COLUMNS[1..].to_vec();
+    q.extend(["penetration_depth", "wall_seconds", "steps"]);
+    q
+}
+
+/// Joins the lines of a message with "; ".
+pub fn one_line(s: &str) -> String {
+    s.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// How far the nucleus bottom p_b is below the pillar tops [µm], 0 when above them or on
+/// a flat substrate:
+///
+/// depth = max(0, y_top − (c_y − r_n + u_y(p_b)))
+///
+/// with c_y − r_n the reference height of p_b (the lowest point of the nucleus, on the
+/// symmetry line) and y_top the height of the pillar tops ([`crate::case::Pillars::resolved_y_top`]).
+pub fn penetration_depth(case: &Case, uy_bottom: f64) -> f64 {
+    match &case.substrate {
+        Substrate::Flat(_) => 0.0,
+        Substrate::Pillars(p) => {
+            let y_top = p.resolved_y_top(&case.geometry);
+            let y_b = case.geometry.centre_y - case.geometry.r_n + uy_bottom;
+            (y_top - y_b).max(0.0)
+        }
+    }
+}
+
+/// A CSV field, quoted when it holds a comma, a quote or a line break.
+fn field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+fn num(v: Option<f64>) -> String {
+    v.map(|x| x.to_string()).unwrap_or_default()
+}
+
+/// The header line for `axes`.
+pub fn header(axes: &[String]) -> String {
+    let mut cols: Vec<String> = vec!["id".into()];
+    cols.extend(axes.iter().map(|a| field(a)));
+    cols.push("status".into());
+    cols.extend(COLUMNS.iter().map(|c| c.to_string()));
+    cols.extend([
+        "penetration_depth".into(),
+        "wall_seconds".into(),
+        "steps".into(),
+        "reason".into(),
+    ]);
+    cols.join(",")
+}
+
+/// One row's line.
+pub fn line(r: &Row) -> String {
+    let mut cols: Vec<String> = vec![field(&r.id)];
+    cols.extend(r.values.iter().map(|v| field(v)));
+    cols.push(r.status.as_str().into());
+    match r.last {
+        Some(o) => cols.extend(o.values().iter().map(|v| v.to_string())),
+        None => cols.extend((0..N_COLUMNS).map(|_| String::new())),
+    }
+    cols.push(num(r.penetration));
+    cols.push(num(r.wall_seconds));
+    cols.push(r.steps.map(|s| s.to_string()).unwrap_or_default());
+    cols.push(field(&r.reason));
+    cols.join(",")
+}
+
+/// The whole file.
+pub fn render(axes: &[String], rows: &[Row]) -> String {
+    let mut s = header(axes);
+    s.push('\n');
+    for r in rows {
+        s.push_str(&line(r));
+        s.push('\n');
+    }
+    s
+}
+
+/// Splits one CSV line into fields (RFC 4180 quoting; no line breaks inside fields).
+fn split(line: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut cur = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', true) => quoted = false,
+            ('"', false) if cur.is_empty() => quoted = true,
+            (',', false) => out.push(std::mem::take(&mut cur)),
+            (c, _) => cur.push(c),
+        }
+    }
+    out.push(cur);
+    out
+}
+
+/// Parses `sweep.csv`: the axis paths and the rows. The message names the line.
+pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), String> {
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
+    let (_, head) = lines.next().ok_or("empty file (no header)")?;
+    let head = split(head);
+    let status_at = head
+        .iter()
+        .position(|h| h == "status")
+        .ok_or("line 1: no `status` column")?;
+    if head.first().map(String::as_str) != Some("id") {
+        return Err("line 1: the first column is not `id`".into());
+    }
+    let axes: Vec<String> = head[1..status_at].to_vec();
+    let expected = status_at + 1 + N_COLUMNS + 4;
+    if head.len() != expected {
+        return Err(format!(
+            "line 1: {} columns, expected {expected}",
+            head.len()
+        ));
+    }
+    let mut rows = Vec::new();
+    for (k, l) in lines {
+        let f = split(l);
+        let bad = |m: String| format!("line {}: {m}", k + 1);
+        if f.len() != expected {
+            return Err(bad(format!("{} fields, expected {expected}", f.len())));
+        }
+        let number = |s: &str| -> Result<Option<f64>, String> {
+            if s.is_empty() {
+                Ok(None)
+            } else {
+                s.parse()
+                    .map(Some)
+                    .map_err(|_| bad(format!("`{s}` is not a number")))
+            }
+        };
+        let status = Status::parse(&f[status_at])
+            .ok_or_else(|| bad(format!("unknown status `{}`", f[status_at])))?;
+        let obs = &f[status_at + 1..status_at + 1 + N_COLUMNS];
+        let last = if obs.iter().all(|s| s.is_empty()) {
+            None
+        } else {
+            let mut v = [0.0; N_COLUMNS];
+            for (x, s) in v.iter_mut().zip(obs) {
+                *x = number(s)?.unwrap_or(f64::NAN);
+            }
+            Some(Observables::from_values(v))
+        };
+        let rest = &f[status_at + 1 + N_COLUMNS..];
+        rows.push(Row {
+            id: f[0].clone(),
+            values: f[1..status_at].to_vec(),
+            status,
+            last,
+            penetration: number(&rest[0])?,
+            wall_seconds: number(&rest[1])?,
+            steps: number(&rest[2])?.map(|s| s as u64),
+            reason: rest[3].clone(),
+        });
+    }
+    Ok((axes, rows))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_round_trip_through_the_csv_text() {
+        let axes = vec![
+            "substrate.width".to_string(),
+            "active.pac.inner_semi_axes".into(),
+        ];
+        let rows = vec![
+            Row {
+                id: "g0_1".into(),
+                values: vec!["6.0".into(), "(5.0, 4.0)".into()],
+                status: Status::Finished,
+                last: Some(Observables::from_values([
+                    600.0, 8.4, -6.6, -3.0, -5.5, 0.2, 0.5,
+                ])),
+                penetration: Some(1.25),
+                wall_seconds: Some(3.5),
+                steps: Some(775),
+                reason: String::new(),
+            },
+            Row::bare(
+                "g1_0",
+                vec!["8.0".into(), "(5.0, 4.0)".into()],
+                Status::Invalid,
+                "base.ron:3:4: x = 1 is \"bad\", really\nsecond line",
+            ),
+        ];
+        let text = render(&axes, &rows);
+        assert!(text.starts_with(
+            "id,substrate.width,active.pac.inner_semi_axes,status,t,contact_radius,uy_top,"
+        ));
+        let (a, r) = parse(&text).unwrap();
+        assert_eq!(a, axes);
+        assert_eq!(r, rows);
+        assert_eq!(
+            r[1].reason,
+            "base.ron:3:4: x = 1 is \"bad\", really; second line"
+        );
+        assert_eq!(r[0].quantity("uy_top"), Some(-6.6));
+        assert_eq!(r[0].quantity("penetration_depth"), Some(1.25));
+        assert!(parse("id,status\n").is_err());
+    }
+
+    #[test]
+    fn penetration_depth_counts_from_the_pillar_tops() {
+        let mut case = Case::new("p", Substrate::pillars(), 1.0);
+        let p = match &case.substrate {
+            Substrate::Pillars(p) => p.clone(),
+            Substrate::Flat(_) => unreachable!(),
+        };
+        let y_top = p.resolved_y_top(&case.geometry);
+        // p_b starts at c_y - r_n = 3.5 µm; 3.5 + u = y_top - 2 is 2 µm below the tops.
+        let u = y_top - 2.0 - 3.5;
+        assert!((penetration_depth(&case, u) - 2.0).abs() < 1e-12);
+        assert_eq!(penetration_depth(&case, -1.0), 0.0);
+        case.substrate = Substrate::flat();
+        assert_eq!(penetration_depth(&case, -8.0), 0.0);
+    }
+}
