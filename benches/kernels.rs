@@ -1,7 +1,7 @@
 //! The kernels of one IDA step on the default scene's model (`cases/pillars-push-pull.ron`:
 //! pillars, adhesion μ_as unknowns, both active regions) at three mesh refinements
-//! (`mesh.refine` 0.5, 1 = the default, 2): residual, Jacobian assembly, symbolic and
-//! numeric LU and the solve with faer and KLU, and, on the same model with inertia
+//! (`mesh.refine` 0.5, 1 = the default, 2, 4): residual, Jacobian assembly, symbolic and
+//! numeric LU and the solve with faer, KLU and KLU on the nested-dissection ordering, and, on the same model with inertia
 //! (unknowns u, v, μ_as), the full-size LU against the condensed one (velocities
 //! eliminated, `faer-condensed`).
 //!
@@ -24,7 +24,7 @@ use cellsim::model::CellModel;
 use cellsim::scene;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 
-const REFINES: [f64; 3] = [0.5, 1.0, 2.0];
+const REFINES: [f64; 4] = [0.5, 1.0, 2.0, 4.0];
 const T: f64 = 45_000.0;
 
 fn model(refine: f64, inertia: bool) -> CellModel {
@@ -116,7 +116,11 @@ fn kernels(c: &mut Criterion) {
         g.finish();
         m.jacobian(T, &y, &yp, 0.1, &mut vals).unwrap();
         let rhs: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).sin()).collect();
-        for kind in [LinearSolverKind::Faer, LinearSolverKind::Klu] {
+        for kind in [
+            LinearSolverKind::Faer,
+            LinearSolverKind::Klu,
+            LinearSolverKind::KluMetis,
+        ] {
             let name = kind.build().name();
             let mut g = c.benchmark_group(format!("lu-symbolic-{name}"));
             g.bench_with_input(
@@ -148,6 +152,7 @@ fn kernels(c: &mut Criterion) {
             LinearSolverKind::Faer,
             LinearSolverKind::FaerCondensed,
             LinearSolverKind::Klu,
+            LinearSolverKind::KluMetis,
         ] {
             let mut s = kind.build_for(&mi).unwrap();
             s.analyse(mi.pattern()).unwrap();

@@ -7,7 +7,14 @@ use serde::{Deserialize, Serialize};
 use crate::dae::Dae;
 use crate::dae::condensed::CondensedLu;
 use crate::dae::linsolve::{
-    FaerLu, LinearSolver, LinearSolverError, LinearSolverFactory, SharedFactory,
+    ColumnOrdering, FaerLu, LinearSolver, LinearSolverError, LinearSolverFactory, Permuted,
+    SharedFactory,
+};
+
+/// METIS's nested dissection of A + Aᵀ as a column ordering of faer's LU.
+pub const METIS_ORDERING: ColumnOrdering = ColumnOrdering::External {
+    name: "faer-metis",
+    order: crate::sundials::nested_dissection,
 };
 
 /// Which sparse LU to use.
@@ -24,6 +31,12 @@ pub enum LinearSolverKind {
     /// (the cell model with inertia).
     #[serde(rename = "faer-condensed")]
     FaerCondensed,
+    /// KLU (natural ordering) on the matrix permuted by METIS's nested dissection of
+    /// A + Aᵀ: the least fill of the measured orderings (docs/benchmarks.md).
+    #[serde(rename = "klu-metis")]
+    KluMetis,
+    /// SuiteSparse's UMFPACK (multifrontal; symmetric strategy, AMD ordering).
+    Umfpack,
 }
 
 impl LinearSolverKind {
@@ -34,6 +47,14 @@ impl LinearSolverKind {
         match self {
             LinearSolverKind::Faer => Box::new(FaerLu::new()),
             LinearSolverKind::Klu => Box::new(crate::sundials::KluLu::new()),
+            LinearSolverKind::KluMetis => Box::new(Permuted::new(
+                "klu-metis",
+                crate::sundials::nested_dissection,
+                Box::new(crate::sundials::KluLu::natural()),
+            )),
+            LinearSolverKind::Umfpack => Box::new(crate::sundials::UmfpackLu::new(
+                crate::sundials::UmfpackOrdering::Amd,
+            )),
             LinearSolverKind::FaerCondensed => Box::new(CondensedLu::unconfigured()),
         }
     }

@@ -68,6 +68,10 @@ enum LinearSolverArg {
     /// faer's LU after eliminating the velocities while inertia is on (half-size system);
     /// the full LU once inertia is off.
     FaerCondensed,
+    /// KLU on the matrix ordered by METIS's nested dissection.
+    KluMetis,
+    /// SuiteSparse's UMFPACK (AMD ordering).
+    Umfpack,
 }
 
 impl From<LinearSolverArg> for LinearSolverKind {
@@ -76,6 +80,8 @@ impl From<LinearSolverArg> for LinearSolverKind {
             LinearSolverArg::Faer => LinearSolverKind::Faer,
             LinearSolverArg::Klu => LinearSolverKind::Klu,
             LinearSolverArg::FaerCondensed => LinearSolverKind::FaerCondensed,
+            LinearSolverArg::KluMetis => LinearSolverKind::KluMetis,
+            LinearSolverArg::Umfpack => LinearSolverKind::Umfpack,
         }
     }
 }

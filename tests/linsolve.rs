@@ -107,6 +107,48 @@ fn condensed_solve_matches_the_full_lu_on_the_cell_jacobian() {
 }
 
 #[test]
+fn every_backend_and_ordering_solves_the_cell_jacobian() {
+    // Without inertia (u, μ_as) and with it (u, v, μ_as: the full-size LUs), at a state
+    // in contact, for a small and a large cj.
+    for inertia in [false, true] {
+        let mut m = pillars_model(inertia);
+        let (y, yp) = deformed_state(&m, 3);
+        let pattern = m.pattern().clone();
+        let mut values = vec![0.0; pattern.compute_nnz()];
+        let mut rng = Lcg(17);
+        for cj in [0.1, 1e4] {
+            m.jacobian(45_000.0, &y, &yp, cj, &mut values).unwrap();
+            let b: Vec<f64> = (0..m.size()).map(|_| rng.next() - 0.5).collect();
+            let reference = solve(LinearSolverKind::Faer, &m, &values, &b);
+            for kind in [
+                LinearSolverKind::Klu,
+                LinearSolverKind::KluMetis,
+                LinearSolverKind::Umfpack,
+            ] {
+                let x = solve(kind, &m, &values, &b);
+                let d: Vec<f64> = x.iter().zip(&reference).map(|(a, c)| a - c).collect();
+                let rel = norm(&d) / norm(&reference);
+                // Scaled residual |Jx − b| / (|J| |x|): round-off.
+                let r: Vec<f64> = matvec(&pattern, &values, &x)
+                    .iter()
+                    .zip(&b)
+                    .map(|(a, c)| a - c)
+                    .collect();
+                let jmax = values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                let xmax = x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                let res = r.iter().fold(0.0f64, |a, v| a.max(v.abs())) / (jmax * xmax);
+                eprintln!(
+                    "inertia {inertia}, cj {cj:.0e}, {kind:?}: |x - x_faer|/|x_faer| = \
+                     {rel:.1e}, scaled residual {res:.1e}"
+                );
+                assert!(rel < 1e-7, "{kind:?}: differs from faer by {rel:.2e}");
+                assert!(res < 1e-14, "{kind:?}: scaled residual {res:.2e}");
+            }
+        }
+    }
+}
+
+#[test]
 fn condensed_solver_refuses_a_system_without_velocities() {
     let m = pillars_model(false);
     assert!(m.first_order_blocks().is_none());

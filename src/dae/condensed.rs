@@ -98,12 +98,23 @@ pub struct CondensedLu {
 impl CondensedLu {
     /// A solver for a problem with the (position, velocity) pairs `blocks`.
     pub fn new(blocks: FirstOrderBlocks) -> Self {
+        Self::with_inner(blocks, FaerLu::new())
+    }
+
+    /// A solver for a problem with the (position, velocity) pairs `blocks` that factorizes
+    /// the condensed system with `inner` (e.g. faer's LU with another column ordering).
+    pub fn with_inner(blocks: FirstOrderBlocks, inner: FaerLu) -> Self {
         Self {
             blocks: Some(blocks),
-            inner: FaerLu::new(),
+            inner,
             plan: None,
             factorized: false,
         }
+    }
+
+    /// The LU of the condensed system.
+    pub fn inner(&self) -> &FaerLu {
+        &self.inner
     }
 
     /// A solver that does not know the problem's pairs: `analyse` fails with

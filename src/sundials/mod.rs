@@ -1,4 +1,5 @@
-//! The only FFI in the crate: SUNDIALS 6 (IDA, serial N_Vector, KLU) behind safe types.
+//! The only FFI in the crate: SUNDIALS 6 (IDA, serial N_Vector, KLU), SuiteSparse's
+//! UMFPACK and METIS's nested-dissection ordering behind safe types.
 //!
 //! Every C handle is owned by a Rust value that frees it on drop; anything whose address C
 //! keeps (the user data, the linear-solver state) is boxed so it never moves. Callbacks are
@@ -8,9 +9,13 @@
 
 mod ida;
 mod klu;
+mod metis;
+mod umfpack;
 
 pub use ida::{CalcIc, Ida, IdaOptions};
 pub use klu::KluLu;
+pub use metis::{nested_dissection, nested_dissection_ata};
+pub use umfpack::{UmfpackLu, UmfpackOrdering};
 
 use std::ffi::CStr;
 use std::os::raw::{c_char, c_int, c_void};
