@@ -310,6 +310,33 @@ fn an_end_time_just_after_the_inertia_switch_finishes() {
 }
 
 #[test]
+fn a_switch_within_round_off_of_an_output_time_finishes() {
+    // Outputs every 0.06 s: the switch falls at 10.079999999999998 s, the output time
+    // 10.08 s a few ulps later. IDA refuses an output time that close to its initial time
+    // ("tout too close to t0"); the restarted integrator must take it as reached.
+    let out = tmp("cli-switch-roundoff");
+    let res = cellsim(&[
+        "run",
+        "cases/fast/flat-gravity.ron",
+        "--set",
+        "substrate.y_s=-2.1",
+        "--set",
+        "phases.t_end=12.0",
+        "--set",
+        "output.n_times=200",
+        "--out",
+        &out,
+        "--quiet",
+    ]);
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert!(res.status.success(), "{stderr}");
+    let s = summary_of(&out);
+    assert_eq!(s["finished"], true);
+    let ts = s["inertia_switched_off_at"].as_f64().unwrap();
+    assert!((ts - 10.08).abs() < 1e-9, "switched at {ts}");
+}
+
+#[test]
 fn a_closed_stdout_ends_quietly() {
     let mut child = Command::new(env!("CARGO_BIN_EXE_cellsim"))
         .args(["check", "cases/flat.ron"])

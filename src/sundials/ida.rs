@@ -411,8 +411,11 @@ impl<D: Dae> Integrator for Ida<D> {
         on_step: &mut dyn FnMut(f64, &Stats) -> bool,
     ) -> Result<(), IntegratorError> {
         let mut tret = self.t_internal;
-        while self.t_internal < tout {
-            let eps = 8.0 * f64::EPSILON * tout.abs().max(1.0);
+        // Within round-off of IDA's own time, tout is reached: IDA refuses an output time
+        // that close to its initial time (IDA_ILL_INPUT "tout too close to t0"), which is
+        // what a restart at an output time (the inertia switch) asks otherwise.
+        let eps = 8.0 * f64::EPSILON * tout.abs().max(1.0);
+        while self.t_internal < tout - eps {
             let next = self
                 .breakpoints
                 .iter()
@@ -449,7 +452,7 @@ impl<D: Dae> Integrator for Ida<D> {
                 return Err(IntegratorError::Interrupted { t: tret });
             }
         }
-        if tout == self.t_internal {
+        if (tout - self.t_internal).abs() <= eps {
             // At IDA's own time y and ẏ are what it returned (or, before its first step,
             // the initial values: IDAGetDky has no derivative of order 1 to give then).
             self.out_y
