@@ -1,9 +1,16 @@
 //! METIS's nested-dissection ordering (`METIS_NodeND`, METIS 5 built from source by
 //! `metis-sys`) of a sparse matrix's symmetrized pattern A + Aᵀ.
 
+use std::sync::Mutex;
+
 use metis_sys as sys;
 
 use crate::dae::Pattern;
+
+/// METIS keeps its random-number state in globals (GKlib), so concurrent calls from the
+/// runs of `paper`, `study` or `sweep` would race on it and give orderings that depend on
+/// timing: calls are serialised.
+static METIS: Mutex<()> = Mutex::new(());
 
 /// The nested-dissection permutation of the square pattern `a` computed by METIS on the
 /// graph of A + Aᵀ (diagonal dropped): `perm[k]` is the unknown eliminated k-th.
@@ -77,7 +84,10 @@ fn node_nd(mut adj: Vec<Vec<usize>>) -> Result<Vec<usize>, String> {
     let mut iperm: Vec<sys::idx_t> = vec![0; n];
     // SAFETY: METIS reads nvtxs + 1 entries of xadj and xadj[n] of adjncy (a valid CSR
     // graph built above, symmetric, no self-loops) and writes n entries of perm and iperm;
-    // a null vwgt means unit weights. It keeps no pointer after returning.
+    // a null vwgt means unit weights. It keeps no pointer after returning. The lock makes
+    // the call the only one using METIS's global state (a poisoned lock only means another
+    // call panicked outside METIS: the state is still whole).
+    let _only_caller = METIS.lock().unwrap_or_else(|e| e.into_inner());
     let status = unsafe {
         let s = sys::METIS_SetDefaultOptions(options.as_mut_ptr());
         if s != sys::rstatus_et_METIS_OK {
