@@ -13,7 +13,6 @@ use crate::dae::linsolve::{LinearSolver, LinearSolverError};
 const UMFPACK_CONTROL: usize = 20;
 const UMFPACK_INFO: usize = 90;
 // Control entries.
-const UMFPACK_IRSTEP: usize = 7;
 const UMFPACK_ORDERING: usize = 10;
 // Info entries.
 const UMFPACK_LNZ: usize = 43;
@@ -100,8 +99,11 @@ impl UmfpackLu {
             UmfpackOrdering::Amd => UMFPACK_ORDERING_AMD,
             UmfpackOrdering::Metis => UMFPACK_ORDERING_METIS,
         };
-        // No iterative refinement: one solve with the factors, as the other backends.
-        control[UMFPACK_IRSTEP] = 0.0;
+        // UMFPACK's default iterative refinement (up to UMFPACK_IRSTEP = 2 steps) is kept:
+        // its pivoting accepts diagonal pivots down to 1e-3 of the column's largest entry,
+        // and without refinement the backward error reached 2.4e-14 on the cell Jacobian
+        // (test `every_backend_and_ordering_solves_the_cell_jacobian`), above the other
+        // backends' 1e-16 to 1e-15.
         Self {
             ordering,
             control,
