@@ -6,7 +6,7 @@ APT_PACKAGES := libsundials-dev libsuitesparse-dev libclang-dev pkg-config \
 CARGO ?= cargo
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all deps build paper test memcheck robertson bench lint clean
+.PHONY: all deps build paper test memcheck test-cluster robertson bench lint clean
 
 all: build
 
@@ -36,6 +36,11 @@ test: deps
 # valgrind memcheck of short cell-model runs with each sparse LU (installs valgrind).
 memcheck: deps
 	scripts/memcheck.sh
+
+# `cellsim sweep --slurm --submit` on a real Slurm: a single-node cluster started on this
+# machine (installs slurm-wlm and munge), its result compared with the same sweep run locally.
+test-cluster: deps
+	scripts/slurm-test.sh
 
 robertson: deps
 	$(CARGO) run --release --example robertson
