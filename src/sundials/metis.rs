@@ -9,8 +9,15 @@ use crate::dae::Pattern;
 
 /// METIS keeps its random-number state in globals (GKlib), so concurrent calls from the
 /// runs of `paper`, `study` or `sweep` would race on it and give orderings that depend on
-/// timing: calls are serialised.
+/// timing: calls are serialised, ours and those UMFPACK makes through CHOLMOD.
 static METIS: Mutex<()> = Mutex::new(());
+
+/// Runs `f` as the only user of METIS in this process (a poisoned lock only means another
+/// call panicked outside METIS: its state is still whole).
+pub(super) fn exclusive<R>(f: impl FnOnce() -> R) -> R {
+    let _only_caller = METIS.lock().unwrap_or_else(|e| e.into_inner());
+    f()
+}
 
 /// The nested-dissection permutation of the square pattern `a` computed by METIS on the
 /// graph of A + Aᵀ (diagonal dropped): `perm[k]` is the unknown eliminated k-th.
@@ -84,11 +91,8 @@ fn node_nd(mut adj: Vec<Vec<usize>>) -> Result<Vec<usize>, String> {
     let mut iperm: Vec<sys::idx_t> = vec![0; n];
     // SAFETY: METIS reads nvtxs + 1 entries of xadj and xadj[n] of adjncy (a valid CSR
     // graph built above, symmetric, no self-loops) and writes n entries of perm and iperm;
-    // a null vwgt means unit weights. It keeps no pointer after returning. The lock makes
-    // the call the only one using METIS's global state (a poisoned lock only means another
-    // call panicked outside METIS: the state is still whole).
-    let _only_caller = METIS.lock().unwrap_or_else(|e| e.into_inner());
-    let status = unsafe {
+    // a null vwgt means unit weights. It keeps no pointer after returning.
+    let status = exclusive(|| unsafe {
         let s = sys::METIS_SetDefaultOptions(options.as_mut_ptr());
         if s != sys::rstatus_et_METIS_OK {
             s
@@ -103,7 +107,7 @@ fn node_nd(mut adj: Vec<Vec<usize>>) -> Result<Vec<usize>, String> {
                 iperm.as_mut_ptr(),
             )
         }
-    };
+    });
     if status != sys::rstatus_et_METIS_OK {
         return Err(format!("METIS_NodeND returned {status}"));
     }

@@ -173,11 +173,13 @@ impl LinearSolver for UmfpackLu {
         self.wi = vec![0; n];
         self.w = vec![0.0; 5 * n];
         // SAFETY: a valid CSC pattern of n columns (ap n + 1 entries, ai nnz); no values
-        // (null Ax: the analysis uses the pattern only); Symbolic written on success.
-        let status = unsafe {
+        // (null Ax: the analysis uses the pattern only); Symbolic written on success. The
+        // METIS ordering runs inside (through CHOLMOD), on METIS's global state: exclusive.
+        let n_c = int(n)?;
+        let status = super::metis::exclusive(|| unsafe {
             umfpack_di_symbolic(
-                int(n)?,
-                int(n)?,
+                n_c,
+                n_c,
                 self.ap.as_ptr(),
                 self.ai.as_ptr(),
                 ptr::null(),
@@ -185,7 +187,7 @@ impl LinearSolver for UmfpackLu {
                 self.control.as_ptr(),
                 self.info.as_mut_ptr(),
             )
-        };
+        });
         if status != UMFPACK_OK {
             self.symbolic = ptr::null_mut();
             return Err(LinearSolverError::Other(format!(
