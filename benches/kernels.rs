@@ -16,49 +16,16 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use cellsim::case::Case;
 use cellsim::dae::{Dae, LinearSolver};
-use cellsim::fem::Mesh;
 use cellsim::lu::LinearSolverKind;
-use cellsim::model::CellModel;
-use cellsim::scene;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 
 const REFINES: [f64; 4] = [0.5, 1.0, 2.0, 4.0];
 const T: f64 = 45_000.0;
 
-fn model(refine: f64, inertia: bool) -> CellModel {
-    let file = format!("{}/cases/pillars-push-pull.ron", env!("CARGO_MANIFEST_DIR"));
-    let mut case = Case::load(&file).unwrap();
-    case.mesh.refine = refine;
-    let mesh = Mesh::generate(&scene::mesh_params(&case)).unwrap();
-    CellModel::new(scene::model_params(&case, &file, inertia).unwrap(), mesh).unwrap()
-}
-
-/// The cell 0.5 µm down (in the contact band), smoothly deformed; small rates.
-fn state(m: &CellModel) -> (Vec<f64>, Vec<f64>) {
-    let n = m.size();
-    let (mut y, mut yp) = (vec![0.0; n], vec![0.0; n]);
-    for (i, x) in m.mesh.nodes.iter().enumerate() {
-        let du = [
-            0.05 * (0.3 * x[1]).sin() * x[0] / 10.0,
-            -0.5 + 0.04 * (0.25 * x[0]).cos(),
-        ];
-        for (k, &duk) in du.iter().enumerate() {
-            let d = m.dofs.u[i][k];
-            if d != usize::MAX {
-                y[d] = duk;
-                yp[d] = 1e-4 * duk;
-            }
-        }
-    }
-    let off = m.dofs.mu_offset();
-    for k in 0..m.dofs.n_mu() {
-        y[off + k] = 700.0;
-        yp[off + k] = 0.1;
-    }
-    (y, yp)
-}
+#[path = "support/mod.rs"]
+mod support;
+use support::{model, state};
 
 /// Benchmarks `{prefix}lu-numeric-{name}` (factorize `vals`) and `{prefix}lu-solve-{name}`
 /// (solve with `rhs`) of an analysed solver, parameter n = `rhs.len()`.

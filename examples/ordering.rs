@@ -17,14 +17,10 @@
 use std::cell::RefCell;
 use std::time::Instant;
 
-use cellsim::case::Case;
 use cellsim::dae::condensed::CondensedLu;
 use cellsim::dae::linsolve::{ColumnOrdering, FaerLu, Permuted};
 use cellsim::dae::{Dae, LinearSolver, Pattern};
-use cellsim::fem::Mesh;
 use cellsim::lu::METIS_ORDERING;
-use cellsim::model::CellModel;
-use cellsim::scene;
 use cellsim::sundials::{
     KluLu, UmfpackLu, UmfpackOrdering, nested_dissection, nested_dissection_ata,
 };
@@ -33,38 +29,9 @@ use faer::sparse::linalg::SupernodalThreshold;
 
 const T: f64 = 45_000.0;
 
-fn model(refine: f64, inertia: bool) -> CellModel {
-    let file = format!("{}/cases/pillars-push-pull.ron", env!("CARGO_MANIFEST_DIR"));
-    let mut case = Case::load(&file).unwrap();
-    case.mesh.refine = refine;
-    let mesh = Mesh::generate(&scene::mesh_params(&case)).unwrap();
-    CellModel::new(scene::model_params(&case, &file, inertia).unwrap(), mesh).unwrap()
-}
-
-/// The state of `benches/kernels.rs`: the cell 0.5 µm down, smoothly deformed.
-fn state(m: &CellModel) -> (Vec<f64>, Vec<f64>) {
-    let n = m.size();
-    let (mut y, mut yp) = (vec![0.0; n], vec![0.0; n]);
-    for (i, x) in m.mesh.nodes.iter().enumerate() {
-        let du = [
-            0.05 * (0.3 * x[1]).sin() * x[0] / 10.0,
-            -0.5 + 0.04 * (0.25 * x[0]).cos(),
-        ];
-        for (k, &duk) in du.iter().enumerate() {
-            let d = m.dofs.u[i][k];
-            if d != usize::MAX {
-                y[d] = duk;
-                yp[d] = 1e-4 * duk;
-            }
-        }
-    }
-    let off = m.dofs.mu_offset();
-    for k in 0..m.dofs.n_mu() {
-        y[off + k] = 700.0;
-        yp[off + k] = 0.1;
-    }
-    (y, yp)
-}
+#[path = "../benches/support/mod.rs"]
+mod support;
+use support::{model, state};
 
 thread_local! {
     static GIVEN: RefCell<Vec<usize>> = const { RefCell::new(Vec::new()) };
