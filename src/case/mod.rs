@@ -154,13 +154,18 @@ impl Case {
 
     /// Reads, parses and validates the case file at `path`.
     pub fn load(path: impl AsRef<Path>) -> Result<Case, CaseError> {
-        let path = path.as_ref();
+        let (label, bytes) = Case::read_file(path.as_ref())?;
+        Case::from_bytes(&bytes, &label)
+    }
+
+    /// The bytes of the case file at `path`, with the label its messages use.
+    pub(crate) fn read_file(path: &Path) -> Result<(String, Vec<u8>), CaseError> {
         let label = path.display().to_string();
         let bytes = std::fs::read(path).map_err(|source| CaseError::Read {
             file: label.clone(),
             source,
         })?;
-        Case::from_bytes(&bytes, &label)
+        Ok((label, bytes))
     }
 
     /// Parses and validates a case from the bytes of a file, which must be UTF-8 text (a

@@ -339,6 +339,17 @@ struct Edit {
     text: String,
 }
 
+impl Edit {
+    /// Replaces the text of `node` by `value`.
+    fn replace(node: &Node, value: &str) -> Self {
+        Edit {
+            start: node.start,
+            end: node.end,
+            text: value.to_string(),
+        }
+    }
+}
+
 /// Why an override cannot be applied to a text.
 enum EditError {
     /// The text is not a RON value this module can walk (the parser will say why).
@@ -387,13 +398,7 @@ fn edit_for(text: &str, path: &[&str], value: &str) -> Result<Edit, EditError> {
         let here = path[..k].join(".");
         if let Some(g) = cur.fields() {
             match g.elems.iter().find(|e| e.name.as_deref() == Some(comp)) {
-                Some(e) if last => {
-                    return Ok(Edit {
-                        start: e.node.start,
-                        end: e.node.end,
-                        text: value.to_string(),
-                    });
-                }
+                Some(e) if last => return Ok(Edit::replace(&e.node, value)),
                 Some(e) => cur = &e.node,
                 None => {
                     return Ok(Edit {
@@ -405,13 +410,7 @@ fn edit_for(text: &str, path: &[&str], value: &str) -> Result<Edit, EditError> {
             }
         } else if let (Some(items), Ok(index)) = (cur.items(), comp.parse::<usize>()) {
             match items.get(index) {
-                Some(e) if last => {
-                    return Ok(Edit {
-                        start: e.node.start,
-                        end: e.node.end,
-                        text: value.to_string(),
-                    });
-                }
+                Some(e) if last => return Ok(Edit::replace(&e.node, value)),
                 Some(e) => cur = &e.node,
                 None => {
                     return Err(EditError::Path(format!(
@@ -628,12 +627,7 @@ impl Case {
         path: impl AsRef<std::path::Path>,
         overrides: &[Override],
     ) -> Result<Case, CaseError> {
-        let path = path.as_ref();
-        let label = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|source| CaseError::Read {
-            file: label.clone(),
-            source,
-        })?;
+        let (label, bytes) = Case::read_file(path.as_ref())?;
         let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
         match std::str::from_utf8(bytes) {
             Ok(text) => Case::from_str_with_overrides(text, &label, overrides),
