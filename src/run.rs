@@ -455,6 +455,40 @@ impl Solver {
             Solver::Bdf2(b) => b.dae(),
         }
     }
+
+    fn model_mut(&mut self) -> &mut CellModel {
+        match self {
+            Solver::Ida(i) => i.dae_mut(),
+            Solver::Bdf2(b) => b.dae_mut(),
+        }
+    }
+}
+
+/// Runs in progress in this process (`paper`, `study` and `sweep` run several at once).
+static ACTIVE_RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// A run counted in [`ACTIVE_RUNS`] while it lives.
+struct ActiveRun;
+
+impl ActiveRun {
+    fn start() -> Self {
+        ACTIVE_RUNS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        ActiveRun
+    }
+
+    /// Whether the element loops should use the thread pool now: only while this is the
+    /// one run of the process (several runs already share the cores), and only with more
+    /// than one thread. Same bits either way ([`CellModel::set_parallel`]).
+    fn alone() -> bool {
+        ACTIVE_RUNS.load(std::sync::atomic::Ordering::SeqCst) == 1
+            && rayon::current_num_threads() > 1
+    }
+}
+
+impl Drop for ActiveRun {
+    fn drop(&mut self) {
+        ACTIVE_RUNS.fetch_sub(1, std::sync::atomic::Ordering::SeqCst);
+    }
 }
 
 /// A progress bar for a scene (hidden when `visible` is false).
@@ -489,8 +523,9 @@ pub fn progress_bar_in(
 
 /// Runs one scene; see the module documentation.
 pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunError> {
+    let _active = ActiveRun::start();
     let setup_start = Instant::now();
-    let model = build_model(case, file)?;
+    let model = build_model(case, file, opts.settings.defer_adhesion)?;
     let mut files = RunWriter::create(case, file, opts, &model)?;
     let y0 = vec![0.0; model.dofs.n];
     if let Err(stop) = files.output(&model, 0.0, &y0, &y0) {
@@ -523,6 +558,7 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
         }
         files.summary.stats = driver.stats();
         files.summary.inertia_switched_off_at = driver.switched_at;
+        files.summary.adhesion_unknowns_added_at = driver.adhesion_added_at;
         if let Some(reason) = driver.switch_overdue() {
             stopped = Some((FailureKind::Integration, reason));
             break;
@@ -532,17 +568,24 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
     }
     driver.finish();
     files.summary.inertia_switched_off_at = driver.switched_at;
+    files.summary.adhesion_unknowns_added_at = driver.adhesion_added_at;
     files.finish(case, driver.stats(), start.elapsed().as_secs_f64(), stopped)
 }
 
-/// The mesh and the cell model of a case, with the system it starts with.
-fn build_model(case: &Case, file: &str) -> Result<CellModel, RunError> {
+/// The mesh and the cell model of a case, with the system it starts with (`defer_adhesion`:
+/// the μ_as unknowns join it at T_g0, [`CellModel::deferring_adhesion`]).
+fn build_model(case: &Case, file: &str, defer_adhesion: bool) -> Result<CellModel, RunError> {
     let mesh = Mesh::generate(&scene::mesh_params(case)).map_err(|source| RunError::Mesh {
         file: file.into(),
         source,
     })?;
     let params = scene::model_params(case, file, scene::starts_with_inertia(case))?;
-    CellModel::new(params, mesh).map_err(|e| RunError::Model {
+    let model = if defer_adhesion {
+        CellModel::deferring_adhesion(params, mesh)
+    } else {
+        CellModel::new(params, mesh)
+    };
+    model.map_err(|e| RunError::Model {
         file: file.into(),
         message: e.to_string(),
     })
@@ -569,11 +612,16 @@ struct Driver {
     switch_after: Option<f64>,
     /// When inertia was switched off.
     switched_at: Option<f64>,
+    /// When the μ_as unknowns join the system (T_g0), while they are deferred.
+    adhesion_at: Option<f64>,
+    /// When they joined it.
+    adhesion_added_at: Option<f64>,
 }
 
 impl Driver {
     fn new(case: &Case, opts: &RunOptions, model: CellModel) -> Result<Self, IntegratorError> {
         let ph = &case.phases;
+        let adhesion_at = (model.adhesion_deferred() && ph.t_g0 < ph.t_end).then_some(ph.t_g0);
         Ok(Self {
             solver: Solver::new(model, &opts.settings)?,
             settings: opts.settings.clone(),
@@ -590,6 +638,8 @@ impl Driver {
                 _ => None,
             },
             switched_at: None,
+            adhesion_at,
+            adhesion_added_at: None,
         })
     }
 
@@ -608,6 +658,7 @@ impl Driver {
     /// switch time and the contact carries the cell.
     fn advance_to(&mut self, tout: f64) -> Advance {
         self.guard.next_output(tout);
+        self.solver.model_mut().set_parallel(ActiveRun::alone());
         // Why the driver stopped the integrator, and when (the integrator itself only
         // says "interrupted").
         let mut stopped: Option<(StopCause, f64)> = None;
@@ -619,7 +670,51 @@ impl Driver {
         }
     }
 
+    /// Advances to `tout`, adding the μ_as unknowns on the way at their time.
     fn advance_inner(
+        &mut self,
+        tout: f64,
+        stopped: &mut Option<(StopCause, f64)>,
+    ) -> Result<(), String> {
+        if let Some(ta) = self.adhesion_at {
+            if tout >= ta {
+                self.advance_system(ta, stopped)?;
+                if stopped.is_some() {
+                    return Ok(());
+                }
+                self.add_adhesion_unknowns()?;
+            }
+        }
+        self.advance_system(tout, stopped)
+    }
+
+    /// Swaps the system for the same one with its μ_as unknowns, at the current time.
+    fn add_adhesion_unknowns(&mut self) -> Result<(), String> {
+        let integ = self.solver.integ_ref();
+        let t = integ.t();
+        let m2 = self
+            .solver
+            .model()
+            .with_adhesion_unknowns(t, integ.y(), integ.yp())
+            .map_err(|e| e.to_string())?;
+        // The solution goes on smoothly: start from a tenth of the last step rather than
+        // IDA's estimate (which started 4000× below it and took a dozen steps to regain it).
+        let mut settings = self.settings.clone();
+        let last = self.solver.integ_ref().stats().last_step;
+        if last > 0.0 {
+            settings.initial_step = Some(0.1 * last);
+        }
+        let new = Solver::new(m2, &settings)
+            .map_err(|e| format!("restart with the adhesion unknowns at t = {t}: {e}"))?;
+        let old = std::mem::replace(&mut self.solver, new);
+        self.stats_before += &old.integ_ref().stats();
+        self.adhesion_at = None;
+        self.adhesion_added_at = Some(t);
+        Ok(())
+    }
+
+    /// Advances the current system to `tout`, switching inertia off on the way when due.
+    fn advance_system(
         &mut self,
         tout: f64,
         stopped: &mut Option<(StopCause, f64)>,
@@ -632,6 +727,7 @@ impl Driver {
             stats_before,
             switch_after,
             switched_at,
+            ..
         } = self;
         if let Some(ts) = *switch_after {
             if solver.integ_ref().t() >= ts {
@@ -676,6 +772,8 @@ impl Driver {
 enum OutputStop {
     /// The state or its observables are not finite (nothing written): the run stops.
     NonFinite(f64),
+    /// The state at an output time could not be formed (the reason): the run stops.
+    State(f64, String),
     /// A file could not be written: the run fails with this error.
     Io(RunError),
 }
@@ -687,6 +785,10 @@ impl OutputStop {
             OutputStop::NonFinite(t) => Ok((
                 FailureKind::Integration,
                 format!("non-finite state or output at t = {t} s (not written)"),
+            )),
+            OutputStop::State(t, why) => Ok((
+                FailureKind::Integration,
+                format!("cannot form the state at t = {t} s: {why}"),
             )),
             OutputStop::Io(e) => Err(e),
         }
@@ -750,7 +852,8 @@ impl RunWriter {
         let csv_path = out.join("timeseries.csv");
         let mut csv = BufWriter::new(File::create(&csv_path).map_err(io_err(&csv_path))?);
         writeln!(csv, "{}", Observables::CSV_HEADER).map_err(io_err(&csv_path))?;
-        let (nu, nv, nm) = model.block_sizes();
+        let (nu, nv, _) = model.block_sizes();
+        let nm = model.n_mu_as();
         let summary = Summary {
             case: case.name.clone(),
             case_file: file.to_string(),
@@ -772,6 +875,7 @@ impl RunWriter {
             final_values: None,
             outputs: 0,
             inertia_switched_off_at: None,
+            adhesion_unknowns_added_at: None,
             states: Vec::new(),
             cellsim_version: env!("CARGO_PKG_VERSION").to_string(),
             sundials_version: crate::sundials::SUNDIALS_VERSION.to_string(),
@@ -820,14 +924,21 @@ impl RunWriter {
         writeln!(self.csv, "{}", obs.csv_row())
             .and_then(|_| self.csv.flush())
             .map_err(io_err(&self.csv_path))?;
+        let mu_as = model
+            .nodal_mu_as(t, y)
+            .map_err(|why| OutputStop::State(t, why))?;
         if self.frames.is_active() {
-            self.frames.write(&snapshot(model, t, y, yp))?;
+            self.frames
+                .write(&snapshot(model, t, y, yp, mu_as.clone()))?;
         }
         self.summary.outputs += 1;
         self.summary.final_values = Some(obs);
         if let Some(phase) = self.phase_at(t).filter(|_| self.phase_states && t > 0.0) {
             let name = format!("state_{phase}.json");
-            write_json(&self.out.join(&name), &state_file(model, phase, t, y, obs))?;
+            write_json(
+                &self.out.join(&name),
+                &state_file(model, phase, t, y, mu_as, obs),
+            )?;
             self.summary.states.push(name);
         }
         Ok(())
@@ -959,7 +1070,7 @@ fn advance_switching(
 
 /// The state at one output time for the VTU and GIF writers: velocities are the v
 /// unknowns with inertia, u̇ (from `yp`) without.
-fn snapshot(model: &CellModel, t: f64, y: &[f64], yp: &[f64]) -> Snapshot {
+fn snapshot(model: &CellModel, t: f64, y: &[f64], yp: &[f64], mu_as: Vec<Option<f64>>) -> Snapshot {
     let n = model.mesh.nodes.len();
     let per_el = model.element_strain_and_jacobian(y);
     let d = &model.dofs;
@@ -977,9 +1088,7 @@ fn snapshot(model: &CellModel, t: f64, y: &[f64], yp: &[f64]) -> Snapshot {
         t,
         u: (0..n).map(|i| d.node_u(y, i)).collect(),
         v: (0..n).map(velocity).collect(),
-        mu_as: (0..n)
-            .map(|i| (d.mu[i] != crate::model::dofs::NONE).then(|| y[d.mu[i]]))
-            .collect(),
+        mu_as,
         element_strain: per_el.iter().map(|p| p.0).collect(),
         element_jacobian: per_el.iter().map(|p| p.1).collect(),
     }
@@ -990,6 +1099,7 @@ fn state_file(
     phase: &str,
     t: f64,
     y: &[f64],
+    mu_as: Vec<Option<f64>>,
     observables: Observables,
 ) -> StateFile {
     let n = model.mesh.nodes.len();
@@ -998,12 +1108,7 @@ fn state_file(
         phase: phase.to_string(),
         t,
         u: (0..n).map(|i| model.dofs.node_u(y, i)).collect(),
-        mu_as: (0..n)
-            .map(|i| {
-                let d = model.dofs.mu[i];
-                (d != crate::model::dofs::NONE).then(|| y[d])
-            })
-            .collect(),
+        mu_as,
         element_strain: per_el.iter().map(|p| p.0).collect(),
         element_jacobian: per_el.iter().map(|p| p.1).collect(),
         observables,

@@ -3,6 +3,7 @@
 
 mod cli;
 mod dae;
+mod deferred;
 mod hard;
 mod linsolve;
 mod model;

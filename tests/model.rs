@@ -53,7 +53,7 @@ pub fn deformed_state(m: &CellModel, sink: f64, seed: u64) -> (Vec<f64>, Vec<f64
 
 /// Compares the assembled J = ∂F/∂y + cj ∂F/∂ẏ with central differences of the residual,
 /// column by column, on `cols`; returns the worst relative column error.
-fn jacobian_fd_error(
+pub fn jacobian_fd_error(
     m: &mut CellModel,
     t: f64,
     y: &[f64],

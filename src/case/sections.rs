@@ -822,12 +822,18 @@ pub struct Solver {
     /// Maximum number of internal steps between two output times (IDA's mxstep).
     /// Default 5000. Valid: ≥ 1.
     pub max_steps: u64,
-    /// `Faer`, `Klu` or `FaerCondensed`. Default `Faer`: 1.3× faster than KLU on the fine
-    /// mesh, 1.05× slower on the default one (whole runs, docs/benchmarks.md);
-    /// `FaerCondensed` is fastest while inertia is on.
+    /// `Faer`, `Klu` or `FaerCondensed`. Default `FaerCondensed`: faer's LU with the
+    /// velocities eliminated while inertia is on (0.75× the CPU time of `Faer` on the flat
+    /// gravity phase), the same faer LU once inertia is off. faer is 1.3× faster than KLU
+    /// on the fine mesh, 1.05× slower on the default one (whole runs, docs/benchmarks.md).
     pub linear_solver: LinearSolver,
     /// First step size tried by IDA (s). Default none (IDA's estimate). Valid: > 0.
     pub initial_step: Option<f64>,
+    /// Leave the μ_as unknowns out of the system until adhesion can act (T_g0), and
+    /// integrate μ_as beside it until then, along the accepted steps. Default true: before
+    /// T_g0 the μ_as rows change nothing else but limit the steps (MODEL.md §8). `false`
+    /// keeps them in the system from t = 0.
+    pub defer_adhesion: bool,
 }
 
 impl Default for Solver {
@@ -839,8 +845,9 @@ impl Default for Solver {
             bdf2_dt: 1.0,
             max_order: 5,
             max_steps: 5000,
-            linear_solver: LinearSolver::Faer,
+            linear_solver: LinearSolver::FaerCondensed,
             initial_step: None,
+            defer_adhesion: true,
         }
     }
 }

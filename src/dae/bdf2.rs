@@ -420,6 +420,7 @@ impl<D: Dae> Integrator for Bdf2<D> {
                     }
                 }
             }
+            self.dae.accepted_step(self.tn, &self.yn, &self.ypn);
             let stats = self.stats.clone();
             if !on_step(self.tn, &stats) {
                 return Err(IntegratorError::Interrupted { t: self.tn });

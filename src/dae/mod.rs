@@ -74,6 +74,10 @@ pub trait Dae {
     /// Consistent initial values `(t₀, y₀, ẏ₀)`.
     fn initial(&self) -> (f64, Vec<f64>, Vec<f64>);
 
+    /// Called by the integrators after each accepted step with the state at its end, for
+    /// quantities integrated beside the system. Default: nothing.
+    fn accepted_step(&mut self, _t: f64, _y: &[f64], _yp: &[f64]) {}
+
     /// Times where the forcing has a kink (phase boundaries). Integrators stop exactly there.
     fn breakpoints(&self) -> Vec<f64> {
         Vec::new()

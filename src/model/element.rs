@@ -54,7 +54,13 @@ impl ReferenceElements {
     /// Geometry, mass and active strain of every element of `mesh` under `params`:
     /// the standard rule of degree 4 (solid and mass), the band rule of
     /// `params.contact_degree` subdivided `params.contact_subdivisions` times.
-    pub(crate) fn new(params: &ModelParams, mesh: &Mesh) -> Result<Self, ModelError> {
+    /// `adhesion_unknowns`: whether the membrane elements carry μ_as unknowns (adhesion
+    /// modelled and not deferred).
+    pub(crate) fn new(
+        params: &ModelParams,
+        mesh: &Mesh,
+        adhesion_unknowns: bool,
+    ) -> Result<Self, ModelError> {
         let std_tab = P2Tabulation::new(&TriangleRule::degree(4));
         let crule =
             TriangleRule::degree(params.contact_degree).subdivided(params.contact_subdivisions);
@@ -69,6 +75,10 @@ impl ReferenceElements {
             .enumerate()
             .map(|(e, &nodes)| {
                 Element::reference(params, mesh, e, nodes, &std_tab, &ctab, active.as_ref(), &c)
+                    .map(|mut el| {
+                        el.with_mu &= adhesion_unknowns;
+                        el
+                    })
                     .map_err(|source| ModelError::Geometry { element: e, source })
             })
             .collect::<Result<Vec<_>, _>>()?;

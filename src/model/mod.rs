@@ -28,6 +28,7 @@
 
 pub mod dofs;
 mod element;
+pub mod history;
 mod kernels;
 pub mod kinematics;
 pub mod observe;
@@ -40,7 +41,8 @@ use crate::fem::{Domain, Mesh};
 use crate::physics::{ActiveStrain, Adhesion, Contact, Phases, Substrate, Viscosity, Yeoh};
 use dofs::{DofMap, NONE};
 use element::{Element, ElementState, NODES, Nodal, ReferenceElements};
-use kernels::{ElementTangent, Switches};
+use history::AdhesionHistory;
+use kernels::{ElementTangent, ElementVector, Switches};
 pub(crate) use kinematics::deformation;
 use kinematics::{DIM, Vector};
 use plan::AssemblyPlan;
@@ -127,6 +129,37 @@ pub struct CellModel {
     plan: AssemblyPlan,
     /// Initial state (t₀, y₀, ẏ₀) when not the rest state at t = 0 (restarts).
     initial_state: Option<(f64, Vec<f64>, Vec<f64>)>,
+    /// μ_as integrated beside the system while adhesion is modelled but cannot act yet
+    /// (before T_g0): its unknowns are then left out ([`history`]).
+    history: Option<AdhesionHistory>,
+    /// Whether the element loops run on rayon's threads ([`Self::set_parallel`]).
+    parallel: bool,
+    scratch: Scratch,
+}
+
+/// Elements per block of the element loops: each block's element vectors or tangents
+/// are computed (in parallel, or not) into a buffer, then scattered in element order.
+const BLOCK: usize = 64;
+
+/// The per-block buffers of the element loops, kept between calls.
+#[derive(Default)]
+struct Scratch {
+    vectors: Vec<(ElementVector, Result<(), DaeError>)>,
+    tangents: Vec<(Box<ElementTangent>, Result<(), DaeError>)>,
+}
+
+impl Scratch {
+    fn take_vectors(&mut self) -> Vec<(ElementVector, Result<(), DaeError>)> {
+        let mut b = std::mem::take(&mut self.vectors);
+        b.resize_with(BLOCK, || ([[0.0; DIM]; NODES], Ok(())));
+        b
+    }
+
+    fn take_tangents(&mut self) -> Vec<(Box<ElementTangent>, Result<(), DaeError>)> {
+        let mut b = std::mem::take(&mut self.tangents);
+        b.resize_with(BLOCK, || (Box::new(ElementTangent::zeros()), Ok(())));
+        b
+    }
 }
 
 impl CellModel {
@@ -134,8 +167,41 @@ impl CellModel {
     /// mass, active strain) and the assembly plan (the pattern of the iteration matrix and
     /// the positions to refill it).
     pub fn new(params: ModelParams, mesh: Mesh) -> Result<Self, ModelError> {
-        let dofs = DofMap::new(&mesh, params.inertia, params.adhesion.is_some());
-        let ReferenceElements { elements, ctab } = ReferenceElements::new(&params, &mesh)?;
+        let adhesion = params.adhesion.is_some();
+        Self::build(params, mesh, adhesion)
+    }
+
+    /// As [`Self::new`], but with adhesion modelled its μ_as unknowns are left out until
+    /// adhesion can act (T_g0): μ_as is integrated beside the system along the accepted
+    /// steps ([`history`]), and [`Self::with_adhesion_unknowns`] adds the unknowns.
+    /// Starting at T_g0 or later, the unknowns are there from the start.
+    pub fn deferring_adhesion(params: ModelParams, mesh: Mesh) -> Result<Self, ModelError> {
+        let Some(ad) = params.adhesion else {
+            return Self::new(params, mesh);
+        };
+        if params.phases.t_g0 <= 0.0 {
+            return Self::new(params, mesh);
+        }
+        let mut m = Self::build(params, mesh, false)?;
+        let nodes = m.membrane_nodes();
+        let x = nodes.iter().map(|&i| m.mesh.nodes[i]).collect();
+        let xdot = vec![[0.0; DIM]; nodes.len()];
+        let mu = vec![0.0; nodes.len()];
+        m.history = Some(AdhesionHistory::new(
+            ad,
+            m.params.substrate,
+            0.0,
+            mu,
+            x,
+            xdot,
+        ));
+        Ok(m)
+    }
+
+    fn build(params: ModelParams, mesh: Mesh, adhesion_unknowns: bool) -> Result<Self, ModelError> {
+        let dofs = DofMap::new(&mesh, params.inertia, adhesion_unknowns);
+        let ReferenceElements { elements, ctab } =
+            ReferenceElements::new(&params, &mesh, adhesion_unknowns)?;
         let plan = AssemblyPlan::new(&mesh, &dofs, &elements);
         Ok(Self {
             params,
@@ -145,7 +211,103 @@ impl CellModel {
             ctab,
             plan,
             initial_state: None,
+            history: None,
+            parallel: false,
+            scratch: Scratch::default(),
         })
+    }
+
+    /// Runs the element loops (residual and Jacobian) on rayon's thread pool. The results
+    /// are the same bits either way: each element's contribution is computed on its own
+    /// and the contributions are added in element order.
+    pub fn set_parallel(&mut self, parallel: bool) {
+        self.parallel = parallel;
+    }
+
+    /// Whether the element loops run in parallel.
+    pub fn parallel(&self) -> bool {
+        self.parallel
+    }
+
+    /// For each block of [`BLOCK`] elements: `compute(e, out)` for every element of the
+    /// block into `buf` (in parallel when [`Self::set_parallel`]), then `scatter(e, out)`
+    /// in element order. Stops at the first element (in order) whose `compute` failed.
+    fn blocks<T: Send>(
+        &self,
+        buf: &mut [(T, Result<(), DaeError>)],
+        compute: impl Fn(usize, &mut T) -> Result<(), DaeError> + Sync,
+        mut scatter: impl FnMut(usize, &T),
+    ) -> Result<(), DaeError> {
+        use rayon::prelude::*;
+        let ne = self.elements.len();
+        for start in (0..ne).step_by(BLOCK) {
+            let n = BLOCK.min(ne - start);
+            let block = &mut buf[..n];
+            let run = |(k, (out, res)): (usize, &mut (T, Result<(), DaeError>))| {
+                *res = compute(start + k, out);
+            };
+            if self.parallel {
+                block.par_iter_mut().enumerate().for_each(run);
+            } else {
+                block.iter_mut().enumerate().for_each(run);
+            }
+            for (k, (out, res)) in block.iter_mut().enumerate() {
+                std::mem::replace(res, Ok(()))?;
+                scatter(start + k, out);
+            }
+        }
+        Ok(())
+    }
+
+    /// The nodes of the membrane elements, in the order of the μ_as unknowns.
+    fn membrane_nodes(&self) -> Vec<usize> {
+        let on = self.mesh.nodes_of_domain(Domain::Membrane);
+        (0..on.len()).filter(|&i| on[i]).collect()
+    }
+
+    /// Whether the μ_as unknowns are left out until adhesion can act (then
+    /// [`Self::with_adhesion_unknowns`] is due at T_g0).
+    pub fn adhesion_deferred(&self) -> bool {
+        self.history.is_some()
+    }
+
+    /// Number of μ_as values (unknowns, or integrated beside the system while deferred).
+    pub fn n_mu_as(&self) -> usize {
+        self.history.as_ref().map_or(self.dofs.n_mu(), |h| h.len())
+    }
+
+    /// μ_as per mesh node at time `t` with state `y` (`None` off the membrane or without
+    /// adhesion): the unknowns, or while deferred the history's values (`t` within the
+    /// integrator's last step).
+    pub fn nodal_mu_as(&self, t: f64, y: &[f64]) -> Result<Vec<Option<f64>>, String> {
+        let n = self.mesh.nodes.len();
+        match &self.history {
+            None => Ok((0..n)
+                .map(|i| (self.dofs.mu[i] != NONE).then(|| y[self.dofs.mu[i]]))
+                .collect()),
+            Some(h) => {
+                let mu = h.at(t)?;
+                let mut out = vec![None; n];
+                for (k, i) in self.membrane_nodes().into_iter().enumerate() {
+                    out[i] = Some(mu[k]);
+                }
+                Ok(out)
+            }
+        }
+    }
+
+    /// Positions and velocities of the membrane nodes from (y, ẏ) (velocity u̇).
+    fn membrane_motion(&self, y: &[f64], yp: &[f64]) -> (Vec<[f64; DIM]>, Vec<[f64; DIM]>) {
+        let nodes = self.membrane_nodes();
+        let x = nodes
+            .iter()
+            .map(|&i| {
+                let u = self.dofs.node_u(y, i);
+                std::array::from_fn(|k| self.mesh.nodes[i][k] + u[k])
+            })
+            .collect();
+        let xdot = nodes.iter().map(|&i| self.dofs.node_u(yp, i)).collect();
+        (x, xdot)
     }
 
     /// Starts the integration from (t₀, y₀, ẏ₀) instead of the rest state at t = 0.
@@ -264,6 +426,7 @@ impl Dae for CellModel {
     /// `F(t, y, ẏ)`: kinematic rows, then per element the solid, mass and band kernels
     /// scattered into the momentum rows, then the adhesion rows.
     fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
+        let mut buf = self.scratch.take_vectors();
         r.fill(0.0);
         let p = &self.params;
         let sw = Switches::at(p, t);
@@ -275,18 +438,24 @@ impl Dae for CellModel {
             }
         }
         let g_now = p.gravity * sw.s_g * sw.t_g;
-        for (e, el) in self.elements.iter().enumerate() {
+        let element = |e: usize, fe: &mut ElementVector| -> Result<(), DaeError> {
+            let el = &self.elements[e];
             let st = self.gather(el, y, yp);
-            let mut fe = [[0.0f64; DIM]; NODES];
+            *fe = [[0.0f64; DIM]; NODES];
             let law = &p.solids[el.solid];
-            kernels::solid_residual(e, el, law, &p.viscosity, &st, sw.t_a, &mut fe)?;
-            kernels::mass_residual(el, g_now, inertia, p.drag, &st, &mut fe);
+            kernels::solid_residual(e, el, law, &p.viscosity, &st, sw.t_a, fe)?;
+            kernels::mass_residual(el, g_now, inertia, p.drag, &st, fe);
             if self.in_reach(el, &st.u) {
                 let mue = self.gather_mu(el, y, sw.t_as);
-                kernels::band_residual(e, el, &self.ctab, p, &st, mue.as_ref(), sw.t_as, &mut fe)?;
+                kernels::band_residual(e, el, &self.ctab, p, &st, mue.as_ref(), sw.t_as, fe)?;
             }
-            self.plan.scatter_residual(e, &fe, r);
-        }
+            Ok(())
+        };
+        let result = self.blocks(&mut buf, element, |e, fe| {
+            self.plan.scatter_residual(e, fe, r)
+        });
+        self.scratch.vectors = buf;
+        result?;
         let mu_off = self.dofs.mu_offset();
         for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
             let row = mu_off + k;
@@ -313,24 +482,30 @@ impl Dae for CellModel {
         cj: f64,
         v: &mut [f64],
     ) -> Result<(), DaeError> {
+        let mut buf = self.scratch.take_tangents();
         v.fill(0.0);
         let p = &self.params;
         let sw = Switches::at(p, t);
         let inertia = self.dofs.inertia;
         self.plan.add_kinematic(cj, v);
-        let mut tan = ElementTangent::zeros();
-        for (e, el) in self.elements.iter().enumerate() {
+        let element = |e: usize, tan: &mut Box<ElementTangent>| -> Result<(), DaeError> {
+            let el = &self.elements[e];
             let st = self.gather(el, y, yp);
             tan.reset(el.with_mu);
             let law = &p.solids[el.solid];
-            kernels::solid_tangent(e, el, law, &p.viscosity, &st, sw.t_a, &mut tan)?;
-            kernels::mass_tangent(el, cj, inertia, p.drag, &mut tan);
+            kernels::solid_tangent(e, el, law, &p.viscosity, &st, sw.t_a, tan)?;
+            kernels::mass_tangent(el, cj, inertia, p.drag, tan);
             if self.in_reach(el, &st.u) {
                 let mue = self.gather_mu(el, y, sw.t_as);
-                kernels::band_tangent(el, &self.ctab, p, &st, mue.as_ref(), sw.t_as, &mut tan);
+                kernels::band_tangent(el, &self.ctab, p, &st, mue.as_ref(), sw.t_as, tan);
             }
-            self.plan.scatter_tangent(e, &tan, cj, v);
-        }
+            Ok(())
+        };
+        let result = self.blocks(&mut buf, element, |e, tan| {
+            self.plan.scatter_tangent(e, tan, cj, v)
+        });
+        self.scratch.tangents = buf;
+        result?;
         if p.adhesion.is_some() {
             let off = self.dofs.mu_offset();
             for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
@@ -371,6 +546,16 @@ impl Dae for CellModel {
             let n_u = self.dofs.n_u;
             FirstOrderBlocks::contiguous(0, n_u, n_u)
         })
+    }
+
+    /// Advances the μ_as history (while deferred) over the accepted step.
+    fn accepted_step(&mut self, t: f64, y: &[f64], yp: &[f64]) {
+        if self.history.is_some() {
+            let (x, xdot) = self.membrane_motion(y, yp);
+            if let Some(h) = &mut self.history {
+                h.advance(t, x, xdot);
+            }
+        }
     }
 
     fn breakpoints(&self) -> Vec<f64> {

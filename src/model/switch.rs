@@ -47,7 +47,12 @@ impl CellModel {
         yp2[..self.dofs.n_u].iter_mut().for_each(|v| *v = 0.0);
         let mut params = self.params.clone();
         params.inertia = false;
-        let mut m = CellModel::new(params, self.mesh.clone())?;
+        let deferred = self.history.is_some();
+        let mut m = CellModel::build(
+            params,
+            self.mesh.clone(),
+            !deferred && self.params.adhesion.is_some(),
+        )?;
         let atol = Atol::Vector(m.atol_vector(restart.atol));
         let for_y: Vec<bool> = (0..m.dofs.n).map(|i| i < m.dofs.n_u).collect();
         consistent_init(
@@ -65,6 +70,55 @@ impl CellModel {
             t,
             source: Box::new(source),
         })?;
+        if let Some(h) = &self.history {
+            let (x, xdot) = m.membrane_motion(&y2, &yp2);
+            let restarted = h.restarted(t, x, xdot).map_err(|e| ModelError::Restart {
+                what: "switching inertia off",
+                t,
+                source: Box::new(crate::dae::IntegratorError::Problem { t, message: e }),
+            })?;
+            m.history = Some(restarted);
+        }
+        m.set_initial(t, y2, yp2);
+        Ok(m)
+    }
+
+    /// The same cell with its μ_as unknowns, set to restart at time `t` (T_g0, where
+    /// adhesion starts to act) from the state (`y`, `yp`) of this model, which defers them:
+    /// u (and v) and their derivatives carried over, μ_as from the history integrated
+    /// beside the system, μ̇_as = r(x, μ_as). Every row is then consistent: the old rows
+    /// do not see μ_as while `t_as(t) = 0`, and the new ones hold by construction.
+    pub fn with_adhesion_unknowns(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<CellModel, ModelError> {
+        let restart_err = |e: String| ModelError::Restart {
+            what: "adding the adhesion unknowns",
+            t,
+            source: Box::new(crate::dae::IntegratorError::Problem { t, message: e }),
+        };
+        let h = self
+            .history
+            .as_ref()
+            .ok_or_else(|| restart_err("the adhesion unknowns are already there".into()))?;
+        let mu = h.at(t).map_err(restart_err)?;
+        let mut m = CellModel::new(self.params.clone(), self.mesh.clone())?;
+        debug_assert_eq!(m.dofs.n, self.dofs.n + mu.len());
+        let mut y2 = y.to_vec();
+        let mut yp2 = yp.to_vec();
+        y2.extend_from_slice(&mu);
+        let ad = self.params.adhesion.as_ref().expect("deferred adhesion");
+        for (k, &i) in m.dofs.mu_nodes.iter().enumerate() {
+            let x = m.node_position(y, i);
+            yp2.push(crate::physics::adhesion_rate(
+                &m.params.substrate,
+                ad,
+                &x,
+                mu[k],
+            ));
+        }
         m.set_initial(t, y2, yp2);
         Ok(m)
     }

@@ -55,6 +55,14 @@ pub struct RunSettings {
     /// its outputs so far and the reason in the summary. `None`: no limit.
     #[serde(default)]
     pub max_wall_seconds: Option<f64>,
+    /// Leave the μ_as unknowns out of the system until adhesion acts (T_g0), integrating
+    /// μ_as beside it until then ([`crate::model::history`]).
+    #[serde(default = "yes")]
+    pub defer_adhesion: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl RunSettings {
@@ -76,6 +84,7 @@ impl RunSettings {
             initial_step: s.initial_step,
             dt_inertia: None,
             max_wall_seconds: None,
+            defer_adhesion: s.defer_adhesion,
         }
     }
 }
@@ -146,7 +155,8 @@ pub struct Summary {
     pub settings: RunSettings,
     /// Inertia mode of the case.
     pub inertia: String,
-    /// Unknown counts (of the system at the start).
+    /// Unknown counts (u and v of the system at the start; μ_as counted even while its
+    /// unknowns are deferred).
     pub unknowns: Unknowns,
     /// Elements and nodes of the mesh.
     pub mesh_elements: usize,
@@ -168,6 +178,10 @@ pub struct Summary {
     pub outputs: usize,
     /// Time at which inertia was switched off, if it was.
     pub inertia_switched_off_at: Option<f64>,
+    /// Time at which the μ_as unknowns joined the system (T_g0), if they were deferred
+    /// (before it μ_as is integrated beside the system).
+    #[serde(default)]
+    pub adhesion_unknowns_added_at: Option<f64>,
     /// State files written (phase ends).
     pub states: Vec<String>,
     /// cellsim version.

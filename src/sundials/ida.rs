@@ -443,6 +443,9 @@ impl<D: Dae> Integrator for Ida<D> {
             });
             self.check("IDASolve", flag)?;
             self.t_internal = tret;
+            self.user
+                .dae
+                .accepted_step(tret, self.yy.as_slice(), self.yp.as_slice());
             if flag == sys::IDA_TSTOP_RETURN {
                 // IDA clears its stop time once reached.
                 self.tstop = None;

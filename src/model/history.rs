@@ -1,0 +1,282 @@
+//! The adhesion coefficient μ_as before adhesion acts, integrated beside the system.
+//!
+//! μ_as enters the momentum balance only through `b_as = t_as μ_as …`, and the switch
+//! `t_as = S(t; T_g0, T_as0)` is zero until T_g0. Before T_g0 the μ_as rows
+//! `μ̇_as = μ_as0 H_ε(d(x) + e_f) (1 − S(μ_as; 0.98 μ_as,max, μ_as,max))` only follow the
+//! motion of their nodes: they change nothing else, yet in the system they take part in
+//! IDA's error test, and their smooth cap limits the steps of the whole cell (measured on
+//! the flat gravity phase: a μ_as unknown held the largest weighted local error in 108 of
+//! the 120 steps after the fall). So until T_g0 the model leaves them out and integrates
+//! them here, along the accepted steps of the integrator; at T_g0 they join the system
+//! with the values reached ([`super::CellModel::with_adhesion_unknowns`]).
+//!
+//! The ODE factors as `μ̇ = a(t) g(μ)` with the drive `a(t) = μ_as0 H_ε(d(x(t)) + e_f)`
+//! and the cap `g(μ) = 1 − S(μ; 0.98 μ_as,max, μ_as,max)`. In the variable
+//! `A(t) = ∫ a dt` it is autonomous, `dμ/dA = g(μ)`, so each accepted step [t₀, t₁] adds
+//! `ΔA = ∫ a dt` per node and then moves μ along the cap by ΔA:
+//! - `ΔA` by Simpson's rule, the midpoint position from the cubic Hermite interpolant of
+//!   the positions and velocities at both ends (error O(h⁵) for a smooth drive);
+//! - below 0.98 μ_as,max, `g = 1` and μ grows by ΔA exactly; on the cap, classical RK4 in
+//!   `ξ = (μ − 0.98 μ_as,max)/(0.02 μ_as,max)` on `dξ/ds = 1 − S(ξ)` with sub-steps
+//!   `Δs ≤ 0.05 / max(1, |dS/dξ|)`, so `|λ Δs| ≤ 0.05` and the cap's stiffness
+//!   never sets the step of the system.
+//!
+//! The values between the last two accepted steps (the output times, the inertia switch)
+//! are integrated the same way over the part of the step, from the Hermite interpolant.
+
+use super::kinematics::{DIM, Vector};
+use crate::physics::{Adhesion, Substrate, layer};
+
+/// Positions and velocities of the membrane nodes at one time.
+#[derive(Debug, Clone)]
+struct Sample {
+    t: f64,
+    x: Vec<[f64; DIM]>,
+    xdot: Vec<[f64; DIM]>,
+}
+
+impl Sample {
+    /// Position of node `k` at `t` in [self.t, next.t] on the cubic Hermite interpolant.
+    fn hermite(&self, next: &Sample, k: usize, t: f64) -> [f64; DIM] {
+        let h = next.t - self.t;
+        if h <= 0.0 {
+            return next.x[k];
+        }
+        let s = (t - self.t) / h;
+        let (s2, s3) = (s * s, s * s * s);
+        let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
+        let h10 = s3 - 2.0 * s2 + s;
+        let h01 = -2.0 * s3 + 3.0 * s2;
+        let h11 = s3 - s2;
+        std::array::from_fn(|c| {
+            h00 * self.x[k][c]
+                + h10 * h * self.xdot[k][c]
+                + h01 * next.x[k][c]
+                + h11 * h * next.xdot[k][c]
+        })
+    }
+}
+
+/// μ_as at the membrane nodes while it is not an unknown of the system.
+#[derive(Debug, Clone)]
+pub struct AdhesionHistory {
+    adhesion: Adhesion,
+    substrate: Substrate,
+    /// μ_as at `last.t`, per membrane node.
+    mu: Vec<f64>,
+    last: Sample,
+    /// The sample and μ_as before the last step (none before the first step).
+    prev: Option<(Sample, Vec<f64>)>,
+}
+
+impl AdhesionHistory {
+    /// Starts at time `t` with μ_as = `mu` and the nodes at `x` moving with `xdot`.
+    pub fn new(
+        adhesion: Adhesion,
+        substrate: Substrate,
+        t: f64,
+        mu: Vec<f64>,
+        x: Vec<[f64; DIM]>,
+        xdot: Vec<[f64; DIM]>,
+    ) -> Self {
+        assert!(mu.len() == x.len() && x.len() == xdot.len());
+        Self {
+            adhesion,
+            substrate,
+            mu,
+            last: Sample { t, x, xdot },
+            prev: None,
+        }
+    }
+
+    /// Time of the last sample.
+    pub fn t(&self) -> f64 {
+        self.last.t
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.mu.len()
+    }
+
+    /// Whether there are no nodes.
+    pub fn is_empty(&self) -> bool {
+        self.mu.is_empty()
+    }
+
+    /// The drive `a = μ_as0 H_ε(d(x) + e_f)` at position `x`.
+    fn drive(&self, x: [f64; DIM]) -> f64 {
+        let ad = &self.adhesion;
+        let xv = Vector::<f64>::from_fn(|k, _| x[k]);
+        ad.mu_as0 * layer(&self.substrate, &xv, ad.e_f, ad.eps)
+    }
+
+    /// μ_as at time `t` in [s0.t, s1.t] from μ_as `mu0` at `s0.t`.
+    fn integrate(&self, s0: &Sample, mu0: &[f64], s1: &Sample, t: f64) -> Vec<f64> {
+        let h = t - s0.t;
+        if h <= 0.0 {
+            return mu0.to_vec();
+        }
+        let tm = s0.t + 0.5 * h;
+        (0..mu0.len())
+            .map(|k| {
+                let a0 = self.drive(s0.x[k]);
+                let am = self.drive(s0.hermite(s1, k, tm));
+                let a1 = self.drive(s0.hermite(s1, k, t));
+                let da = h / 6.0 * (a0 + 4.0 * am + a1);
+                along_cap(mu0[k], da, self.adhesion.mu_as_max)
+            })
+            .collect()
+    }
+
+    /// Advances over an accepted step to time `t`, where the nodes are at `x` moving with
+    /// `xdot`. A step that does not move forward is ignored.
+    pub fn advance(&mut self, t: f64, x: Vec<[f64; DIM]>, xdot: Vec<[f64; DIM]>) {
+        if t <= self.last.t {
+            return;
+        }
+        let next = Sample { t, x, xdot };
+        let mu = self.integrate(&self.last, &self.mu, &next, t);
+        let old_mu = std::mem::replace(&mut self.mu, mu);
+        let old = std::mem::replace(&mut self.last, next);
+        self.prev = Some((old, old_mu));
+    }
+
+    /// μ_as per node at time `t`, which lies within the last step (or at its end).
+    pub fn at(&self, t: f64) -> Result<Vec<f64>, String> {
+        let tol = 1e-12 * t.abs().max(1.0);
+        if (t - self.last.t).abs() <= tol {
+            return Ok(self.mu.clone());
+        }
+        match &self.prev {
+            Some((s0, mu0)) if t >= s0.t - tol && t <= self.last.t => {
+                Ok(self.integrate(s0, mu0, &self.last, t.max(s0.t)))
+            }
+            _ => Err(format!(
+                "the adhesion history holds t in [{}, {}], not t = {t}",
+                self.prev.as_ref().map_or(self.last.t, |p| p.0.t),
+                self.last.t
+            )),
+        }
+    }
+
+    /// The history continued from time `t` (within the last step) on a restarted system
+    /// whose nodes are at `x` moving with `xdot`.
+    pub fn restarted(
+        &self,
+        t: f64,
+        x: Vec<[f64; DIM]>,
+        xdot: Vec<[f64; DIM]>,
+    ) -> Result<Self, String> {
+        let mu = self.at(t)?;
+        Ok(Self::new(self.adhesion, self.substrate, t, mu, x, xdot))
+    }
+}
+
+/// μ moved by `da ≥ 0` along `dμ/dA = 1 − S(μ; 0.98 m, m)` with `m = mu_max`.
+pub fn along_cap(mu: f64, da: f64, mu_max: f64) -> f64 {
+    let a = 0.98 * mu_max;
+    let w = 0.02 * mu_max;
+    if mu + da <= a {
+        return mu + da;
+    }
+    let (mut xi, mut left) = if mu < a {
+        (0.0, (da - (a - mu)) / w)
+    } else {
+        ((mu - a) / w, da / w)
+    };
+    // dξ/ds = q(ξ) = 1 − S(ξ) = (1 − ξ)³(6ξ² + 3ξ + 1), q' = −30 ξ²(1 − ξ)².
+    let q = |x: f64| {
+        let x = x.clamp(0.0, 1.0);
+        let z = 1.0 - x;
+        z * z * z * (6.0 * x * x + 3.0 * x + 1.0)
+    };
+    while left > 0.0 && xi < 1.0 {
+        let z = 1.0 - xi;
+        let slope = 30.0 * xi * xi * z * z;
+        let ds = (0.05 / slope.max(1.0)).min(left).max(1e-12);
+        let k1 = q(xi);
+        let k2 = q(xi + 0.5 * ds * k1);
+        let k3 = q(xi + 0.5 * ds * k2);
+        let k4 = q(xi + ds * k3);
+        xi = (xi + ds / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)).min(1.0);
+        left -= ds;
+        // Far on the cap the step is set by the slope alone; once q is below round-off
+        // of ξ, μ no longer moves.
+        if q(xi) * left < 1e-17 {
+            break;
+        }
+    }
+    a + w * xi
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::smooth_step;
+
+    /// A reference solution of dμ/dA = 1 − S(μ) by RK4 with tiny fixed steps.
+    fn fine(mu: f64, da: f64, m: f64) -> f64 {
+        let n = 200_000;
+        let h = da / n as f64;
+        let g = |u: f64| 1.0 - smooth_step(u, 0.98 * m, m);
+        let mut u = mu;
+        for _ in 0..n {
+            let k1 = g(u);
+            let k2 = g(u + 0.5 * h * k1);
+            let k3 = g(u + 0.5 * h * k2);
+            let k4 = g(u + h * k3);
+            u += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        }
+        u
+    }
+
+    #[test]
+    fn below_the_cap_mu_grows_by_the_integral_of_the_drive() {
+        assert_eq!(along_cap(0.0, 100.0, 1400.0), 100.0);
+        assert_eq!(along_cap(1000.0, 372.0, 1400.0), 1372.0);
+        assert_eq!(along_cap(5.0, 0.0, 1400.0), 5.0);
+    }
+
+    #[test]
+    fn on_the_cap_mu_follows_the_ode() {
+        let m = 1400.0;
+        for (mu, da) in [
+            (1300.0, 100.0),
+            (1360.0, 30.0),
+            (1380.0, 5.0),
+            (0.0, 1500.0),
+            (0.0, 3000.0),
+            (1395.0, 2000.0),
+        ] {
+            let got = along_cap(mu, da, m);
+            let want = fine(mu, da, m);
+            assert!(
+                (got - want).abs() < 1e-9 * m,
+                "mu {mu} da {da}: {got} vs {want}"
+            );
+            assert!(got <= m);
+        }
+    }
+
+    #[test]
+    fn steps_compose() {
+        // Moving by da1 then da2 is moving by da1 + da2 (the flow property).
+        let m = 1400.0;
+        let once = along_cap(1350.0, 80.0, m);
+        let twice = along_cap(along_cap(1350.0, 30.0, m), 50.0, m);
+        assert!((once - twice).abs() < 1e-9 * m, "{once} vs {twice}");
+    }
+
+    #[test]
+    fn far_on_the_cap_mu_approaches_its_maximum_slowly() {
+        // Near ξ = 1, dξ/ds ≈ 10 (1 − ξ)³, so 1 − ξ ≈ (20 s)^(−1/2).
+        let m = 1400.0;
+        let w = 0.02 * m;
+        let s = 10_000.0;
+        let got = along_cap(0.98 * m, s * w, m);
+        let z = (m - got) / w;
+        let asymptotic = (20.0 * s).powf(-0.5);
+        assert!((z / asymptotic - 1.0).abs() < 0.05, "{z} vs {asymptotic}");
+    }
+}
