@@ -551,17 +551,25 @@ pub fn read_row(id: &str, values: &[String], dir: &Path) -> Row {
     let Some(case_text) = read("case.ron") else {
         return Row::bare(id, values, Status::Missing, "not run");
     };
-    let summary = crate::record::read::read_summary(dir).ok();
-    let Some(s) = summary else {
-        return match read("error.txt") {
-            Some(msg) => Row::bare(id, values, Status::Failed, &msg),
-            None => Row::bare(
-                id,
-                values,
-                Status::Missing,
-                "no summary.json: not run or still running",
-            ),
-        };
+    let summary = crate::record::read::read_summary(dir);
+    let s = match summary {
+        Ok(s) => s,
+        // A summary that does not read (e.g. one of an older cellsim): the point is run
+        // again by the next `cellsim sweep`, as one without a summary.
+        Err(e) if dir.join("summary.json").exists() => {
+            return Row::bare(id, values, Status::Missing, &e.to_string());
+        }
+        Err(_) => {
+            return match read("error.txt") {
+                Some(msg) => Row::bare(id, values, Status::Failed, &msg),
+                None => Row::bare(
+                    id,
+                    values,
+                    Status::Missing,
+                    "no summary.json: not run or still running",
+                ),
+            };
+        }
     };
     let (status, reason) = if s.finished {
         (Status::Finished, String::new())
