@@ -130,6 +130,49 @@ pub fn active_pillars_params(inertia: bool) -> ModelParams {
     p
 }
 
+/// Checks J against finite differences in a deformed state with contact, adhesion and
+/// active strain, at cj = 0 and cj = 37, on 150 random columns plus every column of the
+/// lowest nodes (in contact) and their μ_as.
+fn check_jacobian(params: ModelParams, sink: f64, label: &str) {
+    let inertia = params.inertia;
+    let mut m = CellModel::new(params, coarse_mesh()).unwrap();
+    let (y, yp) = deformed_state(&m, sink, 7);
+    // t in the active phase: gravity, adhesion and active strain all switched on.
+    let t = 45_000.0;
+    // Make sure contact and adhesion are really active in this state.
+    let f = m.contact_force_total(&y);
+    assert!(
+        f.y > 1e-3,
+        "{label}: no contact in the test state (force {f:?})"
+    );
+    let n = m.size();
+    let mut rng = Rand64::new(3);
+    let mut cols: Vec<usize> = (0..150)
+        .map(|_| (rng.rand_float() * n as f64) as usize)
+        .collect();
+    // All unknowns of the lowest nodes (in contact) and some μ_as columns.
+    for (i, x) in m.mesh.nodes.iter().enumerate() {
+        if x[1] < -1.0 {
+            cols.extend(
+                m.dofs.u[i]
+                    .iter()
+                    .chain(m.dofs.v[i].iter())
+                    .filter(|&&d| d != usize::MAX),
+            );
+            if m.dofs.mu[i] != usize::MAX {
+                cols.push(m.dofs.mu[i]);
+            }
+        }
+    }
+    for cj in [0.0, 37.0] {
+        let err = jacobian_fd_error(&mut m, t, &y, &yp, cj, &cols);
+        assert!(
+            err < 1e-6,
+            "{label}, inertia {inertia}, cj {cj}: relative column error {err:.2e}"
+        );
+    }
+}
+
 #[test]
 fn global_jacobian_matches_finite_differences() {
     for (params, sink) in [
@@ -137,40 +180,71 @@ fn global_jacobian_matches_finite_differences() {
         (active_pillars_params(true), 0.5),
         (active_pillars_params(false), 0.5),
     ] {
-        let inertia = params.inertia;
+        check_jacobian(params, sink, "defaults");
+    }
+}
+
+/// The push-pull case on pillars without inertia (drag 1e-3), with `change` applied.
+fn pillars_reading(change: impl Fn(&mut Case)) -> ModelParams {
+    let mut c = Case::reference_active();
+    c.substrate = case::Substrate::pillars();
+    change(&mut c);
+    c.validate().expect("a valid case");
+    let mut p = scene::model_params(&c, "pillars", false).expect("a valid case");
+    p.drag = 1e-3;
+    p
+}
+
+#[test]
+fn global_jacobian_is_exact_for_every_reading_of_the_paper() {
+    let adhesion =
+        |f: fn(&mut case::Adhesion)| move |c: &mut Case| f(c.adhesion.as_mut().expect("adhesion"));
+    let readings: Vec<(&str, ModelParams)> = vec![
+        (
+            "adhesion.direction = Unit",
+            pillars_reading(adhesion(|a| a.direction = case::AdhesionDirection::Unit)),
+        ),
+        (
+            "adhesion.jacobian_factor",
+            pillars_reading(adhesion(|a| a.jacobian_factor = true)),
+        ),
+        (
+            "adhesion.layer_excludes_substrate",
+            pillars_reading(adhesion(|a| a.layer_excludes_substrate = true)),
+        ),
+        (
+            "active.pac semi-axes clipped to the cell",
+            pillars_reading(|c| {
+                let pac = c.active.pac.as_mut().expect("pac");
+                pac.inner_semi_axes = (10.0, 9.0);
+                pac.outer_semi_axes = (15.0, 14.0);
+                pac.clip_to_cell = true;
+            }),
+        ),
+    ];
+    // Each reading changes the residual of the default case in the test state (the
+    // option reaches the model), and its Jacobian is exact.
+    let residual = |params: ModelParams| {
         let mut m = CellModel::new(params, coarse_mesh()).unwrap();
-        let (y, yp) = deformed_state(&m, sink, 7);
-        // t in the active phase: gravity, adhesion and active strain all switched on.
-        let t = 45_000.0;
-        // Make sure contact and adhesion are really active in this state.
-        let f = m.contact_force_total(&y);
-        assert!(f.y > 1e-3, "no contact in the test state (force {f:?})");
-        let n = m.size();
-        let mut rng = Rand64::new(3);
-        let mut cols: Vec<usize> = (0..150)
-            .map(|_| (rng.rand_float() * n as f64) as usize)
-            .collect();
-        // All unknowns of the lowest nodes (in contact) and some μ_as columns.
-        for (i, x) in m.mesh.nodes.iter().enumerate() {
-            if x[1] < -1.0 {
-                cols.extend(
-                    m.dofs.u[i]
-                        .iter()
-                        .chain(m.dofs.v[i].iter())
-                        .filter(|&&d| d != usize::MAX),
-                );
-                if m.dofs.mu[i] != usize::MAX {
-                    cols.push(m.dofs.mu[i]);
-                }
-            }
-        }
-        for cj in [0.0, 37.0] {
-            let err = jacobian_fd_error(&mut m, t, &y, &yp, cj, &cols);
-            assert!(
-                err < 1e-6,
-                "inertia {inertia}, cj {cj}: relative column error {err:.2e}"
-            );
-        }
+        let (y, yp) = deformed_state(&m, 0.5, 7);
+        let mut r = vec![0.0; m.size()];
+        m.residual(45_000.0, &y, &yp, &mut r).unwrap();
+        r
+    };
+    let r0 = residual(pillars_reading(|_| {}));
+    for (label, params) in readings {
+        let r = residual(params.clone());
+        let change = r
+            .iter()
+            .zip(&r0)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        let scale = r0.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        assert!(
+            change > 1e-6 * scale,
+            "{label}: the residual did not change"
+        );
+        check_jacobian(params, 0.5, label);
     }
 }
 
