@@ -512,7 +512,7 @@ fn run_command(a: RunArgs) -> ExitCode {
         Ok(s) => {
             let f = s.final_values.unwrap_or_default();
             out!(
-                "{}: finished t = {} s in {:.1} s wall ({} steps, {} Jacobians, {} unknowns); contact radius {:.3} µm, uy(p_t) {:.4} µm, mean |E| nucleus {:.1} %, cytoplasm {:.1} %; outputs in {}",
+                "{}: finished t = {} s in {:.1} s wall ({} steps, {} Jacobians, {} unknowns); contact radius {:.3} µm ({:.3} µm along the reference contour), uy(p_t) {:.4} µm (nucleus lowest {:.4} µm), mean |E| nucleus {:.1} %, cytoplasm with membrane {:.1} % (membrane {:.1} %); outputs in {}",
                 s.case,
                 f.t,
                 s.wall_seconds,
@@ -520,9 +520,12 @@ fn run_command(a: RunArgs) -> ExitCode {
                 s.stats.jacobian_evals,
                 s.unknowns.total,
                 f.contact_radius,
+                f.contact_radius_ref,
                 f.uy_top,
+                f.uy_nucleus_max,
                 100.0 * f.strain_nucleus,
                 100.0 * f.strain_cytoplasm,
+                100.0 * f.strain_membrane,
                 out.display()
             );
             if let Some(t) = &s.timers {

@@ -122,6 +122,16 @@ fn run_writes_its_time_series_summary_and_states() {
         last[1] > 0.3 && last[2] < -0.39 && last[2] > -0.45,
         "{last:?}"
     );
+    // The paper's measures after the original columns: the contact length along the
+    // reference contour, the membrane's strain, and the nucleus's lowest u_y, at or below
+    // those of p_t and p_b (both nucleus nodes).
+    assert_eq!(last.len(), 10, "{last:?}");
+    assert!(
+        last[7] > 0.0 && (last[7] / last[1] - 1.0).abs() < 0.5,
+        "{last:?}"
+    );
+    assert!(last[8] > 0.0 && last[8] < 0.5, "{last:?}");
+    assert!(last[9] <= last[2] && last[9] <= last[4], "{last:?}");
     assert!(std::path::Path::new(&format!("{out}/mesh.json")).exists());
     assert_eq!(
         summary["states"].as_array().unwrap().len(),

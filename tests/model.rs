@@ -130,6 +130,49 @@ pub fn active_pillars_params(inertia: bool) -> ModelParams {
     p
 }
 
+/// Checks J against finite differences in a deformed state with contact, adhesion and
+/// active strain, at cj = 0 and cj = 37, on 150 random columns plus every column of the
+/// lowest nodes (in contact) and their μ_as.
+fn check_jacobian(params: ModelParams, sink: f64, label: &str) {
+    let inertia = params.inertia;
+    let mut m = CellModel::new(params, coarse_mesh()).unwrap();
+    let (y, yp) = deformed_state(&m, sink, 7);
+    // t in the active phase: gravity, adhesion and active strain all switched on.
+    let t = 45_000.0;
+    // Make sure contact and adhesion are really active in this state.
+    let f = m.contact_force_total(&y);
+    assert!(
+        f.y > 1e-3,
+        "{label}: no contact in the test state (force {f:?})"
+    );
+    let n = m.size();
+    let mut rng = Rand64::new(3);
+    let mut cols: Vec<usize> = (0..150)
+        .map(|_| (rng.rand_float() * n as f64) as usize)
+        .collect();
+    // All unknowns of the lowest nodes (in contact) and some μ_as columns.
+    for (i, x) in m.mesh.nodes.iter().enumerate() {
+        if x[1] < -1.0 {
+            cols.extend(
+                m.dofs.u[i]
+                    .iter()
+                    .chain(m.dofs.v[i].iter())
+                    .filter(|&&d| d != usize::MAX),
+            );
+            if m.dofs.mu[i] != usize::MAX {
+                cols.push(m.dofs.mu[i]);
+            }
+        }
+    }
+    for cj in [0.0, 37.0] {
+        let err = jacobian_fd_error(&mut m, t, &y, &yp, cj, &cols);
+        assert!(
+            err < 1e-6,
+            "{label}, inertia {inertia}, cj {cj}: relative column error {err:.2e}"
+        );
+    }
+}
+
 #[test]
 fn global_jacobian_matches_finite_differences() {
     for (params, sink) in [
@@ -137,40 +180,71 @@ fn global_jacobian_matches_finite_differences() {
         (active_pillars_params(true), 0.5),
         (active_pillars_params(false), 0.5),
     ] {
-        let inertia = params.inertia;
+        check_jacobian(params, sink, "defaults");
+    }
+}
+
+/// The push-pull case on pillars without inertia (drag 1e-3), with `change` applied.
+fn pillars_reading(change: impl Fn(&mut Case)) -> ModelParams {
+    let mut c = Case::reference_active();
+    c.substrate = case::Substrate::pillars();
+    change(&mut c);
+    c.validate().expect("a valid case");
+    let mut p = scene::model_params(&c, "pillars", false).expect("a valid case");
+    p.drag = 1e-3;
+    p
+}
+
+#[test]
+fn global_jacobian_is_exact_for_every_reading_of_the_paper() {
+    let adhesion =
+        |f: fn(&mut case::Adhesion)| move |c: &mut Case| f(c.adhesion.as_mut().expect("adhesion"));
+    let readings: Vec<(&str, ModelParams)> = vec![
+        (
+            "adhesion.direction = Unit",
+            pillars_reading(adhesion(|a| a.direction = case::AdhesionDirection::Unit)),
+        ),
+        (
+            "adhesion.jacobian_factor",
+            pillars_reading(adhesion(|a| a.jacobian_factor = true)),
+        ),
+        (
+            "adhesion.layer_excludes_substrate",
+            pillars_reading(adhesion(|a| a.layer_excludes_substrate = true)),
+        ),
+        (
+            "active.pac semi-axes clipped to the cell",
+            pillars_reading(|c| {
+                let pac = c.active.pac.as_mut().expect("pac");
+                pac.inner_semi_axes = (10.0, 9.0);
+                pac.outer_semi_axes = (15.0, 14.0);
+                pac.clip_to_cell = true;
+            }),
+        ),
+    ];
+    // Each reading changes the residual of the default case in the test state (the
+    // option reaches the model), and its Jacobian is exact.
+    let residual = |params: ModelParams| {
         let mut m = CellModel::new(params, coarse_mesh()).unwrap();
-        let (y, yp) = deformed_state(&m, sink, 7);
-        // t in the active phase: gravity, adhesion and active strain all switched on.
-        let t = 45_000.0;
-        // Make sure contact and adhesion are really active in this state.
-        let f = m.contact_force_total(&y);
-        assert!(f.y > 1e-3, "no contact in the test state (force {f:?})");
-        let n = m.size();
-        let mut rng = Rand64::new(3);
-        let mut cols: Vec<usize> = (0..150)
-            .map(|_| (rng.rand_float() * n as f64) as usize)
-            .collect();
-        // All unknowns of the lowest nodes (in contact) and some μ_as columns.
-        for (i, x) in m.mesh.nodes.iter().enumerate() {
-            if x[1] < -1.0 {
-                cols.extend(
-                    m.dofs.u[i]
-                        .iter()
-                        .chain(m.dofs.v[i].iter())
-                        .filter(|&&d| d != usize::MAX),
-                );
-                if m.dofs.mu[i] != usize::MAX {
-                    cols.push(m.dofs.mu[i]);
-                }
-            }
-        }
-        for cj in [0.0, 37.0] {
-            let err = jacobian_fd_error(&mut m, t, &y, &yp, cj, &cols);
-            assert!(
-                err < 1e-6,
-                "inertia {inertia}, cj {cj}: relative column error {err:.2e}"
-            );
-        }
+        let (y, yp) = deformed_state(&m, 0.5, 7);
+        let mut r = vec![0.0; m.size()];
+        m.residual(45_000.0, &y, &yp, &mut r).unwrap();
+        r
+    };
+    let r0 = residual(pillars_reading(|_| {}));
+    for (label, params) in readings {
+        let r = residual(params.clone());
+        let change = r
+            .iter()
+            .zip(&r0)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        let scale = r0.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        assert!(
+            change > 1e-6 * scale,
+            "{label}: the residual did not change"
+        );
+        check_jacobian(params, 0.5, label);
     }
 }
 
@@ -531,4 +605,155 @@ fn hertz_contact_half_width_of_a_cylinder_pressed_by_its_weight() {
         (b / b_hertz - 1.0).abs() < 0.05,
         "contact half-width {b:.4} µm, Hertz {b_hertz:.4} µm"
     );
+}
+
+// ---------------------------------------------------------------------------------------
+// Observables: the paper's measures against hand-computed cases
+
+/// The state with displacement `u(X)` at every node (velocities and μ_as zero).
+fn prescribed_state(m: &CellModel, u: impl Fn(Vector2<f64>) -> [f64; 2]) -> Vec<f64> {
+    let mut y = vec![0.0; m.size()];
+    for (i, x) in m.mesh.nodes.iter().enumerate() {
+        let d = u(Vector2::new(x[0], x[1]));
+        for k in 0..2 {
+            if m.dofs.u[i][k] != usize::MAX {
+                y[m.dofs.u[i][k]] = d[k];
+            }
+        }
+    }
+    y
+}
+
+#[test]
+fn contact_length_of_a_rigidly_sunk_cell_is_the_arc_below_the_band_in_both_frames() {
+    // The flat reference scene (y_s = −2, ε_ct = 0.1, c = (0, 8.5), r_c = 10), every node
+    // moved down by s: the boundary in contact is the arc with c_y − r_c cos φ − s < y_s +
+    // ε_ct, of length r_c acos((c_y − s − y_s − ε_ct)/r_c) on the half cell, the same
+    // along the deformed and the reference contour.
+    let m = CellModel::new(scene::reference_params(), coarse_mesh()).unwrap();
+    let (cy, rc, ys, eps) = (8.5, 10.0, -2.0, 0.1);
+    assert_eq!(m.params.substrate, Substrate::Flat { y_s: ys });
+    assert_eq!(m.params.contact.eps, eps);
+    for s in [0.6, 1.0, 2.0] {
+        let y = prescribed_state(&m, |_| [0.0, -s]);
+        let o = m.observe(1.0, &y);
+        let arc = rc * ((cy - s - ys - eps) / rc).acos();
+        assert!(
+            (o.contact_radius - arc).abs() < 1e-3 * arc,
+            "sink {s}: deformed {} against {arc}",
+            o.contact_radius
+        );
+        assert!(
+            (o.contact_radius_ref - o.contact_radius).abs() < 1e-12 * arc,
+            "sink {s}: reference {} against deformed {}",
+            o.contact_radius_ref,
+            o.contact_radius
+        );
+    }
+}
+
+#[test]
+fn contact_length_under_a_horizontal_stretch_is_longer_in_the_deformed_frame() {
+    // Sunk by 1 µm and stretched horizontally by λ about the symmetry line: the material
+    // in the band is the arc near the bottom, almost horizontal, so the deformed length is
+    // close to (and below) λ times the reference length; a compression λ < 1 the reverse.
+    let m = CellModel::new(scene::reference_params(), coarse_mesh()).unwrap();
+    for lambda in [1.5, 0.8] {
+        let y = prescribed_state(&m, |p| [(lambda - 1.0) * p.x, -1.0]);
+        let o = m.observe(1.0, &y);
+        let ratio = o.contact_radius / o.contact_radius_ref;
+        assert!(
+            (ratio / lambda - 1.0).abs() < 0.02,
+            "λ {lambda}: deformed/reference = {ratio}"
+        );
+        // The reference length is the rigid sink's: the same material is in the band
+        // (the band criterion depends on the height, which the stretch does not change).
+        let arc = 10.0 * ((8.5 - 1.0 + 2.0 - 0.1) / 10.0f64).acos();
+        assert!((o.contact_radius_ref - arc).abs() < 1e-3 * arc);
+    }
+}
+
+#[test]
+fn strain_of_the_cytoplasm_includes_the_membrane_weighted_by_area() {
+    let m = CellModel::new(scene::reference_params(), coarse_mesh()).unwrap();
+    let c = Vector2::new(m.params.center[0], m.params.center[1]);
+    let (rn, rcp, rc) = (5.0, 9.75, 10.0);
+    // A homogeneous stretch λ along x: ‖E‖ = (λ² − 1)/2 in every domain.
+    let lambda = 1.2f64;
+    let e = (lambda * lambda - 1.0) / 2.0;
+    let y = prescribed_state(&m, |p| [(lambda - 1.0) * (p.x - c.x), 0.0]);
+    let o = m.observe(1.0, &y);
+    for (name, v) in [
+        ("nucleus", o.strain_nucleus),
+        ("cytoplasm", o.strain_cytoplasm),
+        ("membrane", o.strain_membrane),
+    ] {
+        assert!((v - e).abs() < 1e-12, "{name}: {v} against {e}");
+    }
+    // The same stretch on the membrane's nodes only (nodes of the cytoplasm and nucleus
+    // elements do not move): the nucleus and the cytoplasm proper are unstrained, so the
+    // paper's cytoplasm mean is the membrane's times its share of the area,
+    // (r_c² − r_cp²)/(r_c² − r_n²) = 4.9375/75.
+    let y = prescribed_state(&m, |p| {
+        if (p - c).norm() > rcp + 1e-9 {
+            [(lambda - 1.0) * (p.x - c.x), 0.0]
+        } else {
+            [0.0, 0.0]
+        }
+    });
+    let o = m.observe(1.0, &y);
+    assert_eq!(o.strain_nucleus, 0.0);
+    assert!(
+        o.strain_membrane > 0.1 * e,
+        "membrane {}",
+        o.strain_membrane
+    );
+    let share = (rc * rc - rcp * rcp) / (rc * rc - rn * rn);
+    let ratio = o.strain_cytoplasm / o.strain_membrane;
+    assert!(
+        (ratio / share - 1.0).abs() < 5e-4,
+        "cytoplasm/membrane = {ratio}, area share {share}"
+    );
+    // The areas of the P2 mesh (curved edges on the circles) against the half rings'.
+    let s = m.mean_strain_norms(&y);
+    let half_ring = |a: f64, b: f64| std::f64::consts::FRAC_PI_2 * (b * b - a * a);
+    for (k, (a, b)) in [(0.0, rn), (rn, rcp), (rcp, rc)].into_iter().enumerate() {
+        let exact = half_ring(a, b);
+        let err = s.area[k] / exact - 1.0;
+        assert!(err.abs() < 5e-4, "area {k}: {} against {exact}", s.area[k]);
+    }
+}
+
+#[test]
+fn lowest_nucleus_displacement_is_taken_over_every_nucleus_node() {
+    let m = CellModel::new(scene::reference_params(), coarse_mesh()).unwrap();
+    let c = Vector2::new(m.params.center[0], m.params.center[1]);
+    let rn = 5.0;
+    // A dip of depth a centred on an interior nucleus node X0 off the symmetry line (not
+    // p_t, c or p_b), and a larger downward displacement 5a outside the nucleus: the
+    // answer is −a, at X0.
+    let target = Vector2::new(2.0, 7.0);
+    let x0 = m
+        .mesh
+        .nodes
+        .iter()
+        .map(|x| Vector2::new(x[0], x[1]))
+        .filter(|x| (x - c).norm() < rn - 0.5)
+        .min_by(|a, b| (a - target).norm().total_cmp(&(b - target).norm()))
+        .unwrap();
+    assert!(x0.x > 0.5, "X0 = {x0}");
+    let a = 0.7;
+    let y = prescribed_state(&m, |p| {
+        if (p - c).norm() <= rn + 1e-9 {
+            [0.0, -a * (-(p - x0).norm_squared() / 4.0).exp()]
+        } else {
+            [0.0, -5.0 * a]
+        }
+    });
+    let o = m.observe(1.0, &y);
+    assert_eq!(o.uy_nucleus_max, -a);
+    assert!(o.uy_top > -a && o.uy_bottom > -a && o.uy_centre > -a);
+    // Rigid translation: every point has the same displacement.
+    let y = prescribed_state(&m, |_| [0.0, -1.25]);
+    assert_eq!(m.observe(1.0, &y).uy_nucleus_max, -1.25);
 }

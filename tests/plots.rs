@@ -20,6 +20,7 @@ use cellsim::output::vtu::{QUADRATIC_TRIANGLE, VtuSeries, read_vtu, write_vtu};
 use cellsim::physics::Substrate;
 use cellsim::record::Snapshot;
 use cellsim::record::StateFile;
+use cellsim::record::observables::OLD_CSV_HEADER;
 use cellsim::record::read::{ReadError, parse_timeseries};
 
 fn fixture() -> PathBuf {
@@ -397,6 +398,40 @@ fn malformed_files_are_named() {
     let e = parse_timeseries(Path::new("x.csv"), "t,r\n0,0\n").expect_err("header");
     assert!(e.to_string().contains("header"), "{e}");
     assert!(parse_timeseries(Path::new("x.csv"), "").is_err());
+
+    // The files of an older cellsim, before the paper's measures (contact_radius_ref,
+    // strain_membrane, uy_nucleus_max) and with strain_cytoplasm without the membrane:
+    // refused, saying so, not misread.
+    let d = interrupted_copy("older");
+    let csv = std::fs::read_to_string(d.join("timeseries.csv")).expect("csv");
+    let old: Vec<String> = std::iter::once(OLD_CSV_HEADER.to_string())
+        .chain(csv.lines().skip(1).take(5).map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            f[..7].join(",")
+        }))
+        .collect();
+    std::fs::write(d.join("timeseries.csv"), old.join("\n") + "\n").expect("write");
+    let e = RunData::load(&d).expect_err("older csv").to_string();
+    assert!(
+        e.contains("timeseries.csv")
+            && e.contains("older cellsim")
+            && e.contains("strain_membrane"),
+        "{e}"
+    );
+    let text = std::fs::read_to_string(d.join("summary.json")).expect("summary");
+    let mut v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    for c in ["contact_radius_ref", "strain_membrane", "uy_nucleus_max"] {
+        v["final_values"]
+            .as_object_mut()
+            .expect("final values")
+            .remove(c);
+    }
+    std::fs::write(d.join("summary.json"), v.to_string()).expect("write");
+    let e = cellsim::record::read::read_summary(&d).expect_err("older summary");
+    assert!(
+        e.to_string().contains("summary.json") && e.to_string().contains("older cellsim"),
+        "{e}"
+    );
 
     // A state file with the wrong number of nodes.
     let d = interrupted_copy("malformed-state");

@@ -46,9 +46,9 @@ pub use error::{CaseError, Problem};
 pub use locate::Position;
 pub use overrides::Override;
 pub use sections::{
-    Active, Adhesion, Bottom, Contact, Flat, Geometry, Gravity, Inertia, InertiaMode, Integrator,
-    LinearSolver, Material, Materials, Mesh, Output, Pac, Phases, Pillars, Solver, Substrate,
-    Viscosity, units,
+    Active, Adhesion, AdhesionDirection, Bottom, Contact, Flat, Geometry, Gravity, Inertia,
+    InertiaMode, Integrator, LinearSolver, Material, Materials, Mesh, Output, Pac, Phases, Pillars,
+    Solver, Substrate, Viscosity, units,
 };
 pub use validate::{Rule, Violation};
 pub(crate) use validate::{axes, num};

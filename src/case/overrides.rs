@@ -780,6 +780,59 @@ mod tests {
     }
 
     #[test]
+    fn the_readings_of_the_paper_are_reachable_by_overrides() {
+        use crate::case::AdhesionDirection;
+        // Defaults: MODEL.md's readings.
+        let c = load(&["adhesion.e_f=1.5"]).unwrap();
+        let a = c.adhesion.as_ref().unwrap();
+        assert_eq!(a.direction, AdhesionDirection::Cofactor);
+        assert!(!a.jacobian_factor && !a.layer_excludes_substrate);
+        assert!(!c.active.pac.as_ref().unwrap().clip_to_cell);
+        // Each alone, as a sweep sets it.
+        let c = load(&["adhesion.direction=Unit"]).unwrap();
+        assert_eq!(c.adhesion.unwrap().direction, AdhesionDirection::Unit);
+        let c = load(&["adhesion.jacobian_factor=true"]).unwrap();
+        assert!(c.adhesion.unwrap().jacobian_factor);
+        let c = load(&["adhesion.layer_excludes_substrate=true"]).unwrap();
+        assert!(c.adhesion.unwrap().layer_excludes_substrate);
+        // The PAC's semi-axes reading: three fields, or the whole region in one override.
+        let c = load(&[
+            "active.pac.inner_semi_axes=(10.0, 9.0)",
+            "active.pac.outer_semi_axes=(15.0, 14.0)",
+            "active.pac.clip_to_cell=true",
+        ])
+        .unwrap();
+        let pac = c.active.pac.unwrap();
+        assert_eq!(
+            (pac.inner_semi_axes, pac.outer_semi_axes),
+            ((10.0, 9.0), (15.0, 14.0))
+        );
+        assert!(pac.clip_to_cell);
+        let c = load(&[
+            "active.pac=(inner_semi_axes: (10.0, 9.0), outer_semi_axes: (15.0, 14.0), \
+             clip_to_cell: true)",
+        ])
+        .unwrap();
+        assert!(c.active.pac.unwrap().clip_to_cell);
+        // Without clip_to_cell those axes leave the cell: refused, pointing at the switch.
+        let e = load(&[
+            "active.pac.inner_semi_axes=(10.0, 9.0)",
+            "active.pac.outer_semi_axes=(15.0, 14.0)",
+        ])
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("outer_semi_axes") && e.contains("clip_to_cell"),
+            "{e}"
+        );
+        // A misspelt reading lists the valid ones.
+        let e = load(&["adhesion.direction=Normal"])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("Cofactor") && e.contains("Unit"), "{e}");
+    }
+
+    #[test]
     fn override_replaces_whole_enums_and_indexes_tuples() {
         let c = load(&["inertia.mode=On", "substrate=Flat(y_s: -3.0)"]).unwrap();
         assert_eq!(c.inertia.mode, crate::case::InertiaMode::On);

@@ -8,6 +8,8 @@
 
 use serde::{Deserialize, Deserializer, Serialize};
 
+pub use crate::physics::AdhesionDirection;
+
 /// Conversion factors from the SI units of the paper to the solver's µm–s–pN system
 /// (MODEL.md §1).
 pub mod units {
@@ -589,6 +591,22 @@ pub struct Adhesion {
     /// Cap μ_as,max of the adhesion coefficient (N/m³, SI; [`Adhesion::mu_as_max`] gives
     /// pN/µm³). Default 1.4e9 (Table 1, there printed in N). Valid: > 0.
     pub mu_as_max_n_m3: f64,
+    /// Direction of the spreading force, a reading of the paper's Eq. (26), which writes
+    /// cof(F) N: `Cofactor` (cof(F) N as written, whose length is the area stretch of the
+    /// surface with reference normal N) or `Unit` (its unit vector cof(F) N/|cof(F) N|).
+    /// Default `Cofactor` (MODEL.md §5).
+    pub direction: AdhesionDirection,
+    /// Multiply the spreading force by J = det F, the paper's "J f_as" in its weak form,
+    /// Eq. (37). Default false (MODEL.md §5: b_as is Eq. (26)'s f_as per unit reference
+    /// volume).
+    pub jacobian_factor: bool,
+    /// Whether the fibronectin layer excludes the substrate itself: the paper obtains the
+    /// layer "by subtracting g_flat from a higher flat substrate" (Sect. 2.2.1; the layer
+    /// g_f,l enters Eqs. (26) and (28)), i.e. the indicator H_ε(d_sub + e_f) −
+    /// H_ε_ct(d_sub), with the substrate's own indicator of the contact band. Default false
+    /// (MODEL.md §5: H_ε(d_sub + e_f), substrate included). Valid when true:
+    /// e_f >= eps + contact.eps_ct (so that the indicator stays in [0, 1]).
+    pub layer_excludes_substrate: bool,
 }
 
 impl Default for Adhesion {
@@ -598,6 +616,9 @@ impl Default for Adhesion {
             eps: 0.1,
             mu_as0_n_m3s: 1e6,
             mu_as_max_n_m3: 1.4e9,
+            direction: AdhesionDirection::Cofactor,
+            jacobian_factor: false,
+            layer_excludes_substrate: false,
         }
     }
 }
@@ -656,8 +677,18 @@ pub struct Pac {
     pub inner_semi_axes: (f64, f64),
     /// Semi-axes (a_x, a_y) of the outer ellipse (µm). Default (7.5, 7) (Table 1's 15,
     /// 14 µm read as full axes). Valid: inner < outer < r_c, each axis (an outer ellipse
-    /// leaving the cell is the symptom of semi-axes given as full axes).
+    /// leaving the cell is the symptom of semi-axes given as full axes), unless
+    /// `clip_to_cell`.
     pub outer_semi_axes: (f64, f64),
+    /// Let the ellipses extend beyond the cell, the PAC being the part of the cytoplasm
+    /// between them (clipped by the cell). This is the other reading of Table 1: its 10, 9,
+    /// 15, 14 µm taken as the semi-axes a, b of the paper's Eq. (31), which the text calls
+    /// axes: `inner_semi_axes: (10, 9), outer_semi_axes: (15, 14), clip_to_cell: true`
+    /// gives a thin cap under the apical membrane. Default false (MODEL.md §6 reads them
+    /// as full axes, and then an ellipse leaving the cell is a mistake). Valid when true:
+    /// the smaller inner semi-axis < r_cp (otherwise the inner ellipse holds the whole
+    /// cytoplasm and the PAC is empty).
+    pub clip_to_cell: bool,
 }
 
 impl Default for Pac {
@@ -667,6 +698,7 @@ impl Default for Pac {
             theta_deg: -18.0,
             inner_semi_axes: (5.0, 4.5),
             outer_semi_axes: (7.5, 7.0),
+            clip_to_cell: false,
         }
     }
 }

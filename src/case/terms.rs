@@ -88,6 +88,9 @@ pub fn adhesion(case: &Case) -> Option<physics::Adhesion> {
         eps: a.eps,
         mu_as0: a.mu_as0(),
         mu_as_max: a.mu_as_max(),
+        direction: a.direction,
+        jacobian_factor: a.jacobian_factor,
+        exclude_substrate: a.layer_excludes_substrate.then_some(case.contact.eps_ct),
     })
 }
 
@@ -288,20 +291,27 @@ pub fn layer_checks(case: &Case) -> Vec<LayerCheck<'_>> {
             })
         })
     }));
-    checks.push(layer_check("adhesion model", &["adhesion"], move || {
-        let (Some(a), Some(written)) = (adhesion(case), case.adhesion.as_ref()) else {
-            return Ok(());
-        };
-        a.validate().map_err(|e| {
-            physics_refusal(e, "adhesion", |name| match name {
-                "adhesion.e_f" => field("adhesion.e_f", written.e_f),
-                "adhesion.eps" => field("adhesion.eps", written.eps),
-                "adhesion.mu_as0" => field("adhesion.mu_as0_n_m3s", written.mu_as0_n_m3s),
-                "adhesion.mu_as_max" => field("adhesion.mu_as_max_n_m3", written.mu_as_max_n_m3),
-                _ => None,
+    checks.push(layer_check(
+        "adhesion model",
+        &["adhesion", "contact.eps_ct"],
+        move || {
+            let (Some(a), Some(written)) = (adhesion(case), case.adhesion.as_ref()) else {
+                return Ok(());
+            };
+            a.validate().map_err(|e| {
+                physics_refusal(e, "adhesion", |name| match name {
+                    "adhesion.e_f" => field("adhesion.e_f", written.e_f),
+                    "adhesion.eps" => field("adhesion.eps", written.eps),
+                    "adhesion.mu_as0" => field("adhesion.mu_as0_n_m3s", written.mu_as0_n_m3s),
+                    "adhesion.mu_as_max" => {
+                        field("adhesion.mu_as_max_n_m3", written.mu_as_max_n_m3)
+                    }
+                    "adhesion.exclude_substrate" => field("contact.eps_ct", case.contact.eps_ct),
+                    _ => None,
+                })
             })
-        })
-    }));
+        },
+    ));
     checks.push(layer_check("viscosity model", &["viscosity"], move || {
         viscosity(case).validate().map_err(|e| {
             physics_refusal(e, "viscosity", |name| match name {

@@ -264,7 +264,7 @@ impl Case {
         c.loads(&self.viscosity, &self.gravity);
         c.substrate(&self.substrate, g);
         c.contact(&self.contact);
-        c.adhesion(self.adhesion.as_ref());
+        c.adhesion(self.adhesion.as_ref(), &self.contact);
         c.active(&self.active, g);
         c.phases(&self.phases);
         c.inertia(&self.inertia);
@@ -431,13 +431,44 @@ impl Checker<'_> {
         }
     }
 
-    /// Adhesion: positive coefficients.
-    fn adhesion(&mut self, adhesion: Option<&Adhesion>) {
+    /// Adhesion: positive coefficients; a layer excluding the substrate wider than both
+    /// bands.
+    fn adhesion(&mut self, adhesion: Option<&Adhesion>, contact: &Contact) {
         if let Some(a) = adhesion {
             self.positive("adhesion.e_f", a.e_f);
             self.positive("adhesion.eps", a.eps);
             self.positive("adhesion.mu_as0_n_m3s", a.mu_as0_n_m3s);
             self.positive("adhesion.mu_as_max_n_m3", a.mu_as_max_n_m3);
+            let reads = ["adhesion.eps", "contact.eps_ct"];
+            if a.layer_excludes_substrate && !self.any_invalid(&reads) {
+                let min = a.eps + contact.eps_ct;
+                // Blame e_f if the file writes it, else the switch that brought the rule.
+                let (field, value) = if (self.written)("adhesion.e_f")
+                    || !(self.written)("adhesion.layer_excludes_substrate")
+                {
+                    ("adhesion.e_f", num(a.e_f))
+                } else {
+                    ("adhesion.layer_excludes_substrate", "true".to_string())
+                };
+                if !(a.e_f >= min) {
+                    let e_f = if field == "adhesion.e_f" {
+                        String::new()
+                    } else {
+                        format!(" (e_f = {})", num(a.e_f))
+                    };
+                    self.report(
+                        field,
+                        &reads,
+                        value,
+                        Rule::Conflict(format!(
+                            "a layer that excludes the substrate (layer_excludes_substrate) \
+                             needs e_f >= eps + contact.eps_ct = {}{e_f}, so that its \
+                             indicator H(d + e_f) - H(d) stays in [0, 1]",
+                            num(min),
+                        )),
+                    );
+                }
+            }
         }
     }
 
@@ -477,14 +508,27 @@ impl Checker<'_> {
                 self.push(field, value, Rule::Range(rule));
                 self.invalid
                     .extend([inner_path.to_string(), outer_path.to_string()]);
-            } else if !(outer.0 < g.r_c && outer.1 < g.r_c) {
+            } else if !(pac.clip_to_cell || (outer.0 < g.r_c && outer.1 < g.r_c)) {
                 self.report(
                     outer_path,
                     &["geometry.r_c"],
                     axes(outer),
                     Rule::Range(format!(
-                        "outer < r_c = {}, each axis (these are semi-axes, not full axes)",
+                        "outer < r_c = {}, each axis (these are semi-axes, not full axes; \
+                         clip_to_cell: true lets the ellipses leave the cell)",
                         num(g.r_c)
+                    )),
+                );
+            } else if pac.clip_to_cell && !(inner.0.min(inner.1) < g.r_cp) {
+                self.report(
+                    inner_path,
+                    &["geometry.r_cp"],
+                    axes(inner),
+                    Rule::Conflict(format!(
+                        "with clip_to_cell the inner ellipse must leave part of the \
+                         cytoplasm outside it (smaller inner semi-axis < r_cp = {}), \
+                         otherwise the PAC is empty",
+                        num(g.r_cp)
                     )),
                 );
             }

@@ -12,6 +12,78 @@ use crate::record::Observables;
 /// Sub-segments per boundary edge when measuring the contact length.
 const EDGE_SAMPLES: usize = 64;
 
+/// Reference-area integrals of ‖E‖_F and reference areas per domain (nucleus,
+/// cytoplasm, membrane), from [`CellModel::mean_strain_norms`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StrainNorms {
+    /// ∫ ‖E‖_F dA over each domain [µm²].
+    pub integral: [f64; 3],
+    /// Reference area of each domain [µm²] (half cell).
+    pub area: [f64; 3],
+}
+
+impl StrainNorms {
+    fn index(d: Domain) -> usize {
+        match d {
+            Domain::Nucleus => 0,
+            Domain::Cytoplasm => 1,
+            Domain::Membrane => 2,
+        }
+    }
+
+    /// Reference-area mean of ‖E‖_F over the union of `domains`: the integrals summed
+    /// over the areas summed (the paper's cytoplasm is `[Cytoplasm, Membrane]`).
+    pub fn mean(&self, domains: &[Domain]) -> f64 {
+        let (mut i, mut a) = (0.0, 0.0);
+        for &d in domains {
+            i += self.integral[Self::index(d)];
+            a += self.area[Self::index(d)];
+        }
+        i / a
+    }
+}
+
+/// Adds to `total` the length of the part of one P2 edge whose current position `x` has
+/// `depth(x) > 0`, measured along the current curve and along the reference curve:
+/// `[deformed, reference]`. The edge's parameter s ∈ [0, 1] is cut into [`EDGE_SAMPLES`] equal
+/// steps; each step counts with the fraction of it where the depth, interpolated
+/// linearly between its ends, is positive, times its chord in the current frame and in
+/// the reference frame. The fraction is that of the same material sub-segment in both
+/// frames, so a rigid motion gives equal lengths and a uniform stretch λ along a straight
+/// edge gives deformed = λ × reference.
+pub fn add_band_lengths(
+    reference: &[Vector2<f64>; 3],
+    current: &[Vector2<f64>; 3],
+    depth: impl Fn(&Vector2<f64>) -> f64,
+    total: &mut [f64; 2],
+) {
+    let along = |xs: &[Vector2<f64>; 3], s: f64| {
+        let n = edge_shape(s);
+        xs[0] * n[0] + xs[1] * n[1] + xs[2] * n[2]
+    };
+    let mut x0 = along(current, 0.0);
+    let mut p0 = along(reference, 0.0);
+    let mut d0 = depth(&x0);
+    for k in 1..=EDGE_SAMPLES {
+        let s = k as f64 / EDGE_SAMPLES as f64;
+        let x1 = along(current, s);
+        let p1 = along(reference, s);
+        let d1 = depth(&x1);
+        let frac = if d0 > 0.0 && d1 > 0.0 {
+            1.0
+        } else if d0 <= 0.0 && d1 <= 0.0 {
+            0.0
+        } else {
+            d0.max(d1) / (d0 - d1).abs()
+        };
+        total[0] += frac * (x1 - x0).norm();
+        total[1] += frac * (p1 - p0).norm();
+        x0 = x1;
+        p0 = p1;
+        d0 = d1;
+    }
+}
+
 impl CellModel {
     /// Current position of node `i` in state `y`.
     pub fn position(&self, y: &[f64], i: usize) -> Vector2<f64> {
@@ -23,70 +95,74 @@ impl CellModel {
     pub fn observe(&self, t: f64, y: &[f64]) -> Observables {
         let pts = self.mesh.points;
         let uy = |i: usize| self.dofs.node_u(y, i)[1];
-        let (sn, sc) = self.mean_strain_norms(y);
+        let strain = self.mean_strain_norms(y);
+        let (contact, contact_ref) = self.contact_lengths(y);
         Observables {
             t,
-            contact_radius: self.contact_length(y),
+            contact_radius: contact,
             uy_top: uy(pts.nucleus_top),
             uy_centre: uy(pts.centre),
             uy_bottom: uy(pts.nucleus_bottom),
-            strain_nucleus: sn,
-            strain_cytoplasm: sc,
+            strain_nucleus: strain.mean(&[Domain::Nucleus]),
+            strain_cytoplasm: strain.mean(&[Domain::Cytoplasm, Domain::Membrane]),
+            contact_radius_ref: contact_ref,
+            strain_membrane: strain.mean(&[Domain::Membrane]),
+            uy_nucleus_max: self.nucleus_lowest_uy(y),
         }
     }
 
     /// Deformed length of the outer boundary where the depth exceeds −ε_ct, i.e. within
-    /// ε_ct of the substrate: each P2 boundary edge is sampled in [`EDGE_SAMPLES`] chords and
-    /// the in-band part of each chord found by linear interpolation of the depth.
+    /// ε_ct of the substrate (the first value of [`Self::contact_lengths`]).
     pub fn contact_length(&self, y: &[f64]) -> f64 {
-        let eps = self.params.contact.eps;
-        let mut total = 0.0;
-        for edge in &self.mesh.outer_edges {
-            let xs = edge.map(|i| self.position(y, i));
-            let at = |s: f64| {
-                let n = edge_shape(s);
-                xs[0] * n[0] + xs[1] * n[1] + xs[2] * n[2]
-            };
-            let mut x0 = at(0.0);
-            let mut d0 = self.params.substrate.eval(&x0).0 + eps;
-            for k in 1..=EDGE_SAMPLES {
-                let x1 = at(k as f64 / EDGE_SAMPLES as f64);
-                let d1 = self.params.substrate.eval(&x1).0 + eps;
-                let len = (x1 - x0).norm();
-                let frac = if d0 > 0.0 && d1 > 0.0 {
-                    1.0
-                } else if d0 <= 0.0 && d1 <= 0.0 {
-                    0.0
-                } else {
-                    d0.max(d1) / (d0 - d1).abs()
-                };
-                total += frac * len;
-                x0 = x1;
-                d0 = d1;
-            }
-        }
-        total
+        self.contact_lengths(y).0
     }
 
-    /// Reference-area means of the Frobenius norm of E = ½(FᵀF − I) over the nucleus and
-    /// over the cytoplasm (plane strain: E₃₃ = 0).
-    pub fn mean_strain_norms(&self, y: &[f64]) -> (f64, f64) {
-        let mut acc = [[0.0f64; 2]; 2]; // [domain][sum, area]
+    /// Length of the part of the outer boundary in contact, i.e. whose current position
+    /// lies within ε_ct of the substrate (depth > −ε_ct), measured along the deformed
+    /// contour and along the reference contour: `(deformed, reference)` [µm]. Each P2
+    /// boundary edge is sampled in [`EDGE_SAMPLES`] sub-segments of its parameter
+    /// ([`add_band_lengths`]).
+    pub fn contact_lengths(&self, y: &[f64]) -> (f64, f64) {
+        let eps = self.params.contact.eps;
+        let depth = |x: &Vector2<f64>| self.params.substrate.eval(x).0 + eps;
+        let mut total = [0.0; 2];
+        for edge in &self.mesh.outer_edges {
+            let reference = edge.map(|i| Vector2::from(self.mesh.nodes[i]));
+            let current = edge.map(|i| self.position(y, i));
+            add_band_lengths(&reference, &current, depth, &mut total);
+        }
+        (total[0], total[1])
+    }
+
+    /// Reference-area integrals of the Frobenius norm of E = ½(FᵀF − I) per domain (plane
+    /// strain: E₃₃ = 0), and the domains' reference areas.
+    pub fn mean_strain_norms(&self, y: &[f64]) -> StrainNorms {
+        let mut s = StrainNorms {
+            integral: [0.0; 3],
+            area: [0.0; 3],
+        };
         for el in &self.elements {
-            let k = match el.domain {
-                Domain::Nucleus => 0,
-                Domain::Cytoplasm => 1,
-                Domain::Membrane => continue,
-            };
+            let k = StrainNorms::index(el.domain);
             let ue = self.element_displacements(el, y);
             for q in 0..el.geo.jxw.len() {
                 let f = deformation(&ue, &el.geo.grads[q]);
                 let e = (f.transpose() * f - Matrix2::identity()) * 0.5;
-                acc[k][0] += el.geo.jxw[q] * e.norm();
-                acc[k][1] += el.geo.jxw[q];
+                s.integral[k] += el.geo.jxw[q] * e.norm();
+                s.area[k] += el.geo.jxw[q];
             }
         }
-        (acc[0][0] / acc[0][1], acc[1][0] / acc[1][1])
+        s
+    }
+
+    /// The smallest vertical displacement (the largest downward one, negative = down)
+    /// over every node of the nucleus elements, vertices and mid-side nodes [µm].
+    pub fn nucleus_lowest_uy(&self, y: &[f64]) -> f64 {
+        self.elements
+            .iter()
+            .filter(|el| el.domain == Domain::Nucleus)
+            .flat_map(|el| el.nodes)
+            .map(|i| self.dofs.node_u(y, i)[1])
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Per-element mean ‖E‖_F and mean det F (reference-area averages), for output.
@@ -150,5 +226,83 @@ impl CellModel {
             }
         }
         ue
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(x: f64, y: f64) -> Vector2<f64> {
+        Vector2::new(x, y)
+    }
+
+    /// A straight P2 edge from `a` to `b` (mid-node at the midpoint).
+    fn straight(a: Vector2<f64>, b: Vector2<f64>) -> [Vector2<f64>; 3] {
+        [a, (a + b) * 0.5, b]
+    }
+
+    fn lengths(
+        reference: &[Vector2<f64>; 3],
+        current: &[Vector2<f64>; 3],
+        depth: impl Fn(&Vector2<f64>) -> f64,
+    ) -> [f64; 2] {
+        let mut t = [0.0; 2];
+        add_band_lengths(reference, current, depth, &mut t);
+        t
+    }
+
+    #[test]
+    fn a_rigid_motion_gives_the_same_length_in_both_frames() {
+        // A curved edge (mid-node off the chord), half of it below y = 0.3 after the motion.
+        let reference = [v(0.0, 0.0), v(1.0, 0.4), v(2.0, 1.5)];
+        let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+        let current = reference.map(|p| v(c * p.x - s * p.y + 4.0, s * p.x + c * p.y - 0.7));
+        let [d, r] = lengths(&reference, &current, |x| 0.3 - x.y);
+        assert!(
+            d > 0.1 && r > 0.1,
+            "part of the edge is in the band: {d}, {r}"
+        );
+        assert!((d - r).abs() < 1e-12 * r, "deformed {d}, reference {r}");
+    }
+
+    #[test]
+    fn a_horizontal_stretch_multiplies_the_deformed_length_by_lambda() {
+        // Reference: the segment X ∈ [0, 3] at Y = 1. Current: x = λX, y = Y − 1.05, in a
+        // band whose depth 2 − x is linear, so the part in contact is exactly x < 2:
+        // deformed length 2, reference length 2/λ.
+        let lambda = 1.6;
+        let reference = straight(v(0.0, 1.0), v(3.0, 1.0));
+        let current = reference.map(|p| v(lambda * p.x, p.y - 1.05));
+        let [d, r] = lengths(&reference, &current, |x| 2.0 - x.x);
+        assert!((d - 2.0).abs() < 1e-12, "deformed {d}");
+        assert!((r - 2.0 / lambda).abs() < 1e-12, "reference {r}");
+        assert!((d - lambda * r).abs() < 1e-12);
+        // Wholly in a flat band (depth > 0 everywhere): 3λ and 3.
+        let [d, r] = lengths(&reference, &current, |x| 0.1 - x.y);
+        assert!((d - 3.0 * lambda).abs() < 1e-12 && (r - 3.0).abs() < 1e-12);
+        // Wholly out of it: nothing.
+        assert_eq!(lengths(&reference, &current, |x| -1.0 - x.y), [0.0, 0.0]);
+    }
+
+    #[test]
+    fn lengths_add_to_the_running_total() {
+        let reference = straight(v(0.0, 0.0), v(1.0, 0.0));
+        let mut t = [1.0, 2.0];
+        add_band_lengths(&reference, &reference, |_| 1.0, &mut t);
+        assert!((t[0] - 2.0).abs() < 1e-12 && (t[1] - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn means_over_unions_of_domains_weight_by_area() {
+        let s = StrainNorms {
+            integral: [2.0, 6.0, 1.0],
+            area: [4.0, 10.0, 2.0],
+        };
+        assert_eq!(s.mean(&[Domain::Nucleus]), 0.5);
+        assert_eq!(s.mean(&[Domain::Cytoplasm]), 0.6);
+        assert_eq!(s.mean(&[Domain::Membrane]), 0.5);
+        // (6 + 1)/(10 + 2), not the mean of the means (0.55).
+        assert_eq!(s.mean(&[Domain::Cytoplasm, Domain::Membrane]), 7.0 / 12.0);
     }
 }

@@ -8,7 +8,7 @@
 
 use super::smooth::{heaviside, smooth_step};
 use super::substrate::Substrate;
-use super::{PhysicsError, Real, check, cst};
+use super::{PhysicsError, Real, check, cst, sqrt};
 use nalgebra::{Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
 
@@ -39,8 +39,21 @@ impl Contact {
     }
 }
 
+/// Direction of the adhesive spreading force (the paper's Eq. (26)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum AdhesionDirection {
+    /// `cof(F) N` as Eq. (26) writes it (MODEL.md's reading): by Nanson's formula the
+    /// current normal of the surface whose reference normal is `N`, scaled by its area
+    /// stretch `da/dA`.
+    Cofactor,
+    /// Its unit vector `cof(F) N / |cof(F) N|`: the current normal alone.
+    Unit,
+}
+
 /// Adhesive spreading in the fibronectin layer and the maturation of the adhesion
-/// coefficient `μ_as`.
+/// coefficient `μ_as`, with the readings of the paper that MODEL.md leaves open
+/// (`direction`, `jacobian_factor`, `exclude_substrate`; MODEL.md's defaults are
+/// `Cofactor`, `false`, `None`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Adhesion {
     /// Thickness `e_f` of the fibronectin layer over the substrate [µm] (MODEL.md: 1.5).
@@ -52,10 +65,22 @@ pub struct Adhesion {
     pub mu_as0: f64,
     /// Cap `μ_as,max` [pN/µm³] (MODEL.md: 1.4e9 N/m³ = 1.4e3 pN/µm³).
     pub mu_as_max: f64,
+    /// Direction of the force: `cof(F) N` or its unit vector (Eq. (26); MODEL.md:
+    /// `Cofactor`).
+    pub direction: AdhesionDirection,
+    /// Multiply the force by `J = det F`, the paper's "J f_as" of Eq. (37) (MODEL.md:
+    /// no, `b_as` is the force per unit reference volume as Eq. (26) gives it).
+    pub jacobian_factor: bool,
+    /// `Some(ε)`: the layer indicator excludes the substrate itself, `H_ε_f(d + e_f) −
+    /// H_ε(d)`, the paper's "layer obtained by subtracting g_flat" (Sect. 2.2.1, used in
+    /// Eqs. (26) and (28)), with `ε` the half-width of the substrate's own indicator (the
+    /// contact band's `ε_ct`). `None` (MODEL.md): `H_ε_f(d + e_f)`, substrate included.
+    pub exclude_substrate: Option<f64>,
 }
 
 impl Adhesion {
-    /// Checks `e_f ≥ 0`, `ε > 0`, `μ_as0 ≥ 0`, `μ_as,max > 0`, finite.
+    /// Checks `e_f ≥ 0`, `ε > 0`, `μ_as0 ≥ 0`, `μ_as,max > 0`, finite; when the layer
+    /// excludes the substrate, its `ε_s > 0` and `e_f ≥ ε + ε_s`.
     pub fn validate(&self) -> Result<(), PhysicsError> {
         check(
             self.e_f.is_finite() && self.e_f >= 0.0,
@@ -80,7 +105,25 @@ impl Adhesion {
             "adhesion.mu_as_max",
             self.mu_as_max,
             "must be finite and > 0",
-        )
+        )?;
+        if let Some(eps_s) = self.exclude_substrate {
+            check(
+                eps_s.is_finite() && eps_s > 0.0,
+                "adhesion.exclude_substrate",
+                eps_s,
+                "must be finite and > 0",
+            )?;
+            // Where the substrate's indicator is not 0 (d > −ε_s) the layer's must be 1
+            // (d + e_f ≥ ε_f), so that the difference lies in [0, 1].
+            check(
+                self.e_f >= self.eps + eps_s,
+                "adhesion.e_f",
+                self.e_f,
+                "must be >= the layer's and the substrate's half-widths summed when the \
+                 layer excludes the substrate (so that the layer indicator stays in [0, 1])",
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -92,11 +135,17 @@ pub fn contact_force<T: Real>(sub: &Substrate, c: &Contact, x: &Vector2<T>, J: T
     n * (J * h * c.mu_ct)
 }
 
-/// Fibronectin-layer indicator `H_ε(d(x) + e_f)` ∈ [0, 1] at current position `x` [µm]:
-/// 1 within `e_f − ε` of the substrate (and inside it).
-pub fn layer<T: Real>(sub: &Substrate, x: &Vector2<T>, e_f: f64, eps: f64) -> T {
+/// Fibronectin-layer indicator at current position `x` [µm]: `H_ε(d(x) + e_f)` ∈ [0, 1],
+/// 1 within `e_f − ε` of the substrate and inside it; or, when the layer excludes the
+/// substrate (`exclude_substrate = Some(ε_s)`), `H_ε(d + e_f) − H_ε_s(d)`, 0 again inside
+/// the substrate.
+pub fn layer<T: Real>(sub: &Substrate, ad: &Adhesion, x: &Vector2<T>) -> T {
     let (d, _) = sub.eval(x);
-    heaviside(d + e_f, eps)
+    let h = heaviside(d + ad.e_f, ad.eps);
+    match ad.exclude_substrate {
+        None => h,
+        Some(eps_s) => h - heaviside(d, eps_s),
+    }
 }
 
 /// Cofactor `cof(F) = J F⁻ᵀ`; in 2-D `[[F₁₁, −F₁₀], [−F₀₁, F₀₀]]`, polynomial in `F`.
@@ -105,9 +154,11 @@ pub fn cofactor<T: Real>(F: &Matrix2<T>) -> Matrix2<T> {
 }
 
 /// Adhesive spreading force per unit reference volume [pN/µm³] (membrane only — the
-/// caller applies it there): `b_as = t_as μ_as H_ε(d(x) + e_f) cof(F) N`, with `N` the
-/// outward radial reference direction, `μ_as` [pN/µm³] the local adhesion coefficient and
-/// `t_as` the adhesion switch.
+/// caller applies it there): `b_as = t_as μ_as g_l(x) a(F)`, with `g_l` the [`layer`]
+/// indicator, `N` the outward radial reference direction, `μ_as` [pN/µm³] the local
+/// adhesion coefficient, `t_as` the adhesion switch and `a(F)` by the readings of `ad`:
+/// `cof(F) N` (MODEL.md) or `cof(F) N/|cof(F) N|` ([`AdhesionDirection`]), times
+/// `J = det F` when `jacobian_factor`.
 pub fn adhesion_force<T: Real>(
     sub: &Substrate,
     ad: &Adhesion,
@@ -117,15 +168,25 @@ pub fn adhesion_force<T: Real>(
     mu_as: T,
     t_as: f64,
 ) -> Vector2<T> {
-    let h = layer(sub, x, ad.e_f, ad.eps);
+    let h = layer(sub, ad, x);
     let N: Vector2<T> = N_ref.map(cst::<T>);
-    cofactor(F) * N * (h * mu_as * t_as)
+    let mut a = cofactor(F) * N;
+    if ad.direction == AdhesionDirection::Unit {
+        // |cof(F) N| = J |F⁻ᵀ N| > 0 for an admissible F.
+        let len = sqrt(a.x * a.x + a.y * a.y);
+        a /= len;
+    }
+    if ad.jacobian_factor {
+        a *= F.determinant();
+    }
+    a * (h * mu_as * t_as)
 }
 
 /// Rate of the adhesion coefficient [pN/(µm³·s)]:
-/// `μ̇_as = μ_as0 H_ε(d(x) + e_f) (1 − S(μ_as; 0.98 μ_as,max, μ_as,max))`.
+/// `μ̇_as = μ_as0 g_l(x) (1 − S(μ_as; 0.98 μ_as,max, μ_as,max))`, `g_l` the [`layer`]
+/// indicator (`H_ε(d(x) + e_f)` by default).
 pub fn adhesion_rate<T: Real>(sub: &Substrate, ad: &Adhesion, x: &Vector2<T>, mu_as: T) -> T {
-    let h = layer(sub, x, ad.e_f, ad.eps);
+    let h = layer(sub, ad, x);
     let cap = smooth_step(mu_as, 0.98 * ad.mu_as_max, ad.mu_as_max);
     h * (-cap + 1.0) * ad.mu_as0
 }
@@ -219,21 +280,56 @@ mod tests {
         }
     }
 
+    /// MODEL.md's adhesion and each reading of the paper it leaves open, alone and all
+    /// together.
+    fn adhesion_readings() -> Vec<Adhesion> {
+        let d = crate::physics::reference::adhesion();
+        let eps_ct = crate::physics::reference::contact().eps;
+        vec![
+            d,
+            Adhesion {
+                direction: AdhesionDirection::Unit,
+                ..d
+            },
+            Adhesion {
+                jacobian_factor: true,
+                ..d
+            },
+            Adhesion {
+                exclude_substrate: Some(eps_ct),
+                ..d
+            },
+            Adhesion {
+                direction: AdhesionDirection::Unit,
+                jacobian_factor: true,
+                exclude_substrate: Some(eps_ct),
+                ..d
+            },
+        ]
+    }
+
     #[test]
     fn adhesion_force_and_rate_derivatives_match_finite_differences() {
         // variables: x (2), F (4), μ_as (1)
         type D = DualSVec64<7>;
-        let ad = crate::physics::reference::adhesion();
         let h = 1e-6;
         let N = Vector2::new(0.6, -0.8);
         let F0 = Matrix2::new(1.1, 0.2, -0.3, 0.9);
-        for s in substrates() {
-            // in the layer's transition (d + e_f ∈ (−ε, ε)) and the cap's transition
+        let y_top = crate::physics::reference::pillars().y_top;
+        for (ad, s) in adhesion_readings()
+            .into_iter()
+            .flat_map(|ad| substrates().map(|s| (ad, s)))
+        {
+            // in the layer's transition (d + e_f ∈ (−ε, ε)), the cap's transition and
+            // the substrate's own transition (d ∈ (−ε, ε), flat and pillar top)
             for (x, y, mu) in [
                 (0.0, -0.45, 700.0),
                 (2.0, -0.52, 1380.0),
                 (8.3, 1.22, 1390.0),
                 (13.5, -3.0, 10.0),
+                (1.0, -1.96, 900.0),
+                (3.0, -2.05, 400.0),
+                (8.5, y_top + 0.03, 1200.0),
             ] {
                 let v = [x, y, F0[(0, 0)], F0[(0, 1)], F0[(1, 0)], F0[(1, 1)], mu];
                 let dual = |i: usize| D::from_re(v[i]).derivative(i);
@@ -260,16 +356,16 @@ mod tests {
                     let fscale = mu.max(1.0) / ad.eps;
                     assert!(
                         (fd.x - eps(&f.x)[k]).abs() < 1e-6 * fscale,
-                        "{s:?} f_x k={k}"
+                        "{ad:?} {s:?} f_x k={k}"
                     );
                     assert!(
                         (fd.y - eps(&f.y)[k]).abs() < 1e-6 * fscale,
-                        "{s:?} f_y k={k}"
+                        "{ad:?} {s:?} f_y k={k}"
                     );
                     let rscale = ad.mu_as0 / ad.eps.min(0.02 * ad.mu_as_max);
                     assert!(
                         (rd - eps(&r)[k]).abs() < 1e-6 * rscale,
-                        "{s:?} rate k={k}: {rd} vs {}",
+                        "{ad:?} {s:?} rate k={k}: {rd} vs {}",
                         eps(&r)[k]
                     );
                 }
@@ -302,7 +398,57 @@ mod tests {
         assert_eq!(adhesion_rate(&s, &ad, &X, ad.mu_as_max), 0.0);
         assert!((adhesion_rate(&s, &ad, &X, 0.99 * ad.mu_as_max) - 0.5 * ad.mu_as0).abs() < 1e-12);
         // layer indicator is ½ at distance e_f from the surface
-        assert!((layer(&s, &Vector2::new(3.0_f64, -0.5), ad.e_f, ad.eps) - 0.5).abs() < 1e-12);
+        assert!((layer(&s, &ad, &Vector2::new(3.0_f64, -0.5)) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn adhesion_readings_change_the_force_as_the_paper_reads() {
+        let d = crate::physics::reference::adhesion();
+        let eps_ct = crate::physics::reference::contact().eps;
+        let s = Substrate::Flat { y_s: -2.0 };
+        let F = Matrix2::new(1.2, 0.1, 0.0, 0.8);
+        let J = F.determinant();
+        let N = Vector2::new(0.6, -0.8);
+        let X = Vector2::new(0.0_f64, -1.0); // inside the layer, above the substrate's band
+        let cof_n = F.try_inverse().unwrap().transpose() * N * J;
+        let f0 = adhesion_force(&s, &d, &X, &F, &N, 100.0, 0.5);
+        assert!((f0 - cof_n * 50.0).norm() < 1e-12);
+        // Unit: the same direction, length t_as μ_as.
+        let unit = Adhesion {
+            direction: AdhesionDirection::Unit,
+            ..d
+        };
+        let f = adhesion_force(&s, &unit, &X, &F, &N, 100.0, 0.5);
+        assert!((f - cof_n / cof_n.norm() * 50.0).norm() < 1e-12);
+        assert!((f.norm() - 50.0).abs() < 1e-12);
+        // J f_as: J times the default.
+        let with_j = Adhesion {
+            jacobian_factor: true,
+            ..d
+        };
+        let f = adhesion_force(&s, &with_j, &X, &F, &N, 100.0, 0.5);
+        assert!((f - f0 * J).norm() < 1e-12);
+        // Excluding the substrate: the same above its band, ½ less on its surface, nothing
+        // inside it (where the default layer is 1).
+        let excl = Adhesion {
+            exclude_substrate: Some(eps_ct),
+            ..d
+        };
+        assert_eq!(layer(&s, &excl, &X), layer(&s, &d, &X));
+        let on = Vector2::new(0.0_f64, -2.0);
+        assert_eq!(layer(&s, &d, &on), 1.0);
+        assert!((layer(&s, &excl, &on) - 0.5).abs() < 1e-15);
+        let inside = Vector2::new(0.0_f64, -2.5);
+        assert_eq!(layer(&s, &d, &inside), 1.0);
+        assert_eq!(layer(&s, &excl, &inside), 0.0);
+        assert_eq!(adhesion_rate(&s, &excl, &inside, 0.0), 0.0);
+        assert_eq!(adhesion_rate(&s, &d, &inside, 0.0), d.mu_as0);
+        // The layer indicator stays in [0, 1] across both bands.
+        for k in 0..=400 {
+            let x = Vector2::new(0.0, -2.6 + 1.2 * k as f64 / 400.0);
+            let g = layer(&s, &excl, &x);
+            assert!((0.0..=1.0).contains(&g), "y = {}: {g}", x.y);
+        }
     }
 
     #[test]
@@ -342,5 +488,20 @@ mod tests {
             .validate()
             .is_err()
         );
+        // Excluding the substrate needs a positive half-width and a layer wider than
+        // both bands.
+        let excl = Adhesion {
+            exclude_substrate: Some(0.1),
+            ..crate::physics::reference::adhesion()
+        };
+        assert!(excl.validate().is_ok());
+        for (e_f, eps_s) in [(1.5, 0.0), (1.5, f64::NAN), (0.15, 0.1)] {
+            let bad = Adhesion {
+                e_f,
+                exclude_substrate: Some(eps_s),
+                ..excl
+            };
+            assert!(bad.validate().is_err(), "e_f {e_f}, ε_s {eps_s}");
+        }
     }
 }

@@ -27,7 +27,8 @@ pub mod substrate;
 
 pub use active::{ActiveStrain, Bottom, Domain, Pac};
 pub use loads::{
-    Adhesion, Contact, adhesion_force, adhesion_rate, cofactor, contact_force, gravity_force, layer,
+    Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_rate, cofactor, contact_force,
+    gravity_force, layer,
 };
 pub use material::{MaterialPoint, Viscosity, Yeoh, admissible, material_point, piola_total};
 pub use phases::{Flip, Phases};

@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Number of columns of `timeseries.csv`.
-pub const N_COLUMNS: usize = 7;
+pub const N_COLUMNS: usize = 10;
 
 /// The column names of `timeseries.csv`, in order.
 pub const COLUMNS: [&str; N_COLUMNS] = [
@@ -19,7 +19,16 @@ pub const COLUMNS: [&str; N_COLUMNS] = [
     "uy_bottom",
     "strain_nucleus",
     "strain_cytoplasm",
+    "contact_radius_ref",
+    "strain_membrane",
+    "uy_nucleus_max",
 ];
+
+/// The header of `timeseries.csv` before the paper's measures were added (cellsim before
+/// `contact_radius_ref`, `strain_membrane` and `uy_nucleus_max`; its `strain_cytoplasm`
+/// excluded the membrane). Recognised only to refuse such a file with a clear message.
+pub const OLD_CSV_HEADER: &str =
+    "t,contact_radius,uy_top,uy_centre,uy_bottom,strain_nucleus,strain_cytoplasm";
 
 /// The quantities of one output row, in the units of `timeseries.csv`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -36,14 +45,26 @@ pub struct Observables {
     pub uy_bottom: f64,
     /// Reference-area mean of ‖E‖_F over the nucleus (fraction).
     pub strain_nucleus: f64,
-    /// Reference-area mean of ‖E‖_F over the cytoplasm (fraction).
+    /// Reference-area mean of ‖E‖_F over the paper's cytoplasm, which includes the
+    /// membrane (Sect. 2.1): cytoplasm and membrane together (fraction). Before the
+    /// paper's measures were added this column was the cytoplasm without the membrane.
     pub strain_cytoplasm: f64,
+    /// Length along the reference contour of the part of the boundary in contact (the
+    /// material of [`Self::contact_radius`]: same criterion, measured in the reference
+    /// frame, as the paper's COMSOL does) [µm] (half cell).
+    pub contact_radius_ref: f64,
+    /// Reference-area mean of ‖E‖_F over the membrane alone (fraction).
+    pub strain_membrane: f64,
+    /// Largest downward displacement of the nucleus: the smallest u_y over every node
+    /// (vertices and mid-side nodes) of the nucleus elements [µm] (negative = down, as
+    /// `uy_top`; never above `uy_top` and `uy_bottom`, which are nucleus nodes).
+    pub uy_nucleus_max: f64,
 }
 
 impl Observables {
     /// The CSV header, exactly as the run writes it ([`COLUMNS`] joined by commas).
-    pub const CSV_HEADER: &'static str =
-        "t,contact_radius,uy_top,uy_centre,uy_bottom,strain_nucleus,strain_cytoplasm";
+    pub const CSV_HEADER: &'static str = "t,contact_radius,uy_top,uy_centre,uy_bottom,\
+         strain_nucleus,strain_cytoplasm,contact_radius_ref,strain_membrane,uy_nucleus_max";
 
     /// The values in CSV column order.
     pub fn values(&self) -> [f64; N_COLUMNS] {
@@ -55,6 +76,9 @@ impl Observables {
             self.uy_bottom,
             self.strain_nucleus,
             self.strain_cytoplasm,
+            self.contact_radius_ref,
+            self.strain_membrane,
+            self.uy_nucleus_max,
         ]
     }
 
@@ -68,6 +92,9 @@ impl Observables {
             uy_bottom,
             strain_nucleus,
             strain_cytoplasm,
+            contact_radius_ref,
+            strain_membrane,
+            uy_nucleus_max,
         ] = v;
         Observables {
             t,
@@ -77,6 +104,9 @@ impl Observables {
             uy_bottom,
             strain_nucleus,
             strain_cytoplasm,
+            contact_radius_ref,
+            strain_membrane,
+            uy_nucleus_max,
         }
     }
 
@@ -153,6 +183,8 @@ mod tests {
     #[test]
     fn header_is_the_columns_joined() {
         assert_eq!(Observables::CSV_HEADER, COLUMNS.join(","));
+        // The original columns keep their order: the new ones come after them.
+        assert!(Observables::CSV_HEADER.starts_with(&format!("{OLD_CSV_HEADER},")));
     }
 
     #[test]
@@ -162,19 +194,26 @@ mod tests {
         assert_eq!(o.values(), v);
         assert_eq!(Observables::parse_csv_row(&o.csv_row()), Ok(o));
         assert_eq!(o.get("uy_top"), Some(v[2]));
+        // The paper's measures, after the original columns, by name.
+        assert_eq!(o.get("contact_radius_ref"), Some(v[7]));
+        assert_eq!(o.get("strain_membrane"), Some(v[8]));
+        assert_eq!(o.get("uy_nucleus_max"), Some(v[9]));
         assert_eq!(o.get("nope"), None);
         let err = Observables::parse_csv_row("1,2,3").unwrap_err();
-        assert_eq!(err, "3 fields, expected 7");
+        assert_eq!(err, "3 fields, expected 10");
         let err = Observables::parse_csv_row("1,2,x,4,5,6,7").unwrap_err();
         assert_eq!(err, "`x` is not a number");
     }
 
     #[test]
     fn interpolation_is_linear_between_rows_and_none_outside() {
-        let a = Observables::from_values([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
-        let b = Observables::from_values([10.0, 3.0, 2.0, 1.0, 0.0, -1.0, -2.0]);
+        let a = Observables::from_values([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
+        let b = Observables::from_values([10.0, 3.0, 2.0, 1.0, 0.0, -1.0, -2.0, 1.0, 0.0, 1.0]);
         let m = interpolate(&[a, b], 2.5).unwrap();
-        assert_eq!(m.values(), [2.5, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0]);
+        assert_eq!(
+            m.values(),
+            [2.5, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 5.5, 6.0, 7.0]
+        );
         assert_eq!(interpolate(&[a, b], 10.0), Some(b));
         assert_eq!(interpolate(&[a, b], 10.1), None);
         assert_eq!(interpolate(&[a, b], -0.1), None);

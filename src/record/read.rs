@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
-use super::observables::{Observables, interpolate};
+use super::observables::{COLUMNS, OLD_CSV_HEADER, Observables, interpolate};
 use super::{MeshFile, StateFile, Summary};
 
 /// Why a run directory's file could not be loaded.
@@ -81,9 +81,31 @@ fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, ReadError> {
     serde_json::from_str(&text).map_err(|e| ReadError::malformed(path, e.to_string()))
 }
 
-/// Reads `dir/summary.json`.
+/// Reads `dir/summary.json`. One written by an older cellsim, whose final values lack the
+/// paper's measures, is refused with a message saying so.
 pub fn read_summary(dir: &Path) -> Result<Summary, ReadError> {
-    read_json(&dir.join("summary.json"))
+    let path = dir.join("summary.json");
+    read_json(&path).map_err(|e| match e {
+        ReadError::Malformed { path, message } if older_observables(&message) => {
+            ReadError::Malformed {
+                path,
+                message: format!(
+                    "{message}: written by an older cellsim (final values without {}); run \
+                     the case again",
+                    new_columns()
+                ),
+            }
+        }
+        e => e,
+    })
+}
+
+/// Whether a JSON error says that a row of observables lacks one of the newer columns.
+fn older_observables(message: &str) -> bool {
+    let old = OLD_CSV_HEADER.split(',').count();
+    COLUMNS[old..]
+        .iter()
+        .any(|c| message.contains(&format!("missing field `{c}`")))
 }
 
 /// Reads `mesh.json` and checks that every index it holds is in range.
@@ -122,8 +144,15 @@ pub fn read_mesh(path: &Path) -> Result<MeshFile, ReadError> {
     Ok(mesh)
 }
 
+/// The columns a current `timeseries.csv` has after those of [`OLD_CSV_HEADER`].
+fn new_columns() -> String {
+    let old = OLD_CSV_HEADER.split(',').count();
+    COLUMNS[old..].join(", ")
+}
+
 /// Parses `timeseries.csv`. The header must be exactly
-/// [`Observables::CSV_HEADER`]. A last line without its newline that does not parse is
+/// [`Observables::CSV_HEADER`]; a file with the header of an older cellsim
+/// ([`OLD_CSV_HEADER`]) is refused with a message saying so. A last line without its newline that does not parse is
 /// taken as cut short by an interruption and dropped (reported in the second value);
 /// any other bad line is an error naming the line.
 pub fn parse_timeseries(
@@ -135,6 +164,17 @@ pub fn parse_timeseries(
         Some((_, h)) => h.trim_end(),
         None => return Err(ReadError::malformed(path, "empty file (no header)")),
     };
+    if header == OLD_CSV_HEADER {
+        return Err(ReadError::malformed(
+            path,
+            format!(
+                "line 1: written by an older cellsim (header `{header}`): it lacks the \
+                 columns {} and its strain_cytoplasm excludes the membrane, so it cannot be \
+                 read as a current run; run the case again",
+                new_columns()
+            ),
+        ));
+    }
     if header != Observables::CSV_HEADER {
         return Err(ReadError::malformed(
             path,
@@ -216,7 +256,7 @@ impl RunData {
         }
         let summary_path = dir.join("summary.json");
         let summary: Option<Summary> = if summary_path.exists() {
-            Some(read_json(&summary_path)?)
+            Some(read_summary(&dir)?)
         } else {
             notes.push(format!("{}: missing", summary_path.display()));
             None

@@ -135,6 +135,11 @@ pub struct Point {
     pub case: Result<(Case, String), String>,
 }
 
+/// RON text on one line: every run of whitespace (line breaks included) made one space.
+fn single_line(ron: &str) -> String {
+    ron.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
 /// A sweep file with its points resolved.
 #[derive(Debug, Clone)]
 pub struct Plan {
@@ -461,15 +466,18 @@ impl Plan {
                     )));
                 }
             };
+            // On one line: a struct value (a whole `active.pac`) is written over several
+            // lines in a case, and sweep.csv holds one point per line.
             let values = design
                 .axes
                 .iter()
                 .zip(&dp.values)
                 .map(|(a, v)| match v {
-                    Some(v) => v.clone(),
+                    Some(v) => single_line(v),
                     None => base_case
                         .as_deref()
                         .and_then(|t| value_at(t, &a.path))
+                        .map(|v| single_line(&v))
                         .unwrap_or_default(),
                 })
                 .collect();
@@ -551,17 +559,25 @@ pub fn read_row(id: &str, values: &[String], dir: &Path) -> Row {
     let Some(case_text) = read("case.ron") else {
         return Row::bare(id, values, Status::Missing, "not run");
     };
-    let summary = crate::record::read::read_summary(dir).ok();
-    let Some(s) = summary else {
-        return match read("error.txt") {
-            Some(msg) => Row::bare(id, values, Status::Failed, &msg),
-            None => Row::bare(
-                id,
-                values,
-                Status::Missing,
-                "no summary.json: not run or still running",
-            ),
-        };
+    let summary = crate::record::read::read_summary(dir);
+    let s = match summary {
+        Ok(s) => s,
+        // A summary that does not read (e.g. one of an older cellsim): the point is run
+        // again by the next `cellsim sweep`, as one without a summary.
+        Err(e) if dir.join("summary.json").exists() => {
+            return Row::bare(id, values, Status::Missing, &e.to_string());
+        }
+        Err(_) => {
+            return match read("error.txt") {
+                Some(msg) => Row::bare(id, values, Status::Failed, &msg),
+                None => Row::bare(
+                    id,
+                    values,
+                    Status::Missing,
+                    "no summary.json: not run or still running",
+                ),
+            };
+        }
     };
     let (status, reason) = if s.finished {
         (Status::Finished, String::new())
@@ -1040,6 +1056,44 @@ mod tests {
         assert!(eval("(1 + 2", &look).is_err());
         assert!(eval("1 / 0", &look).is_err());
         assert!(eval("1 2", &look).is_err());
+    }
+
+    #[test]
+    fn struct_valued_axes_are_one_line_in_the_table() {
+        // An axis over a whole section (the PAC's semi-axes reading in one value): the
+        // base's value comes from the resolved case, written over several lines.
+        let dir = std::env::temp_dir().join(format!("cellsim-sweep-struct-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("cases/fast/push-pull-short.ron");
+        let file = dir.join("pac.ron");
+        std::fs::write(
+            &file,
+            format!(
+                "(name: \"pac\", base: {:?}, design: OneAtATime([(path: \"active.pac\", \
+                 values: [(inner_semi_axes: (10.0, 9.0),\n outer_semi_axes: (15.0, 14.0), \
+                 clip_to_cell: true)])]))",
+                base.display().to_string()
+            ),
+        )
+        .unwrap();
+        let plan = Plan::load(&file).unwrap();
+        assert_eq!(plan.points.len(), 2);
+        for p in &plan.points {
+            assert!(!p.values[0].contains('\n'), "{:?}", p.values[0]);
+            assert!(p.case.is_ok(), "{:?}", p.case);
+        }
+        assert!(plan.points[0].values[0].contains("clip_to_cell: false"));
+        assert!(plan.points[1].values[0].contains("clip_to_cell: true"));
+        // The table with those values reads back.
+        let axes = vec!["active.pac".to_string()];
+        let rows: Vec<Row> = plan
+            .points
+            .iter()
+            .map(|p| Row::bare(&p.id, p.values.clone(), Status::Missing, "not run"))
+            .collect();
+        let (a, r) = table::parse(&table::render(&axes, &rows)).unwrap();
+        assert_eq!((a, r), (axes, rows));
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

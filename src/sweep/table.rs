@@ -2,9 +2,8 @@
 //!
 //! Columns: `id`, one per axis (its dotted path; the value the point has on that axis),
 //! `status` (finished / failed / invalid / interrupted / missing), the last row of the
-//! point's `timeseries.csv` (`t`, `contact_radius`, `uy_top`, `uy_centre`, `uy_bottom`,
-//! `strain_nucleus`, `strain_cytoplasm`: the final values of a finished run, the last ones
-//! written for one that stopped), `penetration_depth` (µm), `wall_seconds` (set-up and
+//! point's `timeseries.csv` (its columns [`COLUMNS`], `t` … `uy_nucleus_max`: the final
+//! values of a finished run, the last ones written for one that stopped), `penetration_depth` (µm), `wall_seconds` (set-up and
 //! integration), `steps` and `reason` (why the point failed, is invalid or interrupted).
 //! Numbers are written in full precision; fields with a comma or a quote are quoted as
 //! RFC 4180 says.
@@ -229,9 +228,19 @@ pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), String> {
     let axes: Vec<String> = head[1..status_at].to_vec();
     let expected = status_at + 1 + N_COLUMNS + 4;
     if head.len() != expected {
+        let older = !head.iter().any(|h| h == COLUMNS[N_COLUMNS - 1]);
         return Err(format!(
-            "line 1: {} columns, expected {expected}",
-            head.len()
+            "line 1: {} columns, expected {expected}{}",
+            head.len(),
+            if older {
+                format!(
+                    " (no `{}` column: a sweep.csv of an older cellsim, whose \
+                     strain_cytoplasm excluded the membrane; run the sweep again)",
+                    COLUMNS[N_COLUMNS - 1]
+                )
+            } else {
+                String::new()
+            }
         ));
     }
     let mut rows = Vec::new();
@@ -293,7 +302,7 @@ mod tests {
                 values: vec!["6.0".into(), "(5.0, 4.0)".into()],
                 status: Status::Finished,
                 last: Some(Observables::from_values([
-                    600.0, 8.4, -6.6, -3.0, -5.5, 0.2, 0.5,
+                    600.0, 8.4, -6.6, -3.0, -5.5, 0.2, 0.5, 6.1, 0.7, -6.9,
                 ])),
                 penetration: Some(1.25),
                 wall_seconds: Some(3.5),
@@ -320,7 +329,19 @@ mod tests {
         );
         assert_eq!(r[0].quantity("uy_top"), Some(-6.6));
         assert_eq!(r[0].quantity("penetration_depth"), Some(1.25));
+        // The paper's measures are columns too, read by name.
+        assert_eq!(r[0].quantity("contact_radius_ref"), Some(6.1));
+        assert_eq!(r[0].quantity("strain_membrane"), Some(0.7));
+        assert_eq!(r[0].quantity("uy_nucleus_max"), Some(-6.9));
+        for q in ["contact_radius_ref", "strain_membrane", "uy_nucleus_max"] {
+            assert!(quantities().contains(&q), "{q}");
+        }
         assert!(parse("id,status\n").is_err());
+        // A sweep.csv written before those columns existed: refused, saying why.
+        let old = "id,status,t,contact_radius,uy_top,uy_centre,uy_bottom,strain_nucleus,\
+                   strain_cytoplasm,penetration_depth,wall_seconds,steps,reason\n";
+        let err = parse(old).unwrap_err();
+        assert!(err.contains("older cellsim"), "{err}");
     }
 
     #[test]
