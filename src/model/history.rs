@@ -108,7 +108,7 @@ impl AdhesionHistory {
     fn drive(&self, x: [f64; DIM]) -> f64 {
         let ad = &self.adhesion;
         let xv = Vector::<f64>::from_fn(|k, _| x[k]);
-        ad.mu_as0 * layer(&self.substrate, &xv, ad.e_f, ad.eps)
+        ad.mu_as0 * layer(&self.substrate, ad, &xv)
     }
 
     /// μ_as at time `t` in [s0.t, s1.t] from μ_as `mu0` at `s0.t`.
