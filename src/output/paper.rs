@@ -15,8 +15,9 @@ use std::path::{Path, PathBuf};
 
 use super::OutputError;
 use super::figures::{
-    StrainBars, contact_radius_figure, displacement_figure, shape_figure, shape_view,
-    strain_bars_figure, strain_time_figure, upside_down_figure,
+    Compared, DisplacementMarks, StrainBars, contact_radius_figure, displacement_figure,
+    run_phases, shape_figure, shape_view, strain_bars_figure, strain_time_figure,
+    upside_down_figure,
 };
 use crate::record::RunData;
 use crate::record::StateFile;
@@ -279,11 +280,9 @@ pub fn our_value(q: Quantity, run: &RunData, control: Option<&RunData>) -> Resul
         Quantity::ContactRadius(w) => Ok(at(time(w))?.contact_radius),
         Quantity::NucleusDisplacement(When::End) => {
             at(t_end)?;
-            Ok(run
-                .series
-                .iter()
-                .map(|o| -o.uy_top)
-                .fold(f64::NEG_INFINITY, f64::max))
+            lowest_top(run)
+                .map(|(_, v)| -v)
+                .ok_or_else(|| "no rows".to_string())
         }
         Quantity::NucleusDisplacement(w) => Ok(-at(time(w))?.uy_top),
         Quantity::StrainNucleus => Ok(at(t_end)?.strain_nucleus),
@@ -297,6 +296,19 @@ pub fn our_value(q: Quantity, run: &RunData, control: Option<&RunData>) -> Resul
             Ok((mine.uy_top - theirs.uy_top).abs())
         }
     }
+}
+
+/// When and where the nucleus top p_t is lowest over the run: (t, u_y(p_t)) of the row
+/// with the smallest u_y (the first of equal ones). The paper's "maximum displacement of
+/// the nucleus" is compared with its negative.
+pub fn lowest_top(run: &RunData) -> Option<(f64, f64)> {
+    run.series
+        .iter()
+        .filter(|o| o.uy_top.is_finite())
+        .fold(None, |best: Option<(f64, f64)>, o| match best {
+            Some((_, v)) if v <= o.uy_top => best,
+            _ => Some((o.t, o.uy_top)),
+        })
 }
 
 fn fmt_num(v: f64, digits: usize) -> String {
@@ -373,18 +385,27 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
             .map(|r| r.value)
     };
 
+    // The paper's value of `q` for `scene` against ours, drawn at time `t`, signed by
+    // `sign` as the curve it sits on.
+    let compared = |scene: &str, q: Quantity, t: f64, sign: f64| -> Option<Compared> {
+        let paper = reported(scene, q)?;
+        let ours = our_value(q, get(scene)?, None).ok()?;
+        Some(Compared {
+            t,
+            paper: sign * paper,
+            ours: sign * ours,
+        })
+    };
+
     // Contact radius on the flat substrate (Fig. 6b).
     if let Some(flat) = get("flat") {
         let [tg, _, _, t_end] = flat.mesh.phase_times;
-        let pts: Vec<(f64, f64)> = [
-            (
-                tg,
-                reported("flat", Quantity::ContactRadius(When::GravityEnd)),
-            ),
-            (t_end, reported("flat", Quantity::ContactRadius(When::End))),
+        let pts: Vec<Compared> = [
+            (Quantity::ContactRadius(When::GravityEnd), tg),
+            (Quantity::ContactRadius(When::End), t_end),
         ]
         .into_iter()
-        .filter_map(|(t, v)| v.map(|v| (t, v)))
+        .filter_map(|(q, t)| compared("flat", q, t, 1.0))
         .collect();
         let p = out.join("contact-radius.png");
         record(
@@ -393,35 +414,29 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
         );
     }
 
-    // Nucleus displacement for push, pull, push-pull (Fig. 9's kind of curve).
+    // Nucleus displacement for push, pull, push-pull (Fig. 9's kind of curve): the values
+    // at T_g0 and T_as0 on the p_t curve; the paper's maximum against the lowest p_t.
     let pillar_names = ["pillars-push", "pillars-pull", "pillars-push-pull"];
     let pillars: Vec<&RunData> = pillar_names.iter().filter_map(|n| get(n)).collect();
     if !pillars.is_empty() {
-        let marks: Vec<Vec<(f64, f64)>> = pillars
+        let marks: Vec<DisplacementMarks> = pillars
             .iter()
             .map(|r| {
-                let [tg, tas, _, t_end] = r.mesh.phase_times;
-                [
-                    (tg, When::GravityEnd),
-                    (tas, When::SpreadingEnd),
-                    (t_end, When::End),
-                ]
-                .into_iter()
-                .filter_map(|(t, w)| {
-                    reported(&r.name, Quantity::NucleusDisplacement(w)).map(|v| (t, -v))
-                })
-                .collect()
+                let [tg, tas, _, _] = r.mesh.phase_times;
+                let q = Quantity::NucleusDisplacement;
+                DisplacementMarks {
+                    at_times: [(tg, When::GravityEnd), (tas, When::SpreadingEnd)]
+                        .into_iter()
+                        .filter_map(|(t, w)| compared(&r.name, q(w), t, -1.0))
+                        .collect(),
+                    maximum: lowest_top(r)
+                        .and_then(|(t, _)| compared(&r.name, q(When::End), t, -1.0)),
+                }
             })
             .collect();
         let p = out.join("nucleus-displacement.png");
         record(
-            displacement_figure(
-                &p,
-                &pillars,
-                &marks,
-                "paper (Sect. 3.2): circles in each scene's colour",
-            )
-            .map(|_| p),
+            displacement_figure(&p, &pillars, &marks, "paper (Sect. 3.2)").map(|_| p),
             &mut report,
         );
         let p = out.join("strain-time.png");
@@ -481,10 +496,11 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
             None
         }
         .unwrap_or_else(|| shape_view(&r.mesh, &r.states.iter().collect::<Vec<_>>()));
+        let phases = run_phases(r);
         for st in &r.states {
             let p = out.join(format!("shape-{}-{}.png", s.name, st.phase));
             record(
-                shape_figure(&p, s.name, &r.mesh, st, view).map(|_| p),
+                shape_figure(&p, s.name, &r.mesh, st, view, phases.as_ref()).map(|_| p),
                 &mut report,
             );
         }
