@@ -826,6 +826,59 @@ fn strain_bar_panels_share_their_scale() {
 }
 
 #[test]
+fn timings_stay_out_of_the_comparison() {
+    let r = load_fixture();
+    let outcome = |reused: bool| {
+        vec![SceneOutcome {
+            name: "pillars-push-pull".into(),
+            dir: fixture(),
+            result: Ok(!reused),
+        }]
+    };
+    let data = vec![("pillars-push-pull".to_string(), r.clone())];
+    // The same physics with another wall time and step count, reused or not.
+    let mut slower = r.clone();
+    let sm = slower.summary.as_mut().expect("summary");
+    sm.wall_seconds = 1234.5;
+    sm.stats.steps += 7;
+    let data_slower = vec![("pillars-push-pull".to_string(), slower)];
+    let md = paper::comparison_markdown(&outcome(false), &data);
+    assert_eq!(
+        md,
+        paper::comparison_markdown(&outcome(true), &data_slower),
+        "comparison.md changed with the wall time, steps or reuse"
+    );
+    let wall = format!("{:.1}", r.summary.as_ref().expect("summary").wall_seconds);
+    assert!(
+        !md.contains("wall (s)") && !md.contains(&format!("| {wall} |")),
+        "{md}"
+    );
+    assert!(md.contains(paper::TIMINGS_FILE));
+    // The timings file has them.
+    let t = paper::timings_markdown(&outcome(false), &data);
+    assert!(t.contains(&format!("| {wall} |")), "{t}");
+    let t2 = paper::timings_markdown(&outcome(true), &data_slower);
+    assert!(
+        t2.contains("| 1234.5 |") && t2.contains("finished (reused)"),
+        "{t2}"
+    );
+    // cellsim paper writes both, apart.
+    let d = scratch("timings");
+    let report = paper::draw_paper(&d, &outcome(false));
+    assert!(report.problems.is_empty(), "{:?}", report.problems);
+    let written = std::fs::read_to_string(d.join(paper::COMPARISON_FILE)).expect("comparison");
+    assert_eq!(written, md);
+    assert!(d.join(paper::TIMINGS_FILE).exists());
+    // plots/timings.md is not under version control.
+    let ignore = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(".gitignore"))
+        .expect(".gitignore");
+    assert!(
+        ignore.lines().any(|l| l.trim() == "/plots/timings.md"),
+        "{ignore}"
+    );
+}
+
+#[test]
 fn layer_edge_is_drawn_under_the_cell() {
     let r = load_fixture();
     let d = scratch("layer-edge");

@@ -506,19 +506,38 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
         }
     }
 
-    let p = out.join("comparison.md");
-    let text = comparison_markdown(runs, &data);
-    record(
-        std::fs::write(&p, text)
-            .map(|_| p.clone())
-            .map_err(|e| OutputError::write(&p, e)),
-        &mut report,
-    );
+    for (name, text) in [
+        (COMPARISON_FILE, comparison_markdown(runs, &data)),
+        (TIMINGS_FILE, timings_markdown(runs, &data)),
+    ] {
+        let p = out.join(name);
+        record(
+            std::fs::write(&p, text)
+                .map(|_| p.clone())
+                .map_err(|e| OutputError::write(&p, e)),
+            &mut report,
+        );
+    }
     report
 }
 
-/// The text of `comparison.md`: every reported value against ours, then the cost of
-/// each run.
+/// The comparison with the paper: physics only, so it changes only when the results do.
+pub const COMPARISON_FILE: &str = "comparison.md";
+/// What each run cost (wall time, steps, Jacobians), apart from the comparison because it
+/// changes from run to run (`plots/timings.md` is not under version control).
+pub const TIMINGS_FILE: &str = "timings.md";
+
+/// Status of a run for the tables: "finished" whether it ran now or was reused.
+fn run_status(o: &SceneOutcome) -> String {
+    match &o.result {
+        Ok(_) => "finished".to_string(),
+        Err(e) => format!("did not finish ({})", e.replace('|', "/")),
+    }
+}
+
+/// The text of `comparison.md`: every reported value against ours, then how far each run
+/// got. Nothing in it depends on the machine or the load (wall times are in
+/// [`timings_markdown`]), so rerunning unchanged code leaves it unchanged.
 pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) -> String {
     let get = |name: &str| data.iter().find(|(n, _)| n == name).map(|(_, d)| d);
     let mut s = String::new();
@@ -560,14 +579,58 @@ pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) ->
     }
     let _ = writeln!(
         s,
-        "\n## Runs\n\n| run | status | t reached (s) | wall (s) | steps | Jacobians | error-test failures | unknowns | run directory |\n|---|---|---:|---:|---:|---:|---:|---:|---|"
+        "\n## Runs\n\nRun directories: `runs/<run>/` beside this file. What each run cost \
+         (wall time, steps, Jacobians) is in `{TIMINGS_FILE}` beside it, kept apart because \
+         it changes from run to run.\n\n| run | status | t reached (s) | unknowns |\n|---|---|---:|---:|"
     );
     for o in runs {
         let d = get(&o.name);
-        let status = match (&o.result, d.map(|d| d.finished())) {
-            (Ok(true), _) => "finished".to_string(),
-            (Ok(false), _) => "finished (reused)".to_string(),
-            (Err(e), _) => format!("did not finish ({})", e.replace('|', "/")),
+        let sm = d.and_then(|d| d.summary.as_ref());
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} |",
+            o.name,
+            run_status(o),
+            d.map(|d| fmt_num(d.t_last(), 0)).unwrap_or("–".into()),
+            sm.map(|x| x.unknowns.total.to_string())
+                .unwrap_or("–".into()),
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nDefinitions. *Contact radius*: deformed length of the half cell's boundary within \
+         ε_ct of the substrate. *Downward displacement of p_t*: −u_y of the nucleus top; at \
+         the end, its largest value over the run (the paper's \"maximum displacement of the \
+         nucleus\"); it counts from the suspended start, so it includes the fall onto \
+         the pillars (the cell starts 0.5 µm above them, MODEL.md §5). *Mean ‖E‖*: reference-area mean of the Frobenius norm of the \
+         Green-Lagrange strain over the domain. *Upside down − control*: the control \
+         (`{CONTROL}`) is the push-pull scene continued to the upside-down scene's end time \
+         with gravity unchanged, the paper's Fig. 9 control; both are compared at that \
+         time."
+    );
+    s
+}
+
+/// The text of `timings.md`: what each run cost. Wall times change from run to run (and
+/// steps from machine to machine), so this is apart from `comparison.md`.
+pub fn timings_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) -> String {
+    let get = |name: &str| data.iter().find(|(n, _)| n == name).map(|(_, d)| d);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# What each run of `cellsim paper` cost\n\nWritten by `cellsim paper` (cellsim {}); \
+         the physics is in `{COMPARISON_FILE}`. Wall time is the integration only (mesh and \
+         set-up excluded); a reused run shows the time of the run that wrote it.\n\n| run | status \
+         | t reached (s) | wall (s) | steps | Jacobians | error-test failures | unknowns | run directory |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---|",
+        env!("CARGO_PKG_VERSION")
+    );
+    for o in runs {
+        let d = get(&o.name);
+        let status = match &o.result {
+            Ok(true) => "finished".to_string(),
+            Ok(false) => "finished (reused)".to_string(),
+            Err(_) => run_status(o),
         };
         let sm = d.and_then(|d| d.summary.as_ref());
         let _ = writeln!(
@@ -588,17 +651,5 @@ pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) ->
             o.dir.display()
         );
     }
-    let _ = writeln!(
-        s,
-        "\nDefinitions. *Contact radius*: deformed length of the half cell's boundary within \
-         ε_ct of the substrate. *Downward displacement of p_t*: −u_y of the nucleus top; at \
-         the end, its largest value over the run (the paper's \"maximum displacement of the \
-         nucleus\"); it counts from the suspended start, so it includes the fall onto \
-         the pillars (the cell starts 0.5 µm above them, MODEL.md §5). *Mean ‖E‖*: reference-area mean of the Frobenius norm of the \
-         Green-Lagrange strain over the domain. *Upside down − control*: the control \
-         (`{CONTROL}`) is the push-pull scene continued to the upside-down scene's end time \
-         with gravity unchanged, the paper's Fig. 9 control; both are compared at that \
-         time. Wall time is the integration only (mesh and set-up excluded)."
-    );
     s
 }
