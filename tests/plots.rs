@@ -10,8 +10,8 @@ use std::process::Command;
 
 use cellsim::output::RunData;
 use cellsim::output::figures::{
-    self, CYTOPLASM, LAYER, MEMBRANE, NUCLEUS, SHAPE_SIZE, SUBSTRATE, StrainBars, TIME_SIZE,
-    UPSIDE_DOWN_SIZE,
+    self, CYTOPLASM, Compared, DisplacementMarks, FOOT, GravityMark, LAYER, LAYER_EDGE, MEMBRANE,
+    NUCLEUS, SHAPE_SIZE, SUBSTRATE, StrainBars, TIME_SIZE, UPSIDE_DOWN_SIZE,
 };
 use cellsim::output::geometry::{Backdrop, CellShape};
 use cellsim::output::movie::{FRAME_SIZE, MAX_FRAMES, Movie};
@@ -86,14 +86,37 @@ fn time_figures_have_their_size_and_ink() {
     let runs = [&r];
 
     let p = d.join("contact.png");
-    figures::contact_radius_figure(&p, &runs, &[(10000.0, 1.0), (55000.0, 8.8)], "paper")
-        .expect("contact radius figure");
+    let reported = [(10000.0, 1.0), (55000.0, 8.8)].map(|(t, paper)| Compared {
+        t,
+        paper,
+        ours: r.at(t).expect("row").contact_radius,
+    });
+    figures::contact_radius_figure(&p, &runs, &reported, "paper").expect("contact radius figure");
     check_png(&p, TIME_SIZE, 0.03);
 
     let p = d.join("disp.png");
-    let marks = vec![vec![(10000.0, -0.1), (40000.0, -5.0)]];
+    let marks = vec![DisplacementMarks {
+        at_times: vec![Compared {
+            t: 10000.0,
+            paper: -0.1,
+            ours: r.at(10000.0).expect("row").uy_top,
+        }],
+        maximum: Some(Compared {
+            t: 55000.0,
+            paper: -9.65,
+            ours: r.series.last().expect("rows").uy_top,
+        }),
+    }];
     figures::displacement_figure(&p, &runs, &marks, "paper").expect("displacement figure");
     check_png(&p, TIME_SIZE, 0.03);
+    // The side panel of maxima (right quarter) holds the paper's hollow circle and our dot.
+    let (w, _, px) = png(&p);
+    let side = px
+        .iter()
+        .enumerate()
+        .filter(|(k, c)| (*k as u32 % w) > w * 3 / 4 && **c == [31, 119, 180])
+        .count();
+    assert!(side > 50, "{side} pixels of our dot in the side panel");
 
     let p = d.join("strain.png");
     figures::strain_time_figure(&p, &runs).expect("strain figure");
@@ -135,7 +158,7 @@ fn shape_figure_fills_domains_and_keeps_equal_aspect() {
     let view = figures::shape_view(&r.mesh, &states);
     for s in &r.states {
         let p = d.join(format!("shape-{}.png", s.phase));
-        let scale = figures::shape_figure(&p, "fixture", &r.mesh, s, view).expect("shape");
+        let scale = figures::shape_figure(&p, "fixture", &r.mesh, s, view, None).expect("shape");
         let rel = (scale.px_per_um_x - scale.px_per_um_y).abs() / scale.px_per_um_x;
         assert!(rel < 0.01, "{}: aspect {scale:?}", s.phase);
         assert!(scale.px_per_um_x > 10.0, "{scale:?}");
@@ -248,14 +271,40 @@ fn backdrop_matches_the_substrate_geometry() {
     );
     assert!((top(&b.substrate, -8.01) - p.y_top).abs() < 1e-3);
     assert!((top(&b.substrate, 0.01) - floor).abs() < 1e-6);
-    // Under the rounded foot of a pillar (x = 4.6, inside the pillar's width) the
-    // substrate is two strips with a gap above the floor: the undercut is drawn open.
-    let foot = column(&b.substrate, 4.61);
-    assert_eq!(foot.len(), 2, "{foot:?}");
+    // Under the rounded foot of a pillar (x = 4.6, inside the pillar's width) the model's
+    // substrate is two strips with a gap above the floor (the undercut)...
+    let undercut = column(&b.substrate, 4.61);
+    assert_eq!(undercut.len(), 2, "{undercut:?}");
     assert!(
-        (foot[1][1] - floor).abs() < 1e-6 && foot[0][0] > floor + 0.3,
-        "{foot:?}"
+        (undercut[1][1] - floor).abs() < 1e-6 && undercut[0][0] > floor + 0.3,
+        "{undercut:?}"
     );
+    // ...which the pillar's foot fills: across the pillar's width, substrate and foot
+    // together are one piece from below the floor to the pillar's top, so the pillar is
+    // drawn standing on its floor. Outside the width (mid-gap) there is no foot.
+    let solid_from_floor = |x: f64| -> f64 {
+        let mut pieces = column(&b.substrate, x);
+        pieces.extend(column(&b.foot, x));
+        pieces.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        let mut reach = view[2];
+        for [lo, hi] in pieces {
+            if lo > reach + 1e-9 {
+                break;
+            }
+            reach = reach.max(hi);
+        }
+        reach
+    };
+    for x in [4.05, 4.3, 4.61, 5.5, 8.01, 11.7, 11.95, -4.3, -11.95] {
+        let top_x = top(&b.substrate, x);
+        let reach = solid_from_floor(x);
+        assert!(
+            (reach - top_x).abs() < 1e-9,
+            "x = {x}: solid from the floor up to {reach}, pillar top {top_x}"
+        );
+    }
+    assert!(column(&b.foot, 0.01).is_empty() && column(&b.foot, 3.9).is_empty());
+    assert!(column(&b.foot, 12.1).is_empty());
     // The layer reaches e_f above the pillar top and above the floor.
     assert!((top(&b.layer, 8.01) - (p.y_top + 1.5)).abs() < 1e-3);
     assert!((top(&b.layer, 0.01) - (floor + 1.5)).abs() < 1e-6);
@@ -617,6 +666,10 @@ fn comparison_uses_the_reported_table() {
         .expect("final displacement");
     let max_down = r.series.iter().map(|o| -o.uy_top).fold(f64::MIN, f64::max);
     assert_eq!(disp, max_down);
+    // The figure's dot for it sits where p_t is lowest, at that value.
+    let (t_low, low) = paper::lowest_top(&r).expect("rows");
+    assert_eq!(-low, disp);
+    assert_eq!(r.at(t_low).expect("row").uy_top, low);
     let g = paper::our_value(Quantity::NucleusDisplacement(When::GravityEnd), &r, None)
         .expect("at T_g0");
     let row = r.at(10000.0).expect("row at T_g0");
@@ -703,4 +756,256 @@ fn paper_figures_from_stored_runs() {
     assert_eq!(control.name, paper::CONTROL);
     assert_eq!(control.phases.t_end, cases[4].0.phases.t_end);
     assert_eq!(control.active, cases[3].0.active);
+}
+
+#[test]
+fn contact_radius_and_strain_axes_start_at_zero() {
+    let r = load_fixture();
+    let runs = [&r];
+    // The fixture starts at 0 (no contact, no strain): a padded axis would start below.
+    let contact = figures::contact_radius_plot(&runs, &[], "");
+    let (lo, hi) = figures::value_range(&contact);
+    assert_eq!(lo, 0.0);
+    let top = r
+        .series
+        .iter()
+        .map(|o| o.contact_radius)
+        .fold(0.0, f64::max);
+    assert!(hi > top, "{hi} above {top}");
+    let strain = figures::strain_time_plot(&runs);
+    assert_eq!(figures::value_range(&strain).0, 0.0);
+    // The rule: 0 when asked and nothing is negative; padded otherwise.
+    let vals = [1.2, 13.9];
+    assert_eq!(figures::value_axis(vals.into_iter(), true, 0).0, 0.0);
+    assert!(figures::value_axis(vals.into_iter(), false, 0).0 > 0.0);
+    let (lo, _) = figures::value_axis([-0.5, 3.0].into_iter(), true, 0);
+    assert!(lo < -0.5, "{lo}");
+}
+
+#[test]
+fn identical_runs_are_found_and_named() {
+    let r = load_fixture();
+    // A copy of the run that leaves it at t = 40 000 s.
+    let mut other = r.clone();
+    other.name = "pillars-pull".into();
+    let k = other
+        .series
+        .iter()
+        .position(|o| o.t > 40000.0)
+        .expect("rows after T_as0");
+    for o in &mut other.series[k..] {
+        o.uy_top -= 1e-6;
+    }
+    let mut first = r.clone();
+    first.name = "pillars-push".into();
+    assert_eq!(
+        figures::identical_until(&[&first, &other]),
+        Some(other.series[k - 1].t)
+    );
+    assert_eq!(other.series[k - 1].t, 40000.0);
+    let note = figures::identical_note(&[&first, &other], "push, pull").expect("a note");
+    assert_eq!((note.from, note.to), (0.0, 40000.0));
+    assert!(
+        note.text.contains("push, pull") && note.text.contains("40 000 s = T_as0"),
+        "{}",
+        note.text
+    );
+    assert_eq!(
+        figures::short_names(&[&first, &other]),
+        vec!["push".to_string(), "pull".to_string()]
+    );
+    // One run, or runs apart from the first row: no note.
+    assert_eq!(figures::identical_until(&[&r]), None);
+    let mut apart = r.clone();
+    apart.series[0].contact_radius += 1.0;
+    assert_eq!(figures::identical_until(&[&r, &apart]), None);
+    assert!(figures::identical_note(&[&r, &apart], "x").is_none());
+    // The same run twice: identical throughout.
+    assert_eq!(figures::identical_until(&[&r, &r]), Some(r.t_last()));
+}
+
+#[test]
+fn strain_bar_panels_share_their_scale() {
+    let d = scratch("bars-scale");
+    // Equal paper values in both domains, ours far apart: the grey bars must be equally
+    // tall in both panels.
+    let bars = vec![StrainBars {
+        scene: "push".into(),
+        paper_nucleus: Some(0.5),
+        ours_nucleus: Some(0.2),
+        paper_cytoplasm: Some(0.5),
+        ours_cytoplasm: Some(0.9),
+    }];
+    assert!((figures::strain_bars_top(&bars) - 117.0).abs() < 1e-9);
+    let p = d.join("bars.png");
+    figures::strain_bars_figure(&p, &bars, "ours", "paper").expect("bars figure");
+    let (w, h, px) = png(&p);
+    let grey = [170u8, 170, 170];
+    // Height of the grey bar: the rows holding a long run of grey pixels, per half.
+    let bar_rows = |x0: u32, x1: u32| {
+        (0..h)
+            .filter(|y| {
+                (x0..x1)
+                    .filter(|x| px[(y * w + x) as usize] == grey)
+                    .count()
+                    > 40
+            })
+            .count()
+    };
+    let (left, right) = (bar_rows(0, w / 2), bar_rows(w / 2, w));
+    assert!(left > 100, "{left} rows");
+    assert!(
+        left.abs_diff(right) <= 2,
+        "grey bars {left} and {right} px tall"
+    );
+}
+
+#[test]
+fn timings_stay_out_of_the_comparison() {
+    let r = load_fixture();
+    let outcome = |reused: bool| {
+        vec![SceneOutcome {
+            name: "pillars-push-pull".into(),
+            dir: fixture(),
+            result: Ok(!reused),
+        }]
+    };
+    let data = vec![("pillars-push-pull".to_string(), r.clone())];
+    // The same physics with another wall time and step count, reused or not.
+    let mut slower = r.clone();
+    let sm = slower.summary.as_mut().expect("summary");
+    sm.wall_seconds = 1234.5;
+    sm.stats.steps += 7;
+    let data_slower = vec![("pillars-push-pull".to_string(), slower)];
+    let md = paper::comparison_markdown(&outcome(false), &data);
+    assert_eq!(
+        md,
+        paper::comparison_markdown(&outcome(true), &data_slower),
+        "comparison.md changed with the wall time, steps or reuse"
+    );
+    let wall = format!("{:.1}", r.summary.as_ref().expect("summary").wall_seconds);
+    assert!(
+        !md.contains("wall (s)") && !md.contains(&format!("| {wall} |")),
+        "{md}"
+    );
+    assert!(md.contains(paper::TIMINGS_FILE));
+    // The timings file has them.
+    let t = paper::timings_markdown(&outcome(false), &data);
+    assert!(t.contains(&format!("| {wall} |")), "{t}");
+    let t2 = paper::timings_markdown(&outcome(true), &data_slower);
+    assert!(
+        t2.contains("| 1234.5 |") && t2.contains("finished (reused)"),
+        "{t2}"
+    );
+    // cellsim paper writes both, apart.
+    let d = scratch("timings");
+    let report = paper::draw_paper(&d, &outcome(false));
+    assert!(report.problems.is_empty(), "{:?}", report.problems);
+    let written = std::fs::read_to_string(d.join(paper::COMPARISON_FILE)).expect("comparison");
+    assert_eq!(written, md);
+    assert!(d.join(paper::TIMINGS_FILE).exists());
+    // plots/timings.md is not under version control.
+    let ignore = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(".gitignore"))
+        .expect(".gitignore");
+    assert!(
+        ignore.lines().any(|l| l.trim() == "/plots/timings.md"),
+        "{ignore}"
+    );
+}
+
+#[test]
+fn layer_edge_is_drawn_under_the_cell() {
+    let r = load_fixture();
+    let d = scratch("layer-edge");
+    let end = r.state("end").expect("end state");
+    let states: Vec<&StateFile> = r.states.iter().collect();
+    let view = figures::shape_view(&r.mesh, &states);
+    // The layer's edge alone (the cell moved far out of the view), then under the cell.
+    let away = StateFile {
+        u: vec![[0.0, 1000.0]; r.mesh.nodes.len()],
+        ..end.clone()
+    };
+    let count = |s: &StateFile, name: &str| {
+        let p = d.join(name);
+        figures::shape_figure(&p, "fixture", &r.mesh, s, view, None).expect("shape");
+        count_color(&png(&p).2, LAYER_EDGE)
+    };
+    let alone = count(&away, "away.png");
+    let under = count(end, "end.png");
+    assert!(alone > 2000, "{alone} edge pixels");
+    // At the end the cell sits in the layer between the pillars: the edge there is hidden.
+    assert!(
+        (under as f64) < 0.9 * alone as f64,
+        "edge pixels {under} with the cell, {alone} without"
+    );
+}
+
+#[test]
+fn pillars_are_drawn_standing_on_their_floor() {
+    let r = load_fixture();
+    let d = scratch("foot");
+    let s = r.state("gravity").expect("state");
+    let view = figures::shape_view(&r.mesh, &[s]);
+    let p = d.join("shape.png");
+    figures::shape_figure(&p, "fixture", &r.mesh, s, view, None).expect("shape");
+    let px = png(&p).2;
+    // Four feet (two undercut wedges each) in view, a few hundred pixels of foot fill.
+    assert!(count_color(&px, FOOT) > 400, "{}", count_color(&px, FOOT));
+}
+
+#[test]
+fn gravity_is_shown_down_or_flipped() {
+    use cellsim::physics::{Flip, Phases};
+    let plain = Phases {
+        t_g0: 10000.0,
+        t_as0: 40000.0,
+        t_a0: 50000.0,
+        flip: None,
+    };
+    let g = GravityMark::at(&plain, 50000.0);
+    assert_eq!(g.factor, 1.0);
+    assert_eq!(g.note, "gravity");
+    let flipped = Phases {
+        flip: Some(Flip {
+            start: 50000.0,
+            duration: 10000.0,
+        }),
+        ..plain
+    };
+    let before = GravityMark::at(&flipped, 50000.0);
+    assert_eq!(before.factor, 1.0);
+    assert!(before.note.contains("flipped later"), "{}", before.note);
+    let during = GravityMark::at(&flipped, 55000.0);
+    assert!(during.factor.abs() < 1e-12 && during.note.contains("flipping"));
+    let after = GravityMark::at(&flipped, 60000.0);
+    assert_eq!(after.factor, -1.0);
+    assert!(after.note.contains("upside down"), "{}", after.note);
+    // The arrow is drawn: black pixels in the upper left corner that are not there
+    // without it.
+    let r = load_fixture();
+    let d = scratch("gravity");
+    let s = r.state("end").expect("state");
+    let view = figures::shape_view(&r.mesh, &[s]);
+    let corner_black = |ph: Option<&Phases>, name: &str| {
+        let p = d.join(name);
+        figures::shape_figure(&p, "fixture", &r.mesh, s, view, ph).expect("shape");
+        let (w, _, px) = png(&p);
+        px.iter()
+            .enumerate()
+            .filter(|(k, c)| {
+                let (x, y) = (*k as u32 % w, *k as u32 / w);
+                (120..300).contains(&x) && (60..200).contains(&y) && **c == [0, 0, 0]
+            })
+            .count()
+    };
+    let with = corner_black(Some(&flipped), "with.png");
+    let without = corner_black(None, "without.png");
+    assert!(
+        with > without + 300,
+        "{with} black pixels, {without} without"
+    );
+    // A run's phases come from its case file (the fixture's has no flip).
+    let ph = figures::run_phases(&r).expect("the fixture's case file loads");
+    assert!(ph.flip.is_none());
+    assert_eq!(ph.t_a0, r.mesh.phase_times[2]);
 }

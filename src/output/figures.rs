@@ -21,6 +21,7 @@ use plotters::prelude::*;
 use super::OutputError;
 use super::geometry::{Backdrop, Bounds, CellShape, Pt, Rect, substrate_floor};
 use crate::fem::Domain;
+use crate::physics::Phases;
 use crate::record::Observables;
 use crate::record::RunData;
 use crate::record::{MeshFile, StateFile};
@@ -48,6 +49,9 @@ pub const MEMBRANE: RGBColor = RGBColor(70, 160, 80);
 pub const SUBSTRATE: RGBColor = RGBColor(160, 160, 160);
 /// Fill colour of the fibronectin layer (the paper's yellow, Fig. 3).
 pub const LAYER: RGBColor = RGBColor(255, 240, 150);
+/// Fill colour of a pillar's foot: the undercut below the superellipse's rounded lower
+/// corners, drawn so the pillar stands on its floor, but outside the model's substrate.
+pub const FOOT: RGBColor = RGBColor(190, 190, 190);
 /// Line colour of the fibronectin layer's edge.
 pub const LAYER_EDGE: RGBColor = RGBColor(170, 130, 0);
 /// Outline colour of the PAC region (the paper's blue).
@@ -102,7 +106,8 @@ pub struct Curve {
     pub stroke: Stroke,
 }
 
-/// Reported values drawn as hollow circles.
+/// Values drawn as circles: hollow for the paper's, filled for the cellsim value each is
+/// compared with.
 #[derive(Debug, Clone)]
 pub struct Marks {
     /// Legend text (empty: no legend entry).
@@ -111,9 +116,22 @@ pub struct Marks {
     pub points: Vec<(f64, f64)>,
     /// Colour.
     pub color: RGBColor,
-    /// Circle radius [px] (concentric circles keep coinciding values of several runs
-    /// visible).
+    /// Circle radius [px].
     pub radius: i32,
+    /// Filled (a cellsim value) instead of hollow (the paper's).
+    pub filled: bool,
+}
+
+/// A note over a time interval, drawn as a bracket under the row of phase names: e.g.
+/// where several runs are the same run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpanNote {
+    /// Start of the interval [s].
+    pub from: f64,
+    /// End of the interval [s].
+    pub to: f64,
+    /// Text above the bracket.
+    pub text: String,
 }
 
 /// A time plot: curves, reported values and the phases.
@@ -125,8 +143,16 @@ pub struct TimePlot {
     pub y_desc: String,
     /// The curves.
     pub curves: Vec<Curve>,
-    /// Reported values.
+    /// Reported values, and ours where they are compared.
     pub marks: Vec<Marks>,
+    /// Thin vertical lines joining a paper value to the cellsim value it is compared with:
+    /// (t, one value, the other).
+    pub links: Vec<(f64, f64, f64)>,
+    /// Notes over time intervals (brackets under the phase names).
+    pub notes: Vec<SpanNote>,
+    /// The value axis starts at 0 (for quantities that cannot be negative), unless a value
+    /// is negative.
+    pub from_zero: bool,
     /// T_g0, T_as0, T_a0 and the end time [s]: boundaries are drawn at the first three
     /// where they lie inside the time axis.
     pub phase_times: [f64; 4],
@@ -151,23 +177,102 @@ fn group_thousands(v: f64) -> String {
     if v < -0.5 { format!("-{out}") } else { out }
 }
 
-/// Padded value range of the curves and marks (a unit range if there is nothing).
-fn value_range(plot: &TimePlot) -> (f64, f64) {
-    let vals = plot
-        .curves
+/// The finite values of the curves and marks of `plot`.
+fn plot_values(plot: &TimePlot) -> impl Iterator<Item = f64> + '_ {
+    plot.curves
         .iter()
         .flat_map(|c| c.points.iter())
         .chain(plot.marks.iter().flat_map(|m| m.points.iter()))
         .map(|p| p.1)
-        .filter(|v| v.is_finite());
-    let (lo, hi) = vals.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-        (a.min(v), b.max(v))
-    });
+        .filter(|v| v.is_finite())
+}
+
+/// The value axis for values `vals`: padded by 8 % of their span below and, to leave room
+/// for the phase names (and the notes, `notes` of them), 16 % (+ 10 % per note) above. With
+/// `from_zero` and no negative value the axis starts at exactly 0. A unit range if there is
+/// nothing.
+pub fn value_axis(vals: impl Iterator<Item = f64>, from_zero: bool, notes: usize) -> (f64, f64) {
+    let (lo, hi) = vals
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
     if !(lo <= hi) {
         return (0.0, 1.0);
     }
+    let zero = from_zero && lo >= 0.0;
+    let lo = if zero { 0.0 } else { lo };
     let span = (hi - lo).max(1e-6 * hi.abs().max(lo.abs())).max(1e-12);
-    (lo - 0.08 * span, hi + 0.16 * span)
+    let top = 0.16 + 0.10 * notes as f64;
+    let bottom = if zero { 0.0 } else { lo - 0.08 * span };
+    (bottom, hi + top * span)
+}
+
+/// The value axis of a time plot (see [`value_axis`]).
+pub fn value_range(plot: &TimePlot) -> (f64, f64) {
+    value_axis(plot_values(plot), plot.from_zero, plot.notes.len())
+}
+
+/// The last output time up to which every run of `runs` wrote the same rows (every column
+/// equal to 1e-12 relative), or `None` with fewer than two runs or rows that differ from
+/// the first. Rows are compared in order; the runs must share their output times.
+pub fn identical_until(runs: &[&RunData]) -> Option<f64> {
+    let (first, rest) = runs.split_first()?;
+    if rest.is_empty() {
+        return None;
+    }
+    let same = |a: f64, b: f64| a == b || (a - b).abs() <= 1e-12 * a.abs().max(b.abs());
+    let mut until = None;
+    for (k, row) in first.series.iter().enumerate() {
+        let all = rest.iter().all(|r| {
+            r.series.get(k).is_some_and(|o| {
+                row.values()
+                    .iter()
+                    .zip(o.values().iter())
+                    .all(|(a, b)| same(*a, *b))
+            })
+        });
+        if !all {
+            break;
+        }
+        until = Some(row.t);
+    }
+    until
+}
+
+/// A note saying that `runs` are the same run until [`identical_until`], naming the phase
+/// boundary it falls on (`who` names the runs). `None` if they differ from the start, are
+/// fewer than two, or stay identical to the end of the shortest.
+pub fn identical_note(runs: &[&RunData], who: &str) -> Option<SpanNote> {
+    let until = identical_until(runs)?;
+    let shortest = runs
+        .iter()
+        .map(|r| r.t_last())
+        .fold(f64::INFINITY, f64::min);
+    if until <= 0.0 {
+        return None;
+    }
+    let names = ["T_g0", "T_as0", "T_a0"];
+    let [tg, tas, ta, _] = runs[0].mesh.phase_times;
+    let at = [tg, tas, ta]
+        .iter()
+        .zip(names)
+        .find(|(t, _)| **t == until)
+        .map(|(_, n)| format!(" = {n}"))
+        .unwrap_or_default();
+    let text = if until >= shortest {
+        format!("{who}: identical runs throughout")
+    } else {
+        format!(
+            "{who}: identical runs until t = {} s{at} (one curve)",
+            group_thousands(until)
+        )
+    };
+    Some(SpanNote {
+        from: 0.0,
+        to: until,
+        text,
+    })
 }
 
 fn phase_intervals(plot: &TimePlot) -> Vec<(f64, f64, String)> {
@@ -184,21 +289,38 @@ fn phase_intervals(plot: &TimePlot) -> Vec<(f64, f64, String)> {
     out
 }
 
-/// Draws a time plot into `area`.
+/// Margin around a time plot [px].
+const TIME_MARGIN: u32 = 18;
+/// Height of the time axis' label area [px].
+const TIME_X_LABELS: u32 = 60;
+
+/// Draws a time plot into `area` on its own value axis ([`value_range`]).
 pub fn draw_time_plot<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     plot: &TimePlot,
 ) -> Result<(), String> {
+    draw_time_plot_on(area, plot, value_range(plot))
+}
+
+/// Draws a time plot into `area` with the value axis `(lo, hi)`. Without a title there
+/// is no caption, so a panel beside it built with the same margins lines up.
+pub fn draw_time_plot_on<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    plot: &TimePlot,
+    (lo, hi): (f64, f64),
+) -> Result<(), String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-    let (lo, hi) = value_range(plot);
     let t_max = if plot.t_max > 0.0 { plot.t_max } else { 1.0 };
     // 3 % of room after the end, so marks at the end time are not cut.
     let t_axis_end = 1.03 * t_max;
-    let mut chart = ChartBuilder::on(area)
-        .caption(&plot.title, (FONT, 28))
-        .margin(18)
+    let mut builder = ChartBuilder::on(area);
+    if !plot.title.is_empty() {
+        builder.caption(&plot.title, (FONT, 28));
+    }
+    let mut chart = builder
+        .margin(TIME_MARGIN)
         .margin_right(44)
-        .x_label_area_size(60)
+        .x_label_area_size(TIME_X_LABELS)
         .y_label_area_size(90)
         .build_cartesian_2d(0.0..t_axis_end, lo..hi)
         .map_err(e)?;
@@ -243,6 +365,38 @@ pub fn draw_time_plot<DB: DrawingBackend>(
             .map_err(e)?;
     }
 
+    // Notes: a bracket over [from, to] under the phase names, the text above it.
+    for (k, n) in plot.notes.iter().enumerate() {
+        let span = hi - lo;
+        let y_text = hi - (0.055 + 0.09 * k as f64) * span;
+        let y_line = y_text - 0.045 * span;
+        let tick = 0.015 * span;
+        let (a, b) = (n.from.max(0.0), n.to.min(t_axis_end));
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![
+                    (a, y_line - tick),
+                    (a, y_line),
+                    (b, y_line),
+                    (b, y_line - tick),
+                ],
+                BLACK.stroke_width(2),
+            )))
+            .map_err(e)?;
+        let style =
+            TextStyle::from((FONT, 18).into_font()).pos(plotters::style::text_anchor::Pos::new(
+                plotters::style::text_anchor::HPos::Left,
+                plotters::style::text_anchor::VPos::Top,
+            ));
+        chart
+            .draw_series(std::iter::once(Text::new(
+                n.text.clone(),
+                (a + 0.01 * t_max, y_text),
+                style,
+            )))
+            .map_err(e)?;
+    }
+
     for c in &plot.curves {
         let style = c.color.stroke_width(3);
         let color = c.color;
@@ -263,6 +417,9 @@ pub fn draw_time_plot<DB: DrawingBackend>(
                 .map_err(e)?,
         };
         let stroke = c.stroke;
+        if c.label.is_empty() {
+            continue;
+        }
         anno.label(&c.label).legend(move |(x, y)| {
             let s = color.stroke_width(3);
             match stroke {
@@ -278,24 +435,31 @@ pub fn draw_time_plot<DB: DrawingBackend>(
             }
         });
     }
+    chart
+        .draw_series(plot.links.iter().map(|&(t, a, b)| {
+            PathElement::new(vec![(t, a), (t, b)], RGBColor(90, 90, 90).stroke_width(2))
+        }))
+        .map_err(e)?;
     for m in &plot.marks {
         let color = m.color;
+        let style = if m.filled {
+            color.filled()
+        } else {
+            color.stroke_width(3)
+        };
         let anno = chart
-            .draw_series(
-                m.points
-                    .iter()
-                    .map(|&p| Circle::new(p, m.radius, color.stroke_width(3))),
-            )
+            .draw_series(m.points.iter().map(|&p| Circle::new(p, m.radius, style)))
             .map_err(e)?;
         if !m.label.is_empty() {
-            anno.label(&m.label).legend(move |(x, y)| {
-                Circle::new((x + LEGEND_GLYPH / 2, y), 7, color.stroke_width(3))
-            });
+            anno.label(&m.label)
+                .legend(move |(x, y)| Circle::new((x + LEGEND_GLYPH / 2, y), 7, style));
         }
     }
-    // Upper legends start below the row of phase names.
+    // Upper legends start below the row of phase names and the notes.
     let position = match plot.legend {
-        SeriesLabelPosition::UpperLeft => SeriesLabelPosition::Coordinate(12, 40),
+        SeriesLabelPosition::UpperLeft => {
+            SeriesLabelPosition::Coordinate(12, 40 + 60 * plot.notes.len() as i32)
+        }
         ref other => other.clone(),
     };
     chart
@@ -345,14 +509,93 @@ pub fn run_label(r: &RunData) -> String {
     }
 }
 
-/// Contact radius against time for `runs` (the paper's Fig. 6b), with `reported` values
-/// (t [s], radius [µm]) as hollow circles labelled `reported_label`.
+/// A value the paper reports set against the cellsim value it is compared with (signed as
+/// the curve it is drawn on).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Compared {
+    /// Time of the cellsim value [s]: the time the paper gives, or when our extreme is
+    /// reached.
+    pub t: f64,
+    /// The paper's value.
+    pub paper: f64,
+    /// Ours, a point of the curve it is compared with.
+    pub ours: f64,
+}
+
+/// Marks, filled dots and joining lines for `compared` values: paper hollow black
+/// circles, ours filled dots in `color` on the curve, a grey line between.
+fn compared_marks(compared: &[Compared], color: RGBColor) -> (Vec<Marks>, Vec<(f64, f64, f64)>) {
+    let marks = vec![
+        Marks {
+            label: String::new(),
+            points: compared.iter().map(|c| (c.t, c.paper)).collect(),
+            color: BLACK,
+            radius: 8,
+            filled: false,
+        },
+        Marks {
+            label: String::new(),
+            points: compared.iter().map(|c| (c.t, c.ours)).collect(),
+            color,
+            radius: 6,
+            filled: true,
+        },
+    ];
+    let links = compared.iter().map(|c| (c.t, c.paper, c.ours)).collect();
+    (marks, links)
+}
+
+/// Legend entries (no points) for the paper's marks (`paper_label`) and for ours
+/// (`ours_label`).
+fn compared_legend(paper_label: &str, ours_label: &str) -> Vec<Marks> {
+    vec![
+        Marks {
+            label: paper_label.to_string(),
+            points: vec![],
+            color: BLACK,
+            radius: 8,
+            filled: false,
+        },
+        Marks {
+            label: ours_label.to_string(),
+            points: vec![],
+            color: BLACK,
+            radius: 6,
+            filled: true,
+        },
+    ]
+}
+
+/// The names of `runs` without their common prefix up to a `-` ("pillars-push",
+/// "pillars-pull" → "push", "pull").
+pub fn short_names(runs: &[&RunData]) -> Vec<String> {
+    let names: Vec<&str> = runs.iter().map(|r| r.name.as_str()).collect();
+    let prefix = names.first().and_then(|n| n.find('-').map(|k| &n[..=k]));
+    let strip = match prefix {
+        Some(p) if names.iter().all(|n| n.starts_with(p) && n.len() > p.len()) => p.len(),
+        _ => 0,
+    };
+    names.iter().map(|n| n[strip..].to_string()).collect()
+}
+
+/// Contact radius against time for `runs` (the paper's Fig. 6b), the axis from 0, with
+/// the paper's `reported` values (hollow circles, `reported_label`) joined to ours (filled
+/// dots on the first run's curve).
 pub fn contact_radius_figure(
     path: &Path,
     runs: &[&RunData],
-    reported: &[(f64, f64)],
+    reported: &[Compared],
     reported_label: &str,
 ) -> Result<(), OutputError> {
+    time_figure(path, &contact_radius_plot(runs, reported, reported_label))
+}
+
+/// The plot of [`contact_radius_figure`].
+pub fn contact_radius_plot(
+    runs: &[&RunData],
+    reported: &[Compared],
+    reported_label: &str,
+) -> TimePlot {
     let curves = runs
         .iter()
         .enumerate()
@@ -363,41 +606,57 @@ pub fn contact_radius_figure(
             stroke: Stroke::Solid,
         })
         .collect();
-    let marks = if reported.is_empty() {
-        vec![]
-    } else {
-        vec![Marks {
-            label: reported_label.to_string(),
-            points: reported.to_vec(),
-            color: BLACK,
-            radius: 8,
-        }]
-    };
-    let plot = TimePlot {
+    let (mut marks, links) = compared_marks(reported, PALETTE[0]);
+    if !reported.is_empty() {
+        marks.extend(compared_legend(reported_label, "cellsim, compared with it"));
+    }
+    TimePlot {
         title: "Contact radius (half-width of the contact zone)".into(),
         y_desc: "contact radius (µm)".into(),
         curves,
         marks,
+        links,
+        notes: identical_note(runs, &short_names(runs).join(", "))
+            .into_iter()
+            .collect(),
+        from_zero: true,
         phase_times: runs.first().map(|r| r.mesh.phase_times).unwrap_or([0.0; 4]),
-        after_active: "rest".into(),
+        after_active: after_active_name(runs.first().copied()),
         t_max: t_axis(runs),
         legend: SeriesLabelPosition::UpperLeft,
-    };
-    time_figure(path, &plot)
+    }
 }
 
-/// Vertical displacement of p_t (solid) and c (dashed) against time for `runs` (the
-/// paper's Fig. 9 kind of curve), with reported displacements of p_t per run (t [s],
-/// u_y [µm]) as hollow circles in the run's colour, concentric (one radius per run) so
-/// values shared by several runs stay visible.
+/// What the paper reports about one run's nucleus displacement, against ours.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DisplacementMarks {
+    /// Values at given times (T_g0, T_as0), on the p_t curve.
+    pub at_times: Vec<Compared>,
+    /// The paper's maximum nucleus displacement against our largest downward displacement
+    /// of p_t (`t` = when ours is reached): drawn on the curve and in the side panel.
+    pub maximum: Option<Compared>,
+}
+
+/// Share of the width of [`displacement_figure`] taken by the panel of maxima.
+const MAX_PANEL_SHARE: f64 = 0.25;
+
+/// Vertical displacement of p_t (solid) and c (thin dashed) against time for `runs` (the
+/// paper's Fig. 9 kind of curve). The paper's values (`reported`, one entry per run) are
+/// hollow black circles, each joined by a grey line to the cellsim value it is compared
+/// with, a filled dot in the run's colour on the p_t curve. The paper's maximum nucleus
+/// displacement has no time: it is set against our largest downward displacement of p_t
+/// in a side panel on the same value axis (the dot also marks where p_t reaches it).
+/// Runs that are the same run for a while say so above the curves.
 pub fn displacement_figure(
     path: &Path,
     runs: &[&RunData],
-    reported: &[Vec<(f64, f64)>],
+    reported: &[DisplacementMarks],
     reported_label: &str,
 ) -> Result<(), OutputError> {
     let mut curves = Vec::new();
     let mut marks = Vec::new();
+    let mut links = Vec::new();
+    let mut maxima = Vec::new();
     for (k, r) in runs.iter().enumerate() {
         let color = PALETTE[k % PALETTE.len()];
         curves.push(Curve {
@@ -412,40 +671,176 @@ pub fn displacement_figure(
             color,
             stroke: Stroke::Dashed,
         });
-        if let Some(rep) = reported.get(k) {
-            if !rep.is_empty() {
-                marks.push(Marks {
-                    label: String::new(),
-                    points: rep.clone(),
-                    color,
-                    radius: 7 + 4 * k as i32,
-                });
-            }
+        let Some(rep) = reported.get(k) else { continue };
+        let (m, l) = compared_marks(&rep.at_times, color);
+        marks.extend(m);
+        links.extend(l);
+        if let Some(m) = rep.maximum {
+            // Where p_t is lowest: the dot only; the paper's maximum is in the side panel.
+            marks.push(Marks {
+                label: String::new(),
+                points: vec![(m.t, m.ours)],
+                color,
+                radius: 6,
+                filled: true,
+            });
+            maxima.push((k, color, m));
         }
     }
-    if !marks.is_empty() {
-        marks.push(Marks {
-            label: reported_label.to_string(),
-            points: vec![],
-            color: BLACK,
-            radius: 8,
-        });
+    let short = short_names(runs);
+    let has_marks = marks.iter().any(|m| !m.points.is_empty());
+    if has_marks {
+        marks.extend(compared_legend(
+            reported_label,
+            "cellsim: p_t at that time / at its lowest",
+        ));
     }
     let plot = TimePlot {
-        title: "Vertical displacement of the nucleus top p_t and the cell centre c".into(),
+        title: String::new(),
         y_desc: "vertical displacement u_y (µm, negative = down)".into(),
         curves,
         marks,
+        links,
+        notes: identical_note(runs, &short.join(", "))
+            .into_iter()
+            .collect(),
+        from_zero: false,
         phase_times: runs.first().map(|r| r.mesh.phase_times).unwrap_or([0.0; 4]),
-        after_active: "rest".into(),
+        after_active: after_active_name(runs.first().copied()),
         t_max: t_axis(runs),
         legend: SeriesLabelPosition::LowerLeft,
     };
-    time_figure(path, &plot)
+    let range = value_axis(
+        plot_values(&plot).chain(maxima.iter().flat_map(|(_, _, m)| [m.paper, m.ours])),
+        false,
+        plot.notes.len(),
+    );
+    let root = BitMapBackend::new(path, TIME_SIZE).into_drawing_area();
+    let err = |x: String| OutputError::draw(path, x);
+    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
+    let root = root
+        .titled(
+            "Vertical displacement of the nucleus top p_t and the cell centre c",
+            (FONT, 28),
+        )
+        .map_err(|x| OutputError::draw(path, x))?;
+    if maxima.is_empty() {
+        draw_time_plot_on(&root, &plot, range).map_err(err)?;
+    } else {
+        let w = root.dim_in_pixel().0;
+        let (left, right) =
+            root.split_horizontally((w as f64 * (1.0 - MAX_PANEL_SHARE)).round() as u32);
+        draw_time_plot_on(&left, &plot, range).map_err(err)?;
+        let columns: Vec<(String, RGBColor, Compared)> = maxima
+            .into_iter()
+            .map(|(k, c, m)| (short[k].clone(), c, m))
+            .collect();
+        draw_maxima_panel(&right, &columns, range).map_err(err)?;
+    }
+    root.present().map_err(|x| OutputError::draw(path, x))
 }
 
-/// Mean ‖E‖ of nucleus (solid) and cytoplasm (dashed) against time for `runs`, in %.
+/// The side panel of [`displacement_figure`]: for each run, the paper's maximum (hollow
+/// circle) and ours (filled dot) joined, values printed, on the value axis `(lo, hi)`,
+/// lined up with the time plot beside it.
+fn draw_maxima_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    columns: &[(String, RGBColor, Compared)],
+    (lo, hi): (f64, f64),
+) -> Result<(), String> {
+    use plotters::style::text_anchor::{HPos, Pos, VPos};
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    let n = columns.len().max(1);
+    let mut chart = ChartBuilder::on(area)
+        .margin(TIME_MARGIN)
+        .margin_left(4)
+        .margin_right(12)
+        .x_label_area_size(TIME_X_LABELS)
+        .y_label_area_size(0)
+        .build_cartesian_2d(0.0..n as f64, lo..hi)
+        .map_err(e)?;
+    let names: Vec<String> = columns.iter().map(|c| c.0.clone()).collect();
+    let fmt = |x: &f64| {
+        let k = (x - 0.5).round();
+        if (x - 0.5 - k).abs() < 1e-6 && k >= 0.0 {
+            names.get(k as usize).cloned().unwrap_or_default()
+        } else {
+            String::new()
+        }
+    };
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(2 * n + 1)
+        .x_label_formatter(&fmt)
+        .y_label_formatter(&|_| String::new())
+        .x_desc("maximum over the run")
+        .axis_desc_style((FONT, 22))
+        .label_style((FONT, 18))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(e)?;
+    let grey = RGBColor(110, 110, 110);
+    let span = hi - lo;
+    let caption = |k: usize, s: &str| {
+        Text::new(
+            s.to_string(),
+            (0.04 * n as f64, hi - (0.01 + 0.04 * k as f64) * span),
+            TextStyle::from((FONT, 17).into_font())
+                .color(&grey)
+                .pos(Pos::new(HPos::Left, VPos::Top)),
+        )
+    };
+    chart
+        .draw_series([
+            caption(0, "paper: maximum nucleus"),
+            caption(1, "displacement (Sect. 3.2) ○"),
+            caption(2, "cellsim: lowest u_y(p_t) ●"),
+        ])
+        .map_err(e)?;
+    for (k, (_, color, m)) in columns.iter().enumerate() {
+        let x = k as f64 + 0.35;
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(x, m.paper), (x, m.ours)],
+                RGBColor(90, 90, 90).stroke_width(2),
+            )))
+            .map_err(e)?;
+        chart
+            .draw_series([
+                Circle::new((x, m.paper), 8, BLACK.stroke_width(3)),
+                Circle::new((x, m.ours), 6, color.filled()),
+            ])
+            .map_err(e)?;
+        // Values beside the marks, the upper one above, the lower one below.
+        let (up, down) = if m.paper >= m.ours {
+            ((m.paper, BLACK), (m.ours, *color))
+        } else {
+            ((m.ours, *color), (m.paper, BLACK))
+        };
+        for ((v, c), vpos) in [(up, VPos::Bottom), (down, VPos::Top)] {
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    format!("{v:.2}"),
+                    (x + 0.1, v),
+                    TextStyle::from((FONT, 17).into_font())
+                        .color(&c)
+                        .pos(Pos::new(HPos::Left, vpos)),
+                )))
+                .map_err(e)?;
+        }
+    }
+    Ok(())
+}
+
+/// Mean ‖E‖ of nucleus (solid) and cytoplasm (dashed) against time for `runs`, in %, the
+/// axis from 0.
 pub fn strain_time_figure(path: &Path, runs: &[&RunData]) -> Result<(), OutputError> {
+    time_figure(path, &strain_time_plot(runs))
+}
+
+/// The plot of [`strain_time_figure`].
+pub fn strain_time_plot(runs: &[&RunData]) -> TimePlot {
     let mut curves = Vec::new();
     for (k, r) in runs.iter().enumerate() {
         let color = PALETTE[k % PALETTE.len()];
@@ -462,23 +857,40 @@ pub fn strain_time_figure(path: &Path, runs: &[&RunData]) -> Result<(), OutputEr
             stroke: Stroke::Dashed,
         });
     }
-    let plot = TimePlot {
+    TimePlot {
         title: "Mean Green-Lagrange strain norm per domain".into(),
         y_desc: "mean ‖E‖ over the domain (%)".into(),
         curves,
         marks: vec![],
+        links: vec![],
+        notes: identical_note(runs, &short_names(runs).join(", "))
+            .into_iter()
+            .collect(),
+        from_zero: true,
         phase_times: runs.first().map(|r| r.mesh.phase_times).unwrap_or([0.0; 4]),
-        after_active: "rest".into(),
+        after_active: after_active_name(runs.first().copied()),
         t_max: t_axis(runs),
         legend: SeriesLabelPosition::UpperLeft,
-    };
-    time_figure(path, &plot)
+    }
+}
+
+/// Name of the interval after T_a0 in the upside-down figures.
+pub const FLIP_PHASE: &str = "gravity flips ↓→↑";
+
+/// Name of the interval after T_a0 for `run`: [`FLIP_PHASE`] if its gravity flips there
+/// ([`run_phases`]), else "rest".
+fn after_active_name(run: Option<&RunData>) -> String {
+    match run.and_then(run_phases) {
+        Some(p) if p.flip.is_some() => FLIP_PHASE.into(),
+        _ => "rest".into(),
+    }
 }
 
 /// The upside-down experiment (the paper's Fig. 9): top, u_y(p_t) of the control (red,
 /// dotted) and of the upside-down run (blue, dashed); bottom, their difference
-/// upside-down − control, with the paper's reported difference (`reported` µm at the end)
-/// as a hollow circle. The control's rows are interpolated at the upside-down run's times.
+/// upside-down − control, with the paper's reported difference (`reported` µm at the end,
+/// unsigned: ± hollow circles) and ours (a filled dot). The control's rows are
+/// interpolated at the upside-down run's times.
 pub fn upside_down_figure(
     path: &Path,
     control: &RunData,
@@ -506,8 +918,13 @@ pub fn upside_down_figure(
             },
         ],
         marks: vec![],
+        links: vec![],
+        notes: identical_note(&[control, upside], "control, upside down")
+            .into_iter()
+            .collect(),
+        from_zero: false,
         phase_times: upside.mesh.phase_times,
-        after_active: "gravity flipped".into(),
+        after_active: FLIP_PHASE.into(),
         t_max,
         legend: SeriesLabelPosition::LowerLeft,
     };
@@ -520,13 +937,25 @@ pub fn upside_down_figure(
         })
         .collect();
     let mut marks = vec![];
+    let mut links = vec![];
     if let Some(d) = reported {
         marks.push(Marks {
             label: format!("paper: |difference| = {d} µm at the end (Sect. 3.3)"),
             points: vec![(t_max, d), (t_max, -d)],
             color: BLACK,
             radius: 8,
+            filled: false,
         });
+        if let Some(&(t, v)) = diff.last().filter(|p| p.0 == t_max) {
+            marks.push(Marks {
+                label: "cellsim at the end".into(),
+                points: vec![(t, v)],
+                color: BLACK,
+                radius: 6,
+                filled: true,
+            });
+            links.push((t, v, d.copysign(v)));
+        }
     }
     let bottom = TimePlot {
         title: "Difference upside down − control".into(),
@@ -538,8 +967,11 @@ pub fn upside_down_figure(
             stroke: Stroke::Solid,
         }],
         marks,
+        links,
+        notes: vec![],
+        from_zero: false,
         phase_times: upside.mesh.phase_times,
-        after_active: "gravity flipped".into(),
+        after_active: FLIP_PHASE.into(),
         t_max,
         legend: SeriesLabelPosition::UpperLeft,
     };
@@ -580,16 +1012,55 @@ pub fn strain_bars_figure(
     root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
     let root = root
         .titled(
-            "Mean Green-Lagrange strain norm at the end of the active phase",
+            "Mean Green-Lagrange strain norm at the end of the active phase (one scale)",
             (FONT, 28),
         )
         .map_err(|x| OutputError::draw(path, x))?;
     let (left, right) = root.split_horizontally(TIME_SIZE.0 / 2);
     let pick_n = |b: &StrainBars| (b.paper_nucleus, b.ours_nucleus);
     let pick_c = |b: &StrainBars| (b.paper_cytoplasm, b.ours_cytoplasm);
-    draw_bars(&left, "nucleus", bars, &pick_n, ours_label, paper_label).map_err(derr)?;
-    draw_bars(&right, "cytoplasm", bars, &pick_c, ours_label, paper_label).map_err(derr)?;
+    // One scale for both panels, so a bar's height compares across them.
+    let top = strain_bars_top(bars);
+    draw_bars(
+        &left,
+        "nucleus",
+        bars,
+        &pick_n,
+        top,
+        ours_label,
+        paper_label,
+    )
+    .map_err(derr)?;
+    draw_bars(
+        &right,
+        "cytoplasm",
+        bars,
+        &pick_c,
+        top,
+        ours_label,
+        paper_label,
+    )
+    .map_err(derr)?;
     root.present().map_err(|x| OutputError::draw(path, x))
+}
+
+/// The top of the value axis (%) shared by both panels of [`strain_bars_figure`]: 1.3 ×
+/// the largest value of either domain, paper's or ours (at least 13 %).
+pub fn strain_bars_top(bars: &[StrainBars]) -> f64 {
+    bars.iter()
+        .flat_map(|b| {
+            [
+                b.paper_nucleus,
+                b.ours_nucleus,
+                b.paper_cytoplasm,
+                b.ours_cytoplasm,
+            ]
+        })
+        .flatten()
+        .map(|v| 100.0 * v)
+        .filter(|v| v.is_finite())
+        .fold(10.0f64, f64::max)
+        * 1.3
 }
 
 type BarPick<'a> = &'a dyn Fn(&StrainBars) -> (Option<f64>, Option<f64>);
@@ -599,22 +1070,12 @@ fn draw_bars<DB: DrawingBackend>(
     title: &str,
     bars: &[StrainBars],
     pick: BarPick<'_>,
+    top: f64,
     ours_label: &str,
     paper_label: &str,
 ) -> Result<(), String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let n = bars.len().max(1);
-    let top = bars
-        .iter()
-        .flat_map(|b| {
-            let (p, o) = pick(b);
-            [p, o]
-        })
-        .flatten()
-        .map(|v| 100.0 * v)
-        .filter(|v| v.is_finite())
-        .fold(10.0f64, f64::max)
-        * 1.3;
     let names: Vec<String> = bars.iter().map(|b| b.scene.clone()).collect();
     let mut chart = ChartBuilder::on(area)
         .caption(title, (FONT, 24))
@@ -743,6 +1204,72 @@ pub struct ShapeStyleOptions {
     pub font: u32,
     /// Draw the element edges (the mesh) in darker shades of the fills.
     pub mesh_lines: bool,
+    /// Draw the direction of gravity (an arrow in the upper left corner).
+    pub gravity: Option<GravityMark>,
+}
+
+/// The direction of gravity in a shape drawing, and what to say about it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GravityMark {
+    /// Gravity's signed strength relative to g along −e_y: t_g(t) s_g(t) (1 = down, full;
+    /// −1 = up, the cell upside down).
+    pub factor: f64,
+    /// Text beside the arrow.
+    pub note: String,
+}
+
+impl GravityMark {
+    /// Gravity at time `t` under `phases` (MODEL.md §5): down, ramping in over [0, T_g0],
+    /// and with a flip, saying when the device is turned upside down.
+    pub fn at(phases: &Phases, t: f64) -> Self {
+        let factor = phases.t_g(t) * phases.gravity_sign(t);
+        let note = match phases.flip {
+            None => "gravity".to_string(),
+            Some(f) => {
+                let end = f.start + f.duration;
+                let span = format!("{}–{} s", group_thousands(f.start), group_thousands(end));
+                if t <= f.start {
+                    format!("gravity (flipped later: upside down over t = {span})")
+                } else if t < end {
+                    format!("gravity flipping (upside down over t = {span})")
+                } else {
+                    format!("gravity flipped: upside down (turned over t = {span})")
+                }
+            }
+        };
+        GravityMark { factor, note }
+    }
+}
+
+/// The loading phases of a run, with the gravity flip, which the run's files do not
+/// record: from the case file its summary names (if it loads, has the run's name and its
+/// phase times), else from the compiled-in paper scene of that name (the control:
+/// push-pull's, without a flip). `None` if neither applies.
+pub fn run_phases(run: &RunData) -> Option<Phases> {
+    use super::paper::{CONTROL, SCENES};
+    let fits = |case: &crate::case::Case| {
+        let ph = crate::case::terms::phases(case);
+        let [tg, tas, ta, _] = run.mesh.phase_times;
+        (case.name == run.name && [ph.t_g0, ph.t_as0, ph.t_a0] == [tg, tas, ta]).then_some(ph)
+    };
+    if let Some(sm) = &run.summary {
+        if let Some(ph) = crate::case::Case::load(&sm.case_file)
+            .ok()
+            .as_ref()
+            .and_then(fits)
+        {
+            return Some(ph);
+        }
+    }
+    let (scene, name) = if run.name == CONTROL {
+        ("pillars-push-pull", CONTROL)
+    } else {
+        (run.name.as_str(), run.name.as_str())
+    };
+    let s = SCENES.iter().find(|s| s.name == scene)?;
+    let mut case = crate::case::Case::from_str(s.text, s.file).ok()?;
+    case.name = name.to_string();
+    fits(&case)
 }
 
 /// Points [x, y] as plotters' coordinate pairs.
@@ -826,6 +1353,21 @@ pub fn draw_shape<DB: DrawingBackend>(
             .map_err(e)?
             .label("fibronectin layer")
             .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], LAYER.filled()));
+        // The layer's edge under the cell: the cell hides it where it lies in the layer.
+        chart
+            .draw_series(
+                back.layer_edge
+                    .iter()
+                    .map(|l| PathElement::new(xy(&l[..]), LAYER_EDGE.stroke_width(2))),
+            )
+            .map_err(e)?;
+    }
+    if !back.foot.is_empty() {
+        chart
+            .draw_series(back.foot.iter().map(|r| rect(r, FOOT)))
+            .map_err(e)?
+            .label("pillar foot (not substrate in the model)")
+            .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], FOOT.filled()));
     }
     chart
         .draw_series(back.substrate.iter().map(|r| rect(r, SUBSTRATE)))
@@ -885,8 +1427,7 @@ pub fn draw_shape<DB: DrawingBackend>(
                 PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
             });
     }
-    // Layer edge and substrate surface on top, as the paper's black lines.
-    paths!(back.layer_edge, LAYER_EDGE.stroke_width(2));
+    // The substrate's surface on top, as the paper's black line.
     paths!(back.surface, BLACK.stroke_width(2));
     *backdrop = Some(back);
     chart
@@ -899,6 +1440,9 @@ pub fn draw_shape<DB: DrawingBackend>(
         .map_err(e)?
         .label("p_t, c, p_b")
         .legend(|(x, y)| Circle::new((x + 11, y), 4, BLACK.filled()));
+    if let Some(g) = &opts.gravity {
+        draw_gravity(&chart.plotting_area().strip_coord_spec(), g, fs).map_err(e)?;
+    }
     if opts.legend {
         chart
             .configure_series_labels()
@@ -917,6 +1461,55 @@ pub fn draw_shape<DB: DrawingBackend>(
         px_per_um_x: (px.0 - o.0).abs() as f64 / 10.0,
         px_per_um_y: (py.1 - o.1).abs() as f64 / 10.0,
     })
+}
+
+/// Draws the gravity arrow of `g` in the upper left corner of `chart`'s plotting area: a
+/// vertical arrow pointing along gravity (its length scales with |factor|), "g" beside it
+/// and the note to its right, on a white box.
+fn draw_gravity<DB: DrawingBackend>(
+    raw: &DrawingArea<DB, Shift>,
+    g: &GravityMark,
+    fs: f64,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    use plotters::style::text_anchor::{HPos, Pos, VPos};
+    let full = 2.4 * fs; // arrow length at full gravity [px]
+    let (bx, by) = ((0.6 * fs) as i32, (0.5 * fs) as i32); // box corner within the area
+    let cx = bx + (0.7 * fs) as i32;
+    let mid = by + (0.2 * fs + 0.5 * full) as i32;
+    let half = (0.5 * full * g.factor.abs().min(1.0)) as i32;
+    let dir = if g.factor >= 0.0 { 1 } else { -1 }; // +1: down on screen
+    let (tail, tip) = (mid - dir * half, mid + dir * half);
+    let font = (0.65 * fs) as i32;
+    let style = TextStyle::from((FONT, font).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+    let text_w = raw.estimate_text_size(&g.note, &style)?.0 as i32;
+    let box_w = (1.6 * fs) as i32 + text_w;
+    let box_h = (0.4 * fs + full) as i32;
+    raw.draw(&Rectangle::new(
+        [(bx, by), (bx + box_w, by + box_h)],
+        WHITE.mix(0.9).filled(),
+    ))?;
+    raw.draw(&Rectangle::new([(bx, by), (bx + box_w, by + box_h)], BLACK))?;
+    if half > 0 {
+        let head = (0.35 * fs) as i32;
+        raw.draw(&PathElement::new(
+            vec![(cx, tail), (cx, tip - dir * head)],
+            BLACK.stroke_width(4),
+        ))?;
+        raw.draw(&Polygon::new(
+            vec![
+                (cx - head / 2 - 2, tip - dir * head),
+                (cx + head / 2 + 2, tip - dir * head),
+                (cx, tip),
+            ],
+            BLACK.filled(),
+        ))?;
+    }
+    raw.draw(&Text::new(
+        g.note.clone(),
+        (cx + (0.6 * fs) as i32, mid),
+        style,
+    ))?;
+    Ok(())
 }
 
 /// Human name of a phase-end state.
@@ -938,6 +1531,7 @@ pub fn shape_figure(
     mesh: &MeshFile,
     state: &StateFile,
     view: Bounds,
+    phases: Option<&Phases>,
 ) -> Result<ShapeScale, OutputError> {
     let root = BitMapBackend::new(path, SHAPE_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
@@ -950,6 +1544,7 @@ pub fn shape_figure(
         legend: true,
         font: 28,
         mesh_lines: true,
+        gravity: phases.map(|p| GravityMark::at(p, state.t)),
     };
     let scale = draw_shape(&root, mesh, &state.u, view, &opts, &mut None)
         .map_err(|x| OutputError::draw(path, x))?;
@@ -998,8 +1593,11 @@ pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> 
             },
         ],
         marks: vec![],
+        links: vec![],
+        notes: vec![],
+        from_zero: false,
         phase_times: run.mesh.phase_times,
-        after_active: "rest".into(),
+        after_active: after_active_name(Some(run)),
         t_max: run.t_end(),
         legend: SeriesLabelPosition::LowerLeft,
     };
@@ -1012,9 +1610,10 @@ pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> 
 
     let states: Vec<&StateFile> = run.states.iter().collect();
     let view = shape_view(&run.mesh, &states);
+    let phases = run_phases(run);
     for s in &run.states {
         let p = out.join(format!("shape-{}.png", s.phase));
-        shape_figure(&p, &run.name, &run.mesh, s, view)?;
+        shape_figure(&p, &run.name, &run.mesh, s, view, phases.as_ref())?;
         written.push(p);
     }
     Ok(written)

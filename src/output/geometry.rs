@@ -497,6 +497,12 @@ pub struct Backdrop {
     pub layer: Vec<Rect>,
     /// The substrate `{d_sub ≥ 0}` as thin column rectangles.
     pub substrate: Vec<Rect>,
+    /// The pillars' feet: in each column within a pillar's width, from the floor up to the
+    /// pillar's mid-height (where its side is vertical). Drawn under [`Backdrop::substrate`],
+    /// it fills the undercuts below the superellipse's rounded lower corners, so the
+    /// pillars stand on their floor; the model's substrate leaves those undercuts open
+    /// (MODEL.md §5), and the fibronectin layer fills them there.
+    pub foot: Vec<Rect>,
     /// The layer's upper edge `d_sub = −e_f` (segments).
     pub layer_edge: Vec<[Pt; 2]>,
     /// The substrate's surface, exact (polylines, clipped to the view).
@@ -522,13 +528,20 @@ impl Backdrop {
                     b.layer_edge.push([[x0, y_s + e], [x1, y_s + e]]);
                 }
             }
-            Substrate::Pillars(_) => {
+            Substrate::Pillars(p) => {
                 let n = columns.max(2);
                 let dx = (x1 - x0) / n as f64;
                 let depth = |x: f64, y: f64| sub.eval(&Vector2::new(x, y)).0;
+                let floor = p.y_top - p.height;
+                let mid = (p.y_top - 0.5 * p.height).min(y1);
                 for k in 0..n {
                     let (xa, xb) = (x0 + k as f64 * dx, x0 + (k + 1) as f64 * dx);
                     let xm = 0.5 * (xa + xb);
+                    // Within the pillar's width, as the substrate strips: by the centre.
+                    let within = (xm - p.nearest_axis(xm)).abs() < 0.5 * p.width;
+                    if within && mid > floor.max(y0) {
+                        b.foot.push([xa, xb, floor.max(y0), mid]);
+                    }
                     for [lo, hi] in intervals(|y| depth(xm, y), y0, y1) {
                         b.substrate.push([xa, xb, lo, hi]);
                     }

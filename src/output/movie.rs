@@ -124,6 +124,7 @@ impl Movie {
                 legend: false,
                 font: 20,
                 mesh_lines: false,
+                gravity: None,
             };
             draw_shape(
                 &area,

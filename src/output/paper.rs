@@ -15,8 +15,9 @@ use std::path::{Path, PathBuf};
 
 use super::OutputError;
 use super::figures::{
-    StrainBars, contact_radius_figure, displacement_figure, shape_figure, shape_view,
-    strain_bars_figure, strain_time_figure, upside_down_figure,
+    Compared, DisplacementMarks, StrainBars, contact_radius_figure, displacement_figure,
+    run_phases, shape_figure, shape_view, strain_bars_figure, strain_time_figure,
+    upside_down_figure,
 };
 use crate::record::RunData;
 use crate::record::StateFile;
@@ -279,11 +280,9 @@ pub fn our_value(q: Quantity, run: &RunData, control: Option<&RunData>) -> Resul
         Quantity::ContactRadius(w) => Ok(at(time(w))?.contact_radius),
         Quantity::NucleusDisplacement(When::End) => {
             at(t_end)?;
-            Ok(run
-                .series
-                .iter()
-                .map(|o| -o.uy_top)
-                .fold(f64::NEG_INFINITY, f64::max))
+            lowest_top(run)
+                .map(|(_, v)| -v)
+                .ok_or_else(|| "no rows".to_string())
         }
         Quantity::NucleusDisplacement(w) => Ok(-at(time(w))?.uy_top),
         Quantity::StrainNucleus => Ok(at(t_end)?.strain_nucleus),
@@ -297,6 +296,19 @@ pub fn our_value(q: Quantity, run: &RunData, control: Option<&RunData>) -> Resul
             Ok((mine.uy_top - theirs.uy_top).abs())
         }
     }
+}
+
+/// When and where the nucleus top p_t is lowest over the run: (t, u_y(p_t)) of the row
+/// with the smallest u_y (the first of equal ones). The paper's "maximum displacement of
+/// the nucleus" is compared with its negative.
+pub fn lowest_top(run: &RunData) -> Option<(f64, f64)> {
+    run.series
+        .iter()
+        .filter(|o| o.uy_top.is_finite())
+        .fold(None, |best: Option<(f64, f64)>, o| match best {
+            Some((_, v)) if v <= o.uy_top => best,
+            _ => Some((o.t, o.uy_top)),
+        })
 }
 
 fn fmt_num(v: f64, digits: usize) -> String {
@@ -373,18 +385,27 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
             .map(|r| r.value)
     };
 
+    // The paper's value of `q` for `scene` against ours, drawn at time `t`, signed by
+    // `sign` as the curve it sits on.
+    let compared = |scene: &str, q: Quantity, t: f64, sign: f64| -> Option<Compared> {
+        let paper = reported(scene, q)?;
+        let ours = our_value(q, get(scene)?, None).ok()?;
+        Some(Compared {
+            t,
+            paper: sign * paper,
+            ours: sign * ours,
+        })
+    };
+
     // Contact radius on the flat substrate (Fig. 6b).
     if let Some(flat) = get("flat") {
         let [tg, _, _, t_end] = flat.mesh.phase_times;
-        let pts: Vec<(f64, f64)> = [
-            (
-                tg,
-                reported("flat", Quantity::ContactRadius(When::GravityEnd)),
-            ),
-            (t_end, reported("flat", Quantity::ContactRadius(When::End))),
+        let pts: Vec<Compared> = [
+            (Quantity::ContactRadius(When::GravityEnd), tg),
+            (Quantity::ContactRadius(When::End), t_end),
         ]
         .into_iter()
-        .filter_map(|(t, v)| v.map(|v| (t, v)))
+        .filter_map(|(q, t)| compared("flat", q, t, 1.0))
         .collect();
         let p = out.join("contact-radius.png");
         record(
@@ -393,35 +414,29 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
         );
     }
 
-    // Nucleus displacement for push, pull, push-pull (Fig. 9's kind of curve).
+    // Nucleus displacement for push, pull, push-pull (Fig. 9's kind of curve): the values
+    // at T_g0 and T_as0 on the p_t curve; the paper's maximum against the lowest p_t.
     let pillar_names = ["pillars-push", "pillars-pull", "pillars-push-pull"];
     let pillars: Vec<&RunData> = pillar_names.iter().filter_map(|n| get(n)).collect();
     if !pillars.is_empty() {
-        let marks: Vec<Vec<(f64, f64)>> = pillars
+        let marks: Vec<DisplacementMarks> = pillars
             .iter()
             .map(|r| {
-                let [tg, tas, _, t_end] = r.mesh.phase_times;
-                [
-                    (tg, When::GravityEnd),
-                    (tas, When::SpreadingEnd),
-                    (t_end, When::End),
-                ]
-                .into_iter()
-                .filter_map(|(t, w)| {
-                    reported(&r.name, Quantity::NucleusDisplacement(w)).map(|v| (t, -v))
-                })
-                .collect()
+                let [tg, tas, _, _] = r.mesh.phase_times;
+                let q = Quantity::NucleusDisplacement;
+                DisplacementMarks {
+                    at_times: [(tg, When::GravityEnd), (tas, When::SpreadingEnd)]
+                        .into_iter()
+                        .filter_map(|(t, w)| compared(&r.name, q(w), t, -1.0))
+                        .collect(),
+                    maximum: lowest_top(r)
+                        .and_then(|(t, _)| compared(&r.name, q(When::End), t, -1.0)),
+                }
             })
             .collect();
         let p = out.join("nucleus-displacement.png");
         record(
-            displacement_figure(
-                &p,
-                &pillars,
-                &marks,
-                "paper (Sect. 3.2): circles in each scene's colour",
-            )
-            .map(|_| p),
+            displacement_figure(&p, &pillars, &marks, "paper (Sect. 3.2)").map(|_| p),
             &mut report,
         );
         let p = out.join("strain-time.png");
@@ -481,28 +496,48 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
             None
         }
         .unwrap_or_else(|| shape_view(&r.mesh, &r.states.iter().collect::<Vec<_>>()));
+        let phases = run_phases(r);
         for st in &r.states {
             let p = out.join(format!("shape-{}-{}.png", s.name, st.phase));
             record(
-                shape_figure(&p, s.name, &r.mesh, st, view).map(|_| p),
+                shape_figure(&p, s.name, &r.mesh, st, view, phases.as_ref()).map(|_| p),
                 &mut report,
             );
         }
     }
 
-    let p = out.join("comparison.md");
-    let text = comparison_markdown(runs, &data);
-    record(
-        std::fs::write(&p, text)
-            .map(|_| p.clone())
-            .map_err(|e| OutputError::write(&p, e)),
-        &mut report,
-    );
+    for (name, text) in [
+        (COMPARISON_FILE, comparison_markdown(runs, &data)),
+        (TIMINGS_FILE, timings_markdown(runs, &data)),
+    ] {
+        let p = out.join(name);
+        record(
+            std::fs::write(&p, text)
+                .map(|_| p.clone())
+                .map_err(|e| OutputError::write(&p, e)),
+            &mut report,
+        );
+    }
     report
 }
 
-/// The text of `comparison.md`: every reported value against ours, then the cost of
-/// each run.
+/// The comparison with the paper: physics only, so it changes only when the results do.
+pub const COMPARISON_FILE: &str = "comparison.md";
+/// What each run cost (wall time, steps, Jacobians), apart from the comparison because it
+/// changes from run to run (`plots/timings.md` is not under version control).
+pub const TIMINGS_FILE: &str = "timings.md";
+
+/// Status of a run for the tables: "finished" whether it ran now or was reused.
+fn run_status(o: &SceneOutcome) -> String {
+    match &o.result {
+        Ok(_) => "finished".to_string(),
+        Err(e) => format!("did not finish ({})", e.replace('|', "/")),
+    }
+}
+
+/// The text of `comparison.md`: every reported value against ours, then how far each run
+/// got. Nothing in it depends on the machine or the load (wall times are in
+/// [`timings_markdown`]), so rerunning unchanged code leaves it unchanged.
 pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) -> String {
     let get = |name: &str| data.iter().find(|(n, _)| n == name).map(|(_, d)| d);
     let mut s = String::new();
@@ -544,14 +579,58 @@ pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) ->
     }
     let _ = writeln!(
         s,
-        "\n## Runs\n\n| run | status | t reached (s) | wall (s) | steps | Jacobians | error-test failures | unknowns | run directory |\n|---|---|---:|---:|---:|---:|---:|---:|---|"
+        "\n## Runs\n\nRun directories: `runs/<run>/` beside this file. What each run cost \
+         (wall time, steps, Jacobians) is in `{TIMINGS_FILE}` beside it, kept apart because \
+         it changes from run to run.\n\n| run | status | t reached (s) | unknowns |\n|---|---|---:|---:|"
     );
     for o in runs {
         let d = get(&o.name);
-        let status = match (&o.result, d.map(|d| d.finished())) {
-            (Ok(true), _) => "finished".to_string(),
-            (Ok(false), _) => "finished (reused)".to_string(),
-            (Err(e), _) => format!("did not finish ({})", e.replace('|', "/")),
+        let sm = d.and_then(|d| d.summary.as_ref());
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} |",
+            o.name,
+            run_status(o),
+            d.map(|d| fmt_num(d.t_last(), 0)).unwrap_or("–".into()),
+            sm.map(|x| x.unknowns.total.to_string())
+                .unwrap_or("–".into()),
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nDefinitions. *Contact radius*: deformed length of the half cell's boundary within \
+         ε_ct of the substrate. *Downward displacement of p_t*: −u_y of the nucleus top; at \
+         the end, its largest value over the run (the paper's \"maximum displacement of the \
+         nucleus\"); it counts from the suspended start, so it includes the fall onto \
+         the pillars (the cell starts 0.5 µm above them, MODEL.md §5). *Mean ‖E‖*: reference-area mean of the Frobenius norm of the \
+         Green-Lagrange strain over the domain. *Upside down − control*: the control \
+         (`{CONTROL}`) is the push-pull scene continued to the upside-down scene's end time \
+         with gravity unchanged, the paper's Fig. 9 control; both are compared at that \
+         time."
+    );
+    s
+}
+
+/// The text of `timings.md`: what each run cost. Wall times change from run to run (and
+/// steps from machine to machine), so this is apart from `comparison.md`.
+pub fn timings_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) -> String {
+    let get = |name: &str| data.iter().find(|(n, _)| n == name).map(|(_, d)| d);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# What each run of `cellsim paper` cost\n\nWritten by `cellsim paper` (cellsim {}); \
+         the physics is in `{COMPARISON_FILE}`. Wall time is the integration only (mesh and \
+         set-up excluded); a reused run shows the time of the run that wrote it.\n\n| run | status \
+         | t reached (s) | wall (s) | steps | Jacobians | error-test failures | unknowns | run directory |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---|",
+        env!("CARGO_PKG_VERSION")
+    );
+    for o in runs {
+        let d = get(&o.name);
+        let status = match &o.result {
+            Ok(true) => "finished".to_string(),
+            Ok(false) => "finished (reused)".to_string(),
+            Err(_) => run_status(o),
         };
         let sm = d.and_then(|d| d.summary.as_ref());
         let _ = writeln!(
@@ -572,17 +651,5 @@ pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) ->
             o.dir.display()
         );
     }
-    let _ = writeln!(
-        s,
-        "\nDefinitions. *Contact radius*: deformed length of the half cell's boundary within \
-         ε_ct of the substrate. *Downward displacement of p_t*: −u_y of the nucleus top; at \
-         the end, its largest value over the run (the paper's \"maximum displacement of the \
-         nucleus\"); it counts from the suspended start, so it includes the fall onto \
-         the pillars (the cell starts 0.5 µm above them, MODEL.md §5). *Mean ‖E‖*: reference-area mean of the Frobenius norm of the \
-         Green-Lagrange strain over the domain. *Upside down − control*: the control \
-         (`{CONTROL}`) is the push-pull scene continued to the upside-down scene's end time \
-         with gravity unchanged, the paper's Fig. 9 control; both are compared at that \
-         time. Wall time is the integration only (mesh and set-up excluded)."
-    );
     s
 }
