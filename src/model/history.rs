@@ -1,28 +1,24 @@
-//! The adhesion coefficient μ_as before adhesion acts, integrated beside the system.
+//! The adhesion exposure before adhesion acts, integrated beside the system.
+//!
+//! The adhesion coefficient follows `μ̇_as = a(t) g(μ_as)` with the drive
+//! `a(t) = μ_as0 H_ε(d(x(t)) + e_f)` at the node's current position and the cap
+//! `g(μ) = 1 − S(μ; 0.98 μ_as,max, μ_as,max)`. In the exposure `A(t) = ∫ a dt` it is
+//! autonomous, `dμ/dA = g(μ)`, so `μ_as = Φ(A)` with Φ the flow from 0, in closed form
+//! ([`cap`]). The model's unknown is therefore A, whose row `Ȧ − a(x) = 0` is linear in A
+//! and smooth: the cap's sharp knee (0.98 → 1 μ_as,max within 28 s of exposure) sits in
+//! Φ, evaluated exactly, instead of in an ODE that IDA must resolve (in the spreading
+//! phase of push-pull a μ_as unknown held the largest weighted local error in 640 of
+//! 1 359 steps).
 //!
 //! μ_as enters the momentum balance only through `b_as = t_as μ_as …`, and the switch
-//! `t_as = S(t; T_g0, T_as0)` is zero until T_g0. Before T_g0 the μ_as rows
-//! `μ̇_as = μ_as0 H_ε(d(x) + e_f) (1 − S(μ_as; 0.98 μ_as,max, μ_as,max))` only follow the
-//! motion of their nodes: they change nothing else, yet in the system they take part in
-//! IDA's error test, and their smooth cap limits the steps of the whole cell (measured on
-//! the flat gravity phase: a μ_as unknown held the largest weighted local error in 108 of
-//! the 120 steps after the fall). So until T_g0 the model leaves them out and integrates
-//! them here, along the accepted steps of the integrator; at T_g0 they join the system
-//! with the values reached ([`super::CellModel::with_adhesion_unknowns`]).
-//!
-//! The ODE factors as `μ̇ = a(t) g(μ)` with the drive `a(t) = μ_as0 H_ε(d(x(t)) + e_f)`
-//! and the cap `g(μ) = 1 − S(μ; 0.98 μ_as,max, μ_as,max)`. In the variable
-//! `A(t) = ∫ a dt` it is autonomous, `dμ/dA = g(μ)`, so each accepted step [t₀, t₁] adds
-//! `ΔA = ∫ a dt` per node and then moves μ along the cap by ΔA:
-//! - `ΔA` by Simpson's rule, the midpoint position from the cubic Hermite interpolant of
-//!   the positions and velocities at both ends (error O(h⁵) for a smooth drive);
-//! - below 0.98 μ_as,max, `g = 1` and μ grows by ΔA exactly; on the cap, classical RK4 in
-//!   `ξ = (μ − 0.98 μ_as,max)/(0.02 μ_as,max)` on `dξ/ds = 1 − S(ξ)` with sub-steps
-//!   `Δs ≤ 0.05 / max(1, |dS/dξ|)`, so `|λ Δs| ≤ 0.05` and the cap's stiffness
-//!   never sets the step of the system.
-//!
-//! The values between the last two accepted steps (the output times, the inertia switch)
-//! are integrated the same way over the part of the step, from the Hermite interpolant.
+//! `t_as = S(t; T_g0, T_as0)` is zero until T_g0. Before T_g0 the exposure rows only
+//! follow the motion of their nodes, so the model leaves them out and integrates A here,
+//! along the accepted steps of the integrator; at T_g0 they join the system with the
+//! values reached ([`super::CellModel::with_adhesion_unknowns`]). Each accepted step
+//! [t₀, t₁] adds `ΔA = ∫ a dt` by Simpson's rule, the midpoint position from the cubic
+//! Hermite interpolant of the positions and velocities at both ends (error O(h⁵) for a
+//! smooth drive). The values between the last two accepted steps (the output times, the
+//! inertia switch) are integrated the same way over the part of the step.
 
 use super::kinematics::{DIM, Vector};
 use crate::physics::{Adhesion, Substrate, layer};
@@ -57,33 +53,33 @@ impl Sample {
     }
 }
 
-/// μ_as at the membrane nodes while it is not an unknown of the system.
+/// The exposure at the membrane nodes while it is not an unknown of the system.
 #[derive(Debug, Clone)]
 pub struct AdhesionHistory {
     adhesion: Adhesion,
     substrate: Substrate,
-    /// μ_as at `last.t`, per membrane node.
-    mu: Vec<f64>,
+    /// The exposure A at `last.t`, per membrane node.
+    exposure: Vec<f64>,
     last: Sample,
     /// The sample and μ_as before the last step (none before the first step).
     prev: Option<(Sample, Vec<f64>)>,
 }
 
 impl AdhesionHistory {
-    /// Starts at time `t` with μ_as = `mu` and the nodes at `x` moving with `xdot`.
+    /// Starts at time `t` with exposure `exposure` and the nodes at `x` moving with `xdot`.
     pub fn new(
         adhesion: Adhesion,
         substrate: Substrate,
         t: f64,
-        mu: Vec<f64>,
+        exposure: Vec<f64>,
         x: Vec<[f64; DIM]>,
         xdot: Vec<[f64; DIM]>,
     ) -> Self {
-        assert!(mu.len() == x.len() && x.len() == xdot.len());
+        assert!(exposure.len() == x.len() && x.len() == xdot.len());
         Self {
             adhesion,
             substrate,
-            mu,
+            exposure,
             last: Sample { t, x, xdot },
             prev: None,
         }
@@ -96,12 +92,12 @@ impl AdhesionHistory {
 
     /// Number of nodes.
     pub fn len(&self) -> usize {
-        self.mu.len()
+        self.exposure.len()
     }
 
     /// Whether there are no nodes.
     pub fn is_empty(&self) -> bool {
-        self.mu.is_empty()
+        self.exposure.is_empty()
     }
 
     /// The drive `a = μ_as0 H_ε(d(x) + e_f)` at position `x`.
@@ -111,7 +107,7 @@ impl AdhesionHistory {
         ad.mu_as0 * layer(&self.substrate, ad, &xv)
     }
 
-    /// μ_as at time `t` in [s0.t, s1.t] from μ_as `mu0` at `s0.t`.
+    /// The exposure at time `t` in [s0.t, s1.t] from `mu0` at `s0.t`.
     fn integrate(&self, s0: &Sample, mu0: &[f64], s1: &Sample, t: f64) -> Vec<f64> {
         let h = t - s0.t;
         if h <= 0.0 {
@@ -123,8 +119,7 @@ impl AdhesionHistory {
                 let a0 = self.drive(s0.x[k]);
                 let am = self.drive(s0.hermite(s1, k, tm));
                 let a1 = self.drive(s0.hermite(s1, k, t));
-                let da = h / 6.0 * (a0 + 4.0 * am + a1);
-                along_cap(mu0[k], da, self.adhesion.mu_as_max)
+                mu0[k] + h / 6.0 * (a0 + 4.0 * am + a1)
             })
             .collect()
     }
@@ -136,17 +131,17 @@ impl AdhesionHistory {
             return;
         }
         let next = Sample { t, x, xdot };
-        let mu = self.integrate(&self.last, &self.mu, &next, t);
-        let old_mu = std::mem::replace(&mut self.mu, mu);
+        let a = self.integrate(&self.last, &self.exposure, &next, t);
+        let old_mu = std::mem::replace(&mut self.exposure, a);
         let old = std::mem::replace(&mut self.last, next);
         self.prev = Some((old, old_mu));
     }
 
-    /// μ_as per node at time `t`, which lies within the last step (or at its end).
+    /// The exposure per node at time `t`, which lies within the last step (or at its end).
     pub fn at(&self, t: f64) -> Result<Vec<f64>, String> {
         let tol = 1e-12 * t.abs().max(1.0);
         if (t - self.last.t).abs() <= tol {
-            return Ok(self.mu.clone());
+            return Ok(self.exposure.clone());
         }
         match &self.prev {
             Some((s0, mu0)) if t >= s0.t - tol && t <= self.last.t => {
@@ -168,13 +163,15 @@ impl AdhesionHistory {
         x: Vec<[f64; DIM]>,
         xdot: Vec<[f64; DIM]>,
     ) -> Result<Self, String> {
-        let mu = self.at(t)?;
-        Ok(Self::new(self.adhesion, self.substrate, t, mu, x, xdot))
+        let a = self.at(t)?;
+        Ok(Self::new(self.adhesion, self.substrate, t, a, x, xdot))
     }
 }
 
-/// μ moved by `da ≥ 0` along `dμ/dA = 1 − S(μ; 0.98 m, m)` with `m = mu_max`.
-pub fn along_cap(mu: f64, da: f64, mu_max: f64) -> f64 {
+/// μ moved by `da ≥ 0` along `dμ/dA = 1 − S(μ; 0.98 m, m)` with `m = mu_max`, by RK4
+/// sub-steps (the reference for [`cap`] in the tests).
+#[cfg(test)]
+fn along_cap(mu: f64, da: f64, mu_max: f64) -> f64 {
     let a = 0.98 * mu_max;
     let w = 0.02 * mu_max;
     if mu + da <= a {
@@ -208,6 +205,59 @@ pub fn along_cap(mu: f64, da: f64, mu_max: f64) -> f64 {
         }
     }
     a + w * xi
+}
+
+/// μ_as and dμ_as/dA after the exposure `A = ∫ μ_as0 H_ε dt` from μ_as = 0: the flow of
+/// `dμ/dA = g(μ) = 1 − S(μ; 0.98 m, m)` (`m = mu_max`) in closed form. Below 0.98 m,
+/// μ = A. On the cap, with `ξ = (μ − 0.98 m)/(0.02 m)` and `z = 1 − ξ`,
+/// `1 − S = z³ p(z)`, `p(z) = 6z² − 15z + 10`, and the time on the cap
+/// `s = (A − 0.98 m)/(0.02 m) = Ψ(1) − Ψ(z)` with the antiderivative of `1/(z³ p)`
+/// (partial fractions):
+/// `Ψ(z) = −1/(20 z²) − 0.15/z + 0.165 ln z − 0.0825 ln p(z) + 0.3375/(6k) atan((z − 1.25)/k)`,
+/// `k² = 10/96`. Ψ is increasing; z is found by safeguarded Newton in `1/z`.
+pub fn cap(a: f64, mu_max: f64) -> (f64, f64) {
+    let lin = 0.98 * mu_max;
+    if a <= lin {
+        return (a, 1.0);
+    }
+    let w = 0.02 * mu_max;
+    let s = (a - lin) / w;
+    let k = (10.0f64 / 96.0).sqrt();
+    let p = |z: f64| (6.0 * z - 15.0) * z + 10.0;
+    let psi = |z: f64| {
+        -0.05 / (z * z) - 0.15 / z + 0.165 * z.ln() - 0.0825 * p(z).ln()
+            + 0.3375 / (6.0 * k) * ((z - 1.25) / k).atan()
+    };
+    let target = psi(1.0) - s;
+    // f(v) = Ψ(1/v) − target, decreasing in v ≥ 1; f'(v) = −Ψ'(z)/v² = −1/(z p(z)) · z… :
+    // dΨ/dz = 1/(z³ p), dz/dv = −z², so df/dv = −1/(z p(z)).
+    let f = |v: f64| psi(1.0 / v) - target;
+    let (mut lo, mut hi) = (1.0f64, 1.0f64);
+    while f(hi) > 0.0 {
+        hi *= 2.0;
+    }
+    let mut v = (s / 0.05).sqrt().clamp(lo, hi).max(1.0);
+    for _ in 0..100 {
+        let fv = f(v);
+        if fv > 0.0 {
+            lo = v;
+        } else {
+            hi = v;
+        }
+        let z = 1.0 / v;
+        let step = fv * z * p(z);
+        let mut next = v + step;
+        if !(next > lo && next < hi) {
+            next = 0.5 * (lo + hi);
+        }
+        if (next - v).abs() <= 1e-15 * v {
+            v = next;
+            break;
+        }
+        v = next;
+    }
+    let z = 1.0 / v;
+    (lin + w * (1.0 - z), z * z * z * p(z))
 }
 
 #[cfg(test)]
@@ -266,6 +316,26 @@ mod tests {
         let once = along_cap(1350.0, 80.0, m);
         let twice = along_cap(along_cap(1350.0, 30.0, m), 50.0, m);
         assert!((once - twice).abs() < 1e-9 * m, "{once} vs {twice}");
+    }
+
+    #[test]
+    fn the_closed_form_cap_is_the_flow_from_zero() {
+        let m = 1400.0;
+        for a in [
+            10.0, 1371.0, 1372.0, 1380.0, 1390.0, 1400.0, 1450.0, 3000.0, 4.0e4,
+        ] {
+            let (mu, g) = cap(a, m);
+            let want = along_cap(0.0, a, m);
+            assert!((mu - want).abs() < 1e-9 * m, "A {a}: {mu} vs {want}");
+            // dμ/dA = 1 − S(μ).
+            let gw = 1.0 - smooth_step(mu, 0.98 * m, m);
+            assert!((g - gw).abs() < 1e-9, "A {a}: g {g} vs {gw}");
+            assert!(mu <= m);
+        }
+        // Continuous and increasing across the start of the cap.
+        let (below, _) = cap(0.98 * m, m);
+        let (above, _) = cap(0.98 * m + 1e-9, m);
+        assert!(above > below && above - below < 2e-9);
     }
 
     #[test]

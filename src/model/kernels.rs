@@ -22,7 +22,7 @@
 //!   `b = b_ct(x, J) + b_as(x, F, μ_as)` ([`band_force`]: contact, plus adhesion on
 //!   membrane elements), derivatives by forward-mode dual numbers in (x, F, μ_as);
 //! - [`mu_rate_residual`] / [`mu_rate_tangent`]: the nodal adhesion rows
-//!   `μ̇_as − r(x, μ_as)`.
+//!   `Ȧ − μ_as0 H_ε(d(x) + e_f)` of the exposure A (μ_as = Φ(A), [`super::history`]).
 
 use nalgebra::{Const, SVector};
 use num_dual::DualSVec64;
@@ -408,23 +408,24 @@ pub(crate) fn band_tangent(
     }
 }
 
-/// The adhesion row of a membrane node: `μ̇_as − r(x, μ_as)` at its current position `x`.
-pub(crate) fn mu_rate_residual(p: &ModelParams, x: &Vector<f64>, mu: f64, mu_dot: f64) -> f64 {
+/// The adhesion row of a membrane node: `Ȧ − a(x)` with the drive `a = r(x, μ_as = 0)`
+/// at its current position `x` (the rate of μ_as before the cap).
+pub(crate) fn mu_rate_residual(p: &ModelParams, x: &Vector<f64>, a_dot: f64) -> f64 {
     match &p.adhesion {
-        Some(ad) => mu_dot - adhesion_rate(&p.substrate, ad, x, mu),
+        Some(ad) => a_dot - adhesion_rate(&p.substrate, ad, x, 0.0),
         None => 0.0,
     }
 }
 
-/// `∂r/∂x` (DIM values) and `∂r/∂μ_as` of the adhesion rate at a node, by dual numbers;
-/// the row's entries are `cj − ∂r/∂μ_as` and `−∂r/∂x_k`.
-pub(crate) fn mu_rate_tangent(p: &ModelParams, x: &Vector<f64>, mu: f64) -> [f64; DIM + 1] {
+/// `∂a/∂x` (DIM values) of the drive at a node, by dual numbers, and `∂a/∂A = 0`; the
+/// row's entries are `cj` and `−∂a/∂x_k`.
+pub(crate) fn mu_rate_tangent(p: &ModelParams, x: &Vector<f64>) -> [f64; DIM + 1] {
     type DualR = DualSVec64<{ DIM + 1 }>;
     let Some(ad) = &p.adhesion else {
         return [0.0; DIM + 1];
     };
     let xd: SVector<DualR, DIM> = SVector::from_fn(|k, _| DualR::from_re(x[k]).derivative(k));
-    let rate = adhesion_rate(&p.substrate, ad, &xd, DualR::from_re(mu).derivative(DIM));
+    let rate = adhesion_rate(&p.substrate, ad, &xd, DualR::from_re(0.0));
     let d = rate.eps.unwrap_generic(Const::<{ DIM + 1 }>, Const::<1>);
     std::array::from_fn(|k| d[k])
 }

@@ -281,15 +281,19 @@ impl CellModel {
     /// integrator's last step).
     pub fn nodal_mu_as(&self, t: f64, y: &[f64]) -> Result<Vec<Option<f64>>, String> {
         let n = self.mesh.nodes.len();
+        let Some(ad) = &self.params.adhesion else {
+            return Ok(vec![None; n]);
+        };
+        let mu = |a: f64| history::cap(a, ad.mu_as_max).0;
         match &self.history {
             None => Ok((0..n)
-                .map(|i| (self.dofs.mu[i] != NONE).then(|| y[self.dofs.mu[i]]))
+                .map(|i| (self.dofs.mu[i] != NONE).then(|| mu(y[self.dofs.mu[i]])))
                 .collect()),
             Some(h) => {
-                let mu = h.at(t)?;
+                let a = h.at(t)?;
                 let mut out = vec![None; n];
                 for (k, i) in self.membrane_nodes().into_iter().enumerate() {
-                    out[i] = Some(mu[k]);
+                    out[i] = Some(mu(a[k]));
                 }
                 Ok(out)
             }
@@ -379,10 +383,20 @@ impl CellModel {
         st
     }
 
-    /// The nodal μ_as of `el` when adhesion acts on it at `t_as`.
+    /// The nodal μ_as = Φ(A) of `el` and dμ_as/dA when adhesion acts on it at `t_as`.
     #[inline]
-    fn gather_mu(&self, el: &Element, y: &[f64], t_as: f64) -> Option<[f64; NODES]> {
-        kernels::adhesion_acts(&self.params, el, t_as).then(|| el.nodes.map(|i| y[self.dofs.mu[i]]))
+    fn gather_mu(
+        &self,
+        el: &Element,
+        y: &[f64],
+        t_as: f64,
+    ) -> Option<([f64; NODES], [f64; NODES])> {
+        if !kernels::adhesion_acts(&self.params, el, t_as) {
+            return None;
+        }
+        let m = self.params.adhesion.as_ref()?.mu_as_max;
+        let c = el.nodes.map(|i| history::cap(y[self.dofs.mu[i]], m));
+        Some((c.map(|v| v.0), c.map(|v| v.1)))
     }
 
     /// Current position of node `i`.
@@ -446,7 +460,7 @@ impl Dae for CellModel {
             kernels::solid_residual(e, el, law, &p.viscosity, &st, sw.t_a, fe)?;
             kernels::mass_residual(el, g_now, inertia, p.drag, &st, fe);
             if self.in_reach(el, &st.u) {
-                let mue = self.gather_mu(el, y, sw.t_as);
+                let mue = self.gather_mu(el, y, sw.t_as).map(|m| m.0);
                 kernels::band_residual(e, el, &self.ctab, p, &st, mue.as_ref(), sw.t_as, fe)?;
             }
             Ok(())
@@ -460,7 +474,7 @@ impl Dae for CellModel {
         for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
             let row = mu_off + k;
             let x = self.node_position(y, i);
-            r[row] = kernels::mu_rate_residual(p, &x, y[row], yp[row]);
+            r[row] = kernels::mu_rate_residual(p, &x, yp[row]);
         }
         if r.iter().all(|v| v.is_finite()) {
             Ok(())
@@ -497,7 +511,23 @@ impl Dae for CellModel {
             kernels::mass_tangent(el, cj, inertia, p.drag, tan);
             if self.in_reach(el, &st.u) {
                 let mue = self.gather_mu(el, y, sw.t_as);
-                kernels::band_tangent(el, &self.ctab, p, &st, mue.as_ref(), sw.t_as, tan);
+                kernels::band_tangent(
+                    el,
+                    &self.ctab,
+                    p,
+                    &st,
+                    mue.map(|m| m.0).as_ref(),
+                    sw.t_as,
+                    tan,
+                );
+                // The unknown is the exposure A: ∂f/∂A_b = ∂f/∂μ_b dμ_b/dA_b.
+                if let Some((_, g)) = mue {
+                    for row in tan.b.iter_mut() {
+                        for (b, gb) in row.iter_mut().zip(g) {
+                            *b *= gb;
+                        }
+                    }
+                }
             }
             Ok(())
         };
@@ -507,11 +537,9 @@ impl Dae for CellModel {
         self.scratch.tangents = buf;
         result?;
         if p.adhesion.is_some() {
-            let off = self.dofs.mu_offset();
             for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
-                let row = off + k;
                 let x = self.node_position(y, i);
-                let d = kernels::mu_rate_tangent(p, &x, y[row]);
+                let d = kernels::mu_rate_tangent(p, &x);
                 let pos = &self.plan.mu_rate[k];
                 v[pos[0]] += cj - d[DIM];
                 for c in 0..DIM {

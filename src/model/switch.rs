@@ -85,8 +85,8 @@ impl CellModel {
 
     /// The same cell with its μ_as unknowns, set to restart at time `t` (T_g0, where
     /// adhesion starts to act) from the state (`y`, `yp`) of this model, which defers them:
-    /// u (and v) and their derivatives carried over, μ_as from the history integrated
-    /// beside the system, μ̇_as = r(x, μ_as). Every row is then consistent: the old rows
+    /// u (and v) and their derivatives carried over, the exposure A from the history
+    /// integrated beside the system, Ȧ = a(x). Every row is then consistent: the old rows
     /// do not see μ_as while `t_as(t) = 0`, and the new ones hold by construction.
     pub fn with_adhesion_unknowns(
         &self,
@@ -103,20 +103,20 @@ impl CellModel {
             .history
             .as_ref()
             .ok_or_else(|| restart_err("the adhesion unknowns are already there".into()))?;
-        let mu = h.at(t).map_err(restart_err)?;
+        let exposure = h.at(t).map_err(restart_err)?;
         let mut m = CellModel::new(self.params.clone(), self.mesh.clone())?;
-        debug_assert_eq!(m.dofs.n, self.dofs.n + mu.len());
+        debug_assert_eq!(m.dofs.n, self.dofs.n + exposure.len());
         let mut y2 = y.to_vec();
         let mut yp2 = yp.to_vec();
-        y2.extend_from_slice(&mu);
+        y2.extend_from_slice(&exposure);
         let ad = self.params.adhesion.as_ref().expect("deferred adhesion");
-        for (k, &i) in m.dofs.mu_nodes.iter().enumerate() {
+        for &i in &m.dofs.mu_nodes {
             let x = m.node_position(y, i);
             yp2.push(crate::physics::adhesion_rate(
                 &m.params.substrate,
                 ad,
                 &x,
-                mu[k],
+                0.0,
             ));
         }
         m.set_initial(t, y2, yp2);
