@@ -8,6 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use cellsim::fem::Domain;
 use cellsim::output::RunData;
 use cellsim::output::figures::{
     self, CYTOPLASM, Compared, DisplacementMarks, FOOT, GravityMark, LAYER, LAYER_EDGE, MEMBRANE,
@@ -15,9 +16,10 @@ use cellsim::output::figures::{
 };
 use cellsim::output::geometry::{Backdrop, CellShape};
 use cellsim::output::movie::{FRAME_SIZE, MAX_FRAMES, Movie};
-use cellsim::output::paper::{self, Quantity, SceneOutcome, When};
+use cellsim::output::paper::{self, Measure, Quantity, SceneOutcome, When};
 use cellsim::output::vtu::{QUADRATIC_TRIANGLE, VtuSeries, read_vtu, write_vtu};
 use cellsim::physics::Substrate;
+use cellsim::record::Observables;
 use cellsim::record::Snapshot;
 use cellsim::record::StateFile;
 use cellsim::record::observables::OLD_CSV_HEADER;
@@ -104,17 +106,18 @@ fn time_figures_have_their_size_and_ink() {
         maximum: Some(Compared {
             t: 55000.0,
             paper: -9.65,
-            ours: r.series.last().expect("rows").uy_top,
+            ours: r.series.last().expect("rows").uy_nucleus_max,
         }),
+        maximum_top: paper::lowest_top(&r),
     }];
     figures::displacement_figure(&p, &runs, &marks, "paper").expect("displacement figure");
     check_png(&p, TIME_SIZE, 0.03);
-    // The side panel of maxima (right quarter) holds the paper's hollow circle and our dot.
+    // The side panel of maxima (right third) holds the paper's hollow circle and our dot.
     let (w, _, px) = png(&p);
     let side = px
         .iter()
         .enumerate()
-        .filter(|(k, c)| (*k as u32 % w) > w * 3 / 4 && **c == [31, 119, 180])
+        .filter(|(k, c)| (*k as u32 % w) > w * 68 / 100 && **c == [31, 119, 180])
         .count();
     assert!(side > 50, "{side} pixels of our dot in the side panel");
 
@@ -664,12 +667,31 @@ fn comparison_uses_the_reported_table() {
     // Our values from the stored run, read as if it were the push-pull scene.
     let disp = paper::our_value(Quantity::NucleusDisplacement(When::End), &r, None)
         .expect("final displacement");
-    let max_down = r.series.iter().map(|o| -o.uy_top).fold(f64::MIN, f64::max);
+    // The paper's maximum is compared with the lowest point of the nucleus over the run.
+    let max_down = r
+        .series
+        .iter()
+        .map(|o| -o.uy_nucleus_max)
+        .fold(f64::MIN, f64::max);
     assert_eq!(disp, max_down);
-    // The figure's dot for it sits where p_t is lowest, at that value.
-    let (t_low, low) = paper::lowest_top(&r).expect("rows");
+    let (t_low, low) = paper::lowest_nucleus(&r).expect("rows");
     assert_eq!(-low, disp);
-    assert_eq!(r.at(t_low).expect("row").uy_top, low);
+    assert_eq!(r.at(t_low).expect("row").uy_nucleus_max, low);
+    // p_t's lowest is the other measure, shown beside it.
+    let top = paper::measure_value(
+        Quantity::NucleusDisplacement(When::End),
+        Measure::NucleusTop,
+        &r,
+        None,
+    )
+    .expect("p_t's lowest");
+    let (_, low_top) = paper::lowest_top(&r).expect("rows");
+    assert_eq!(top, -low_top);
+    assert!(
+        top < disp,
+        "p_t {top} is not the nucleus's lowest point {disp}"
+    );
+    // Values at a time are p_t's, as on Fig. 9's curve.
     let g = paper::our_value(Quantity::NucleusDisplacement(When::GravityEnd), &r, None)
         .expect("at T_g0");
     let row = r.at(10000.0).expect("row at T_g0");
@@ -696,16 +718,253 @@ fn comparison_uses_the_reported_table() {
         md.lines().filter(|l| l.starts_with("| ")).count(),
         paper::REPORTED.len() + 1 + runs.len() + 1
     );
-    let final_row = md
-        .lines()
-        .find(|l| l.starts_with("| pillars-push-pull | largest downward"))
-        .expect("final displacement row");
-    assert!(final_row.contains("| 9.650 |"), "{final_row}");
-    assert!(final_row.contains(&format!("{disp:.3}")), "{final_row}");
+    let final_row = cells(&md, "| pillars-push-pull | maximum downward");
+    assert_eq!(final_row[3], "9.650");
+    assert_eq!(final_row[4], format!("{disp:.3}"));
     let rel = 100.0 * (disp - 9.65) / 9.65;
-    assert!(final_row.contains(&format!("{rel:+.1} %")), "{final_row}");
-    assert!(md.contains("| flat | contact radius at the end (µm) | 8.800 | n/a: no run |"));
+    assert_eq!(final_row[5], format!("{rel:+.1} %"));
+    assert!(final_row[2].contains("`uy_nucleus_max`"), "{final_row:?}");
+    assert!(
+        final_row[6].contains("`uy_top`") && final_row[6].contains(&format!("{top:.3}")),
+        "{final_row:?}"
+    );
+    assert!(md.contains(
+        "| flat | contact radius at the end (µm) | reference-frame contour length in contact \
+         (`contact_radius_ref`), the paper's definition | 8.800 | n/a: no run | – | – |"
+    ));
     assert!(md.contains("| pillars-push-pull | finished |"), "{md}");
+}
+
+/// The cells of the table row of `md` starting with `start`, trimmed.
+fn cells(md: &str, start: &str) -> Vec<String> {
+    let line = md
+        .lines()
+        .find(|l| l.starts_with(start))
+        .unwrap_or_else(|| panic!("no row {start}"));
+    line.trim_matches('|')
+        .split(" | ")
+        .map(|c| c.trim().to_string())
+        .collect()
+}
+
+#[test]
+fn comparison_uses_the_papers_measures() {
+    let r = load_fixture();
+    let t_end = r.t_end();
+    let end = r.at(t_end).expect("last row");
+    // The fixture's contacting membrane is stretched: the two frames differ.
+    assert!(
+        end.contact_radius > 1.05 * end.contact_radius_ref,
+        "{} vs {}",
+        end.contact_radius,
+        end.contact_radius_ref
+    );
+    // Every scene pointed at the stored run.
+    let mut names: Vec<&str> = paper::SCENES.iter().map(|s| s.name).collect();
+    names.push(paper::CONTROL);
+    let runs: Vec<SceneOutcome> = names
+        .iter()
+        .map(|n| SceneOutcome {
+            name: n.to_string(),
+            dir: fixture(),
+            result: Ok(false),
+        })
+        .collect();
+    let data: Vec<(String, RunData)> = names.iter().map(|n| (n.to_string(), r.clone())).collect();
+    let md = paper::comparison_markdown(&runs, &data);
+    // Contact radius: the reference frame compared, the deformed one beside it.
+    let row = cells(&md, "| flat | contact radius at the end");
+    assert!(row[2].contains("reference-frame"), "{row:?}");
+    assert_eq!(row[4], format!("{:.3}", end.contact_radius_ref), "{row:?}");
+    let rel = 100.0 * (end.contact_radius_ref - 8.8) / 8.8;
+    assert_eq!(row[5], format!("{rel:+.1} %"));
+    assert!(
+        row[6].starts_with("deformed contour length (`contact_radius`): ")
+            && row[6].contains(&format!("{:.3}", end.contact_radius)),
+        "{row:?}"
+    );
+    // Cytoplasm: with the membrane (the paper's Ω_cp) compared; without it and the
+    // membrane alone beside it.
+    let row = cells(&md, "| pillars-push | mean ‖E‖ of the cytoplasm");
+    assert!(row[2].contains("incl. membrane"), "{row:?}");
+    assert_eq!(row[4], format!("{:.1}", 100.0 * end.strain_cytoplasm));
+    let (a_cp, a_m) = (
+        r.mesh.area(Domain::Cytoplasm),
+        r.mesh.area(Domain::Membrane),
+    );
+    let alone = paper::cytoplasm_alone(&end, a_cp, a_m);
+    assert!(
+        row[6].contains(&format!("without the membrane: {:.1}", 100.0 * alone))
+            && row[6].contains(&format!(
+                "(`strain_membrane`): {:.1}",
+                100.0 * end.strain_membrane
+            )),
+        "{row:?}"
+    );
+    // Every row names its measure, a column of timeseries.csv.
+    for rep in paper::REPORTED.iter() {
+        let (m, _) = rep.quantity.measures();
+        let d = m.describe(rep.quantity);
+        assert!(d.contains('`'), "{d}");
+        assert!(
+            md.lines().any(|l| l.starts_with(&format!(
+                "| {} | {} | {d} |",
+                rep.scene,
+                rep.quantity.describe()
+            ))),
+            "no row for {rep:?} with {d}"
+        );
+    }
+}
+
+#[test]
+fn cytoplasm_alone_undoes_the_membrane() {
+    let r = load_fixture();
+    // The three domains tile the half disc of radius r_c.
+    let areas = [Domain::Nucleus, Domain::Cytoplasm, Domain::Membrane].map(|d| r.mesh.area(d));
+    assert!(areas.iter().all(|a| *a > 0.0), "{areas:?}");
+    let c = r.mesh.center;
+    let r_c = r
+        .mesh
+        .nodes
+        .iter()
+        .map(|p| (p[0] - c[0]).hypot(p[1] - c[1]))
+        .fold(0.0, f64::max);
+    let half_disc = 0.5 * std::f64::consts::PI * r_c * r_c;
+    let total: f64 = areas.iter().sum();
+    assert!(
+        (total - half_disc).abs() < 1e-3 * half_disc,
+        "{total} against {half_disc}"
+    );
+    // Means over the union undone: cytoplasm 0.6 over 3 µm², membrane 0.2 over 1 µm²
+    // make 0.5 over both.
+    let o = Observables {
+        strain_cytoplasm: 0.5,
+        strain_membrane: 0.2,
+        ..Default::default()
+    };
+    assert!((paper::cytoplasm_alone(&o, 3.0, 1.0) - 0.6).abs() < 1e-15);
+}
+
+#[test]
+fn contact_radius_marks_sit_on_the_reference_frame_curve() {
+    let mut r = load_fixture();
+    r.name = "flat".into();
+    let compared = paper::contact_radius_compared(&r);
+    assert_eq!(compared.len(), 2, "{compared:?}");
+    let end = compared[1];
+    assert_eq!(end.paper, 8.8);
+    assert_eq!(end.ours, r.at(end.t).expect("row").contact_radius_ref);
+    let plot = figures::contact_radius_plot(&[&r], &compared, "paper");
+    let reference = plot
+        .curves
+        .iter()
+        .find(|c| c.label.contains(figures::CONTACT_REFERENCE_LABEL))
+        .expect("reference-frame curve");
+    let deformed = plot
+        .curves
+        .iter()
+        .find(|c| c.label.contains(figures::CONTACT_DEFORMED_LABEL))
+        .expect("deformed-frame curve");
+    assert_eq!(reference.stroke, figures::Stroke::Solid);
+    assert_eq!(deformed.stroke, figures::Stroke::Dashed);
+    // Our dots (filled marks) are points of the solid curve, not of the dashed one.
+    let dots: Vec<(f64, f64)> = plot
+        .marks
+        .iter()
+        .filter(|m| m.filled)
+        .flat_map(|m| m.points.iter().copied())
+        .collect();
+    assert_eq!(dots.len(), 2);
+    for d in &dots {
+        assert!(
+            reference.points.contains(d),
+            "{d:?} not on the reference curve"
+        );
+    }
+    assert!(
+        !deformed.points.contains(&dots[1]),
+        "the end dot is on the deformed curve"
+    );
+    // The paper's circles are joined to those dots.
+    assert_eq!(
+        plot.links,
+        compared
+            .iter()
+            .map(|c| (c.t, c.paper, c.ours))
+            .collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn nucleus_maximum_set_against_the_lowest_point_of_the_nucleus() {
+    let r = load_fixture();
+    let m = paper::displacement_marks("pillars-pull", &r);
+    let max = m.maximum.expect("maximum");
+    let (t, low) = paper::lowest_nucleus(&r).expect("rows");
+    assert_eq!((max.t, max.paper, max.ours), (t, -9.63, low));
+    assert_eq!(m.maximum_top, paper::lowest_top(&r));
+    // At T_g0 and T_as0 on the p_t curve.
+    assert_eq!(m.at_times.len(), 2);
+    for c in &m.at_times {
+        assert_eq!(c.ours, r.at(c.t).expect("row").uy_top);
+    }
+    // A scene the paper reports nothing for has no marks.
+    assert_eq!(
+        paper::displacement_marks("flat", &r),
+        figures::DisplacementMarks::default()
+    );
+    // The side panel draws the square of p_t's lowest beside the dot.
+    let d = scratch("maxima");
+    let p = d.join("disp.png");
+    figures::displacement_figure(&p, &[&r], std::slice::from_ref(&m), "paper").expect("figure");
+    let (w, _, px) = png(&p);
+    let blue = [31u8, 119, 180];
+    let side_x0 = (w as f64 * 0.68) as u32;
+    let without = figures::DisplacementMarks {
+        maximum_top: None,
+        ..m
+    };
+    let p2 = d.join("disp-no-top.png");
+    figures::displacement_figure(&p2, &[&r], &[without], "paper").expect("figure");
+    let (_, _, px2) = png(&p2);
+    let count = |px: &[[u8; 3]]| {
+        px.iter()
+            .enumerate()
+            .filter(|(k, c)| (*k as u32 % w) > side_x0 && **c == blue)
+            .count()
+    };
+    assert!(
+        count(&px) > count(&px2) + 50,
+        "the square adds no blue to the side panel: {} vs {}",
+        count(&px),
+        count(&px2)
+    );
+}
+
+#[test]
+fn strain_curves_are_the_papers_cytoplasm() {
+    let r = load_fixture();
+    let plot = figures::strain_time_plot(&[&r]);
+    let dashed: Vec<_> = plot
+        .curves
+        .iter()
+        .filter(|c| c.stroke == figures::Stroke::Dashed && !c.points.is_empty())
+        .collect();
+    assert_eq!(dashed.len(), 1);
+    let expected: Vec<(f64, f64)> = r
+        .series
+        .iter()
+        .map(|o| (o.t, 100.0 * o.strain_cytoplasm))
+        .collect();
+    assert_eq!(dashed[0].points, expected);
+    // The legend says so.
+    assert!(
+        plot.curves
+            .iter()
+            .any(|c| c.stroke == figures::Stroke::Dashed && c.label == figures::CYTOPLASM_LABEL)
+    );
+    assert!(figures::CYTOPLASM_LABEL.contains("incl. membrane"));
 }
 
 #[test]

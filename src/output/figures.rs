@@ -120,6 +120,18 @@ pub struct Marks {
     pub radius: i32,
     /// Filled (a cellsim value) instead of hollow (the paper's).
     pub filled: bool,
+    /// Circle, or square (a second cellsim measure beside the compared one).
+    pub shape: MarkShape,
+}
+
+/// The shape of a [`Marks`] point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum MarkShape {
+    /// A circle of the mark's radius.
+    #[default]
+    Circle,
+    /// A square with the mark's radius as half side.
+    Square,
 }
 
 /// A note over a time interval, drawn as a bracket under the row of phase names: e.g.
@@ -447,12 +459,30 @@ pub fn draw_time_plot_on<DB: DrawingBackend>(
         } else {
             color.stroke_width(3)
         };
-        let anno = chart
-            .draw_series(m.points.iter().map(|&p| Circle::new(p, m.radius, style)))
-            .map_err(e)?;
+        let r = m.radius;
+        let anno = match m.shape {
+            MarkShape::Circle => chart
+                .draw_series(m.points.iter().map(|&p| Circle::new(p, r, style)))
+                .map_err(e)?,
+            MarkShape::Square => chart
+                .draw_series(
+                    m.points
+                        .iter()
+                        .map(|&p| EmptyElement::at(p) + Rectangle::new([(-r, -r), (r, r)], style)),
+                )
+                .map_err(e)?,
+        };
+        let shape = m.shape;
         if !m.label.is_empty() {
-            anno.label(&m.label)
-                .legend(move |(x, y)| Circle::new((x + LEGEND_GLYPH / 2, y), 7, style));
+            anno.label(&m.label).legend(move |(x, y)| {
+                let c = (x + LEGEND_GLYPH / 2, y);
+                match shape {
+                    MarkShape::Circle => Circle::new(c, 7, style).into_dyn(),
+                    MarkShape::Square => {
+                        Rectangle::new([(c.0 - 6, c.1 - 6), (c.0 + 6, c.1 + 6)], style).into_dyn()
+                    }
+                }
+            });
         }
     }
     // Upper legends start below the row of phase names and the notes.
@@ -532,6 +562,7 @@ fn compared_marks(compared: &[Compared], color: RGBColor) -> (Vec<Marks>, Vec<(f
             color: BLACK,
             radius: 8,
             filled: false,
+            shape: MarkShape::Circle,
         },
         Marks {
             label: String::new(),
@@ -539,6 +570,7 @@ fn compared_marks(compared: &[Compared], color: RGBColor) -> (Vec<Marks>, Vec<(f
             color,
             radius: 6,
             filled: true,
+            shape: MarkShape::Circle,
         },
     ];
     let links = compared.iter().map(|c| (c.t, c.paper, c.ours)).collect();
@@ -555,6 +587,7 @@ fn compared_legend(paper_label: &str, ours_label: &str) -> Vec<Marks> {
             color: BLACK,
             radius: 8,
             filled: false,
+            shape: MarkShape::Circle,
         },
         Marks {
             label: ours_label.to_string(),
@@ -562,6 +595,7 @@ fn compared_legend(paper_label: &str, ours_label: &str) -> Vec<Marks> {
             color: BLACK,
             radius: 6,
             filled: true,
+            shape: MarkShape::Circle,
         },
     ]
 }
@@ -578,9 +612,12 @@ pub fn short_names(runs: &[&RunData]) -> Vec<String> {
     names.iter().map(|n| n[strip..].to_string()).collect()
 }
 
-/// Contact radius against time for `runs` (the paper's Fig. 6b), the axis from 0, with
-/// the paper's `reported` values (hollow circles, `reported_label`) joined to ours (filled
-/// dots on the first run's curve).
+/// Contact radius against time for `runs` (the paper's Fig. 6b), the axis from 0: each
+/// run measured along the reference contour (solid, `contact_radius_ref`: the paper's
+/// "length of the cell contour in contact", as its COMSOL integrates it) and along the
+/// deformed contour (dashed, `contact_radius`), with the paper's `reported` values (hollow
+/// circles, `reported_label`) joined to ours (filled dots, on the first run's
+/// reference-frame curve).
 pub fn contact_radius_figure(
     path: &Path,
     runs: &[&RunData],
@@ -590,28 +627,42 @@ pub fn contact_radius_figure(
     time_figure(path, &contact_radius_plot(runs, reported, reported_label))
 }
 
+/// Legend text of the reference-frame contact curve of [`contact_radius_plot`].
+pub const CONTACT_REFERENCE_LABEL: &str = "along the reference contour (the paper's measure)";
+/// Legend text of the deformed-frame contact curve of [`contact_radius_plot`].
+pub const CONTACT_DEFORMED_LABEL: &str = "along the deformed contour";
+
 /// The plot of [`contact_radius_figure`].
 pub fn contact_radius_plot(
     runs: &[&RunData],
     reported: &[Compared],
     reported_label: &str,
 ) -> TimePlot {
-    let curves = runs
-        .iter()
-        .enumerate()
-        .map(|(k, r)| Curve {
-            label: run_label(r),
-            points: points(&r.series, |o| o.contact_radius),
-            color: PALETTE[k % PALETTE.len()],
+    let mut curves = Vec::new();
+    for (k, r) in runs.iter().enumerate() {
+        let color = PALETTE[k % PALETTE.len()];
+        curves.push(Curve {
+            label: format!("{}: {CONTACT_REFERENCE_LABEL}", run_label(r)),
+            points: points(&r.series, |o| o.contact_radius_ref),
+            color,
             stroke: Stroke::Solid,
-        })
-        .collect();
+        });
+        curves.push(Curve {
+            label: format!("{}: {CONTACT_DEFORMED_LABEL}", r.name),
+            points: points(&r.series, |o| o.contact_radius),
+            color,
+            stroke: Stroke::Dashed,
+        });
+    }
     let (mut marks, links) = compared_marks(reported, PALETTE[0]);
     if !reported.is_empty() {
-        marks.extend(compared_legend(reported_label, "cellsim, compared with it"));
+        marks.extend(compared_legend(
+            reported_label,
+            "cellsim, compared with it (reference contour)",
+        ));
     }
     TimePlot {
-        title: "Contact radius (half-width of the contact zone)".into(),
+        title: "Contact radius: length of the cell contour in contact (half cell)".into(),
         y_desc: "contact radius (µm)".into(),
         curves,
         marks,
@@ -627,26 +678,69 @@ pub fn contact_radius_plot(
     }
 }
 
-/// What the paper reports about one run's nucleus displacement, against ours.
+/// What the paper reports about one run's nucleus displacement, against ours (signed as
+/// u_y).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct DisplacementMarks {
     /// Values at given times (T_g0, T_as0), on the p_t curve.
     pub at_times: Vec<Compared>,
-    /// The paper's maximum nucleus displacement against our largest downward displacement
-    /// of p_t (`t` = when ours is reached): drawn on the curve and in the side panel.
+    /// The paper's maximum nucleus displacement against the lowest point of the nucleus
+    /// over the run (`uy_nucleus_max`; `t` = when it is reached): drawn on that curve and
+    /// in the side panel.
     pub maximum: Option<Compared>,
+    /// (t, u_y) where the nucleus top p_t is lowest: the other reading of the paper's
+    /// maximum, a square on the p_t curve and in the side panel.
+    pub maximum_top: Option<(f64, f64)>,
 }
 
 /// Share of the width of [`displacement_figure`] taken by the panel of maxima.
-const MAX_PANEL_SHARE: f64 = 0.25;
+const MAX_PANEL_SHARE: f64 = 0.32;
 
-/// Vertical displacement of p_t (solid) and c (thin dashed) against time for `runs` (the
-/// paper's Fig. 9 kind of curve). The paper's values (`reported`, one entry per run) are
-/// hollow black circles, each joined by a grey line to the cellsim value it is compared
-/// with, a filled dot in the run's colour on the p_t curve. The paper's maximum nucleus
-/// displacement has no time: it is set against our largest downward displacement of p_t
-/// in a side panel on the same value axis (the dot also marks where p_t reaches it).
-/// Runs that are the same run for a while say so above the curves.
+/// Legend entries without points for plots with several curves per run: one per run in
+/// its colour (its short name, solid), then one per line style in black (`styles`).
+fn key_curves(runs: &[&RunData], styles: &[(Stroke, &str)]) -> Vec<Curve> {
+    let short = short_names(runs);
+    let mut out: Vec<Curve> = runs
+        .iter()
+        .enumerate()
+        .map(|(k, r)| Curve {
+            label: if runs.len() == 1 {
+                run_label(r)
+            } else if r.finished() {
+                short[k].clone()
+            } else {
+                format!(
+                    "{} (stopped at t = {} s)",
+                    short[k],
+                    group_thousands(r.t_last())
+                )
+            },
+            points: vec![],
+            color: PALETTE[k % PALETTE.len()],
+            stroke: Stroke::Solid,
+        })
+        .collect();
+    out.extend(styles.iter().map(|(stroke, label)| Curve {
+        label: label.to_string(),
+        points: vec![],
+        color: BLACK,
+        stroke: *stroke,
+    }));
+    out
+}
+
+/// Legend text of the curve of the nucleus's lowest point in [`displacement_figure`].
+pub const NUCLEUS_LOWEST_LABEL: &str = "nucleus, lowest point";
+
+/// Vertical displacement against time for `runs` (the paper's Fig. 9 kind of curve): the
+/// nucleus top p_t (solid), the lowest point of the nucleus (dotted, `uy_nucleus_max`)
+/// and the cell centre c (dashed), one colour per run. The paper's values (`reported`, one
+/// entry per run) are hollow black circles, each joined by a grey line to the cellsim
+/// value it is compared with, a filled dot in the run's colour: at T_g0 and T_as0 on the
+/// p_t curve. The paper's maximum nucleus displacement has no time: a side panel on the
+/// same value axis sets it against the lowest point of the nucleus over the run (the dot
+/// also marks where the dotted curve reaches it), with p_t's lowest as a square beside
+/// it. Runs that are the same run for a while say so above the curves.
 pub fn displacement_figure(
     path: &Path,
     runs: &[&RunData],
@@ -659,41 +753,71 @@ pub fn displacement_figure(
     let mut maxima = Vec::new();
     for (k, r) in runs.iter().enumerate() {
         let color = PALETTE[k % PALETTE.len()];
-        curves.push(Curve {
-            label: format!("{}: nucleus top p_t", run_label(r)),
-            points: points(&r.series, |o| o.uy_top),
-            color,
-            stroke: Stroke::Solid,
-        });
-        curves.push(Curve {
-            label: format!("{}: centre c", r.name),
-            points: points(&r.series, |o| o.uy_centre),
-            color,
-            stroke: Stroke::Dashed,
-        });
+        for (f, stroke) in [
+            (
+                (|o: &Observables| o.uy_top) as fn(&Observables) -> f64,
+                Stroke::Solid,
+            ),
+            (|o: &Observables| o.uy_nucleus_max, Stroke::Dotted),
+            (|o: &Observables| o.uy_centre, Stroke::Dashed),
+        ] {
+            curves.push(Curve {
+                label: String::new(),
+                points: points(&r.series, f),
+                color,
+                stroke,
+            });
+        }
         let Some(rep) = reported.get(k) else { continue };
         let (m, l) = compared_marks(&rep.at_times, color);
         marks.extend(m);
         links.extend(l);
         if let Some(m) = rep.maximum {
-            // Where p_t is lowest: the dot only; the paper's maximum is in the side panel.
+            // Where the nucleus is lowest: the dot only; the paper's maximum is in the
+            // side panel.
             marks.push(Marks {
                 label: String::new(),
                 points: vec![(m.t, m.ours)],
                 color,
                 radius: 6,
                 filled: true,
+                shape: MarkShape::Circle,
             });
-            maxima.push((k, color, m));
+            maxima.push((k, color, m, rep.maximum_top));
+        }
+        if let Some(p) = rep.maximum_top {
+            marks.push(Marks {
+                label: String::new(),
+                points: vec![p],
+                color,
+                radius: 5,
+                filled: true,
+                shape: MarkShape::Square,
+            });
         }
     }
+    curves.extend(key_curves(
+        runs,
+        &[
+            (Stroke::Solid, "nucleus top p_t"),
+            (Stroke::Dotted, NUCLEUS_LOWEST_LABEL),
+            (Stroke::Dashed, "cell centre c"),
+        ],
+    ));
     let short = short_names(runs);
     let has_marks = marks.iter().any(|m| !m.points.is_empty());
     if has_marks {
-        marks.extend(compared_legend(
-            reported_label,
-            "cellsim: p_t at that time / at its lowest",
-        ));
+        marks.extend(compared_legend(reported_label, "cellsim, compared with it"));
+        if !maxima.is_empty() {
+            marks.push(Marks {
+                label: "cellsim: p_t at its lowest".into(),
+                points: vec![],
+                color: BLACK,
+                radius: 5,
+                filled: true,
+                shape: MarkShape::Square,
+            });
+        }
     }
     let plot = TimePlot {
         title: String::new(),
@@ -711,7 +835,11 @@ pub fn displacement_figure(
         legend: SeriesLabelPosition::LowerLeft,
     };
     let range = value_axis(
-        plot_values(&plot).chain(maxima.iter().flat_map(|(_, _, m)| [m.paper, m.ours])),
+        plot_values(&plot).chain(
+            maxima
+                .iter()
+                .flat_map(|(_, _, m, top)| [m.paper, m.ours, top.map_or(f64::NAN, |p| p.1)]),
+        ),
         false,
         plot.notes.len(),
     );
@@ -720,7 +848,7 @@ pub fn displacement_figure(
     root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
     let root = root
         .titled(
-            "Vertical displacement of the nucleus top p_t and the cell centre c",
+            "Vertical displacement of the nucleus (top p_t, lowest point) and the cell centre c",
             (FONT, 28),
         )
         .map_err(|x| OutputError::draw(path, x))?;
@@ -731,21 +859,56 @@ pub fn displacement_figure(
         let (left, right) =
             root.split_horizontally((w as f64 * (1.0 - MAX_PANEL_SHARE)).round() as u32);
         draw_time_plot_on(&left, &plot, range).map_err(err)?;
-        let columns: Vec<(String, RGBColor, Compared)> = maxima
+        let columns: Vec<MaximumColumn> = maxima
             .into_iter()
-            .map(|(k, c, m)| (short[k].clone(), c, m))
+            .map(|(k, color, compared, top)| MaximumColumn {
+                name: short[k].clone(),
+                color,
+                compared,
+                top: top.map(|p| p.1),
+            })
             .collect();
         draw_maxima_panel(&right, &columns, range).map_err(err)?;
     }
     root.present().map_err(|x| OutputError::draw(path, x))
 }
 
+/// A value printed at height `v` from `x` on, in colour `c`, placed by `vpos`.
+fn value_text(
+    v: f64,
+    x: f64,
+    c: &RGBColor,
+    vpos: plotters::style::text_anchor::VPos,
+) -> Text<'_, (f64, f64), String> {
+    use plotters::style::text_anchor::{HPos, Pos};
+    Text::new(
+        format!("{v:.2}"),
+        (x, v),
+        TextStyle::from((FONT, 16).into_font())
+            .color(c)
+            .pos(Pos::new(HPos::Left, vpos)),
+    )
+}
+
+/// One run's column in the side panel of [`displacement_figure`].
+struct MaximumColumn {
+    /// Short run name.
+    name: String,
+    /// The run's colour.
+    color: RGBColor,
+    /// The paper's maximum against the lowest point of the nucleus.
+    compared: Compared,
+    /// The lowest u_y of p_t.
+    top: Option<f64>,
+}
+
 /// The side panel of [`displacement_figure`]: for each run, the paper's maximum (hollow
-/// circle) and ours (filled dot) joined, values printed, on the value axis `(lo, hi)`,
-/// lined up with the time plot beside it.
+/// circle) and the lowest point of the nucleus (filled dot) joined, p_t's lowest (a
+/// square) beside them, values printed, on the value axis `(lo, hi)`, lined up with the
+/// time plot beside it.
 fn draw_maxima_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
-    columns: &[(String, RGBColor, Compared)],
+    columns: &[MaximumColumn],
     (lo, hi): (f64, f64),
 ) -> Result<(), String> {
     use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -759,7 +922,7 @@ fn draw_maxima_panel<DB: DrawingBackend>(
         .y_label_area_size(0)
         .build_cartesian_2d(0.0..n as f64, lo..hi)
         .map_err(e)?;
-    let names: Vec<String> = columns.iter().map(|c| c.0.clone()).collect();
+    let names: Vec<String> = columns.iter().map(|c| c.name.clone()).collect();
     let fmt = |x: &f64| {
         let k = (x - 0.5).round();
         if (x - 0.5 - k).abs() < 1e-6 && k >= 0.0 {
@@ -780,26 +943,65 @@ fn draw_maxima_panel<DB: DrawingBackend>(
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(e)?;
-    let grey = RGBColor(110, 110, 110);
+    let grey = RGBColor(90, 90, 90);
     let span = hi - lo;
-    let caption = |k: usize, s: &str| {
-        Text::new(
-            s.to_string(),
-            (0.04 * n as f64, hi - (0.01 + 0.04 * k as f64) * span),
-            TextStyle::from((FONT, 17).into_font())
-                .color(&grey)
-                .pos(Pos::new(HPos::Left, VPos::Top)),
-        )
-    };
-    chart
-        .draw_series([
-            caption(0, "paper: maximum nucleus"),
-            caption(1, "displacement (Sect. 3.2) ○"),
-            caption(2, "cellsim: lowest u_y(p_t) ●"),
-        ])
-        .map_err(e)?;
-    for (k, (_, color, m)) in columns.iter().enumerate() {
-        let x = k as f64 + 0.35;
+    // The key: a marker, then its text on two lines.
+    let key: [(MarkShape, bool, &str, &str); 3] = [
+        (
+            MarkShape::Circle,
+            false,
+            "paper: maximum displacement",
+            "of the nucleus (Sect. 3.2)",
+        ),
+        (
+            MarkShape::Circle,
+            true,
+            "cellsim, compared with it: lowest",
+            "point of the nucleus (uy_nucleus_max)",
+        ),
+        (
+            MarkShape::Square,
+            true,
+            "cellsim, beside it: lowest p_t,",
+            "the point the paper's Fig. 9 plots",
+        ),
+    ];
+    let x_text = 0.12 * n as f64;
+    let x_mark = 0.05 * n as f64;
+    for (k, (shape, filled, a, b)) in key.iter().enumerate() {
+        let y = hi - (0.02 + 0.085 * k as f64) * span;
+        let style = if *filled {
+            grey.filled()
+        } else {
+            BLACK.stroke_width(2)
+        };
+        let y_mark = y - 0.018 * span;
+        match shape {
+            MarkShape::Circle => chart
+                .draw_series(std::iter::once(Circle::new((x_mark, y_mark), 6, style)))
+                .map_err(e)?,
+            MarkShape::Square => chart
+                .draw_series(std::iter::once(
+                    EmptyElement::at((x_mark, y_mark)) + Rectangle::new([(-5, -5), (5, 5)], style),
+                ))
+                .map_err(e)?,
+        };
+        for (line, text) in [a, b].iter().enumerate() {
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    text.to_string(),
+                    (x_text, y - 0.036 * line as f64 * span),
+                    TextStyle::from((FONT, 16).into_font())
+                        .color(&grey)
+                        .pos(Pos::new(HPos::Left, VPos::Top)),
+                )))
+                .map_err(e)?;
+        }
+    }
+    for (k, col) in columns.iter().enumerate() {
+        let m = col.compared;
+        let color = &col.color;
+        let x = k as f64 + 0.2;
         chart
             .draw_series(std::iter::once(PathElement::new(
                 vec![(x, m.paper), (x, m.ours)],
@@ -814,18 +1016,29 @@ fn draw_maxima_panel<DB: DrawingBackend>(
             .map_err(e)?;
         // Values beside the marks, the upper one above, the lower one below.
         let (up, down) = if m.paper >= m.ours {
-            ((m.paper, BLACK), (m.ours, *color))
+            ((m.paper, &BLACK), (m.ours, color))
         } else {
-            ((m.ours, *color), (m.paper, BLACK))
+            ((m.ours, color), (m.paper, &BLACK))
         };
-        for ((v, c), vpos) in [(up, VPos::Bottom), (down, VPos::Top)] {
+        chart
+            .draw_series([
+                value_text(up.0, x + 0.08, up.1, VPos::Bottom),
+                value_text(down.0, x + 0.08, down.1, VPos::Top),
+            ])
+            .map_err(e)?;
+        if let Some(v) = col.top {
+            let xs = k as f64 + 0.66;
             chart
-                .draw_series(std::iter::once(Text::new(
-                    format!("{v:.2}"),
-                    (x + 0.1, v),
-                    TextStyle::from((FONT, 17).into_font())
-                        .color(&c)
-                        .pos(Pos::new(HPos::Left, vpos)),
+                .draw_series(std::iter::once(
+                    EmptyElement::at((xs, v)) + Rectangle::new([(-5, -5), (5, 5)], color.filled()),
+                ))
+                .map_err(e)?;
+            chart
+                .draw_series(std::iter::once(value_text(
+                    v,
+                    xs + 0.07,
+                    color,
+                    VPos::Center,
                 )))
                 .map_err(e)?;
         }
@@ -833,30 +1046,46 @@ fn draw_maxima_panel<DB: DrawingBackend>(
     Ok(())
 }
 
-/// Mean ‖E‖ of nucleus (solid) and cytoplasm (dashed) against time for `runs`, in %, the
-/// axis from 0.
+/// Mean ‖E‖ of the nucleus (solid), of the cytoplasm including the membrane (dashed, the
+/// paper's Ω_cp, `strain_cytoplasm`) and of the membrane alone (dotted) against time for
+/// `runs`, in %, the axis from 0; one colour per run.
 pub fn strain_time_figure(path: &Path, runs: &[&RunData]) -> Result<(), OutputError> {
     time_figure(path, &strain_time_plot(runs))
 }
+
+/// Legend text of the cytoplasm curves of [`strain_time_plot`] and the cytoplasm panel of
+/// [`strain_bars_figure`].
+pub const CYTOPLASM_LABEL: &str = "cytoplasm incl. membrane (the paper's Ω_cp)";
 
 /// The plot of [`strain_time_figure`].
 pub fn strain_time_plot(runs: &[&RunData]) -> TimePlot {
     let mut curves = Vec::new();
     for (k, r) in runs.iter().enumerate() {
         let color = PALETTE[k % PALETTE.len()];
-        curves.push(Curve {
-            label: format!("{}: nucleus", run_label(r)),
-            points: points(&r.series, |o| 100.0 * o.strain_nucleus),
-            color,
-            stroke: Stroke::Solid,
-        });
-        curves.push(Curve {
-            label: format!("{}: cytoplasm", r.name),
-            points: points(&r.series, |o| 100.0 * o.strain_cytoplasm),
-            color,
-            stroke: Stroke::Dashed,
-        });
+        for (f, stroke) in [
+            (
+                (|o: &Observables| o.strain_nucleus) as fn(&Observables) -> f64,
+                Stroke::Solid,
+            ),
+            (|o: &Observables| o.strain_cytoplasm, Stroke::Dashed),
+            (|o: &Observables| o.strain_membrane, Stroke::Dotted),
+        ] {
+            curves.push(Curve {
+                label: String::new(),
+                points: points(&r.series, |o| 100.0 * f(o)),
+                color,
+                stroke,
+            });
+        }
     }
+    curves.extend(key_curves(
+        runs,
+        &[
+            (Stroke::Solid, "nucleus"),
+            (Stroke::Dashed, CYTOPLASM_LABEL),
+            (Stroke::Dotted, "membrane alone"),
+        ],
+    ));
     TimePlot {
         title: "Mean Green-Lagrange strain norm per domain".into(),
         y_desc: "mean ‖E‖ over the domain (%)".into(),
@@ -945,6 +1174,7 @@ pub fn upside_down_figure(
             color: BLACK,
             radius: 8,
             filled: false,
+            shape: MarkShape::Circle,
         });
         if let Some(&(t, v)) = diff.last().filter(|p| p.0 == t_max) {
             marks.push(Marks {
@@ -953,6 +1183,7 @@ pub fn upside_down_figure(
                 color: BLACK,
                 radius: 6,
                 filled: true,
+                shape: MarkShape::Circle,
             });
             links.push((t, v, d.copysign(v)));
         }
@@ -1033,7 +1264,7 @@ pub fn strain_bars_figure(
     .map_err(derr)?;
     draw_bars(
         &right,
-        "cytoplasm",
+        CYTOPLASM_LABEL,
         bars,
         &pick_c,
         top,
@@ -1552,8 +1783,8 @@ pub fn shape_figure(
     Ok(scale)
 }
 
-/// All of one run's figures into `out`: `contact-radius.png`, `displacement.png`
-/// (p_t, c and p_b), `strain.png` (mean ‖E‖ over time) and `shape-<phase>.png` for each
+/// All of one run's figures into `out`: `contact-radius.png` (both frames), `displacement.png`
+/// (p_t, c, p_b and the nucleus's lowest point), `strain.png` (mean ‖E‖ over time) and `shape-<phase>.png` for each
 /// state file written. Works on partial runs (fewer rows, missing states). Returns the
 /// files written.
 pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> {
@@ -1568,7 +1799,7 @@ pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> 
     let color = PALETTE[0];
     let plot = TimePlot {
         title: format!(
-            "{}: vertical displacement of p_t, c and p_b",
+            "{}: vertical displacement of p_t, c, p_b and the nucleus's lowest point",
             run_label(run)
         ),
         y_desc: "vertical displacement u_y (µm, negative = down)".into(),
@@ -1589,6 +1820,12 @@ pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> 
                 label: "nucleus bottom p_b".into(),
                 points: points(&run.series, |o| o.uy_bottom),
                 color: PALETTE[2],
+                stroke: Stroke::Dotted,
+            },
+            Curve {
+                label: NUCLEUS_LOWEST_LABEL.into(),
+                points: points(&run.series, |o| o.uy_nucleus_max),
+                color: PALETTE[3],
                 stroke: Stroke::Dotted,
             },
         ],

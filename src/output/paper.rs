@@ -7,6 +7,12 @@
 //! gravity unchanged, the "control" curve of the paper's Fig. 9 — the paper's 0.006 µm is
 //! the difference between the two at the same time.
 //!
+//! Each reported value is compared with the cellsim measure that matches how the paper
+//! measures it (MODEL.md §7, "How the paper measures"; [`Quantity::measures`]): the contact
+//! radius along the reference contour, the cytoplasm with the membrane, the maximum
+//! nucleus displacement over all nucleus points; our other measures of the same quantity
+//! are shown beside it.
+//!
 //! The figures and `comparison.md` are drawn from the run directories' files only (see
 //! [`super::read`]), so they can be redrawn from runs that stopped early.
 
@@ -19,8 +25,8 @@ use super::figures::{
     run_phases, shape_figure, shape_view, strain_bars_figure, strain_time_figure,
     upside_down_figure,
 };
-use crate::record::RunData;
-use crate::record::StateFile;
+use crate::fem::Domain;
+use crate::record::{MeshFile, Observables, RunData, StateFile};
 
 /// One of the paper's scenes: its name and case file.
 #[derive(Debug, Clone, Copy)]
@@ -81,14 +87,17 @@ pub enum When {
 pub enum Quantity {
     /// Contact radius [µm].
     ContactRadius(When),
-    /// Downward displacement of the nucleus top p_t, −u_y(p_t) [µm]; at the end, its
-    /// largest value over the run (the paper's "maximum displacement of the nucleus").
+    /// Downward displacement of the nucleus, −u_y [µm]; at T_g0 and T_as0 the nucleus top
+    /// p_t's; at the end the paper's "maximum displacement of the nucleus", the largest
+    /// over the nucleus and the run (see [`Quantity::measures`]).
     NucleusDisplacement(When),
     /// Mean ‖E‖ over the nucleus at the end (fraction).
     StrainNucleus,
-    /// Mean ‖E‖ over the cytoplasm at the end (fraction).
+    /// Mean ‖E‖ over the paper's cytoplasm Ω_cp, which includes the membrane, at the end
+    /// (fraction).
     StrainCytoplasm,
-    /// |u_y(p_t)| difference between the upside-down run and the control at the end [µm].
+    /// |u_y(p_t)| difference between the upside-down run and the control at the end [µm]
+    /// (p_t, the point the paper's Fig. 9 plots).
     UpsideDownDifference,
 }
 
@@ -239,15 +248,17 @@ impl Quantity {
         match self {
             Quantity::ContactRadius(w) => format!("contact radius {} (µm)", when(w)),
             Quantity::NucleusDisplacement(When::End) => {
-                "largest downward displacement of p_t (µm)".into()
+                "maximum downward displacement of the nucleus (µm)".into()
             }
             Quantity::NucleusDisplacement(w) => {
-                format!("downward displacement of p_t {} (µm)", when(w))
+                format!("downward displacement of the nucleus {} (µm)", when(w))
             }
             Quantity::StrainNucleus => "mean ‖E‖ of the nucleus at the end (%)".into(),
             Quantity::StrainCytoplasm => "mean ‖E‖ of the cytoplasm at the end (%)".into(),
             Quantity::UpsideDownDifference => {
-                "difference of u_y(p_t), upside down − control, at the end, absolute (µm)".into()
+                "difference of the nucleus displacement, upside down − control, at the end, \
+                 absolute (µm)"
+                    .into()
             }
         }
     }
@@ -256,11 +267,138 @@ impl Quantity {
     fn percent(&self) -> bool {
         matches!(self, Quantity::StrainNucleus | Quantity::StrainCytoplasm)
     }
+
+    /// The cellsim measure compared with the paper's value (the one matching the paper's
+    /// definition, MODEL.md §7 "How the paper measures"), and the other measures of the
+    /// same quantity shown beside it.
+    pub fn measures(&self) -> (Measure, &'static [Measure]) {
+        use Measure::*;
+        match self {
+            Quantity::ContactRadius(_) => (ContactReference, &[ContactDeformed]),
+            // "Maximum displacement of the nucleus" (Sect. 3.2) names no point: the largest
+            // over the nucleus; p_t (the point Fig. 9 plots) beside it.
+            Quantity::NucleusDisplacement(When::End) => (NucleusLowest, &[NucleusTop]),
+            // Values at a time read off a displacement curve: Fig. 9's curve is p_t's.
+            Quantity::NucleusDisplacement(_) => (NucleusTop, &[NucleusLowest]),
+            Quantity::StrainNucleus => (StrainNucleus, &[]),
+            // The paper's cytoplasm Ω_cp includes the membrane (Sect. 2.1).
+            Quantity::StrainCytoplasm => (
+                StrainCytoplasmWithMembrane,
+                &[StrainCytoplasmAlone, StrainMembrane],
+            ),
+            // Fig. 9 plots p_t.
+            Quantity::UpsideDownDifference => (NucleusTop, &[NucleusLowest]),
+        }
+    }
 }
 
-/// Our value of `q` from a run's files, or why there is none. `control` is needed for
+/// A cellsim measure of a quantity the paper reports: which column of `timeseries.csv`
+/// (or value derived from the columns) is set against the paper's value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Measure {
+    /// `contact_radius_ref`: the length of the cell contour in contact measured along the
+    /// reference contour, as the paper's COMSOL integrates it (Sect. 3.1's definition).
+    ContactReference,
+    /// `contact_radius`: the same contact measured along the deformed contour.
+    ContactDeformed,
+    /// `uy_top`: the nucleus top p_t, the point the paper's Fig. 9 plots.
+    NucleusTop,
+    /// `uy_nucleus_max`: the lowest u_y over every node of the nucleus.
+    NucleusLowest,
+    /// `strain_nucleus`: mean ‖E‖ over the nucleus.
+    StrainNucleus,
+    /// `strain_cytoplasm`: mean ‖E‖ over the cytoplasm and the membrane together, the
+    /// paper's Ω_cp (Sect. 2.1).
+    StrainCytoplasmWithMembrane,
+    /// Mean ‖E‖ over the cytoplasm without the membrane (cellsim's measure before the
+    /// paper's), from `strain_cytoplasm`, `strain_membrane` and the domains' reference
+    /// areas.
+    StrainCytoplasmAlone,
+    /// `strain_membrane`: mean ‖E‖ over the membrane alone.
+    StrainMembrane,
+}
+
+impl Measure {
+    /// What the measure is, named for a row about `q`, with its column.
+    pub fn describe(&self, q: Quantity) -> String {
+        let over_run = q == Quantity::NucleusDisplacement(When::End);
+        match self {
+            Measure::ContactReference => {
+                "reference-frame contour length in contact (`contact_radius_ref`), the \
+                 paper's definition"
+                    .into()
+            }
+            Measure::ContactDeformed => "deformed contour length (`contact_radius`)".into(),
+            Measure::NucleusTop if over_run => {
+                "nucleus top p_t at its lowest over the run (`uy_top`), the point Fig. 9 plots"
+                    .into()
+            }
+            Measure::NucleusTop => "nucleus top p_t (`uy_top`), the point Fig. 9 plots".into(),
+            Measure::NucleusLowest if over_run => {
+                "largest over all nucleus nodes and over the run (`uy_nucleus_max`)".into()
+            }
+            Measure::NucleusLowest => "largest over all nucleus nodes (`uy_nucleus_max`)".into(),
+            Measure::StrainNucleus => {
+                "reference-area mean over the nucleus (`strain_nucleus`)".into()
+            }
+            Measure::StrainCytoplasmWithMembrane => {
+                "cytoplasm incl. membrane, the paper's Ω_cp (`strain_cytoplasm`)".into()
+            }
+            Measure::StrainCytoplasmAlone => "cytoplasm without the membrane".into(),
+            Measure::StrainMembrane => "membrane alone (`strain_membrane`)".into(),
+        }
+    }
+
+    /// The downward displacement's column (`uy_top` or `uy_nucleus_max`), for the
+    /// displacement measures.
+    fn uy(&self) -> Option<fn(&Observables) -> f64> {
+        match self {
+            Measure::NucleusTop => Some(|o| o.uy_top),
+            Measure::NucleusLowest => Some(|o| o.uy_nucleus_max),
+            _ => None,
+        }
+    }
+
+    /// The value of this measure in one row (fractions for strains; u_y as signed for the
+    /// displacements). `mesh` gives the areas [`Measure::StrainCytoplasmAlone`] needs.
+    pub fn in_row(&self, o: &Observables, mesh: &MeshFile) -> f64 {
+        match self {
+            Measure::ContactReference => o.contact_radius_ref,
+            Measure::ContactDeformed => o.contact_radius,
+            Measure::NucleusTop => o.uy_top,
+            Measure::NucleusLowest => o.uy_nucleus_max,
+            Measure::StrainNucleus => o.strain_nucleus,
+            Measure::StrainCytoplasmWithMembrane => o.strain_cytoplasm,
+            Measure::StrainCytoplasmAlone => {
+                cytoplasm_alone(o, mesh.area(Domain::Cytoplasm), mesh.area(Domain::Membrane))
+            }
+            Measure::StrainMembrane => o.strain_membrane,
+        }
+    }
+}
+
+/// The mean ‖E‖ over the cytoplasm without the membrane, from the mean over both
+/// (`strain_cytoplasm`), the membrane's (`strain_membrane`) and the reference areas
+/// `a_cp` (cytoplasm alone) and `a_m` (membrane).
+pub fn cytoplasm_alone(o: &Observables, a_cp: f64, a_m: f64) -> f64 {
+    (o.strain_cytoplasm * (a_cp + a_m) - o.strain_membrane * a_m) / a_cp
+}
+
+/// Our value of `q` from a run's files with the measure the comparison uses
+/// ([`Quantity::measures`]), or why there is none. `control` is needed for
 /// [`Quantity::UpsideDownDifference`].
 pub fn our_value(q: Quantity, run: &RunData, control: Option<&RunData>) -> Result<f64, String> {
+    measure_value(q, q.measures().0, run, control)
+}
+
+/// Our value of `q` measured by `m` (one of [`Quantity::measures`]), or why there is none:
+/// a downward displacement is −u_y, at the end its largest over the run.
+pub fn measure_value(
+    q: Quantity,
+    m: Measure,
+    run: &RunData,
+    control: Option<&RunData>,
+) -> Result<f64, String> {
     let [tg, tas, _, t_end] = run.mesh.phase_times;
     let at = |t: f64| {
         run.at(t).ok_or_else(|| {
@@ -276,39 +414,110 @@ pub fn our_value(q: Quantity, run: &RunData, control: Option<&RunData>) -> Resul
         When::SpreadingEnd => tas,
         When::End => t_end,
     };
+    let value = |o: &Observables| m.in_row(o, &run.mesh);
     match q {
-        Quantity::ContactRadius(w) => Ok(at(time(w))?.contact_radius),
+        Quantity::ContactRadius(w) => Ok(value(&at(time(w))?)),
         Quantity::NucleusDisplacement(When::End) => {
             at(t_end)?;
-            lowest_top(run)
+            let uy = m.uy().ok_or("not a displacement measure")?;
+            lowest(run, uy)
                 .map(|(_, v)| -v)
                 .ok_or_else(|| "no rows".to_string())
         }
-        Quantity::NucleusDisplacement(w) => Ok(-at(time(w))?.uy_top),
-        Quantity::StrainNucleus => Ok(at(t_end)?.strain_nucleus),
-        Quantity::StrainCytoplasm => Ok(at(t_end)?.strain_cytoplasm),
+        Quantity::NucleusDisplacement(w) => Ok(-value(&at(time(w))?)),
+        Quantity::StrainNucleus | Quantity::StrainCytoplasm => Ok(value(&at(t_end)?)),
         Quantity::UpsideDownDifference => {
             let c = control.ok_or("no control run")?;
             let mine = at(t_end)?;
             let theirs = c
                 .at(t_end)
                 .ok_or_else(|| format!("control did not reach t = {} s", fmt_num(t_end, 0)))?;
-            Ok((mine.uy_top - theirs.uy_top).abs())
+            Ok((value(&mine) - m.in_row(&theirs, &c.mesh)).abs())
         }
     }
 }
 
-/// When and where the nucleus top p_t is lowest over the run: (t, u_y(p_t)) of the row
-/// with the smallest u_y (the first of equal ones). The paper's "maximum displacement of
-/// the nucleus" is compared with its negative.
-pub fn lowest_top(run: &RunData) -> Option<(f64, f64)> {
+/// When and where `uy` (a column of the rows) is lowest over the run: (t, value) of the
+/// row with the smallest value (the first of equal ones).
+pub fn lowest(run: &RunData, uy: impl Fn(&Observables) -> f64) -> Option<(f64, f64)> {
     run.series
         .iter()
-        .filter(|o| o.uy_top.is_finite())
-        .fold(None, |best: Option<(f64, f64)>, o| match best {
-            Some((_, v)) if v <= o.uy_top => best,
-            _ => Some((o.t, o.uy_top)),
+        .map(|o| (o.t, uy(o)))
+        .filter(|(_, v)| v.is_finite())
+        .fold(None, |best: Option<(f64, f64)>, (t, v)| match best {
+            Some((_, b)) if b <= v => best,
+            _ => Some((t, v)),
         })
+}
+
+/// When and where the nucleus top p_t is lowest over the run: (t, u_y(p_t)) of the row
+/// with the smallest u_y (the first of equal ones); the alternative measure of the
+/// paper's "maximum displacement of the nucleus".
+pub fn lowest_top(run: &RunData) -> Option<(f64, f64)> {
+    lowest(run, |o| o.uy_top)
+}
+
+/// When and where the nucleus is lowest over the run: (t, `uy_nucleus_max`) of the row
+/// with the smallest value; the paper's "maximum displacement of the nucleus" is compared
+/// with its negative.
+pub fn lowest_nucleus(run: &RunData) -> Option<(f64, f64)> {
+    lowest(run, |o| o.uy_nucleus_max)
+}
+
+/// The paper's contact radii on the flat substrate (Fig. 6b) against ours in the paper's
+/// measure, `contact_radius_ref`, at T_g0 and at the end: the marks of
+/// `contact-radius.png`, on the reference-frame curve.
+pub fn contact_radius_compared(flat: &RunData) -> Vec<Compared> {
+    let [tg, _, _, t_end] = flat.mesh.phase_times;
+    [
+        (Quantity::ContactRadius(When::GravityEnd), tg),
+        (Quantity::ContactRadius(When::End), t_end),
+    ]
+    .into_iter()
+    .filter_map(|(q, t)| {
+        let paper = reported_for("flat").find(|r| r.quantity == q)?.value;
+        let ours = our_value(q, flat, None).ok()?;
+        Some(Compared { t, paper, ours })
+    })
+    .collect()
+}
+
+/// The paper's nucleus displacements for `scene` against ours from its `run`, signed as
+/// u_y: at T_g0 and T_as0 on the p_t curve; the maximum against the lowest
+/// `uy_nucleus_max` (when it is reached), with p_t's lowest beside it.
+pub fn displacement_marks(scene: &str, run: &RunData) -> DisplacementMarks {
+    let [tg, tas, _, _] = run.mesh.phase_times;
+    let paper = |q: Quantity| {
+        reported_for(scene)
+            .find(|r| r.quantity == q)
+            .map(|r| r.value)
+    };
+    let q = Quantity::NucleusDisplacement;
+    let at_times = [(tg, When::GravityEnd), (tas, When::SpreadingEnd)]
+        .into_iter()
+        .filter_map(|(t, w)| {
+            let p = paper(q(w))?;
+            let ours = our_value(q(w), run, None).ok()?;
+            Some(Compared {
+                t,
+                paper: -p,
+                ours: -ours,
+            })
+        })
+        .collect();
+    let finished = our_value(q(When::End), run, None).is_ok();
+    let maximum = paper(q(When::End)).filter(|_| finished).and_then(|p| {
+        lowest_nucleus(run).map(|(t, v)| Compared {
+            t,
+            paper: -p,
+            ours: v,
+        })
+    });
+    DisplacementMarks {
+        at_times,
+        maximum,
+        maximum_top: maximum.and(lowest_top(run)),
+    }
 }
 
 fn fmt_num(v: f64, digits: usize) -> String {
@@ -385,28 +594,10 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
             .map(|r| r.value)
     };
 
-    // The paper's value of `q` for `scene` against ours, drawn at time `t`, signed by
-    // `sign` as the curve it sits on.
-    let compared = |scene: &str, q: Quantity, t: f64, sign: f64| -> Option<Compared> {
-        let paper = reported(scene, q)?;
-        let ours = our_value(q, get(scene)?, None).ok()?;
-        Some(Compared {
-            t,
-            paper: sign * paper,
-            ours: sign * ours,
-        })
-    };
-
-    // Contact radius on the flat substrate (Fig. 6b).
+    // Contact radius on the flat substrate (Fig. 6b): both frames, the paper's marks on
+    // the reference-frame curve (its measure).
     if let Some(flat) = get("flat") {
-        let [tg, _, _, t_end] = flat.mesh.phase_times;
-        let pts: Vec<Compared> = [
-            (Quantity::ContactRadius(When::GravityEnd), tg),
-            (Quantity::ContactRadius(When::End), t_end),
-        ]
-        .into_iter()
-        .filter_map(|(q, t)| compared("flat", q, t, 1.0))
-        .collect();
+        let pts = contact_radius_compared(flat);
         let p = out.join("contact-radius.png");
         record(
             contact_radius_figure(&p, &[flat], &pts, "paper (Sect. 3.1, Fig. 6b)").map(|_| p),
@@ -415,24 +606,18 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
     }
 
     // Nucleus displacement for push, pull, push-pull (Fig. 9's kind of curve): the values
-    // at T_g0 and T_as0 on the p_t curve; the paper's maximum against the lowest p_t.
+    // at T_g0 and T_as0 on the p_t curve; the paper's maximum against the lowest point of
+    // the nucleus, p_t's lowest beside it.
     let pillar_names = ["pillars-push", "pillars-pull", "pillars-push-pull"];
-    let pillars: Vec<&RunData> = pillar_names.iter().filter_map(|n| get(n)).collect();
+    let pillar_runs: Vec<(&str, &RunData)> = pillar_names
+        .iter()
+        .filter_map(|n| get(n).map(|r| (*n, r)))
+        .collect();
+    let pillars: Vec<&RunData> = pillar_runs.iter().map(|(_, r)| *r).collect();
     if !pillars.is_empty() {
-        let marks: Vec<DisplacementMarks> = pillars
+        let marks: Vec<DisplacementMarks> = pillar_runs
             .iter()
-            .map(|r| {
-                let [tg, tas, _, _] = r.mesh.phase_times;
-                let q = Quantity::NucleusDisplacement;
-                DisplacementMarks {
-                    at_times: [(tg, When::GravityEnd), (tas, When::SpreadingEnd)]
-                        .into_iter()
-                        .filter_map(|(t, w)| compared(&r.name, q(w), t, -1.0))
-                        .collect(),
-                    maximum: lowest_top(r)
-                        .and_then(|(t, _)| compared(&r.name, q(When::End), t, -1.0)),
-                }
-            })
+            .map(|(n, r)| displacement_marks(n, r))
             .collect();
         let p = out.join("nucleus-displacement.png");
         record(
@@ -551,29 +736,56 @@ pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) ->
     );
     let _ = writeln!(
         s,
-        "| scene | quantity | paper | cellsim | difference | paper's source |\n|---|---|---:|---:|---:|---|"
+        "Each row sets the paper's value against one cellsim measure, the one matching how the \
+         paper measures (MODEL.md §7, \"How the paper measures\"), named in *measure compared*; \
+         the same quantity in our other measures is in the last columns, with its difference \
+         to the paper.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| scene | quantity | measure compared | paper | cellsim | difference | other cellsim \
+         measures | paper's source |\n|---|---|---|---:|---:|---:|---|---|"
     );
     for r in REPORTED.iter() {
         let pct = r.quantity.percent();
-        let ours = match get(r.scene) {
-            Some(run) => our_value(r.quantity, run, get(CONTROL)),
+        let (primary, others) = r.quantity.measures();
+        let value = |m: Measure| match get(r.scene) {
+            Some(run) => measure_value(r.quantity, m, run, get(CONTROL)),
             None => Err("no run".into()),
         };
-        let (ours_s, diff_s) = match ours {
-            Ok(v) => (
-                fmt_value(v, pct),
-                format!("{:+.1} %", 100.0 * (v - r.value) / r.value),
-            ),
+        let diff = |v: f64| format!("{:+.1} %", 100.0 * (v - r.value) / r.value);
+        let (ours_s, diff_s) = match value(primary) {
+            Ok(v) => (fmt_value(v, pct), diff(v)),
             Err(why) => (format!("n/a: {why}"), "–".into()),
         };
+        let other_s = others
+            .iter()
+            .filter_map(|&m| {
+                value(m).ok().map(|v| {
+                    format!(
+                        "{}: {} ({})",
+                        m.describe(r.quantity),
+                        fmt_value(v, pct),
+                        diff(v)
+                    )
+                })
+            })
+            .collect::<Vec<_>>()
+            .join("; ");
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} |",
             r.scene,
             r.quantity.describe(),
+            primary.describe(r.quantity),
             fmt_value(r.value, pct),
             ours_s,
             diff_s,
+            if other_s.is_empty() {
+                "–".into()
+            } else {
+                other_s
+            },
             r.source
         );
     }
@@ -598,12 +810,23 @@ pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) ->
     }
     let _ = writeln!(
         s,
-        "\nDefinitions. *Contact radius*: deformed length of the half cell's boundary within \
-         ε_ct of the substrate. *Downward displacement of p_t*: −u_y of the nucleus top; at \
-         the end, its largest value over the run (the paper's \"maximum displacement of the \
-         nucleus\"); it counts from the suspended start, so it includes the fall onto \
-         the pillars (the cell starts 0.5 µm above them, MODEL.md §5). *Mean ‖E‖*: reference-area mean of the Frobenius norm of the \
-         Green-Lagrange strain over the domain. *Upside down − control*: the control \
+        "\nDefinitions. *Contact radius*: length of the half cell's boundary within ε_ct of \
+         the substrate; the paper defines it as \"the length of the cell contour in contact \
+         with the substrate\" (Sect. 3.1) and its COMSOL integrates boundary lengths on the \
+         fixed mesh, i.e. along the reference contour (`contact_radius_ref`); along the \
+         deformed contour (`contact_radius`) the stretched membrane makes it longer. \
+         *Downward displacement of the nucleus*: −u_y; the paper's \"maximum displacement of \
+         the nucleus\" (Sect. 3.2) names no point, so it is compared with the largest over \
+         every nucleus node and over the run (`uy_nucleus_max`), the nucleus top p_t beside \
+         it (`uy_top`, the point the paper's Fig. 9 plots); the values at T_g0 and T_as0 \
+         and the upside-down difference are p_t's, as on Fig. 9's curves. Displacements \
+         count from the suspended start, so they include the fall onto the pillars (the \
+         cell starts 0.5 µm above them, MODEL.md §5). *Mean ‖E‖*: reference-area mean of the \
+         Frobenius norm of the Green-Lagrange strain over the domain; the paper's cytoplasm \
+         Ω_cp includes the membrane (Sect. 2.1), as `strain_cytoplasm` does; the cytoplasm \
+         without the membrane is \
+         (`strain_cytoplasm`·(A_cp + A_m) − `strain_membrane`·A_m)/A_cp with the reference \
+         areas A_cp (cytoplasm) and A_m (membrane). *Upside down − control*: the control \
          (`{CONTROL}`) is the push-pull scene continued to the upside-down scene's end time \
          with gravity unchanged, the paper's Fig. 9 control; both are compared at that \
          time."

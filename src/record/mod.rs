@@ -298,6 +298,27 @@ pub struct MeshFile {
     pub phase_times: [f64; 4],
 }
 
+impl MeshFile {
+    /// Reference area of the elements of domain `d` [µm²] (half cell): det J of each
+    /// isoparametric P2 map integrated exactly (it is quadratic; a degree-2 rule is exact),
+    /// the areas the run's reference-area means are weighted with.
+    pub fn area(&self, d: Domain) -> f64 {
+        use crate::fem::{P2Tabulation, TriangleRule, p2};
+        let tab = P2Tabulation::new(&TriangleRule::degree(2));
+        self.elements
+            .iter()
+            .zip(&self.domains)
+            .filter(|(_, dom)| **dom == d)
+            .map(|(el, _)| {
+                let x = el.map(|n| self.nodes[n]);
+                (0..tab.weights.len())
+                    .map(|q| p2::jacobian(&x, &tab.grads[q]).1 * tab.weights[q])
+                    .sum::<f64>()
+            })
+            .sum()
+    }
+}
+
 /// A state written at a phase end.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct StateFile {
