@@ -421,7 +421,14 @@ impl Plan {
         for dp in design.points() {
             let mut ovs = set.clone();
             for (axis, v) in design.axes.iter().zip(&dp.values) {
-                if let Some(v) = v {
+                let Some(v) = v else { continue };
+                if let Some(set) = axis.variant_set(v) {
+                    for o in set {
+                        ovs.push(Override::parse(o).map_err(|m| {
+                            bad(format!("design: axis `{}`: variant `{v}`: {m}", axis.path))
+                        })?);
+                    }
+                } else {
                     let o = Override::new(&axis.path, v)
                         .map_err(|m| bad(format!("design: axis `{}`: value {m}", axis.path)))?;
                     ovs.push(o);
@@ -474,6 +481,8 @@ impl Plan {
                 .zip(&dp.values)
                 .map(|(a, v)| match v {
                     Some(v) => single_line(v),
+                    // A variant axis left alone: the base as it is.
+                    None if a.is_variants() => "(base)".to_string(),
                     None => base_case
                         .as_deref()
                         .and_then(|t| value_at(t, &a.path))
