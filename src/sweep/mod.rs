@@ -1292,6 +1292,123 @@ mod tests {
         std::fs::remove_dir_all(&dir).ok();
     }
 
+    /// The scene a `cases/` file describes, its name and description as the sweep's.
+    fn as_scene(file: &str, like: &Case) -> Case {
+        let mut c = Case::load(repo(file)).unwrap();
+        c.name = like.name.clone();
+        c.description = like.description.clone();
+        c
+    }
+
+    #[test]
+    fn paper_fidelity_scenes_are_the_scene_files() {
+        let plan = Plan::load(&repo("cases/sweeps/paper-fidelity.ron")).unwrap();
+        assert_eq!(plan.points.len(), 66);
+        assert!(plan.points.iter().all(|p| p.case.is_ok()));
+        let point = |reading: &str, scene: &str| -> Case {
+            let p = plan
+                .points
+                .iter()
+                .find(|p| p.values == [reading, scene])
+                .unwrap_or_else(|| panic!("no point ({reading}, {scene})"));
+            p.case.as_ref().unwrap().0.clone()
+        };
+        let base = "baseline (MODEL.md)";
+        for (scene, file) in [
+            ("flat", "cases/flat.ron"),
+            ("push", "cases/pillars-push.ron"),
+            ("pull", "cases/pillars-pull.ron"),
+            ("push-pull", "cases/pillars-push-pull.ron"),
+            ("upside-down", "cases/upside-down.ron"),
+        ] {
+            let c = point(base, scene);
+            assert_eq!(c, as_scene(file, &c), "{scene}");
+            assert_eq!(c.name, file[6..file.len() - 4], "{scene}");
+        }
+        // The control: push-pull continued to the upside-down scene's end, gravity kept.
+        let c = point(base, "control");
+        let mut pp = as_scene("cases/pillars-push-pull.ron", &c);
+        pp.phases.t_end = 60_000.0;
+        assert_eq!(c, pp);
+        // A reading changes what it says on every scene, and the scenes keep theirs.
+        let pac = point("PAC semi-axes, clipped", "push").active.pac.unwrap();
+        assert!(pac.clip_to_cell && pac.inner_semi_axes == (10.0, 9.0));
+        assert_eq!(point("PAC semi-axes, clipped", "pull"), point(base, "pull"));
+        assert_eq!(point("PAC semi-axes, clipped", "flat"), point(base, "flat"));
+        for scene in [
+            "flat",
+            "push",
+            "pull",
+            "push-pull",
+            "upside-down",
+            "control",
+        ] {
+            let a = point("best supported", scene).adhesion.unwrap();
+            assert!(a.jacobian_factor && a.layer_excludes_substrate, "{scene}");
+            assert_eq!(point("e_f = 0.8 µm", scene).adhesion.unwrap().e_f, 0.8);
+        }
+        // The flip reading changes the upside-down scene only.
+        let flip = "gravity flipped in 100 s";
+        assert_eq!(point(flip, "upside-down").gravity.flip_duration, 100.0);
+        for scene in ["flat", "push", "pull", "push-pull", "control"] {
+            assert_eq!(point(flip, scene), point(base, scene), "{scene}");
+        }
+        assert!(point("best supported", "pull").active.pac.is_none());
+        assert!(point("best supported", "flat").active.bottom.is_none());
+    }
+
+    #[test]
+    fn paper_fidelity_references_are_the_papers() {
+        use crate::output::paper::REPORTED;
+        let plan = Plan::load(&repo("cases/sweeps/paper-fidelity.ron")).unwrap();
+        let table = plan.table.unwrap();
+        let scene = |s: &str| match s {
+            "flat" => "flat",
+            "pillars-push" => "push",
+            "pillars-pull" => "pull",
+            "pillars-push-pull" => "push-pull",
+            "upside-down" => "upside-down",
+            _ => "?",
+        };
+        // Every value the paper reports is a column's reference on its scene (strains
+        // in %), and every reference is one the paper reports there.
+        let refs: Vec<(&str, f64)> = table
+            .columns()
+            .filter_map(|c| Some((c.of.as_str(), c.reference?)))
+            .collect();
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs();
+        for r in REPORTED.iter() {
+            let pillar_start = r.scene != "pillars-push"
+                && matches!(
+                    r.quantity,
+                    crate::output::paper::Quantity::NucleusDisplacement(
+                        crate::output::paper::When::GravityEnd
+                            | crate::output::paper::When::SpreadingEnd
+                    )
+                );
+            if pillar_start {
+                continue; // the same case as push until T_as0: the push columns
+            }
+            let found = refs.iter().any(|&(of, v)| {
+                of == scene(r.scene) && (close(v, r.value) || close(v, 100.0 * r.value))
+            });
+            assert!(
+                found,
+                "{} {:?} {} has no column",
+                r.scene, r.quantity, r.value
+            );
+        }
+        for (of, v) in refs {
+            assert!(
+                REPORTED
+                    .iter()
+                    .any(|r| scene(r.scene) == of
+                        && (close(v, r.value) || close(v, 100.0 * r.value))),
+                "{of}: reference {v} is not the paper's"
+            );
+        }
+    }
+
     #[test]
     fn shards_split_the_points_round_robin() {
         assert_eq!(parse_shard("1/4"), Ok((1, 4)));
