@@ -6,7 +6,7 @@ APT_PACKAGES := libsundials-dev libsuitesparse-dev libclang-dev pkg-config \
 CARGO ?= cargo
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all deps build paper test memcheck test-cluster robertson bench lint clean
+.PHONY: all deps build paper fidelity test memcheck test-cluster robertson bench lint clean
 
 all: build
 
@@ -28,6 +28,10 @@ build: deps
 # The main job: the paper's scenes, plots written to plots/.
 paper: deps
 	$(CARGO) run --release -- paper --out plots
+
+# The ambiguity table: every reading of the paper on every scene (docs/paper-fidelity.md).
+fidelity: deps
+	$(CARGO) run --release -- sweep cases/sweeps/paper-fidelity.ron --out plots/sweeps/paper-fidelity --jobs 2
 
 # All tests (release mode: the finite-element tests are numeric).
 test: deps

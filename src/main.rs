@@ -789,11 +789,16 @@ fn sweep_command(a: SweepArgs) -> ExitCode {
                 }
             }
             out!(
-                "{}: {} ({} run, {} reused) in {:.1} s wall; outputs in {}",
+                "{}: {} ({} run, {} reused{}) in {:.1} s wall; outputs in {}",
                 plan.name,
                 report.counts(),
                 report.ran,
                 report.reused,
+                if report.copied > 0 {
+                    format!(", {} copied", report.copied)
+                } else {
+                    String::new()
+                },
                 report.wall_seconds,
                 out.display()
             );

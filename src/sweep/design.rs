@@ -14,18 +14,66 @@
 //! or `LogRange(start: a, stop: b, n: k)` (k values equally spaced in log, a, b > 0).
 //! A Latin hypercube samples each axis's `Range` / `LogRange` (without `n`: the design's
 //! `n` is the number of points) by stratified random sampling with the given seed.
+//!
+//! An axis may instead be a list of named **variants**, each a set of overrides applied
+//! together (Grid, Zip and one-at-a-time designs):
+//!
+//! ```ron
+//! (name: "scene", variants: [
+//!     (name: "flat", set: ["substrate=Flat(y_s: -2.0)", "phases.t_end=40000.0"]),
+//!     (name: "push-pull", set: []),
+//! ]),
+//! ```
+//!
+//! The axis's column in `sweep.csv` is its name and a point's value there is the variant's
+//! name. This is how one sweep runs several scenes of one base case, or readings of a
+//! paper that change several fields at once.
 
 use ron::value::RawValue;
 use serde::{Deserialize, Serialize};
 
-/// One axis as written in the sweep file.
+/// One axis as written in the sweep file: `(path, values)`, or `(name, variants)`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AxisSpec {
     /// Dotted path into the case (as for `--set`).
-    pub path: String,
+    #[serde(default, deserialize_with = "present_string")]
+    pub path: Option<String>,
     /// A list of RON values, or `Range(...)` / `LogRange(...)`.
-    pub values: Box<RawValue>,
+    #[serde(default, deserialize_with = "present_raw")]
+    pub values: Option<Box<RawValue>>,
+    /// Name of a variant axis (its column in `sweep.csv`).
+    #[serde(default, deserialize_with = "present_string")]
+    pub name: Option<String>,
+    /// The variants of a variant axis.
+    #[serde(default, deserialize_with = "present_variants")]
+    pub variants: Option<Vec<Variant>>,
+}
+
+/// One value of a variant axis: a name and the overrides it applies (`PATH=VALUE`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Variant {
+    /// The name (the axis's value in `sweep.csv`, and in a table's rows or columns).
+    pub name: String,
+    /// Overrides applied together, in order.
+    #[serde(default)]
+    pub set: Vec<String>,
+}
+
+/// A field written without `Some(...)`: present means `Some`.
+fn present_raw<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Box<RawValue>>, D::Error> {
+    Box::<RawValue>::deserialize(d).map(Some)
+}
+
+fn present_string<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<String>, D::Error> {
+    String::deserialize(d).map(Some)
+}
+
+fn present_variants<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Option<Vec<Variant>>, D::Error> {
+    Vec::<Variant>::deserialize(d).map(Some)
 }
 
 /// The design as written in the sweep file.
@@ -93,10 +141,14 @@ pub struct Interval {
 /// An axis with its values resolved to RON text.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Axis {
-    /// Dotted path into the case.
+    /// Dotted path into the case; a variant axis's name.
     pub path: String,
-    /// The values, as RON text (empty for a Latin hypercube's axis).
+    /// The values, as RON text (empty for a Latin hypercube's axis); a variant axis's
+    /// variant names.
     pub values: Vec<String>,
+    /// A variant axis's overrides, one list per value (empty for a path axis).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sets: Vec<Vec<String>>,
     /// The sampled range (Latin hypercube).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interval: Option<Interval>,
@@ -214,10 +266,60 @@ fn list_values(text: &str, axis: &str) -> Result<Vec<String>, String> {
         .collect())
 }
 
+/// A variant axis: names checked (not empty, one line, not repeated), overrides parsed.
+fn resolve_variants(name: &str, variants: &[Variant], sampled: bool) -> Result<Axis, String> {
+    let name = name.trim().to_string();
+    if name.is_empty() || name.contains(['\n', '\r']) {
+        return Err(format!("variant axis name {name:?}: one line, not empty"));
+    }
+    if sampled {
+        return Err(format!(
+            "axis `{name}`: a LatinHypercube samples ranges, not variants"
+        ));
+    }
+    if variants.is_empty() {
+        return Err(format!("axis `{name}`: no variants"));
+    }
+    let mut values: Vec<String> = Vec::new();
+    for v in variants {
+        let n = v.name.trim().to_string();
+        if n.is_empty() || n.contains(['\n', '\r']) {
+            return Err(format!(
+                "axis `{name}`: variant name {:?}: one line, not empty",
+                v.name
+            ));
+        }
+        if values.contains(&n) {
+            return Err(format!("axis `{name}`: variant `{n}` is given twice"));
+        }
+        for o in &v.set {
+            crate::case::Override::parse(o)
+                .map_err(|e| format!("axis `{name}`: variant `{n}`: {e}"))?;
+        }
+        values.push(n);
+    }
+    Ok(Axis {
+        path: name,
+        values,
+        sets: variants.iter().map(|v| v.set.clone()).collect(),
+        interval: None,
+    })
+}
+
 fn resolve_axis(spec: &AxisSpec, sampled: bool) -> Result<Axis, String> {
-    let path = spec.path.trim().to_string();
+    let (path, values) = match (&spec.path, &spec.values, &spec.name, &spec.variants) {
+        (Some(p), Some(v), None, None) => (p, v),
+        (None, None, Some(n), Some(v)) => return resolve_variants(n, v, sampled),
+        _ => {
+            return Err(
+                "an axis is `(path: \"a.b\", values: ...)` or `(name: \"...\", variants: [(name: \"...\", set: [...]), ...])`"
+                    .into(),
+            );
+        }
+    };
+    let path = path.trim().to_string();
     crate::case::Override::new(&path, "0").map_err(|e| format!("axis path `{path}`: {e}"))?;
-    let text = spec.values.get_ron().trim();
+    let text = values.get_ron().trim();
     if sampled {
         if text.starts_with('[') {
             return Err(format!(
@@ -238,6 +340,7 @@ fn resolve_axis(spec: &AxisSpec, sampled: bool) -> Result<Axis, String> {
         return Ok(Axis {
             path,
             values: Vec::new(),
+            sets: Vec::new(),
             interval: Some(interval),
         });
     }
@@ -249,8 +352,22 @@ fn resolve_axis(spec: &AxisSpec, sampled: bool) -> Result<Axis, String> {
     Ok(Axis {
         path,
         values,
+        sets: Vec::new(),
         interval: None,
     })
+}
+
+impl Axis {
+    /// Whether the axis is a list of variants (named sets of overrides).
+    pub fn is_variants(&self) -> bool {
+        !self.sets.is_empty()
+    }
+
+    /// The overrides of the variant named `name` (a variant axis only).
+    pub fn variant_set(&self, name: &str) -> Option<&[String]> {
+        let k = self.values.iter().position(|v| v == name)?;
+        self.sets.get(k).map(Vec::as_slice)
+    }
 }
 
 impl Design {
@@ -483,6 +600,56 @@ mod tests {
                 .unwrap();
         let ids: Vec<_> = d.points().into_iter().map(|p| p.id).collect();
         assert_eq!(ids, ["base", "o0_0", "o0_1", "o1_0"]);
+    }
+
+    #[test]
+    fn variant_axes_are_named_sets_of_overrides() {
+        let d = design(
+            r#"Grid([
+                (name: "reading", variants: [(name: "base"), (name: "unit", set: ["adhesion.direction=Unit", "adhesion.e_f=1.0"])]),
+                (path: "materials.gamma", values: [0.1, 0.2]),
+            ])"#,
+        )
+        .unwrap();
+        assert_eq!(d.axes[0].path, "reading");
+        assert_eq!(d.axes[0].values, ["base", "unit"]);
+        assert!(d.axes[0].is_variants() && !d.axes[1].is_variants());
+        assert_eq!(
+            d.axes[0].variant_set("unit").unwrap(),
+            ["adhesion.direction=Unit", "adhesion.e_f=1.0"]
+        );
+        assert_eq!(d.axes[0].variant_set("base").unwrap(), [] as [String; 0]);
+        assert_eq!(d.axes[0].variant_set("other"), None);
+        assert_eq!(d.axes[1].variant_set("0.1"), None);
+        let p = d.points();
+        assert_eq!(p.len(), 4);
+        assert_eq!(p[2].id, "g1_0");
+        assert_eq!(p[2].values, [Some("unit".into()), Some("0.1".into())]);
+        // sweep.json keeps the sets (and an axis of values none).
+        let json = serde_json::to_string(&d).unwrap();
+        assert_eq!(json.matches("\"sets\"").count(), 1, "{json}");
+        assert_eq!(serde_json::from_str::<Design>(&json).unwrap(), d);
+        // Mistakes.
+        let e = |t: &str| design(t).unwrap_err();
+        assert!(
+            e(r#"Grid([(name: "r", variants: [(name: "a"), (name: "a")])])"#)
+                .contains("given twice")
+        );
+        assert!(e(r#"Grid([(name: "r", variants: [])])"#).contains("no variants"));
+        assert!(e(r#"Grid([(name: "r", variants: [(name: " ")])])"#).contains("not empty"));
+        assert!(
+            e(r#"Grid([(name: "r", variants: [(name: "a", set: ["noequals"])])])"#)
+                .contains("variant `a`")
+        );
+        assert!(
+            e(r#"Grid([(name: "r", path: "a.b", variants: [(name: "a")])])"#)
+                .contains("an axis is")
+        );
+        assert!(e(r#"Grid([(path: "a.b")])"#).contains("an axis is"));
+        assert!(
+            e(r#"LatinHypercube(n: 2, seed: 1, axes: [(name: "r", variants: [(name: "a")])])"#)
+                .contains("not variants")
+        );
     }
 
     #[test]

@@ -33,6 +33,7 @@
 //! `retry_failed`); `--shard i/K` runs the points k with k mod K = i only, and
 //! [`collect`] assembles the table and figures from the point directories.
 
+pub mod compare;
 pub mod design;
 pub mod plots;
 pub mod slurm;
@@ -54,6 +55,7 @@ use crate::record::{FailureKind, RunSettings};
 use crate::run::{self, Progress, RunError, RunOptions};
 use crate::stop::StopFlag;
 
+pub use compare::TableSpec;
 pub use design::{Design, DesignSpec, Kind};
 pub use table::{Row, Status};
 
@@ -120,6 +122,13 @@ pub struct SweepFile {
     /// Fields computed from others for every point.
     #[serde(default)]
     pub derive: Vec<Derived>,
+    /// The comparison table ([`compare`]), for a Grid of two axes.
+    #[serde(default, deserialize_with = "present_table")]
+    pub table: Option<TableSpec>,
+}
+
+fn present_table<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<TableSpec>, D::Error> {
+    TableSpec::deserialize(d).map(Some)
 }
 
 /// One point, resolved.
@@ -155,6 +164,8 @@ pub struct Plan {
     pub set: Vec<Override>,
     /// Derived fields.
     pub derive: Vec<Derived>,
+    /// The comparison table, its documents' paths resolved.
+    pub table: Option<TableSpec>,
     /// The points, in design order.
     pub points: Vec<Point>,
 }
@@ -180,6 +191,9 @@ pub struct Record {
     pub settings: Settings,
     /// cellsim version.
     pub cellsim_version: String,
+    /// The comparison table, if the sweep file has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub table: Option<TableSpec>,
 }
 
 /// A point in `sweep.json`.
@@ -407,6 +421,18 @@ impl Plan {
         for d in &spec.derive {
             Override::new(&d.path, "0").map_err(|m| bad(format!("derive: {m}")))?;
         }
+        let table = spec
+            .table
+            .clone()
+            .map(|t| {
+                t.resolve(
+                    &design,
+                    &spec.name,
+                    sweep_file.parent().unwrap_or(Path::new(".")),
+                )
+            })
+            .transpose()
+            .map_err(bad)?;
 
         // The base alone (with `set`): the values of axes a point leaves alone, and the
         // defaults derived expressions may read.
@@ -421,7 +447,14 @@ impl Plan {
         for dp in design.points() {
             let mut ovs = set.clone();
             for (axis, v) in design.axes.iter().zip(&dp.values) {
-                if let Some(v) = v {
+                let Some(v) = v else { continue };
+                if let Some(set) = axis.variant_set(v) {
+                    for o in set {
+                        ovs.push(Override::parse(o).map_err(|m| {
+                            bad(format!("design: axis `{}`: variant `{v}`: {m}", axis.path))
+                        })?);
+                    }
+                } else {
                     let o = Override::new(&axis.path, v)
                         .map_err(|m| bad(format!("design: axis `{}`: value {m}", axis.path)))?;
                     ovs.push(o);
@@ -474,6 +507,8 @@ impl Plan {
                 .zip(&dp.values)
                 .map(|(a, v)| match v {
                     Some(v) => single_line(v),
+                    // A variant axis left alone: the base as it is.
+                    None if a.is_variants() => "(base)".to_string(),
                     None => base_case
                         .as_deref()
                         .and_then(|t| value_at(t, &a.path))
@@ -510,6 +545,7 @@ impl Plan {
             design,
             set,
             derive: spec.derive,
+            table,
             points,
         })
     }
@@ -534,6 +570,7 @@ impl Plan {
                 .collect(),
             settings,
             cellsim_version: env!("CARGO_PKG_VERSION").to_string(),
+            table: self.table.clone(),
         }
     }
 }
@@ -669,6 +706,9 @@ pub struct SweepReport {
     pub ran: usize,
     /// Points skipped because their run was already there.
     pub reused: usize,
+    /// Points not run because their case is another point's: that point's directory
+    /// copied.
+    pub copied: usize,
     /// Files written besides the point directories (sweep.csv, figures).
     pub written: Vec<PathBuf>,
     /// Wall time of the whole command [s].
@@ -725,6 +765,7 @@ struct Shared {
     rows: Vec<Option<Row>>,
     done: usize,
     failed: usize,
+    copied: usize,
 }
 
 /// Runs the plan's points (those of the shard) into `opts.out`; see the module
@@ -754,6 +795,11 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
     let mut rows: Vec<Option<Row>> = vec![None; plan.points.len()];
     let mut queue = VecDeque::new();
     let mut reused = 0;
+    // A point whose resolved case is an earlier point's is not run again: it gets a copy
+    // of that point's directory (runs are deterministic), e.g. a reading that leaves one
+    // of the scenes of a variant axis unchanged.
+    let mut first_with: std::collections::HashMap<&str, usize> = Default::default();
+    let mut copies: std::collections::HashMap<usize, Vec<usize>> = Default::default();
     for &k in &mine {
         let p = &plan.points[k];
         let dir = points_dir.join(&p.id);
@@ -771,11 +817,34 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
             Ok((_, text)) if is_done(&dir, text, opts.retry_failed) => {
                 reused += 1;
                 rows[k] = Some(read_row(&p.id, &p.values, &dir));
+                first_with.entry(text).or_insert(k);
             }
-            Ok(_) => queue.push_back(k),
+            Ok((_, text)) => match first_with.get(text.as_str()) {
+                Some(&j) => copies.entry(j).or_default().push(k),
+                None => {
+                    first_with.insert(text, k);
+                    queue.push_back(k);
+                }
+            },
         }
     }
+    // Copies of points already done are made now.
+    let mut copied = 0;
+    for (j, ks) in copies.iter_mut() {
+        if rows[*j].is_some() {
+            for &k in ks.iter() {
+                let p = &plan.points[k];
+                let dir = points_dir.join(&p.id);
+                copy_point(&points_dir.join(&plan.points[*j].id), &dir)?;
+                rows[k] = Some(read_row(&p.id, &p.values, &dir));
+                copied += 1;
+            }
+            ks.clear();
+        }
+    }
+    let to_copy: usize = copies.values().map(Vec::len).sum();
     let to_run = queue.len();
+    let total = to_run + to_copy;
 
     // sweep.csv as points finish (not when sharded: shards share the directory).
     let csv_path = out.join("sweep.csv");
@@ -794,7 +863,7 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
 
     let visible = opts.progress && std::io::stderr().is_terminal();
     let bar = if visible {
-        let pb = ProgressBar::new(to_run as u64);
+        let pb = ProgressBar::new(total as u64);
         let style = ProgressStyle::with_template(
             "{prefix} [{bar:30}] {pos}/{len} points {msg}, {elapsed} elapsed, ETA {eta}",
         )
@@ -809,7 +878,7 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
     };
     if opts.progress {
         let msg = format!(
-            "{}: {} points{}: {} to run, {} reused, {} invalid; {} at once",
+            "{}: {} points{}: {} to run, {} reused, {} invalid{}; {} at once",
             plan.name,
             mine.len(),
             opts.shard
@@ -817,7 +886,15 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
                 .unwrap_or_default(),
             to_run,
             reused,
-            mine.len() - to_run - reused,
+            mine.len() - total - reused - copied,
+            if to_copy + copied > 0 {
+                format!(
+                    ", {} the same case as another point (copied)",
+                    to_copy + copied
+                )
+            } else {
+                String::new()
+            },
             opts.jobs.min(to_run.max(1))
         );
         if visible {
@@ -832,6 +909,7 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
         rows,
         done: 0,
         failed: 0,
+        copied,
     });
     let queue = Mutex::new(queue);
     let jobs = opts.jobs.clamp(1, to_run.max(1));
@@ -857,27 +935,54 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
                             break;
                         }
                     };
-                    let Ok(mut sh) = shared.lock() else { break };
-                    sh.done += 1;
-                    if row.status == Status::Failed {
-                        sh.failed += 1;
-                    }
-                    if let Some(f) = sh.csv.as_mut() {
-                        let _ = f
-                            .write_all((table::line(&row) + "\n").as_bytes())
-                            .and_then(|_| f.flush());
-                    }
-                    let line = point_line(&row, &axes, sh.done, to_run, t0.elapsed().as_secs_f64());
-                    if visible {
-                        bar.inc(1);
-                        bar.set_message(format!("({} failed)", sh.failed));
-                        if row.status != Status::Finished {
-                            bar.println(line);
+                    let wall = t0.elapsed().as_secs_f64();
+                    let mut done = vec![(k, row, None)];
+                    // Its copies, unless it was interrupted (then they run later).
+                    if done[0].1.status != Status::Interrupted {
+                        for &c in copies.get(&k).into_iter().flatten() {
+                            let q = &plan.points[c];
+                            let cdir = points_dir.join(&q.id);
+                            match copy_point(&dir, &cdir) {
+                                Ok(()) => done.push((
+                                    c,
+                                    read_row(&q.id, &q.values, &cdir),
+                                    Some(p.id.as_str()),
+                                )),
+                                Err(e) => {
+                                    if let Ok(mut f) = first_error.lock() {
+                                        f.get_or_insert(e);
+                                    }
+                                }
+                            }
                         }
-                    } else if opts.progress {
-                        let _ = writeln!(std::io::stderr(), "{line}");
                     }
-                    sh.rows[k] = Some(row);
+                    let Ok(mut sh) = shared.lock() else { break };
+                    for (k, row, copy_of) in done {
+                        sh.done += 1;
+                        sh.copied += usize::from(copy_of.is_some());
+                        if row.status == Status::Failed {
+                            sh.failed += 1;
+                        }
+                        if let Some(f) = sh.csv.as_mut() {
+                            let _ = f
+                                .write_all((table::line(&row) + "\n").as_bytes())
+                                .and_then(|_| f.flush());
+                        }
+                        let line = match copy_of {
+                            None => point_line(&row, &axes, sh.done, total, wall),
+                            Some(of) => copy_line(&row, &axes, sh.done, total, of),
+                        };
+                        if visible {
+                            bar.inc(1);
+                            bar.set_message(format!("({} failed)", sh.failed));
+                            if row.status != Status::Finished {
+                                bar.println(line);
+                            }
+                        } else if opts.progress {
+                            let _ = writeln!(std::io::stderr(), "{line}");
+                        }
+                        sh.rows[k] = Some(row);
+                    }
                 }
             });
         }
@@ -886,7 +991,10 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
     if let Some(e) = first_error.into_inner().ok().flatten() {
         return Err(e);
     }
-    let rows = shared.into_inner().map(|s| s.rows).unwrap_or_default();
+    let (rows, copied) = shared
+        .into_inner()
+        .map(|s| (s.rows, s.copied))
+        .unwrap_or_default();
     let rows: Vec<Row> = mine
         .iter()
         .map(|&k| {
@@ -901,11 +1009,13 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
         write_atomic(&csv_path, &table::render(&axes, &rows))?;
         written.push(csv_path);
         written.extend(plots::draw(out, &record, &rows, None)?);
+        written.extend(compare::write(out, &record, &rows)?);
     }
     Ok(SweepReport {
         rows,
         ran: to_run,
         reused,
+        copied,
         written,
         wall_seconds: start.elapsed().as_secs_f64(),
     })
@@ -932,6 +1042,42 @@ fn point_line(row: &Row, axes: &[String], n: usize, total: usize, wall: f64) -> 
         row.status.as_str(),
         at.join(", ")
     )
+}
+
+/// The log line of a point copied from point `of`.
+fn copy_line(row: &Row, axes: &[String], n: usize, total: usize, of: &str) -> String {
+    let at: Vec<String> = axes
+        .iter()
+        .zip(&row.values)
+        .map(|(a, v)| format!("{a}={v}"))
+        .collect();
+    format!(
+        "[{n}/{total}] {} {}: the same case as {of}, copied ({})",
+        row.id,
+        row.status.as_str(),
+        at.join(", ")
+    )
+}
+
+/// Makes `to` a copy of point directory `from` (emptied first; files and folders).
+fn copy_point(from: &Path, to: &Path) -> Result<(), SweepError> {
+    fn copy_dir(from: &Path, to: &Path) -> Result<(), SweepError> {
+        std::fs::create_dir_all(to).map_err(SweepError::io(to))?;
+        for entry in std::fs::read_dir(from).map_err(SweepError::io(from))? {
+            let entry = entry.map_err(SweepError::io(from))?;
+            let (src, dst) = (entry.path(), to.join(entry.file_name()));
+            if entry.file_type().map_err(SweepError::io(&src))?.is_dir() {
+                copy_dir(&src, &dst)?;
+            } else {
+                std::fs::copy(&src, &dst).map_err(SweepError::io(&src))?;
+            }
+        }
+        Ok(())
+    }
+    if to.exists() {
+        std::fs::remove_dir_all(to).map_err(SweepError::io(to))?;
+    }
+    copy_dir(from, to)
 }
 
 /// Runs one point into `dir` (emptied first) and reads its row back.
@@ -1002,6 +1148,7 @@ pub fn collect(dir: &Path) -> Result<Collected, SweepError> {
     write_atomic(&csv, &table::render(&axes, &rows))?;
     let mut written = vec![csv];
     written.extend(plots::draw(dir, &record, &rows, None)?);
+    written.extend(compare::write(dir, &record, &rows)?);
     Ok(Collected { rows, written })
 }
 
@@ -1094,6 +1241,172 @@ mod tests {
         let (a, r) = table::parse(&table::render(&axes, &rows)).unwrap();
         assert_eq!((a, r), (axes, rows));
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    fn repo(path: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
+    }
+
+    /// `PATH=VALUE` of the point's overrides, in order.
+    fn overrides_of(p: &Point) -> Vec<String> {
+        p.overrides.iter().map(Override::to_string).collect()
+    }
+
+    #[test]
+    fn variant_axes_apply_their_sets_in_axis_order() {
+        let dir =
+            std::env::temp_dir().join(format!("cellsim-sweep-variants-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("v.ron");
+        std::fs::write(
+            &file,
+            format!(
+                r#"(name: "v", base: {:?}, set: ["solver.rtol=1e-3"], design: Grid([
+                    (name: "reading", variants: [(name: "none"), (name: "clip", set: ["active.pac.clip_to_cell=true", "active.pac.inner_semi_axes=(10.0, 9.0)", "active.pac.outer_semi_axes=(15.0, 14.0)"])]),
+                    (name: "scene", variants: [(name: "pp"), (name: "pull", set: ["active.pac=None"])]),
+                ]))"#,
+                repo("cases/fast/push-pull-short.ron").display().to_string()
+            ),
+        )
+        .unwrap();
+        let plan = Plan::load(&file).unwrap();
+        let ids: Vec<&str> = plan.points.iter().map(|p| p.id.as_str()).collect();
+        assert_eq!(ids, ["g0_0", "g0_1", "g1_0", "g1_1"]);
+        assert_eq!(plan.points[3].values, ["clip", "pull"]);
+        assert_eq!(
+            overrides_of(&plan.points[3]),
+            [
+                "solver.rtol=1e-3",
+                "active.pac.clip_to_cell=true",
+                "active.pac.inner_semi_axes=(10.0, 9.0)",
+                "active.pac.outer_semi_axes=(15.0, 14.0)",
+                "active.pac=None"
+            ]
+        );
+        let case = |k: usize| plan.points[k].case.as_ref().unwrap().0.clone();
+        // The later axis wins: the pull scene has no PAC whatever the reading.
+        assert!(case(3).active.pac.is_none() && case(1).active.pac.is_none());
+        assert!(case(2).active.pac.as_ref().unwrap().clip_to_cell);
+        assert!(!case(0).active.pac.as_ref().unwrap().clip_to_cell);
+        assert_eq!(case(0).solver.rtol, 1e-3);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// The scene a `cases/` file describes, its name and description as the sweep's.
+    fn as_scene(file: &str, like: &Case) -> Case {
+        let mut c = Case::load(repo(file)).unwrap();
+        c.name = like.name.clone();
+        c.description = like.description.clone();
+        c
+    }
+
+    #[test]
+    fn paper_fidelity_scenes_are_the_scene_files() {
+        let plan = Plan::load(&repo("cases/sweeps/paper-fidelity.ron")).unwrap();
+        assert_eq!(plan.points.len(), 66);
+        assert!(plan.points.iter().all(|p| p.case.is_ok()));
+        let point = |reading: &str, scene: &str| -> Case {
+            let p = plan
+                .points
+                .iter()
+                .find(|p| p.values == [reading, scene])
+                .unwrap_or_else(|| panic!("no point ({reading}, {scene})"));
+            p.case.as_ref().unwrap().0.clone()
+        };
+        let base = "baseline (MODEL.md)";
+        for (scene, file) in [
+            ("flat", "cases/flat.ron"),
+            ("push", "cases/pillars-push.ron"),
+            ("pull", "cases/pillars-pull.ron"),
+            ("push-pull", "cases/pillars-push-pull.ron"),
+            ("upside-down", "cases/upside-down.ron"),
+        ] {
+            let c = point(base, scene);
+            assert_eq!(c, as_scene(file, &c), "{scene}");
+            assert_eq!(c.name, file[6..file.len() - 4], "{scene}");
+        }
+        // The control: push-pull continued to the upside-down scene's end, gravity kept.
+        let c = point(base, "control");
+        let mut pp = as_scene("cases/pillars-push-pull.ron", &c);
+        pp.phases.t_end = 60_000.0;
+        assert_eq!(c, pp);
+        // A reading changes what it says on every scene, and the scenes keep theirs.
+        let pac = point("PAC semi-axes, clipped", "push").active.pac.unwrap();
+        assert!(pac.clip_to_cell && pac.inner_semi_axes == (10.0, 9.0));
+        assert_eq!(point("PAC semi-axes, clipped", "pull"), point(base, "pull"));
+        assert_eq!(point("PAC semi-axes, clipped", "flat"), point(base, "flat"));
+        for scene in [
+            "flat",
+            "push",
+            "pull",
+            "push-pull",
+            "upside-down",
+            "control",
+        ] {
+            let a = point("best supported", scene).adhesion.unwrap();
+            assert!(a.jacobian_factor && a.layer_excludes_substrate, "{scene}");
+            assert_eq!(point("e_f = 0.8 µm", scene).adhesion.unwrap().e_f, 0.8);
+        }
+        // The flip reading changes the upside-down scene only.
+        let flip = "gravity flipped in 100 s";
+        assert_eq!(point(flip, "upside-down").gravity.flip_duration, 100.0);
+        for scene in ["flat", "push", "pull", "push-pull", "control"] {
+            assert_eq!(point(flip, scene), point(base, scene), "{scene}");
+        }
+        assert!(point("best supported", "pull").active.pac.is_none());
+        assert!(point("best supported", "flat").active.bottom.is_none());
+    }
+
+    #[test]
+    fn paper_fidelity_references_are_the_papers() {
+        use crate::output::paper::REPORTED;
+        let plan = Plan::load(&repo("cases/sweeps/paper-fidelity.ron")).unwrap();
+        let table = plan.table.unwrap();
+        let scene = |s: &str| match s {
+            "flat" => "flat",
+            "pillars-push" => "push",
+            "pillars-pull" => "pull",
+            "pillars-push-pull" => "push-pull",
+            "upside-down" => "upside-down",
+            _ => "?",
+        };
+        // Every value the paper reports is a column's reference on its scene (strains
+        // in %), and every reference is one the paper reports there.
+        let refs: Vec<(&str, f64)> = table
+            .columns()
+            .filter_map(|c| Some((c.of.as_str(), c.reference?)))
+            .collect();
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs();
+        for r in REPORTED.iter() {
+            let pillar_start = r.scene != "pillars-push"
+                && matches!(
+                    r.quantity,
+                    crate::output::paper::Quantity::NucleusDisplacement(
+                        crate::output::paper::When::GravityEnd
+                            | crate::output::paper::When::SpreadingEnd
+                    )
+                );
+            if pillar_start {
+                continue; // the same case as push until T_as0: the push columns
+            }
+            let found = refs.iter().any(|&(of, v)| {
+                of == scene(r.scene) && (close(v, r.value) || close(v, 100.0 * r.value))
+            });
+            assert!(
+                found,
+                "{} {:?} {} has no column",
+                r.scene, r.quantity, r.value
+            );
+        }
+        for (of, v) in refs {
+            assert!(
+                REPORTED
+                    .iter()
+                    .any(|r| scene(r.scene) == of
+                        && (close(v, r.value) || close(v, 100.0 * r.value))),
+                "{of}: reference {v} is not the paper's"
+            );
+        }
     }
 
     #[test]

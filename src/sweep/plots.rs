@@ -174,7 +174,11 @@ fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), O
     if hi - lo < 1e-12 * (1.0 + hi.abs()) {
         (lo, hi) = (lo - 0.5, hi + 0.5);
     }
-    let w = (160 + 110 * nx as u32).max(700) + 150;
+    // Room for the labels: a variant axis's names are longer than numbers.
+    let chars = |v: &[String]| v.iter().map(|s| s.chars().count()).max().unwrap_or(0) as u32;
+    let cell_w = (9 * chars(xs) + 20).clamp(110, 260);
+    let label_w = (9 * chars(ys) + 30).clamp(90, 300);
+    let w = (70 + label_w + cell_w * nx as u32).max(700) + 150;
     let h = (180 + 90 * ny as u32).max(520);
     let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
     root.fill(&WHITE).map_err(|x| e(x.to_string()))?;
@@ -195,7 +199,7 @@ fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), O
         )
         .margin(16)
         .x_label_area_size(60)
-        .y_label_area_size(90)
+        .y_label_area_size(label_w)
         .build_cartesian_2d(
             (0..nx.max(1) - 1).into_segmented(),
             (0..ny.max(1) - 1).into_segmented(),
