@@ -61,12 +61,12 @@ struct Cli {
 /// The sparse LU of the Newton systems.
 #[derive(Clone, Copy, ValueEnum)]
 enum LinearSolverArg {
-    /// faer's sparse LU (pure Rust; the default).
+    /// faer's sparse LU (pure Rust).
     Faer,
     /// SuiteSparse's KLU, through SUNDIALS.
     Klu,
     /// faer's LU after eliminating the velocities while inertia is on (half-size system);
-    /// the full LU once inertia is off.
+    /// the full LU once inertia is off (the default).
     FaerCondensed,
     /// KLU on the matrix ordered by METIS's nested dissection.
     KluMetis,

@@ -1303,7 +1303,7 @@ mod tests {
     #[test]
     fn paper_fidelity_scenes_are_the_scene_files() {
         let plan = Plan::load(&repo("cases/sweeps/paper-fidelity.ron")).unwrap();
-        assert_eq!(plan.points.len(), 66);
+        assert_eq!(plan.points.len(), 72);
         assert!(plan.points.iter().all(|p| p.case.is_ok()));
         let point = |reading: &str, scene: &str| -> Case {
             let p = plan
