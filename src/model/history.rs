@@ -232,11 +232,15 @@ pub fn cap(a: f64, mu_max: f64) -> (f64, f64) {
     // f(v) = Ψ(1/v) − target, decreasing in v ≥ 1; f'(v) = −Ψ'(z)/v² = −1/(z p(z)) · z… :
     // dΨ/dz = 1/(z³ p), dz/dv = −z², so df/dv = −1/(z p(z)).
     let f = |v: f64| psi(1.0 / v) - target;
-    let (mut lo, mut hi) = (1.0f64, 1.0f64);
+    // Ψ(z) ≈ −0.05/z² far along the cap, so v ≈ √(s/0.05): the bracket starts there
+    // (f(1) = s ≥ 0 bounds it below).
+    let mut v = (s / 0.05).sqrt().max(1.0);
+    let (mut lo, mut hi) = (1.0f64, v);
     while f(hi) > 0.0 {
+        lo = hi;
         hi *= 2.0;
     }
-    let mut v = (s / 0.05).sqrt().clamp(lo, hi).max(1.0);
+    v = v.clamp(lo, hi);
     for _ in 0..100 {
         let fv = f(v);
         if fv > 0.0 {
