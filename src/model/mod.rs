@@ -319,6 +319,11 @@ impl CellModel {
         self.initial_state = Some((t0, y0, yp0));
     }
 
+    /// The time the integration starts from: 0, or that of [`Self::set_initial`].
+    pub fn initial_time(&self) -> f64 {
+        self.initial_state.as_ref().map_or(0.0, |s| s.0)
+    }
+
     /// The state of this model (with inertia) mapped to the same model without inertia:
     /// u and μ_as carried over, u̇ = v, μ̇_as kept. Returns (y, ẏ) of the smaller system.
     pub fn drop_inertia_state(&self, y: &[f64], yp: &[f64]) -> (Vec<f64>, Vec<f64>) {

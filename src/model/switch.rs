@@ -1,7 +1,7 @@
 //! Changing the system during a run: the same cell rebuilt with fewer unknowns and
 //! restarted, consistently, from the state of the old one.
 
-use super::{CellModel, ModelError};
+use super::{CellModel, ModelError, ModelParams};
 use crate::dae::{Atol, LinearSolverFactory, consistent_init};
 
 /// How a restarted system is made consistent: the linear solver of its Newton solve
@@ -80,6 +80,46 @@ impl CellModel {
             m.history = Some(restarted);
         }
         m.set_initial(t, y2, yp2);
+        Ok(m)
+    }
+
+    /// The same system as this one now (inertia on or off, μ_as unknowns there or
+    /// deferred) with the parameters `params` of another case that agrees with this one's
+    /// up to `t` ([`crate::run::shared_until`]), set to restart at `t` from (`y`, `yp`).
+    /// Nothing is solved: the state is consistent for both, as their residuals agree at `t`.
+    pub fn branched(
+        &self,
+        mut params: ModelParams,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<CellModel, ModelError> {
+        let refuse = |message: String| ModelError::Restart {
+            what: "branching",
+            t,
+            source: Box::new(crate::dae::IntegratorError::Problem { t, message }),
+        };
+        if params.adhesion.is_some() != self.params.adhesion.is_some() {
+            return Err(refuse("one case has adhesion and the other not".into()));
+        }
+        params.inertia = self.dofs.inertia;
+        let deferred = self.history.is_some();
+        let mut m = CellModel::build(
+            params,
+            self.mesh.clone(),
+            !deferred && self.params.adhesion.is_some(),
+        )?;
+        if m.dofs.n != self.dofs.n || y.len() != m.dofs.n || yp.len() != m.dofs.n {
+            return Err(refuse(format!(
+                "the systems differ: {} unknowns against {}",
+                m.dofs.n, self.dofs.n
+            )));
+        }
+        if let Some(h) = &self.history {
+            let (x, xdot) = m.membrane_motion(y, yp);
+            m.history = Some(h.restarted(t, x, xdot).map_err(refuse)?);
+        }
+        m.set_initial(t, y.to_vec(), yp.to_vec());
         Ok(m)
     }
 

@@ -162,7 +162,8 @@ pub struct Summary {
     pub mesh_elements: usize,
     /// Nodes of the mesh.
     pub mesh_nodes: usize,
-    /// Wall-clock seconds of the integration (mesh and set-up excluded).
+    /// Wall-clock seconds of the integration (mesh and set-up excluded; a stretch computed
+    /// together with other cases, [`Self::shared`], counts in full).
     pub wall_seconds: f64,
     /// Wall-clock seconds of mesh generation and model set-up.
     pub setup_seconds: f64,
@@ -182,6 +183,10 @@ pub struct Summary {
     /// (before it μ_as is integrated beside the system).
     #[serde(default)]
     pub adhesion_unknowns_added_at: Option<f64>,
+    /// Where this run was computed together with other cases up to some time and parted
+    /// from them (`cellsim paper`, [`crate::run::run_all`]); empty for a run on its own.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub shared: Vec<Parting>,
     /// State files written (phase ends).
     pub states: Vec<String>,
     /// cellsim version.
@@ -191,6 +196,20 @@ pub struct Summary {
     /// Where the integration's wall time went (built with the `timers` feature only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub timers: Option<TimeBreakdown>,
+}
+
+/// A time where a run computed together with other cases parted from some of them: their
+/// cases agree up to that time ([`crate::run::shared_until`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Parting {
+    /// The time [s].
+    pub t: f64,
+    /// The cases it had been computed with and parted from there.
+    pub from: Vec<String>,
+    /// Whether its integrator restarted at `t` from the state there, with its own case's
+    /// model (its results then agree with its own run's to the integrator's tolerance), or
+    /// went on (the same bits as its own run).
+    pub restarted: bool,
 }
 
 /// Wall time of the integration split by what IDA (or BDF2) was doing: the callbacks it

@@ -29,6 +29,9 @@ use crate::scene::{self, SceneError};
 use crate::stop::{StopFlag, signal_name};
 use crate::sundials::{Ida, IdaOptions};
 
+mod shared;
+pub use shared::{Member, run_all, shared_until};
+
 /// How a run reports progress.
 #[derive(Clone, Default)]
 pub enum Progress {
@@ -502,10 +505,21 @@ pub fn progress_bar_in(
     visible: bool,
     multi: Option<&indicatif::MultiProgress>,
 ) -> ProgressBar {
+    progress_bar_labelled(&case.name, case.phases.t_end, visible, multi)
+}
+
+/// As [`progress_bar_in`], for a stretch of simulated time up to `t_end` shown as `label`
+/// (several cases computed together: [`run_all`]).
+pub fn progress_bar_labelled(
+    label: &str,
+    t_end: f64,
+    visible: bool,
+    multi: Option<&indicatif::MultiProgress>,
+) -> ProgressBar {
     if !visible {
         return ProgressBar::hidden();
     }
-    let pb = ProgressBar::new((case.phases.t_end * 1000.0).round().max(1.0) as u64);
+    let pb = ProgressBar::new((t_end * 1000.0).round().max(1.0) as u64);
     // Joined to `multi` before styling, so nothing is drawn outside it.
     let pb = match multi {
         Some(m) => m.add(pb),
@@ -517,59 +531,25 @@ pub fn progress_bar_in(
     .unwrap_or_else(|_| ProgressStyle::default_bar())
     .progress_chars("=> ");
     pb.set_style(style);
-    pb.set_prefix(case.name.clone());
+    pb.set_prefix(label.to_string());
     pb
 }
 
 /// Runs one scene; see the module documentation.
 pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunError> {
-    let _active = ActiveRun::start();
-    let setup_start = Instant::now();
-    let model = build_model(case, file, opts.settings.defer_adhesion)?;
-    let mut files = RunWriter::create(case, file, opts, &model)?;
-    let y0 = vec![0.0; model.dofs.n];
-    if let Err(stop) = files.output(&model, 0.0, &y0, &y0) {
-        let (_, message) = stop.into_stop()?;
-        return Err(RunError::Model {
+    let member = Member {
+        case,
+        file,
+        opts: opts.clone(),
+    };
+    let progress = |_: &str, _: f64| opts.progress.clone();
+    let mut results = run_all(&[member], 1, false, &progress, &|_, _| {});
+    results.pop().unwrap_or_else(|| {
+        Err(RunError::Model {
             file: file.into(),
-            message,
-        });
-    }
-    let mut driver = Driver::new(case, opts, model).map_err(|e| RunError::Model {
-        file: file.into(),
-        message: e.to_string(),
-    })?;
-    files.summary.setup_seconds = setup_start.elapsed().as_secs_f64();
-
-    let start = Instant::now();
-    let mut stopped = None;
-    for tout in output_times(case) {
-        match driver.advance_to(tout) {
-            Advance::Reached => {}
-            Advance::Stopped(kind, reason) => {
-                stopped = Some((kind, reason));
-                break;
-            }
-        }
-        let (model, y, yp) = driver.state();
-        if let Err(reason) = files.output(model, tout, y, yp) {
-            stopped = Some(reason.into_stop()?);
-            break;
-        }
-        files.summary.stats = driver.stats();
-        files.summary.inertia_switched_off_at = driver.switched_at;
-        files.summary.adhesion_unknowns_added_at = driver.adhesion_added_at;
-        if let Some(reason) = driver.switch_overdue() {
-            stopped = Some((FailureKind::Integration, reason));
-            break;
-        }
-        files.summary.wall_seconds = start.elapsed().as_secs_f64();
-        files.write_summary()?;
-    }
-    driver.finish();
-    files.summary.inertia_switched_off_at = driver.switched_at;
-    files.summary.adhesion_unknowns_added_at = driver.adhesion_added_at;
-    files.finish(case, driver.stats(), start.elapsed().as_secs_f64(), stopped)
+            message: "not run".into(),
+        })
+    })
 }
 
 /// The mesh and the cell model of a case, with the system it starts with (`defer_adhesion`:
@@ -622,8 +602,19 @@ impl Driver {
     fn new(case: &Case, opts: &RunOptions, model: CellModel) -> Result<Self, IntegratorError> {
         let ph = &case.phases;
         let adhesion_at = (model.adhesion_deferred() && ph.t_g0 < ph.t_end).then_some(ph.t_g0);
+        let solver = Solver::new(model, &opts.settings)?;
         Ok(Self {
-            solver: Solver::new(model, &opts.settings)?,
+            adhesion_at,
+            ..Self::with_solver(case, opts, solver)
+        })
+    }
+
+    /// The driver of `case` on `solver`, with nothing pending (no inertia switch unless
+    /// the case asks for one, no deferred μ_as unknowns).
+    fn with_solver(case: &Case, opts: &RunOptions, solver: Solver) -> Self {
+        let ph = &case.phases;
+        Self {
+            solver,
             settings: opts.settings.clone(),
             guard: StepGuard::new(
                 opts.interrupt.clone(),
@@ -638,9 +629,15 @@ impl Driver {
                 _ => None,
             },
             switched_at: None,
-            adhesion_at,
+            adhesion_at: None,
             adhesion_added_at: None,
-        })
+        }
+    }
+
+    /// Shows progress with `progress` from now on (the run's end now `t_end`).
+    fn relabel(&mut self, progress: Progress, t_end: f64) {
+        self.reporter.finish();
+        self.reporter = Reporter::new(&progress, t_end);
     }
 
     /// Statistics of the run so far (all systems).
@@ -876,6 +873,7 @@ impl RunWriter {
             outputs: 0,
             inertia_switched_off_at: None,
             adhesion_unknowns_added_at: None,
+            shared: Vec::new(),
             states: Vec::new(),
             cellsim_version: env!("CARGO_PKG_VERSION").to_string(),
             sundials_version: crate::sundials::SUNDIALS_VERSION.to_string(),
