@@ -132,8 +132,10 @@ fn check_png(path: &Path) {
 }
 
 /// A small study of the fast push-pull scene with medium drag (no inertia). Ladders:
-/// BDF2 at dt = 1 and 0.5 s; IDA at rtol 1e-2, 1e-3; reference IDA at rtol 1e-6 (its
-/// error on this scene is ~1e-7 against rtol 1e-8, far below BDF2's ~1e-3 here).
+/// BDF2 at dt = 1 and 0.5 s; IDA at rtol 5e-3, 1e-3; reference IDA at rtol 1e-6 (its
+/// error on this scene is ~1e-7 against rtol 1e-8, far below BDF2's ~1e-3 here). Not
+/// rtol 1e-2: whether IDA gets through this scene's contact fronts at 1e-2 depends on the
+/// last digits of atol and the first step (the README's "Work-precision" section).
 ///
 /// The order (fitted on the max-in-time error of uy_top(t)) is asserted only from
 /// dt ≤ 1 s, because the scene is not smooth at larger steps: the cell falls onto the
@@ -156,7 +158,7 @@ fn study_of_the_fast_scene_writes_its_files_and_finds_order_two() {
             "--rungs",
             "2",
             "--rtols",
-            "1e-2,1e-3",
+            "5e-3,1e-3",
             "--ref-rtol",
             "1e-6",
             "--quiet",
@@ -200,7 +202,7 @@ fn study_of_the_fast_scene_writes_its_files_and_finds_order_two() {
             "ref-ida-rtol1e-6",
             "bdf2-dt1",
             "bdf2-dt0.5",
-            "ida-rtol1e-2",
+            "ida-rtol5e-3",
             "ida-rtol1e-3"
         ]
     );

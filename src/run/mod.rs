@@ -732,7 +732,7 @@ impl Driver {
                 let mut on_step =
                     |t: f64, s: &Stats| after_step(guard, reporter, stopped, &base, t, s);
                 if let Some((old_stats, t_switch)) =
-                    advance_switching(solver, tout, settings, &mut on_step)?
+                    advance_switching(solver, ts, tout, settings, &mut on_step)?
                 {
                     *stats_before += &old_stats;
                     *switched_at = Some(t_switch);
@@ -1026,22 +1026,27 @@ fn after_step(
 const SWITCH_PROBE_LIMIT: f64 = 50.0;
 const SWITCH_PROBE_DT: f64 = 0.01;
 
-/// Advances towards `tout` in steps of [`SWITCH_PROBE_DT`] (never past `tout`), and at the
-/// first moment the contact carries the cell's current weight switches inertia off: the
-/// same model on (u, μ_as), restarted there at rest in equilibrium
-/// ([`CellModel::without_inertia_at_rest`]; the cell may be in the air between bounces
-/// before). Returns the old integrator's statistics and the switch time once switched,
-/// `None` if `tout` came first.
+/// Advances towards `tout`, probing at the times `ts + k` [`SWITCH_PROBE_DT`] after the
+/// requested switch time `ts` (whatever the output times, so that runs with other outputs
+/// switch at the same moment), and at the first probe where the contact carries the cell's
+/// current weight switches inertia off: the same model on (u, μ_as), restarted there at
+/// rest in equilibrium ([`CellModel::without_inertia_at_rest`]; the cell may be in the air
+/// between bounces before). Returns the old integrator's statistics and the switch time
+/// once switched, `None` if `tout` came first.
 fn advance_switching(
     solver: &mut Solver,
+    ts: f64,
     tout: f64,
     settings: &RunSettings,
     on_step: &mut dyn FnMut(f64, &Stats) -> bool,
 ) -> Result<Option<(Stats, f64)>, String> {
+    let eps = 1e-9 * SWITCH_PROBE_DT;
     loop {
         let integ = solver.integ_ref();
         let (t, y) = (integ.t(), integ.y());
-        if solver.model().contact_carries_weight(t, y) {
+        let k = ((t - ts) / SWITCH_PROBE_DT).round();
+        let probe = ts + k * SWITCH_PROBE_DT;
+        if (t - probe).abs() <= eps && solver.model().contact_carries_weight(t, y) {
             let restart = Restart {
                 linear_solver: &settings.linear_solver.uncondensed(),
                 rtol: settings.rtol,
@@ -1059,9 +1064,13 @@ fn advance_switching(
         if t >= tout {
             return Ok(None);
         }
+        let mut next = probe;
+        if next <= t + eps {
+            next += SWITCH_PROBE_DT;
+        }
         solver
             .integ()
-            .advance_to((t + SWITCH_PROBE_DT).min(tout), on_step)
+            .advance_to(next.min(tout), on_step)
             .map_err(|e| e.to_string())?;
     }
 }

@@ -430,11 +430,15 @@ impl<D: Dae> Integrator for Ida<D> {
                 self.tstop = next;
             }
             self.user.callback_error = None;
+            // One step towards the next breakpoint rather than `tout`: IDA's first step is
+            // a fraction of the distance it is given, and the steps must not depend on the
+            // output times (runs with other outputs take the same steps, `run::run_all`).
+            let towards = self.tstop.unwrap_or(tout);
             // SAFETY: valid IDA memory and vectors of the right length.
             let flag = timing::time(Phase::Ida, || unsafe {
                 sys::IDASolve(
                     self.mem,
-                    tout,
+                    towards,
                     &mut tret,
                     self.yy.0,
                     self.yp.0,
