@@ -576,10 +576,11 @@ fn paper_command(a: PaperArgs) -> ExitCode {
                 }
             }
             out!(
-                "{} files written in {} (comparison table: {})",
+                "{} files written in {} (comparison table: {}); the runs took {:.1} s wall",
                 report.written.len(),
                 a.out.display(),
-                a.out.join("comparison.md").display()
+                a.out.join("comparison.md").display(),
+                report.runs_seconds
             );
             if report.ok() {
                 ExitCode::SUCCESS

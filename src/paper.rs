@@ -7,7 +7,6 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 use std::time::Instant;
 
 use indicatif::MultiProgress;
@@ -15,8 +14,8 @@ use indicatif::MultiProgress;
 use crate::case::Case;
 use crate::output::paper::{CONTROL, PaperReport, SCENES, SceneOutcome, draw_paper};
 use crate::output::{OutputError, RunData, SnapshotOptions};
-use crate::record::RunSettings;
-use crate::run::{self, Progress, RunOptions};
+use crate::record::{RunSettings, Summary};
+use crate::run::{self, Member, Progress, RunError, RunOptions};
 use crate::stop::StopFlag;
 
 /// Options of [`run_paper`].
@@ -80,7 +79,9 @@ pub fn paper_cases(cases_dir: Option<&Path>) -> Result<Vec<(Case, String)>, Stri
     Ok(out)
 }
 
-/// Runs `cases` into `out/runs/<name>/`, `jobs` at a time, one progress line each.
+/// Runs `cases` into `out/runs/<name>/`, `jobs` tasks at a time, computing together what
+/// their cases share ([`run::run_all`]: the pillar scenes are one run up to T_as0), one
+/// progress line per stretch.
 pub fn run_cases(cases: &[(Case, String)], opts: &PaperOptions) -> Vec<SceneOutcome> {
     let runs_dir = opts.out.join("runs");
     let visible = opts.progress && std::io::stderr().is_terminal();
@@ -96,28 +97,88 @@ pub fn run_cases(cases: &[(Case, String)], opts: &PaperOptions) -> Vec<SceneOutc
                 std::io::Write::write_all(&mut std::io::stderr(), format!("{msg}\n").as_bytes());
         }
     };
-    let queue: Mutex<Vec<usize>> = Mutex::new((0..cases.len()).rev().collect());
-    let results: Mutex<Vec<Option<SceneOutcome>>> = Mutex::new(vec![None; cases.len()]);
-    let jobs = opts.jobs.clamp(1, cases.len().max(1));
-    std::thread::scope(|scope| {
-        for _ in 0..jobs {
-            scope.spawn(|| {
-                loop {
-                    let next = queue.lock().ok().and_then(|mut q| q.pop());
-                    let Some(k) = next else { break };
-                    let (case, label) = &cases[k];
-                    let dir = runs_dir.join(&case.name);
-                    let outcome = run_one(case, label, &dir, opts, &mp, visible, &say);
-                    if let Ok(mut r) = results.lock() {
-                        r[k] = Some(outcome);
-                    }
-                }
+    let mut outcomes: Vec<Option<SceneOutcome>> = vec![None; cases.len()];
+    // The scenes to run (the others reused or not started), by index into `cases`.
+    let mut to_run = Vec::new();
+    for (k, (case, _)) in cases.iter().enumerate() {
+        let name = case.name.clone();
+        let dir = runs_dir.join(&name);
+        if opts.reuse && RunData::load(&dir).is_ok_and(|r| r.finished()) {
+            say(format!(
+                "{name}: reusing the finished run in {}",
+                dir.display()
+            ));
+            outcomes[k] = Some(SceneOutcome {
+                name,
+                dir,
+                result: Ok(false),
             });
+        } else if opts.interrupt.is_set() {
+            outcomes[k] = Some(SceneOutcome {
+                result: Err(format!("{name}: interrupted before it started")),
+                name,
+                dir,
+            });
+        } else {
+            to_run.push(k);
         }
-    });
-    results
-        .into_inner()
-        .unwrap_or_default()
+    }
+    let members: Vec<Member> = to_run
+        .iter()
+        .map(|&k| {
+            let (case, label) = &cases[k];
+            Member {
+                case,
+                file: label,
+                opts: RunOptions {
+                    out: runs_dir.join(&case.name),
+                    settings: RunSettings::from_case(case),
+                    progress: Progress::Hidden,
+                    interrupt: opts.interrupt.clone(),
+                    snapshots: opts.snapshots,
+                },
+            }
+        })
+        .collect();
+    let progress = |label: &str, t_end: f64| {
+        if visible {
+            Progress::Bar(run::progress_bar_labelled(label, t_end, true, Some(&mp)))
+        } else if opts.progress {
+            Progress::Lines {
+                label: label.to_string(),
+                every: run::PROGRESS_LINE_INTERVAL,
+            }
+        } else {
+            Progress::Hidden
+        }
+    };
+    let start = Instant::now();
+    let done = |i: usize, result: &Result<Summary, RunError>| {
+        let name = &members[i].case.name;
+        match result {
+            Ok(s) => say(format!(
+                "{name}: finished t = {} s in {:.1} s wall ({} steps{})",
+                s.final_values.map(|o| o.t).unwrap_or(0.0),
+                s.wall_seconds,
+                s.stats.steps,
+                shared_note(s)
+            )),
+            Err(e) => say(format!(
+                "{name}: stopped after {:.1} s: {e}",
+                start.elapsed().as_secs_f64()
+            )),
+        }
+    };
+    let results = run::run_all(&members, opts.jobs, true, &progress, &done);
+    for (&k, result) in to_run.iter().zip(results) {
+        let name = cases[k].0.name.clone();
+        outcomes[k] = Some(SceneOutcome {
+            dir: runs_dir.join(&name),
+            result: result.map(|_| true).map_err(|e| e.to_string()),
+            name,
+        });
+    }
+    outcomes
         .into_iter()
         .zip(cases)
         .map(|(r, (c, _))| {
@@ -130,79 +191,12 @@ pub fn run_cases(cases: &[(Case, String)], opts: &PaperOptions) -> Vec<SceneOutc
         .collect()
 }
 
-fn run_one(
-    case: &Case,
-    label: &str,
-    dir: &Path,
-    opts: &PaperOptions,
-    mp: &MultiProgress,
-    visible: bool,
-    say: &(dyn Fn(String) + Sync),
-) -> SceneOutcome {
-    let name = case.name.clone();
-    if opts.reuse {
-        if let Ok(r) = RunData::load(dir) {
-            if r.finished() {
-                say(format!(
-                    "{name}: reusing the finished run in {}",
-                    dir.display()
-                ));
-                return SceneOutcome {
-                    name,
-                    dir: dir.to_path_buf(),
-                    result: Ok(false),
-                };
-            }
-        }
-    }
-    if opts.interrupt.is_set() {
-        return SceneOutcome {
-            result: Err(format!("{name}: interrupted before it started")),
-            name,
-            dir: dir.to_path_buf(),
-        };
-    }
-    let progress = if visible {
-        Progress::Bar(run::progress_bar_in(case, true, Some(mp)))
-    } else if opts.progress {
-        Progress::Lines {
-            label: case.name.clone(),
-            every: run::PROGRESS_LINE_INTERVAL,
-        }
-    } else {
-        Progress::Hidden
-    };
-    let ropts = RunOptions {
-        out: dir.to_path_buf(),
-        settings: RunSettings::from_case(case),
-        progress,
-        interrupt: opts.interrupt.clone(),
-        snapshots: opts.snapshots,
-    };
-    let start = Instant::now();
-    let result = match run::run(case, label, &ropts) {
-        Ok(s) => {
-            say(format!(
-                "{name}: finished t = {} s in {:.1} s wall ({} steps)",
-                s.final_values.map(|o| o.t).unwrap_or(0.0),
-                s.wall_seconds,
-                s.stats.steps
-            ));
-            Ok(true)
-        }
-        Err(e) => {
-            say(format!(
-                "{name}: stopped after {:.1} s: {e}",
-                start.elapsed().as_secs_f64()
-            ));
-            Err(e.to_string())
-        }
-    };
-    SceneOutcome {
-        name,
-        dir: dir.to_path_buf(),
-        result,
-    }
+/// "; parted from A, B at t = … s" for a run computed together with others at its start.
+fn shared_note(s: &Summary) -> String {
+    s.shared
+        .iter()
+        .map(|p| format!("; parted from {} at t = {} s", p.from.join(", "), p.t))
+        .collect()
 }
 
 /// `cellsim paper`: runs the scenes (unless reused), then writes the figures and
@@ -218,8 +212,11 @@ pub fn run_paper(opts: &PaperOptions) -> Result<PaperReport, OutputError> {
                 .unwrap_or_else(|| "cases (compiled in)".into()),
             message: m,
         })?;
+    let start = Instant::now();
     let runs = run_cases(&cases, opts);
+    let runs_seconds = start.elapsed().as_secs_f64();
     let mut report = draw_paper(&opts.out, &runs);
     report.runs = runs;
+    report.runs_seconds = runs_seconds;
     Ok(report)
 }

@@ -9,5 +9,6 @@ mod linsolve;
 mod model;
 mod plots;
 mod scenes;
+mod shared;
 mod study;
 mod sweep;

@@ -6,7 +6,7 @@ use cellsim::case::{self, Case};
 use cellsim::record::{RunSettings, Summary};
 use cellsim::run::{self, Progress, RunOptions};
 
-fn tmp(name: &str) -> PathBuf {
+pub fn tmp(name: &str) -> PathBuf {
     let p = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
     let _ = std::fs::remove_dir_all(&p);
     p

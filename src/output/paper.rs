@@ -559,6 +559,8 @@ pub struct PaperReport {
     pub written: Vec<PathBuf>,
     /// Problems met while drawing (each names its file).
     pub problems: Vec<String>,
+    /// Wall-clock seconds of running the scenes (all of them, mesh and set-up included).
+    pub runs_seconds: f64,
 }
 
 impl PaperReport {
@@ -843,9 +845,13 @@ pub fn timings_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) -> St
         s,
         "# What each run of `cellsim paper` cost\n\nWritten by `cellsim paper` (cellsim {}); \
          the physics is in `{COMPARISON_FILE}`. Wall time is the integration only (mesh and \
-         set-up excluded); a reused run shows the time of the run that wrote it.\n\n| run | status \
-         | t reached (s) | wall (s) | steps | Jacobians | error-test failures | unknowns | run directory |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---|",
+         set-up excluded); a reused run shows the time of the run that wrote it. Runs whose \
+         cases agree up to some time are computed together up to it (the pillar scenes up to \
+         T_as0, the upside-down scene and its control up to T_a0) and then each restarted from \
+         the state there: their wall time, steps and Jacobians count that shared stretch in \
+         full, and `shared until` says to when.\n\n| run | status \
+         | t reached (s) | wall (s) | steps | Jacobians | error-test failures | unknowns | shared until (s) | run directory |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---|",
         env!("CARGO_PKG_VERSION")
     );
     for o in runs {
@@ -858,7 +864,7 @@ pub fn timings_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) -> St
         let sm = d.and_then(|d| d.summary.as_ref());
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | `{}` |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | `{}` |",
             o.name,
             status,
             d.map(|d| fmt_num(d.t_last(), 0)).unwrap_or("–".into()),
@@ -870,6 +876,9 @@ pub fn timings_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) -> St
             sm.map(|x| x.stats.error_test_failures.to_string())
                 .unwrap_or("–".into()),
             sm.map(|x| x.unknowns.total.to_string())
+                .unwrap_or("–".into()),
+            sm.and_then(|x| x.shared.iter().map(|p| p.t).reduce(f64::max))
+                .map(|t| fmt_num(t, 0))
                 .unwrap_or("–".into()),
             o.dir.display()
         );

@@ -208,7 +208,8 @@ pub struct Parting {
     pub from: Vec<String>,
     /// Whether its integrator restarted at `t` from the state there, with its own case's
     /// model (its results then agree with its own run's to the integrator's tolerance), or
-    /// went on (the same bits as its own run).
+    /// went on with the integrator it had (or the run ended at `t`). Up to its first
+    /// restart a run is the same computation as its own run, bit for bit.
     pub restarted: bool,
 }
 

@@ -359,8 +359,8 @@ impl Context<'_, '_> {
         for mut tr in std::mem::take(tracks) {
             let m = &self.members[tr.k];
             let setup = Instant::now();
-            let started = build_model(m.case, m.file, m.opts.settings.defer_adhesion).and_then(
-                |model| {
+            let started =
+                build_model(m.case, m.file, m.opts.settings.defer_adhesion).and_then(|model| {
                     let mut files = RunWriter::create(m.case, m.file, &m.opts, &model)?;
                     let y0 = vec![0.0; model.dofs.n];
                     if let Err(stop) = files.output(&model, 0.0, &y0, &y0) {
@@ -372,8 +372,7 @@ impl Context<'_, '_> {
                     }
                     files.summary.setup_seconds = setup.elapsed().as_secs_f64();
                     Ok((model, files))
-                },
-            );
+                });
             match started {
                 Ok((model, files)) => {
                     tr.files = Some(files);
@@ -431,7 +430,16 @@ impl Context<'_, '_> {
             let (ending, going): (Vec<Track>, Vec<Track>) = tracks
                 .into_iter()
                 .partition(|tr| self.case(tr).phases.t_end <= end + tol);
-            for tr in ending {
+            for mut tr in ending {
+                // Computed with the others to its end.
+                let others: Vec<String> = going.iter().map(|g| self.case(g).name.clone()).collect();
+                if let (Some(f), false) = (tr.files.as_mut(), others.is_empty()) {
+                    f.summary.shared.push(Parting {
+                        t: end,
+                        from: others,
+                        restarted: false,
+                    });
+                }
                 self.end(tr, driver.stats(), None);
             }
             if going.is_empty() {
@@ -563,11 +571,7 @@ impl Context<'_, '_> {
         let lead = &self.members[sub[0].k];
         let built = scene::model_params(lead.case, lead.file, model.dofs.inertia)
             .map_err(|e| e.to_string())
-            .and_then(|params| {
-                model
-                    .branched(params, t, y, yp)
-                    .map_err(|e| e.to_string())
-            });
+            .and_then(|params| model.branched(params, t, y, yp).map_err(|e| e.to_string()));
         match built {
             Ok(model) => self.push(Task {
                 members: sub,
