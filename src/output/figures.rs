@@ -13,6 +13,7 @@
 //! - [`plot_run`]: all of a single run's figures (`cellsim plot`).
 
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
@@ -1764,6 +1765,22 @@ pub fn shape_figure(
     view: Bounds,
     phases: Option<&Phases>,
 ) -> Result<ShapeScale, OutputError> {
+    shape_figure_cached(path, name, mesh, state, view, phases, &Mutex::new(None))
+}
+
+/// As [`shape_figure`], with the substrate drawing shared through `cache` by figures of
+/// the same view and substrate (figures drawn at once: each takes a copy, and the first
+/// computed is kept).
+pub fn shape_figure_cached(
+    path: &Path,
+    name: &str,
+    mesh: &MeshFile,
+    state: &StateFile,
+    view: Bounds,
+    phases: Option<&Phases>,
+    cache: &Mutex<Option<Backdrop>>,
+) -> Result<ShapeScale, OutputError> {
+    let mut backdrop = cache.lock().ok().and_then(|c| c.clone());
     let root = BitMapBackend::new(path, SHAPE_SIZE).into_drawing_area();
     root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
     let opts = ShapeStyleOptions {
@@ -1777,9 +1794,14 @@ pub fn shape_figure(
         mesh_lines: true,
         gravity: phases.map(|p| GravityMark::at(p, state.t)),
     };
-    let scale = draw_shape(&root, mesh, &state.u, view, &opts, &mut None)
+    let scale = draw_shape(&root, mesh, &state.u, view, &opts, &mut backdrop)
         .map_err(|x| OutputError::draw(path, x))?;
     root.present().map_err(|x| OutputError::draw(path, x))?;
+    if let Ok(mut c) = cache.lock() {
+        if c.is_none() {
+            *c = backdrop;
+        }
+    }
     Ok(scale)
 }
 

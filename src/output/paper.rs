@@ -18,11 +18,12 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use super::OutputError;
 use super::figures::{
     Compared, DisplacementMarks, StrainBars, contact_radius_figure, displacement_figure,
-    run_phases, shape_figure, shape_view, strain_bars_figure, strain_time_figure,
+    run_phases, shape_figure_cached, shape_view, strain_bars_figure, strain_time_figure,
     upside_down_figure,
 };
 use crate::fem::Domain;
@@ -590,6 +591,12 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
         Ok(p) => report.written.push(p),
         Err(e) => report.problems.push(e.to_string()),
     };
+    // The substrate drawing, computed once per view (the pillar scenes share theirs).
+    let (pillar_backdrop, flat_backdrop) = (Mutex::new(None), Mutex::new(None));
+    // The figures, drawn on the thread pool once all are listed (each writes its own file),
+    // and recorded in the order listed.
+    type Figure<'a> = Box<dyn Fn() -> Result<PathBuf, OutputError> + Send + Sync + 'a>;
+    let mut figures: Vec<Figure> = Vec::new();
     let reported = |scene: &str, q: Quantity| {
         reported_for(scene)
             .find(|r| r.quantity == q)
@@ -601,10 +608,10 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
     if let Some(flat) = get("flat") {
         let pts = contact_radius_compared(flat);
         let p = out.join("contact-radius.png");
-        record(
-            contact_radius_figure(&p, &[flat], &pts, "paper (Sect. 3.1, Fig. 6b)").map(|_| p),
-            &mut report,
-        );
+        figures.push(Box::new(move || {
+            contact_radius_figure(&p, &[flat], &pts, "paper (Sect. 3.1, Fig. 6b)")
+                .map(|_| p.clone())
+        }));
     }
 
     // Nucleus displacement for push, pull, push-pull (Fig. 9's kind of curve): the values
@@ -622,12 +629,14 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
             .map(|(n, r)| displacement_marks(n, r))
             .collect();
         let p = out.join("nucleus-displacement.png");
-        record(
-            displacement_figure(&p, &pillars, &marks, "paper (Sect. 3.2)").map(|_| p),
-            &mut report,
-        );
+        let pillars2 = pillars.clone();
+        figures.push(Box::new(move || {
+            displacement_figure(&p, &pillars2, &marks, "paper (Sect. 3.2)").map(|_| p.clone())
+        }));
         let p = out.join("strain-time.png");
-        record(strain_time_figure(&p, &pillars).map(|_| p), &mut report);
+        figures.push(Box::new(move || {
+            strain_time_figure(&p, &pillars).map(|_| p.clone())
+        }));
     }
 
     // Strain norms (Fig. 7).
@@ -645,16 +654,17 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
         })
         .collect();
     let p = out.join("strain-norms.png");
-    record(
-        strain_bars_figure(&p, &bars, "cellsim", "paper (Sect. 3.2, Fig. 7)").map(|_| p),
-        &mut report,
-    );
+    figures.push(Box::new(move || {
+        strain_bars_figure(&p, &bars, "cellsim", "paper (Sect. 3.2, Fig. 7)").map(|_| p.clone())
+    }));
 
     // Upside down against the control (Fig. 9).
     if let (Some(c), Some(u)) = (get(CONTROL), get("upside-down")) {
         let p = out.join("upside-down.png");
         let d = reported("upside-down", Quantity::UpsideDownDifference);
-        record(upside_down_figure(&p, c, u, d).map(|_| p), &mut report);
+        figures.push(Box::new(move || {
+            upside_down_figure(&p, c, u, d).map(|_| p.clone())
+        }));
     }
 
     // Shapes at each phase end (Figs. 5, 6a, 8); the pillar scenes share one frame.
@@ -686,10 +696,24 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
         let phases = run_phases(r);
         for st in &r.states {
             let p = out.join(format!("shape-{}-{}.png", s.name, st.phase));
-            record(
-                shape_figure(&p, s.name, &r.mesh, st, view, phases.as_ref()).map(|_| p),
-                &mut report,
-            );
+            let phases = phases.clone();
+            let cache = if pillar_scenes.contains(&s.name) {
+                &pillar_backdrop
+            } else {
+                &flat_backdrop
+            };
+            figures.push(Box::new(move || {
+                shape_figure_cached(&p, s.name, &r.mesh, st, view, phases.as_ref(), cache)
+                    .map(|_| p.clone())
+            }));
+        }
+    }
+
+    {
+        use rayon::prelude::*;
+        let drawn: Vec<Result<PathBuf, OutputError>> = figures.par_iter().map(|f| f()).collect();
+        for res in drawn {
+            record(res, &mut report);
         }
     }
 
