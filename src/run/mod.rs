@@ -804,9 +804,14 @@ impl From<crate::output::OutputError> for OutputStop {
     }
 }
 
+/// Longest wall time between two writes of a running run's summary (each is a JSON file
+/// written and renamed into place: after every one of 400 rows it cost a tenth of a short
+/// run).
+pub const SUMMARY_INTERVAL: Duration = Duration::from_millis(500);
+
 /// The files of a run, written as it goes: `mesh.json` first, a `timeseries.csv` row (and
 /// with `--vtu`/`--gif` a snapshot) per output time, `state_<phase>.json` at phase ends,
-/// and `summary.json` after every row and at the end.
+/// and `summary.json` at most every [`SUMMARY_INTERVAL`] of wall time (and at each state file) and at the end.
 struct RunWriter {
     out: PathBuf,
     csv_path: PathBuf,
@@ -816,6 +821,10 @@ struct RunWriter {
     phases: [(f64, &'static str); 4],
     tolerance: f64,
     summary: Summary,
+    /// When the summary was last written.
+    summary_written: Option<Instant>,
+    /// State files listed in the summary last written.
+    states_in_summary: usize,
 }
 
 impl RunWriter {
@@ -893,6 +902,8 @@ impl RunWriter {
             ],
             tolerance: 1e-9 * ph.t_end,
             summary,
+            summary_written: None,
+            states_in_summary: 0,
         })
     }
 
@@ -942,8 +953,24 @@ impl RunWriter {
         Ok(())
     }
 
-    fn write_summary(&self) -> Result<(), RunError> {
+    fn write_summary(&mut self) -> Result<(), RunError> {
+        self.summary_written = Some(Instant::now());
         write_json(&self.out.join("summary.json"), &self.summary)
+    }
+
+    /// Writes the summary after an output time if it is due: at most every
+    /// [`SUMMARY_INTERVAL`] of wall time, and whenever a state file was written (the rows
+    /// themselves are in the CSV, flushed at once; the final summary is always written).
+    fn write_summary_if_due(&mut self) -> Result<(), RunError> {
+        let due = self.summary.states.len() != self.states_in_summary
+            || self
+                .summary_written
+                .is_none_or(|t| t.elapsed() >= SUMMARY_INTERVAL);
+        if due {
+            self.states_in_summary = self.summary.states.len();
+            self.write_summary()?;
+        }
+        Ok(())
     }
 
     /// Closes the snapshot files and writes the final summary: finished, or the stop's

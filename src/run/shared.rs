@@ -546,7 +546,7 @@ impl Context<'_, '_> {
                 files.summary.inertia_switched_off_at = driver.switched_at;
                 files.summary.adhesion_unknowns_added_at = driver.adhesion_added_at;
                 files.summary.wall_seconds = tr.wall_before + start.elapsed().as_secs_f64();
-                if let Err(e) = files.write_summary() {
+                if let Err(e) = files.write_summary_if_due() {
                     failed.push((i, e));
                 }
             }
