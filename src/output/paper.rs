@@ -696,7 +696,6 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
         let phases = run_phases(r);
         for st in &r.states {
             let p = out.join(format!("shape-{}-{}.png", s.name, st.phase));
-            let phases = phases.clone();
             let cache = if pillar_scenes.contains(&s.name) {
                 &pillar_backdrop
             } else {
