@@ -191,6 +191,10 @@ impl CellModel {
         let mut total = Vector2::zeros();
         for el in &self.elements {
             let ue = self.element_displacements(el, y);
+            // An element out of the band's reach adds exact zeros (as in the residual).
+            if !self.in_reach(el, &ue) {
+                continue;
+            }
             for q in 0..el.cgeo.jxw.len() {
                 let nv = &self.ctab.values[q];
                 let f = deformation(&ue, &el.cgeo.grads[q]);
