@@ -14,7 +14,6 @@
 //! medians over repetitions in which the backends take turns, so their ratios hold on a
 //! shared machine.
 
-use std::cell::RefCell;
 use std::time::Instant;
 
 use cellsim::dae::condensed::CondensedLu;
@@ -31,30 +30,7 @@ const T: f64 = 45_000.0;
 
 #[path = "../benches/support/mod.rs"]
 mod support;
-use support::{model, state};
-
-thread_local! {
-    static GIVEN: RefCell<Vec<usize>> = const { RefCell::new(Vec::new()) };
-}
-
-/// The permutation last stored in `GIVEN`, as an external ordering.
-fn given(_: &Pattern) -> Result<Vec<usize>, String> {
-    Ok(GIVEN.with(|g| g.borrow().clone()))
-}
-
-/// nnz(L) + nnz(U) of faer's simplicial LU with the column permutation `perm`.
-fn fill(pattern: &Pattern, values: &[f64], perm: &[usize]) -> usize {
-    GIVEN.with(|g| *g.borrow_mut() = perm.to_vec());
-    let mut s = FaerLu::with_options(Par::Seq, SupernodalThreshold::FORCE_SIMPLICIAL).ordered_by(
-        ColumnOrdering::External {
-            name: "given",
-            order: given,
-        },
-    );
-    s.analyse(pattern).unwrap();
-    s.factorize(values).unwrap();
-    s.factor_nnz().unwrap()
-}
+use support::{fill, model, state};
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);

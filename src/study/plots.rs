@@ -429,3 +429,70 @@ pub fn dt_sensitivity_figure(path: &Path, report: &StudyReport) -> Result<(), Ou
     }
     root.present().map_err(|x| d(x.to_string()))
 }
+
+/// One series of a [`loglog_figure`] panel: measured points (markers and a line) and, when
+/// given, the least-squares power law through them (dashed, its exponent in the legend).
+pub struct LogLogSeries {
+    /// Legend label.
+    pub label: String,
+    /// (x, y) points, both positive.
+    pub points: Vec<(f64, f64)>,
+    /// Draw the fitted power law y = c x^α and write α in the label.
+    pub fit: bool,
+}
+
+/// One panel of a [`loglog_figure`].
+pub struct LogLogPanel {
+    /// Panel title.
+    pub title: String,
+    /// x axis label.
+    pub x_desc: String,
+    /// y axis label.
+    pub y_desc: String,
+    /// The series, each in its own colour.
+    pub series: Vec<LogLogSeries>,
+}
+
+/// Draws `panels` side by side, log–log, under `title`, into the PNG `path`.
+pub fn loglog_figure(path: &Path, title: &str, panels: &[LogLogPanel]) -> Result<(), OutputError> {
+    let n = panels.len().max(1);
+    let size = (PANEL.0 * n as u32, PANEL.1 + 50);
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    let d = |x: String| OutputError::draw(path, x);
+    root.fill(&WHITE).map_err(|x| d(x.to_string()))?;
+    let root = root
+        .titled(title, (FONT, 24))
+        .map_err(|x| d(x.to_string()))?;
+    let areas = root.split_evenly((1, n));
+    for (panel, area) in panels.iter().zip(&areas) {
+        let all = || panel.series.iter().flat_map(|s| s.points.iter());
+        let x = log_range_from_decade(all().map(|p| p.0));
+        let y = log_range(all().map(|p| p.1));
+        // Headroom above the data for the legend.
+        let y = (y.0, y.1 * 8.0);
+        let mut chart =
+            log_chart(area, &panel.title, x, y, &panel.x_desc, &panel.y_desc).map_err(d)?;
+        for (k, s) in panel.series.iter().enumerate() {
+            let color = PALETTE[k % PALETTE.len()];
+            let fit = if s.fit { fit_loglog(&s.points) } else { None };
+            let label = match &fit {
+                Some(f) => format!("{} (fit: ∝ n^{:.2})", s.label, f.slope),
+                None => s.label.clone(),
+            };
+            draw_line(&mut chart, &s.points, color, k % 2 == 1, &label).map_err(d)?;
+            if let Some(f) = fit {
+                let ends = [x.0, x.1].map(|v| (v, (f.intercept + f.slope * v.ln()).exp()));
+                chart
+                    .draw_series(std::iter::once(DashedPathElement::new(
+                        ends.to_vec(),
+                        8,
+                        6,
+                        color.stroke_width(1),
+                    )))
+                    .map_err(|x| d(x.to_string()))?;
+            }
+        }
+        legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(d)?;
+    }
+    root.present().map_err(|x| d(x.to_string()))
+}
