@@ -33,8 +33,8 @@ pub use axisym::{
     piola_total_hoop,
 };
 pub use loads::{
-    Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_rate, cofactor, contact_force,
-    gravity_force, layer,
+    Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_hoop_factor, adhesion_rate,
+    cofactor, contact_force, gravity_force, layer,
 };
 pub use material::{MaterialPoint, Viscosity, Yeoh, admissible, material_point, piola_total};
 pub use phases::{Flip, Phases};
