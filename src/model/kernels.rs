@@ -29,6 +29,12 @@
 //! tangents of the in-plane block only); the axisymmetric ones are in
 //! [`super::axisym`]. The r weight of the axisymmetric integrals is in the elements'
 //! quadrature weights ([`super::element`]), so the mass kernels serve both.
+//!
+//! The element loops are instantiated once per kinematic model, so the helpers they share
+//! (these kernels, the loads, the substrate's depth, the scatter) have two callers each,
+//! and the compiler stopped inlining several of them into plane strain's loop: 3 % more
+//! instructions on `cases/fast/push-pull-short.ron` (callgrind), for the same arithmetic.
+//! The hot ones are marked `#[inline(always)]` for that reason.
 
 use nalgebra::{Const, SVector};
 use num_dual::DualSVec64;
@@ -146,7 +152,7 @@ pub(crate) trait Formulation {
 }
 
 impl Formulation for PlaneStrain {
-    #[inline]
+    #[inline(always)]
     fn solid_residual(
         e: usize,
         el: &Element,
@@ -159,7 +165,7 @@ impl Formulation for PlaneStrain {
         solid_residual(e, el, law, visc, st, t_a, fe)
     }
 
-    #[inline]
+    #[inline(always)]
     fn solid_tangent(
         e: usize,
         el: &Element,
@@ -187,6 +193,7 @@ pub(crate) struct SolidPoint {
 }
 
 /// `F` of element `e` at point `q` is admissible: `J = det F > 0` and finite.
+#[inline(always)]
 pub(crate) fn check_admissible(e: usize, q: usize, f: &Tensor<f64>) -> Result<(), DaeError> {
     let j = Kin::det::<f64>(f);
     if j > 0.0 && j.is_finite() {
@@ -222,6 +229,7 @@ impl SolidPoint {
 
 /// The solid's internal force `f_aᵢ += Σ_q w_q P_iJ ∂Nₐ/∂X_J`, with `P` the total first
 /// Piola–Kirchhoff stress (Yeoh with active strain, plus Kelvin–Voigt viscosity).
+#[inline(always)]
 pub(crate) fn solid_residual(
     e: usize,
     el: &Element,
@@ -248,6 +256,7 @@ pub(crate) fn solid_residual(
 /// The solid's tangents `K_(ai)(bk) += w Σ_JL ∂Nₐ/∂X_J A_(iJ)(kL) ∂N_b/∂X_L` with
 /// `A = ∂P/∂F`, and `C` the same with `∂P/∂Ḟ`.
 #[allow(non_snake_case)]
+#[inline(always)]
 pub(crate) fn solid_tangent(
     e: usize,
     el: &Element,
@@ -288,6 +297,7 @@ pub(crate) fn solid_tangent(
 /// Gravity, inertia and drag: `f_a,y += g_now Σ_b M_ab` (body force `−ρ g s_g t_g e_y`
 /// integrated, `g_now = g s_g t_g`), `f_aᵢ += Σ_b M_ab v̇_bᵢ` (inertia) and
 /// `+= c_d Σ_b M₁_ab v_bᵢ` (drag, `c_d > 0`).
+#[inline(always)]
 pub(crate) fn mass_residual(
     el: &Element,
     g_now: f64,
@@ -314,6 +324,7 @@ pub(crate) fn mass_residual(
 
 /// Inertia and drag tangents: `C_(ai)(bi) += cj M_ab + c_d M₁_ab` (with inertia, `M v̇`
 /// gives `cj M` in the v columns; without, the drag acts on u̇).
+#[inline(always)]
 pub(crate) fn mass_tangent(
     el: &Element,
     cj: f64,
@@ -365,7 +376,7 @@ impl BandPoint {
 /// `hoop = F₃₃` (axisymmetric) the contact takes `J = F₃₃ det F₂` and the adhesion its
 /// factor [`adhesion_hoop_factor`].
 #[allow(non_snake_case, clippy::too_many_arguments)]
-#[inline]
+#[inline(always)]
 pub(crate) fn band_force<T: Real>(
     p: &ModelParams,
     x: &Vector<T>,
@@ -400,6 +411,7 @@ pub(crate) fn adhesion_acts(p: &ModelParams, el: &Element, t_as: f64) -> bool {
 /// The band forces `f_aᵢ −= Σ_q w_q Nₐ bᵢ` ([`band_force`]); `mue`: the nodal μ_as when
 /// adhesion acts on the element.
 #[allow(non_snake_case, clippy::too_many_arguments)]
+#[inline(always)]
 pub(crate) fn band_residual<K: Formulation>(
     e: usize,
     el: &Element,
@@ -446,6 +458,7 @@ type DualB = DualSVec64<NB>;
 /// `K_(ai)(bk) −= w Nₐ (∂bᵢ/∂x_k N_b + Σ_L ∂bᵢ/∂F_kL ∂N_b/∂X_L)` and
 /// `B_(ai)b −= w Nₐ ∂bᵢ/∂μ_as N_b` (membrane elements with adhesion).
 #[allow(non_snake_case, clippy::too_many_arguments)]
+#[inline(always)]
 pub(crate) fn band_tangent<K: Formulation>(
     el: &Element,
     ctab: &P2Tabulation,

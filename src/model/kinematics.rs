@@ -39,7 +39,7 @@ impl Kinematics for PlaneStrain {
     type Tensor<T: Real> = Matrix2<T>;
     type Vector<T: Real> = Vector2<T>;
 
-    #[inline]
+    #[inline(always)]
     fn det<T: Real>(f: &Matrix2<T>) -> T {
         f[(0, 0)] * f[(1, 1)] - f[(0, 1)] * f[(1, 0)]
     }

@@ -129,6 +129,7 @@ impl Adhesion {
 
 /// Contact force per unit reference volume [pN/µm³] at current position `x` with
 /// `J = det F`: `b_ct = J μ_ct H_ε(d(x)) n(x)`.
+#[inline(always)]
 pub fn contact_force<T: Real>(sub: &Substrate, c: &Contact, x: &Vector2<T>, J: T) -> Vector2<T> {
     let (d, n) = sub.eval(x);
     let h = heaviside(d, c.eps);
@@ -139,6 +140,7 @@ pub fn contact_force<T: Real>(sub: &Substrate, c: &Contact, x: &Vector2<T>, J: T
 /// 1 within `e_f − ε` of the substrate and inside it; or, when the layer excludes the
 /// substrate (`exclude_substrate = Some(ε_s)`), `H_ε(d + e_f) − H_ε_s(d)`, 0 again inside
 /// the substrate.
+#[inline(always)]
 pub fn layer<T: Real>(sub: &Substrate, ad: &Adhesion, x: &Vector2<T>) -> T {
     let (d, _) = sub.eval(x);
     let h = heaviside(d + ad.e_f, ad.eps);
@@ -159,6 +161,7 @@ pub fn cofactor<T: Real>(F: &Matrix2<T>) -> Matrix2<T> {
 /// adhesion coefficient, `t_as` the adhesion switch and `a(F)` by the readings of `ad`:
 /// `cof(F) N` (MODEL.md) or `cof(F) N/|cof(F) N|` ([`AdhesionDirection`]), times
 /// `J = det F` when `jacobian_factor`.
+#[inline(always)]
 pub fn adhesion_force<T: Real>(
     sub: &Substrate,
     ad: &Adhesion,
