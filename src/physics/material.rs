@@ -172,6 +172,7 @@ pub(super) struct Sym<T> {
 
 impl<T: Real> Sym<T> {
     /// From the diagonal and the upper off-diagonal entry of `M` (assumed symmetric).
+    #[inline(always)]
     pub(super) fn from_upper(M: &Matrix2<T>) -> Self {
         Self {
             xx: M[(0, 0)],
@@ -180,18 +181,22 @@ impl<T: Real> Sym<T> {
         }
     }
 
+    #[inline(always)]
     pub(super) fn to_matrix(self) -> Matrix2<T> {
         Matrix2::new(self.xx, self.xy, self.xy, self.yy)
     }
 
+    #[inline(always)]
     pub(super) fn tr(self) -> T {
         self.xx + self.yy
     }
 
+    #[inline(always)]
     pub(super) fn det(self) -> T {
         self.xx * self.yy - self.xy * self.xy
     }
 
+    #[inline(always)]
     pub(super) fn add(self, o: Self) -> Self {
         Self {
             xx: self.xx + o.xx,
@@ -200,6 +205,7 @@ impl<T: Real> Sym<T> {
         }
     }
 
+    #[inline(always)]
     pub(super) fn scale(self, s: T) -> Self {
         Self {
             xx: self.xx * s,
@@ -209,11 +215,13 @@ impl<T: Real> Sym<T> {
     }
 
     /// `S : T` (double contraction).
+    #[inline(always)]
     pub(super) fn dot(self, o: Self) -> T {
         self.xx * o.xx + self.xy * o.xy * 2.0 + self.yy * o.yy
     }
 
     /// `Gᵀ S G` for a constant `G`.
+    #[inline(always)]
     pub(super) fn pull(self, G: &Matrix2<f64>) -> Self {
         // (SG)_kj, then Σ_k G_ki (SG)_kj
         let sg00 = self.xx * G[(0, 0)] + self.xy * G[(1, 0)];
@@ -228,11 +236,13 @@ impl<T: Real> Sym<T> {
     }
 
     /// `G S Gᵀ` for a constant `G`.
+    #[inline(always)]
     pub(super) fn push(self, G: &Matrix2<f64>) -> Self {
         self.pull(&G.transpose())
     }
 
     /// `F S`.
+    #[inline(always)]
     pub(super) fn left_mul(self, F: &Matrix2<T>) -> Matrix2<T> {
         Matrix2::new(
             F[(0, 0)] * self.xx + F[(0, 1)] * self.xy,
@@ -243,6 +253,7 @@ impl<T: Real> Sym<T> {
     }
 
     /// `FᵀF`.
+    #[inline(always)]
     pub(super) fn gram(F: &Matrix2<T>) -> Self {
         Self {
             xx: F[(0, 0)] * F[(0, 0)] + F[(1, 0)] * F[(1, 0)],
@@ -254,6 +265,7 @@ impl<T: Real> Sym<T> {
 
 /// `(C_e, F_a⁻¹, J_a)` with `C_e = F_a⁻ᵀ FᵀF F_a⁻¹`; `F_a⁻¹` is `None` when `F_a = I`
 /// exactly (the common case, skipped for speed).
+#[inline(always)]
 pub(super) fn elastic_right_cauchy_green<T: Real>(
     F: &Matrix2<T>,
     Fa: &Matrix2<f64>,
