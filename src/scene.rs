@@ -61,6 +61,7 @@ pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParam
         solid(&m.membrane)?,
     ];
     Ok(ModelParams {
+        kinematics: case.geometry.model,
         center: case.geometry.centre(),
         solids,
         densities: [m.nucleus.rho(), m.cytoplasm.rho(), m.membrane.rho()],

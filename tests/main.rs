@@ -1,6 +1,7 @@
 //! The integration tests: one binary, one module per concern.
 #![allow(clippy::needless_range_loop)]
 
+mod axisym;
 mod cli;
 mod dae;
 mod deferred;

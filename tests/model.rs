@@ -133,7 +133,7 @@ pub fn active_pillars_params(inertia: bool) -> ModelParams {
 /// Checks J against finite differences in a deformed state with contact, adhesion and
 /// active strain, at cj = 0 and cj = 37, on 150 random columns plus every column of the
 /// lowest nodes (in contact) and their μ_as.
-fn check_jacobian(params: ModelParams, sink: f64, label: &str) {
+pub fn check_jacobian(params: ModelParams, sink: f64, label: &str) {
     let inertia = params.inertia;
     let mut m = CellModel::new(params, coarse_mesh()).unwrap();
     let (y, yp) = deformed_state(&m, sink, 7);

@@ -8,7 +8,7 @@
 
 use serde::{Deserialize, Deserializer, Serialize};
 
-pub use crate::physics::AdhesionDirection;
+pub use crate::physics::{AdhesionDirection, KinematicModel};
 
 /// Conversion factors from the SI units of the paper to the solver's µm–s–pN system
 /// (MODEL.md §1).
@@ -27,10 +27,18 @@ pub mod units {
 // Geometry
 
 /// Reference geometry of the half cell (MODEL.md §2): three concentric disks about the
-/// centre c = (0, `centre_y`), cut by the symmetry line x = 0.
+/// centre c = (0, `centre_y`), cut by the symmetry line x = 0; and the kinematic model
+/// that makes it a cell (MODEL.md §10).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Geometry {
+    /// Kinematic model: `PlaneStrain`, the paper's 2-D half cell (an infinite cylinder,
+    /// quantities per unit thickness), or `Axisymmetric`, a 3-D spherical cell whose
+    /// meridian half-plane (r, y) is meshed as the half cell (x → r; F₃₃ = 1 + u_r/r,
+    /// quantities per radian: weights, forces and volume averages weighted by r; MODEL.md
+    /// §10). Default `PlaneStrain`. Valid: `Axisymmetric` needs a `Flat` substrate (a
+    /// pillar array is not axisymmetric).
+    pub model: KinematicModel,
     /// Height c_y of the cell centre (µm). Default 8.5 (Table 1). Any finite value; the
     /// substrate must lie below the cell. The centre's x is 0 by construction: x = 0 is the
     /// symmetry line of the half-cell model, so it is not a parameter.
@@ -47,6 +55,7 @@ pub struct Geometry {
 impl Default for Geometry {
     fn default() -> Self {
         Geometry {
+            model: KinematicModel::PlaneStrain,
             centre_y: 8.5,
             r_n: 5.0,
             r_cp: 9.75,

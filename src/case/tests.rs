@@ -45,9 +45,14 @@ fn close(a: f64, b: f64, rel: f64) -> bool {
 fn case_every_scene_file_loads_and_validates() {
     let scenes = ron_files("");
     let fast = ron_files("fast");
+    let beyond = ron_files("3d");
     assert_eq!(scenes.len(), 5, "the five paper scenes: {scenes:?}");
     assert!(fast.len() >= 2, "fast variants: {fast:?}");
-    for path in scenes.iter().chain(&fast) {
+    assert!(
+        !beyond.is_empty(),
+        "the scenes beyond the paper (MODEL.md §10)"
+    );
+    for path in scenes.iter().chain(&fast).chain(&beyond) {
         let case = Case::load(path).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(case.validate(), Ok(()));
         // Each file is named after its case.
@@ -270,7 +275,11 @@ fn case_round_trip_of_defaults_and_scenes() {
     let text = plain.to_ron().unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(Case::from_str(&text, "plain.ron").ok(), Some(plain));
 
-    for path in ron_files("").iter().chain(&ron_files("fast")) {
+    for path in ron_files("")
+        .iter()
+        .chain(&ron_files("fast"))
+        .chain(&ron_files("3d"))
+    {
         let case = Case::load(path).unwrap_or_else(|e| panic!("{e}"));
         let text = case.to_ron().unwrap_or_else(|e| panic!("{e}"));
         let back = Case::from_str(&text, "again.ron").unwrap_or_else(|e| panic!("{e}"));

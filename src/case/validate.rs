@@ -9,8 +9,8 @@ use std::fmt;
 
 use super::Case;
 use super::sections::{
-    Active, Adhesion, Contact, Geometry, Gravity, Inertia, InertiaMode, Materials, Mesh, Output,
-    Phases, Solver, Substrate, Viscosity,
+    Active, Adhesion, Contact, Geometry, Gravity, Inertia, InertiaMode, KinematicModel, Materials,
+    Mesh, Output, Phases, Solver, Substrate, Viscosity,
 };
 
 /// What rule a value broke.
@@ -364,8 +364,22 @@ impl Checker<'_> {
         self.positive("contact.eps_ct", ct.eps_ct);
     }
 
-    /// Substrate: below the cell; pillars mirror symmetric about x = 0.
+    /// Substrate: below the cell; pillars mirror symmetric about x = 0, and only with the
+    /// plane-strain model.
     fn substrate(&mut self, substrate: &Substrate, g: &Geometry) {
+        if g.model == KinematicModel::Axisymmetric && matches!(substrate, Substrate::Pillars(_)) {
+            self.report(
+                "geometry.model",
+                &["substrate"],
+                "Axisymmetric".into(),
+                Rule::Conflict(
+                    "the axisymmetric model needs a Flat substrate, but the substrate is \
+                     Pillars: a pillar array is not axisymmetric about the cell's vertical \
+                     axis (MODEL.md §10); use PlaneStrain for pillars"
+                        .into(),
+                ),
+            );
+        }
         match substrate {
             Substrate::Flat(f) => {
                 let bottom = g.bottom_y();

@@ -2,6 +2,13 @@
 //! run, computed once from the mesh and the parameters — the geometry at the points of
 //! the standard and the band rules, the consistent mass, the active-strain tensors and
 //! the outward radial directions of the membrane.
+//!
+//! In the axisymmetric model every integral is per radian, `∫ f r dA`: the quadrature
+//! weights of both rules are multiplied by the reference radius r of their points here,
+//! once, so that the mass, gravity, drag, band forces and observables integrate with the
+//! weight r without further change, and the solid kernels find `Nₐ/r` (the hoop row of
+//! the strain) at the standard points in [`Element::hoop`]. The points of both rules are
+//! interior to the element, so r > 0 there.
 
 use nalgebra::Vector2;
 
@@ -10,7 +17,7 @@ use super::{ModelError, ModelParams};
 use crate::fem::p2::{ElementGeometry, P2Tabulation};
 use crate::fem::quadrature::TriangleRule;
 use crate::fem::{Domain, Mesh};
-use crate::physics::ActiveStrain;
+use crate::physics::{ActiveStrain, KinematicModel};
 
 /// Nodes of the element (six-node P2 triangle).
 pub const NODES: usize = 6;
@@ -41,6 +48,9 @@ pub(crate) struct Element {
     pub(crate) cgeo: ElementGeometry,
     /// Outward radial reference direction at the band points (membrane elements).
     pub(crate) radial: Vec<Vector<f64>>,
+    /// Axisymmetric: `Nₐ/r` at the standard points (`∂λ_θ/∂u_(a,r)`, λ_θ = 1 + u_r/r);
+    /// empty in plane strain.
+    pub(crate) hoop: Vec<[f64; NODES]>,
 }
 
 /// The reference elements of a mesh and the tabulation of the band rule they share.
@@ -101,8 +111,23 @@ impl Element {
     ) -> Result<Self, crate::fem::P2Error> {
         let x = mesh.element_coords(e);
         let domain = mesh.domains[e];
-        let geo = std_tab.geometry(&x)?;
-        let cgeo = ctab.geometry(&x)?;
+        let mut geo = std_tab.geometry(&x)?;
+        let mut cgeo = ctab.geometry(&x)?;
+        let mut hoop = Vec::new();
+        if params.kinematics == KinematicModel::Axisymmetric {
+            // Work per radian: dV = r dA. The rules' points are interior, so r > 0.
+            for g in [&mut geo, &mut cgeo] {
+                for (w, p) in g.jxw.iter_mut().zip(&g.x) {
+                    *w *= p[0];
+                }
+            }
+            hoop = geo
+                .x
+                .iter()
+                .zip(&std_tab.values)
+                .map(|(p, n)| n.map(|v| v / p[0]))
+                .collect();
+        }
         let solid = ModelParams::domain_index(domain);
         let rho = params.densities[solid];
         // M₁_ab = ∫ Nₐ N_b on the standard rule; M = ρ M₁.
@@ -152,6 +177,7 @@ impl Element {
             mass1,
             cgeo,
             radial,
+            hoop,
         })
     }
 

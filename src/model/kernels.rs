@@ -23,6 +23,18 @@
 //!   membrane elements), derivatives by forward-mode dual numbers in (x, F, μ_as);
 //! - [`mu_rate_residual`] / [`mu_rate_tangent`]: the nodal adhesion rows
 //!   `Ȧ − μ_as0 H_ε(d(x) + e_f)` of the exposure A (μ_as = Φ(A), [`super::history`]).
+//!
+//! What the kinematic model changes is a [`Formulation`]: the solid kernels and `F₃₃` at
+//! the band points. Plane strain's are below ([`PlaneStrain`]: `F₃₃ = 1`, stresses and
+//! tangents of the in-plane block only); the axisymmetric ones are in
+//! [`super::axisym`]. The r weight of the axisymmetric integrals is in the elements'
+//! quadrature weights ([`super::element`]), so the mass kernels serve both.
+//!
+//! The element loops are instantiated once per kinematic model, so the helpers they share
+//! (these kernels, the loads, the substrate's depth, the scatter) have two callers each,
+//! and the compiler stopped inlining several of them into plane strain's loop: 3 % more
+//! instructions on `cases/fast/push-pull-short.ron` (callgrind), for the same arithmetic.
+//! The hot ones are marked `#[inline(always)]` for that reason.
 
 use nalgebra::{Const, SVector};
 use num_dual::DualSVec64;
@@ -30,13 +42,14 @@ use num_dual::DualSVec64;
 use super::ModelParams;
 use super::element::{EDOF, Element, ElementState, NODES, Nodal};
 use super::kinematics::{
-    DIM, Kin, Kinematics, Tensor, Vector, contract, current_position, deformation, rate,
+    DIM, Kin, Kinematics, PlaneStrain, Tensor, Vector, contract, current_position, deformation,
+    rate,
 };
 use crate::dae::DaeError;
 use crate::fem::p2::P2Tabulation;
 use crate::physics::{
-    Real, Viscosity, Yeoh, adhesion_force, adhesion_rate, contact_force, material_point,
-    piola_total,
+    Real, Viscosity, Yeoh, adhesion_force, adhesion_hoop_factor, adhesion_rate, contact_force,
+    material_point, piola_total,
 };
 
 /// Element force vector, node-major: `f[a][i]`.
@@ -106,6 +119,71 @@ impl Switches {
     }
 }
 
+/// What a kinematic model changes in the element kernels (MODEL.md §3, §10): the solid's
+/// internal force and tangents at the standard points, and `F₃₃` at the band points. The
+/// element loops are generic over it, so the choice is made once per loop and each model
+/// runs its own code ([`PlaneStrain`] keeps `F₃₃ = 1` fixed, with no work for it).
+pub(crate) trait Formulation {
+    /// The solid's internal force of element `e` ([`solid_residual`] in plane strain).
+    fn solid_residual(
+        e: usize,
+        el: &Element,
+        law: &Yeoh,
+        visc: &Viscosity,
+        st: &ElementState,
+        t_a: f64,
+        fe: &mut ElementVector,
+    ) -> Result<(), DaeError>;
+
+    /// The solid's tangents `K`, `C` of element `e` ([`solid_tangent`] in plane strain).
+    fn solid_tangent(
+        e: usize,
+        el: &Element,
+        law: &Yeoh,
+        visc: &Viscosity,
+        st: &ElementState,
+        t_a: f64,
+        tan: &mut ElementTangent,
+    ) -> Result<(), DaeError>;
+
+    /// `F₃₃` at a band point with current position `x` and reference position `x_ref`:
+    /// `None` where it is 1 (plane strain).
+    fn hoop<T: Real>(x: &Vector<T>, x_ref: &[f64; DIM]) -> Option<T>;
+}
+
+impl Formulation for PlaneStrain {
+    #[inline(always)]
+    fn solid_residual(
+        e: usize,
+        el: &Element,
+        law: &Yeoh,
+        visc: &Viscosity,
+        st: &ElementState,
+        t_a: f64,
+        fe: &mut ElementVector,
+    ) -> Result<(), DaeError> {
+        solid_residual(e, el, law, visc, st, t_a, fe)
+    }
+
+    #[inline(always)]
+    fn solid_tangent(
+        e: usize,
+        el: &Element,
+        law: &Yeoh,
+        visc: &Viscosity,
+        st: &ElementState,
+        t_a: f64,
+        tan: &mut ElementTangent,
+    ) -> Result<(), DaeError> {
+        solid_tangent(e, el, law, visc, st, t_a, tan)
+    }
+
+    #[inline(always)]
+    fn hoop<T: Real>(_x: &Vector<T>, _x_ref: &[f64; DIM]) -> Option<T> {
+        None
+    }
+}
+
 /// Kinematics at a point of the standard rule: `F` (checked admissible), `Ḟ`, `F_a`.
 #[allow(non_snake_case)]
 pub(crate) struct SolidPoint {
@@ -115,7 +193,8 @@ pub(crate) struct SolidPoint {
 }
 
 /// `F` of element `e` at point `q` is admissible: `J = det F > 0` and finite.
-fn check_admissible(e: usize, q: usize, f: &Tensor<f64>) -> Result<(), DaeError> {
+#[inline(always)]
+pub(crate) fn check_admissible(e: usize, q: usize, f: &Tensor<f64>) -> Result<(), DaeError> {
     let j = Kin::det::<f64>(f);
     if j > 0.0 && j.is_finite() {
         Ok(())
@@ -150,6 +229,7 @@ impl SolidPoint {
 
 /// The solid's internal force `f_aᵢ += Σ_q w_q P_iJ ∂Nₐ/∂X_J`, with `P` the total first
 /// Piola–Kirchhoff stress (Yeoh with active strain, plus Kelvin–Voigt viscosity).
+#[inline(always)]
 pub(crate) fn solid_residual(
     e: usize,
     el: &Element,
@@ -176,6 +256,7 @@ pub(crate) fn solid_residual(
 /// The solid's tangents `K_(ai)(bk) += w Σ_JL ∂Nₐ/∂X_J A_(iJ)(kL) ∂N_b/∂X_L` with
 /// `A = ∂P/∂F`, and `C` the same with `∂P/∂Ḟ`.
 #[allow(non_snake_case)]
+#[inline(always)]
 pub(crate) fn solid_tangent(
     e: usize,
     el: &Element,
@@ -216,6 +297,7 @@ pub(crate) fn solid_tangent(
 /// Gravity, inertia and drag: `f_a,y += g_now Σ_b M_ab` (body force `−ρ g s_g t_g e_y`
 /// integrated, `g_now = g s_g t_g`), `f_aᵢ += Σ_b M_ab v̇_bᵢ` (inertia) and
 /// `+= c_d Σ_b M₁_ab v_bᵢ` (drag, `c_d > 0`).
+#[inline(always)]
 pub(crate) fn mass_residual(
     el: &Element,
     g_now: f64,
@@ -242,6 +324,7 @@ pub(crate) fn mass_residual(
 
 /// Inertia and drag tangents: `C_(ai)(bi) += cj M_ab + c_d M₁_ab` (with inertia, `M v̇`
 /// gives `cj M` in the v columns; without, the drag acts on u̇).
+#[inline(always)]
 pub(crate) fn mass_tangent(
     el: &Element,
     cj: f64,
@@ -289,21 +372,32 @@ impl BandPoint {
 
 /// Body force of the bands at a point: contact `b_ct(x, J)` plus, with `mu` (membrane
 /// elements while adhesion acts), adhesion `b_as(x, F, μ_as)` along the outward radial
-/// reference direction `radial`, ramped by `t_as`.
-#[allow(non_snake_case)]
-#[inline]
+/// reference direction `radial`, ramped by `t_as`. `J` is `det F₂`; with a hoop stretch
+/// `hoop = F₃₃` (axisymmetric) the contact takes `J = F₃₃ det F₂` and the adhesion its
+/// factor [`adhesion_hoop_factor`].
+#[allow(non_snake_case, clippy::too_many_arguments)]
+#[inline(always)]
 pub(crate) fn band_force<T: Real>(
     p: &ModelParams,
     x: &Vector<T>,
     F: &Tensor<T>,
     J: T,
+    hoop: Option<T>,
     radial: Option<&Vector<f64>>,
     mu: Option<T>,
     t_as: f64,
 ) -> Vector<T> {
+    let J = match hoop {
+        Some(l) => J * l,
+        None => J,
+    };
     let mut b = contact_force(&p.substrate, &p.contact, x, J);
     if let (Some(ad), Some(mu), Some(n)) = (&p.adhesion, mu, radial) {
-        b += adhesion_force(&p.substrate, ad, x, F, n, mu, t_as);
+        let f = adhesion_force(&p.substrate, ad, x, F, n, mu, t_as);
+        b += match hoop {
+            Some(l) => f * adhesion_hoop_factor(ad, l),
+            None => f,
+        };
     }
     b
 }
@@ -317,7 +411,8 @@ pub(crate) fn adhesion_acts(p: &ModelParams, el: &Element, t_as: f64) -> bool {
 /// The band forces `f_aᵢ −= Σ_q w_q Nₐ bᵢ` ([`band_force`]); `mue`: the nodal μ_as when
 /// adhesion acts on the element.
 #[allow(non_snake_case, clippy::too_many_arguments)]
-pub(crate) fn band_residual(
+#[inline(always)]
+pub(crate) fn band_residual<K: Formulation>(
     e: usize,
     el: &Element,
     ctab: &P2Tabulation,
@@ -331,12 +426,14 @@ pub(crate) fn band_residual(
         let nv = &ctab.values[q];
         let pt = BandPoint::at(el, ctab, q, st, mue);
         let J = Kin::det::<f64>(&pt.F);
-        if !(J > 0.0) {
+        let hoop = K::hoop(&pt.x, &el.cgeo.x[q]);
+        let J3 = hoop.map_or(J, |l| J * l);
+        if !(J > 0.0 && J3 > 0.0) {
             return Err(DaeError::Inadmissible(format!(
-                "element {e}, contact point {q}: det F = {J:.3e}"
+                "element {e}, contact point {q}: det F = {J3:.3e}"
             )));
         }
-        let b = band_force(p, &pt.x, &pt.F, J, el.radial.get(q), pt.mu, t_as);
+        let b = band_force(p, &pt.x, &pt.F, J, hoop, el.radial.get(q), pt.mu, t_as);
         let w = el.cgeo.jxw[q];
         for a in 0..NODES {
             for i in 0..DIM {
@@ -361,7 +458,8 @@ type DualB = DualSVec64<NB>;
 /// `K_(ai)(bk) −= w Nₐ (∂bᵢ/∂x_k N_b + Σ_L ∂bᵢ/∂F_kL ∂N_b/∂X_L)` and
 /// `B_(ai)b −= w Nₐ ∂bᵢ/∂μ_as N_b` (membrane elements with adhesion).
 #[allow(non_snake_case, clippy::too_many_arguments)]
-pub(crate) fn band_tangent(
+#[inline(always)]
+pub(crate) fn band_tangent<K: Formulation>(
     el: &Element,
     ctab: &P2Tabulation,
     p: &ModelParams,
@@ -381,7 +479,9 @@ pub(crate) fn band_tangent(
             Tensor::<DualB>::from_fn(|k, l| DualB::from_re(pt.F[(k, l)]).derivative(f_dir(k, l)));
         let J = Kin::det::<DualB>(&Fd);
         let mud = pt.mu.map(|mu| DualB::from_re(mu).derivative(MU_DIR));
-        let b = band_force(p, &xd, &Fd, J, el.radial.get(q), mud, t_as);
+        // F₃₃ = x_r/X_r (axisymmetric) is a function of x: no dual direction of its own.
+        let hoop = K::hoop(&xd, &el.cgeo.x[q]);
+        let b = band_force(p, &xd, &Fd, J, hoop, el.radial.get(q), mud, t_as);
         let w = el.cgeo.jxw[q];
         for i in 0..DIM {
             let db = b[i].eps.unwrap_generic(Const::<NB>, Const::<1>);

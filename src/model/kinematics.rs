@@ -3,9 +3,13 @@
 //! `x = X + Σₐ Nₐ uₐ` and `J = det F`.
 //!
 //! The sums are written once for any spatial dimension `D` and node count `N` (const
-//! generics); what a kinematic model adds on top (plane strain's `F₃₃ = 1`, the hoop
-//! stretch `u_r/r` of an axisymmetric model, …) is described by [`Kinematics`]. The model
-//! uses one implementation, chosen by [`Kin`]: [`PlaneStrain`].
+//! generics); [`Kinematics`] describes the arrays of the in-plane model ([`Kin`]:
+//! [`PlaneStrain`]'s 2 × 2 `F₂`). Two kinematic models complete `F₂` to three dimensions:
+//! [`PlaneStrain`] (`F₃₃ = 1`) and [`Axisymmetric`] (`F₃₃ = λ_θ = 1 + u_r/r`, the same
+//! in-plane arrays in the meridian half-plane). What each changes in the element kernels
+//! is `super::kernels::Formulation`; the case chooses one
+//! ([`crate::physics::KinematicModel`]) and the model dispatches on it once per element
+//! loop.
 
 use nalgebra::{Matrix2, SMatrix, SVector, Vector2};
 
@@ -35,13 +39,21 @@ impl Kinematics for PlaneStrain {
     type Tensor<T: Real> = Matrix2<T>;
     type Vector<T: Real> = Vector2<T>;
 
-    #[inline]
+    #[inline(always)]
     fn det<T: Real>(f: &Matrix2<T>) -> T {
         f[(0, 0)] * f[(1, 1)] - f[(0, 1)] * f[(1, 0)]
     }
 }
 
-/// The kinematic model of the cell model.
+/// Axisymmetric about the vertical axis r = 0 (MODEL.md §10): the half-plane is the
+/// meridian (r, y), displacements (u_r, u_y), `F = F₂ ⊕ λ_θ` with `F₂` as in plane strain
+/// and the hoop stretch `λ_θ = 1 + u_r/r`, `J = λ_θ det F₂`; every integral is weighted
+/// by r (work per radian). u_r = 0 on the axis is the plane-strain symmetry condition.
+#[derive(Debug, Clone, Copy)]
+pub struct Axisymmetric;
+
+/// The in-plane arrays of the cell model (`F₂`, positions, forces), shared by both
+/// kinematic models.
 pub type Kin = PlaneStrain;
 
 /// Spatial dimension of the cell model.

@@ -15,10 +15,12 @@
 //! once per element (refilling, never rebuilding).
 //!
 //! Layout: `element` sets up the reference elements (geometry, mass, active strain);
-//! [`kinematics`] gives the quadrature-point kinematics (F, Ḟ, x, J) for any dimension,
-//! with plane strain the one kinematic model; `kernels` gives each term's residual
-//! contribution and tangent per element (solid, mass, contact/adhesion band, μ_as rate);
-//! `plan` is the assembly plan (pattern and positions, built once) that scatters them.
+//! [`kinematics`] gives the quadrature-point kinematics (F, Ḟ, x, J) for any dimension;
+//! `kernels` gives each term's residual contribution and tangent per element (solid,
+//! mass, contact/adhesion band, μ_as rate) for plane strain, and `axisym` the solid
+//! kernels of the axisymmetric model (MODEL.md §10; [`ModelParams::kinematics`], chosen
+//! once per element loop); `plan` is the assembly plan (pattern and positions, built
+//! once) that scatters them.
 //!
 //! Contact and adhesion act as body forces in thin bands near the substrate. They are
 //! integrated with a separate high-degree (optionally subdivided) rule, and only on the
@@ -26,6 +28,7 @@
 //! when every node lies further from the substrate than the band's reach plus the
 //! element's current diameter (the integrand is then exactly zero everywhere in it).
 
+mod axisym;
 pub mod dofs;
 mod element;
 pub mod history;
@@ -38,19 +41,24 @@ mod switch;
 use crate::dae::{Dae, DaeError, FirstOrderBlocks, Pattern};
 use crate::fem::p2::{P2Error, P2Tabulation};
 use crate::fem::{Domain, Mesh};
-use crate::physics::{ActiveStrain, Adhesion, Contact, Phases, Substrate, Viscosity, Yeoh};
+use crate::physics::{
+    ActiveStrain, Adhesion, Contact, KinematicModel, Phases, Substrate, Viscosity, Yeoh,
+};
 use dofs::{DofMap, NONE};
 use element::{Element, ElementState, NODES, Nodal, ReferenceElements};
 use history::AdhesionHistory;
-use kernels::{ElementTangent, ElementVector, Switches};
+use kernels::{ElementTangent, ElementVector, Formulation, Switches};
 pub(crate) use kinematics::deformation;
-use kinematics::{DIM, Vector};
+use kinematics::{Axisymmetric, DIM, PlaneStrain, Vector};
 use plan::AssemblyPlan;
 pub use switch::Restart;
 
 /// Physical parameters of a scene in solver units (µm, s, pN).
 #[derive(Debug, Clone)]
 pub struct ModelParams {
+    /// Plane strain (the paper's 2-D half cell, per unit thickness) or axisymmetric (the
+    /// (x, y) half-plane is the meridian (r, y) of a 3-D cell, every integral per radian).
+    pub kinematics: KinematicModel,
     /// Cell centre c [µm].
     pub center: [f64; 2],
     /// Solid law of the nucleus, cytoplasm and membrane.
@@ -437,14 +445,15 @@ impl CellModel {
     }
 }
 
-impl Dae for CellModel {
-    fn size(&self) -> usize {
-        self.dofs.n
-    }
-
-    /// `F(t, y, ẏ)`: kinematic rows, then per element the solid, mass and band kernels
-    /// scattered into the momentum rows, then the adhesion rows.
-    fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
+impl CellModel {
+    /// The residual with the kernels of the kinematic model `K` ([`Dae::residual`]).
+    fn residual_of<K: Formulation>(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        r: &mut [f64],
+    ) -> Result<(), DaeError> {
         let mut buf = self.scratch.take_vectors();
         r.fill(0.0);
         let p = &self.params;
@@ -462,11 +471,11 @@ impl Dae for CellModel {
             let st = self.gather(el, y, yp);
             *fe = [[0.0f64; DIM]; NODES];
             let law = &p.solids[el.solid];
-            kernels::solid_residual(e, el, law, &p.viscosity, &st, sw.t_a, fe)?;
+            K::solid_residual(e, el, law, &p.viscosity, &st, sw.t_a, fe)?;
             kernels::mass_residual(el, g_now, inertia, p.drag, &st, fe);
             if self.in_reach(el, &st.u) {
                 let mue = self.gather_mu(el, y, sw.t_as).map(|m| m.0);
-                kernels::band_residual(e, el, &self.ctab, p, &st, mue.as_ref(), sw.t_as, fe)?;
+                kernels::band_residual::<K>(e, el, &self.ctab, p, &st, mue.as_ref(), sw.t_as, fe)?;
             }
             Ok(())
         };
@@ -488,12 +497,8 @@ impl Dae for CellModel {
         }
     }
 
-    fn pattern(&self) -> &Pattern {
-        &self.plan.pattern
-    }
-
-    /// `J = ∂F/∂y + cj ∂F/∂ẏ`: the same kernels' tangents, scattered by the plan.
-    fn jacobian(
+    /// The iteration matrix with the kernels of the kinematic model `K` ([`Dae::jacobian`]).
+    fn jacobian_of<K: Formulation>(
         &mut self,
         t: f64,
         y: &[f64],
@@ -512,11 +517,11 @@ impl Dae for CellModel {
             let st = self.gather(el, y, yp);
             tan.reset(el.with_mu);
             let law = &p.solids[el.solid];
-            kernels::solid_tangent(e, el, law, &p.viscosity, &st, sw.t_a, tan)?;
+            K::solid_tangent(e, el, law, &p.viscosity, &st, sw.t_a, tan)?;
             kernels::mass_tangent(el, cj, inertia, p.drag, tan);
             if self.in_reach(el, &st.u) {
                 let mue = self.gather_mu(el, y, sw.t_as);
-                kernels::band_tangent(
+                kernels::band_tangent::<K>(
                     el,
                     &self.ctab,
                     p,
@@ -558,6 +563,41 @@ impl Dae for CellModel {
             Ok(())
         } else {
             Err(DaeError::Inadmissible("non-finite Jacobian".into()))
+        }
+    }
+}
+
+impl Dae for CellModel {
+    fn size(&self) -> usize {
+        self.dofs.n
+    }
+
+    /// `F(t, y, ẏ)`: kinematic rows, then per element the solid, mass and band kernels
+    /// scattered into the momentum rows, then the adhesion rows; the kernels of the case's
+    /// kinematic model.
+    fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
+        match self.params.kinematics {
+            KinematicModel::PlaneStrain => self.residual_of::<PlaneStrain>(t, y, yp, r),
+            KinematicModel::Axisymmetric => self.residual_of::<Axisymmetric>(t, y, yp, r),
+        }
+    }
+
+    fn pattern(&self) -> &Pattern {
+        &self.plan.pattern
+    }
+
+    /// `J = ∂F/∂y + cj ∂F/∂ẏ`: the same kernels' tangents, scattered by the plan.
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        cj: f64,
+        v: &mut [f64],
+    ) -> Result<(), DaeError> {
+        match self.params.kinematics {
+            KinematicModel::PlaneStrain => self.jacobian_of::<PlaneStrain>(t, y, yp, cj, v),
+            KinematicModel::Axisymmetric => self.jacobian_of::<Axisymmetric>(t, y, yp, cj, v),
         }
     }
 

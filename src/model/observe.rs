@@ -1,4 +1,9 @@
 //! What a scene reports (MODEL.md §7), computed from a state y alone.
+//!
+//! In the axisymmetric model (MODEL.md §10) the integrals are per radian (the elements'
+//! quadrature weights carry r): the strain means are volume means (weight r dA) of the
+//! 3-D ‖E‖, hoop strain included, the weight and the contact force are per radian, and
+//! the contact radius is the length of the meridian contour in contact, as in 2-D.
 
 use nalgebra::{Matrix2, Vector2};
 
@@ -6,20 +11,40 @@ use super::dofs::NONE;
 use super::{CellModel, deformation};
 use crate::fem::Domain;
 use crate::fem::p2::edge_shape;
-use crate::physics::contact_force;
+use crate::physics::{KinematicModel, contact_force};
 use crate::record::Observables;
 
 /// Sub-segments per boundary edge when measuring the contact length.
 const EDGE_SAMPLES: usize = 64;
 
 /// Reference-area integrals of ‖E‖_F and reference areas per domain (nucleus,
-/// cytoplasm, membrane), from [`CellModel::mean_strain_norms`].
+/// cytoplasm, membrane), from [`CellModel::mean_strain_norms`]; in the axisymmetric
+/// model reference volumes per radian (∫ r dA) and the integrals with that weight.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StrainNorms {
-    /// ∫ ‖E‖_F dA over each domain [µm²].
+    /// ∫ ‖E‖_F dA over each domain [µm²] (axisymmetric: ∫ ‖E‖_F r dA [µm³]).
     pub integral: [f64; 3],
-    /// Reference area of each domain [µm²] (half cell).
+    /// Reference area of each domain [µm²] (half cell; axisymmetric: ∫ r dA [µm³], the
+    /// volume per radian).
     pub area: [f64; 3],
+}
+
+/// `F₃₃` at standard point `q` of `el` with nodal displacements `ue`: the hoop stretch
+/// `1 + u_r/r` in the axisymmetric model (its [`super::Element::hoop`] table), 1 in plane
+/// strain.
+fn hoop_stretch(el: &super::Element, q: usize, ue: &[[f64; 2]; 6]) -> f64 {
+    match el.hoop.get(q) {
+        Some(h) => 1.0 + (0..6).map(|a| h[a] * ue[a][0]).sum::<f64>(),
+        None => 1.0,
+    }
+}
+
+/// ‖E‖_F of `E = ½(C − I)` for `F = F₂ ⊕ f33`: the in-plane block and the hoop entry
+/// `½(f33² − 1)` (0 in plane strain).
+fn strain_norm(f: &Matrix2<f64>, f33: f64) -> f64 {
+    let e = (f.transpose() * f - Matrix2::identity()) * 0.5;
+    let e33 = 0.5 * (f33 * f33 - 1.0);
+    (e.norm_squared() + e33 * e33).sqrt()
 }
 
 impl StrainNorms {
@@ -135,7 +160,8 @@ impl CellModel {
     }
 
     /// Reference-area integrals of the Frobenius norm of E = ½(FᵀF − I) per domain (plane
-    /// strain: E₃₃ = 0), and the domains' reference areas.
+    /// strain: E₃₃ = 0), and the domains' reference areas; axisymmetric: with the hoop
+    /// strain E₃₃ = ½(λ_θ² − 1), weighted by r (volumes per radian).
     pub fn mean_strain_norms(&self, y: &[f64]) -> StrainNorms {
         let mut s = StrainNorms {
             integral: [0.0; 3],
@@ -146,8 +172,7 @@ impl CellModel {
             let ue = self.element_displacements(el, y);
             for q in 0..el.geo.jxw.len() {
                 let f = deformation(&ue, &el.geo.grads[q]);
-                let e = (f.transpose() * f - Matrix2::identity()) * 0.5;
-                s.integral[k] += el.geo.jxw[q] * e.norm();
+                s.integral[k] += el.geo.jxw[q] * strain_norm(&f, hoop_stretch(el, q, &ue));
                 s.area[k] += el.geo.jxw[q];
             }
         }
@@ -165,7 +190,8 @@ impl CellModel {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Per-element mean ‖E‖_F and mean det F (reference-area averages), for output.
+    /// Per-element mean ‖E‖_F and mean det F (reference-area averages; axisymmetric:
+    /// volume averages, hoop stretch included), for output.
     pub fn element_strain_and_jacobian(&self, y: &[f64]) -> Vec<(f64, f64)> {
         self.elements
             .iter()
@@ -174,9 +200,9 @@ impl CellModel {
                 let (mut se, mut sj, mut a) = (0.0, 0.0, 0.0);
                 for q in 0..el.geo.jxw.len() {
                     let f = deformation(&ue, &el.geo.grads[q]);
-                    let e = (f.transpose() * f - Matrix2::identity()) * 0.5;
-                    se += el.geo.jxw[q] * e.norm();
-                    sj += el.geo.jxw[q] * f.determinant();
+                    let f33 = hoop_stretch(el, q, &ue);
+                    se += el.geo.jxw[q] * strain_norm(&f, f33);
+                    sj += el.geo.jxw[q] * f.determinant() * f33;
                     a += el.geo.jxw[q];
                 }
                 (se / a, sj / a)
@@ -184,9 +210,11 @@ impl CellModel {
             .collect()
     }
 
-    /// Total contact force on the half cell [pN/µm] (per unit thickness), integrated with
-    /// the contact rule over every element.
+    /// Total contact force on the half cell [pN/µm] (per unit thickness; axisymmetric:
+    /// [pN] per radian, the whole cell's is 2π times it), integrated with the contact rule
+    /// over every element.
     pub fn contact_force_total(&self, y: &[f64]) -> Vector2<f64> {
+        let axisymmetric = self.params.kinematics == KinematicModel::Axisymmetric;
         let p = &self.params;
         let mut total = Vector2::zeros();
         for el in &self.elements {
@@ -203,14 +231,21 @@ impl CellModel {
                     x.x += nv[a] * ue[a][0];
                     x.y += nv[a] * ue[a][1];
                 }
-                total +=
-                    contact_force(&p.substrate, &p.contact, &x, f.determinant()) * el.cgeo.jxw[q];
+                // J = F₃₃ det F₂, F₃₃ = x_r/X_r axisymmetric.
+                let f33 = if axisymmetric {
+                    x.x / el.cgeo.x[q][0]
+                } else {
+                    1.0
+                };
+                total += contact_force(&p.substrate, &p.contact, &x, f.determinant() * f33)
+                    * el.cgeo.jxw[q];
             }
         }
         total
     }
 
-    /// Weight of the half cell at full gravity [pN/µm]: g ∫ ρ dV.
+    /// Weight of the half cell at full gravity [pN/µm]: g ∫ ρ dV (axisymmetric: [pN] per
+    /// radian, g ∫ ρ r dA; the whole cell's is 2π times it).
     pub fn weight(&self) -> f64 {
         self.elements
             .iter()

@@ -152,7 +152,7 @@ impl AssemblyPlan {
     }
 
     /// `r[row] += f_e[a][i]` over element `e`'s momentum rows.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn scatter_residual(&self, e: usize, fe: &ElementVector, r: &mut [f64]) {
         let rows = &self.elements[e].momentum_rows;
         for a in 0..NODES {
@@ -167,7 +167,7 @@ impl AssemblyPlan {
 
     /// Adds element `e`'s tangents to J's values: `K` (u columns) and `C` (v columns)
     /// with inertia, `K + cj C` (u columns) without, and `B` (μ_as columns) where present.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn scatter_tangent(&self, e: usize, tan: &ElementTangent, cj: f64, v: &mut [f64]) {
         let ep = &self.elements[e];
         if ep.momentum_v.is_empty() {

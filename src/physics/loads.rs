@@ -129,6 +129,7 @@ impl Adhesion {
 
 /// Contact force per unit reference volume [pN/µm³] at current position `x` with
 /// `J = det F`: `b_ct = J μ_ct H_ε(d(x)) n(x)`.
+#[inline(always)]
 pub fn contact_force<T: Real>(sub: &Substrate, c: &Contact, x: &Vector2<T>, J: T) -> Vector2<T> {
     let (d, n) = sub.eval(x);
     let h = heaviside(d, c.eps);
@@ -139,6 +140,7 @@ pub fn contact_force<T: Real>(sub: &Substrate, c: &Contact, x: &Vector2<T>, J: T
 /// 1 within `e_f − ε` of the substrate and inside it; or, when the layer excludes the
 /// substrate (`exclude_substrate = Some(ε_s)`), `H_ε(d + e_f) − H_ε_s(d)`, 0 again inside
 /// the substrate.
+#[inline(always)]
 pub fn layer<T: Real>(sub: &Substrate, ad: &Adhesion, x: &Vector2<T>) -> T {
     let (d, _) = sub.eval(x);
     let h = heaviside(d + ad.e_f, ad.eps);
@@ -159,6 +161,7 @@ pub fn cofactor<T: Real>(F: &Matrix2<T>) -> Matrix2<T> {
 /// adhesion coefficient, `t_as` the adhesion switch and `a(F)` by the readings of `ad`:
 /// `cof(F) N` (MODEL.md) or `cof(F) N/|cof(F) N|` ([`AdhesionDirection`]), times
 /// `J = det F` when `jacobian_factor`.
+#[inline(always)]
 pub fn adhesion_force<T: Real>(
     sub: &Substrate,
     ad: &Adhesion,
@@ -180,6 +183,23 @@ pub fn adhesion_force<T: Real>(
         a *= F.determinant();
     }
     a * (h * mu_as * t_as)
+}
+
+/// The factor by which a hoop stretch `λ = F₃₃` (axisymmetric model, MODEL.md §10)
+/// multiplies the [`adhesion_force`] computed from the in-plane `F₂`: for
+/// `F = F₂ ⊕ λ` and a reference direction `N` in the meridian plane,
+/// `cof(F) N = λ cof(F₂) N` (`Cofactor`), while its unit vector is unchanged (`Unit`);
+/// `J = λ det F₂` adds another λ with `jacobian_factor`.
+pub fn adhesion_hoop_factor<T: Real>(ad: &Adhesion, hoop: T) -> T {
+    let from_direction = match ad.direction {
+        AdhesionDirection::Cofactor => hoop,
+        AdhesionDirection::Unit => T::one(),
+    };
+    if ad.jacobian_factor {
+        from_direction * hoop
+    } else {
+        from_direction
+    }
 }
 
 /// Rate of the adhesion coefficient [pN/(µm³·s)]:
@@ -448,6 +468,57 @@ mod tests {
             let x = Vector2::new(0.0, -2.6 + 1.2 * k as f64 / 400.0);
             let g = layer(&s, &excl, &x);
             assert!((0.0..=1.0).contains(&g), "y = {}: {g}", x.y);
+        }
+    }
+
+    #[test]
+    fn adhesion_hoop_factor_matches_the_3d_cofactor() {
+        // For F = F₂ ⊕ λ (3 × 3) and N in the meridian plane, the 3-D reading of each
+        // option, with cof(F) = det(F) F⁻ᵀ of the 3 × 3 matrix, against the 2-D force
+        // times adhesion_hoop_factor.
+        let base = crate::physics::reference::adhesion();
+        let s = Substrate::Flat { y_s: -2.0 };
+        let F = Matrix2::new(1.2, 0.1, -0.2, 0.8);
+        let lambda = 1.35;
+        let F3 = nalgebra::Matrix3::new(
+            F[(0, 0)],
+            F[(0, 1)],
+            0.0,
+            F[(1, 0)],
+            F[(1, 1)],
+            0.0,
+            0.0,
+            0.0,
+            lambda,
+        );
+        let J3 = F3.determinant();
+        let N = Vector2::new(0.6, -0.8);
+        let N3 = nalgebra::Vector3::new(N.x, N.y, 0.0);
+        let X = Vector2::new(0.0_f64, -1.0);
+        let cof_n = F3.try_inverse().unwrap().transpose() * N3 * J3;
+        assert_eq!(cof_n.z, 0.0);
+        for direction in [AdhesionDirection::Cofactor, AdhesionDirection::Unit] {
+            for jacobian_factor in [false, true] {
+                let ad = Adhesion {
+                    direction,
+                    jacobian_factor,
+                    ..base
+                };
+                let mut a = match direction {
+                    AdhesionDirection::Cofactor => cof_n,
+                    AdhesionDirection::Unit => cof_n / cof_n.norm(),
+                };
+                if jacobian_factor {
+                    a *= J3;
+                }
+                let exact = Vector2::new(a.x, a.y) * (100.0 * 0.5);
+                let f = adhesion_force(&s, &ad, &X, &F, &N, 100.0, 0.5)
+                    * adhesion_hoop_factor(&ad, lambda);
+                assert!(
+                    (f - exact).norm() < 1e-12 * exact.norm(),
+                    "{direction:?}, J {jacobian_factor}: {f} against {exact}"
+                );
+            }
         }
     }
 

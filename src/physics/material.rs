@@ -164,15 +164,16 @@ impl Yeoh {
 /// A symmetric 2×2 tensor by its three entries; the stress computations use it to skip
 /// the redundant half of every product (this matters for dual numbers).
 #[derive(Debug, Clone, Copy)]
-struct Sym<T> {
-    xx: T,
-    xy: T,
-    yy: T,
+pub(super) struct Sym<T> {
+    pub(super) xx: T,
+    pub(super) xy: T,
+    pub(super) yy: T,
 }
 
 impl<T: Real> Sym<T> {
     /// From the diagonal and the upper off-diagonal entry of `M` (assumed symmetric).
-    fn from_upper(M: &Matrix2<T>) -> Self {
+    #[inline(always)]
+    pub(super) fn from_upper(M: &Matrix2<T>) -> Self {
         Self {
             xx: M[(0, 0)],
             xy: M[(0, 1)],
@@ -180,19 +181,23 @@ impl<T: Real> Sym<T> {
         }
     }
 
-    fn to_matrix(self) -> Matrix2<T> {
+    #[inline(always)]
+    pub(super) fn to_matrix(self) -> Matrix2<T> {
         Matrix2::new(self.xx, self.xy, self.xy, self.yy)
     }
 
-    fn tr(self) -> T {
+    #[inline(always)]
+    pub(super) fn tr(self) -> T {
         self.xx + self.yy
     }
 
-    fn det(self) -> T {
+    #[inline(always)]
+    pub(super) fn det(self) -> T {
         self.xx * self.yy - self.xy * self.xy
     }
 
-    fn add(self, o: Self) -> Self {
+    #[inline(always)]
+    pub(super) fn add(self, o: Self) -> Self {
         Self {
             xx: self.xx + o.xx,
             xy: self.xy + o.xy,
@@ -200,7 +205,8 @@ impl<T: Real> Sym<T> {
         }
     }
 
-    fn scale(self, s: T) -> Self {
+    #[inline(always)]
+    pub(super) fn scale(self, s: T) -> Self {
         Self {
             xx: self.xx * s,
             xy: self.xy * s,
@@ -209,12 +215,14 @@ impl<T: Real> Sym<T> {
     }
 
     /// `S : T` (double contraction).
-    fn dot(self, o: Self) -> T {
+    #[inline(always)]
+    pub(super) fn dot(self, o: Self) -> T {
         self.xx * o.xx + self.xy * o.xy * 2.0 + self.yy * o.yy
     }
 
     /// `Gᵀ S G` for a constant `G`.
-    fn pull(self, G: &Matrix2<f64>) -> Self {
+    #[inline(always)]
+    pub(super) fn pull(self, G: &Matrix2<f64>) -> Self {
         // (SG)_kj, then Σ_k G_ki (SG)_kj
         let sg00 = self.xx * G[(0, 0)] + self.xy * G[(1, 0)];
         let sg01 = self.xx * G[(0, 1)] + self.xy * G[(1, 1)];
@@ -228,12 +236,14 @@ impl<T: Real> Sym<T> {
     }
 
     /// `G S Gᵀ` for a constant `G`.
-    fn push(self, G: &Matrix2<f64>) -> Self {
+    #[inline(always)]
+    pub(super) fn push(self, G: &Matrix2<f64>) -> Self {
         self.pull(&G.transpose())
     }
 
     /// `F S`.
-    fn left_mul(self, F: &Matrix2<T>) -> Matrix2<T> {
+    #[inline(always)]
+    pub(super) fn left_mul(self, F: &Matrix2<T>) -> Matrix2<T> {
         Matrix2::new(
             F[(0, 0)] * self.xx + F[(0, 1)] * self.xy,
             F[(0, 0)] * self.xy + F[(0, 1)] * self.yy,
@@ -243,7 +253,8 @@ impl<T: Real> Sym<T> {
     }
 
     /// `FᵀF`.
-    fn gram(F: &Matrix2<T>) -> Self {
+    #[inline(always)]
+    pub(super) fn gram(F: &Matrix2<T>) -> Self {
         Self {
             xx: F[(0, 0)] * F[(0, 0)] + F[(1, 0)] * F[(1, 0)],
             xy: F[(0, 0)] * F[(0, 1)] + F[(1, 0)] * F[(1, 1)],
@@ -254,7 +265,8 @@ impl<T: Real> Sym<T> {
 
 /// `(C_e, F_a⁻¹, J_a)` with `C_e = F_a⁻ᵀ FᵀF F_a⁻¹`; `F_a⁻¹` is `None` when `F_a = I`
 /// exactly (the common case, skipped for speed).
-fn elastic_right_cauchy_green<T: Real>(
+#[inline(always)]
+pub(super) fn elastic_right_cauchy_green<T: Real>(
     F: &Matrix2<T>,
     Fa: &Matrix2<f64>,
 ) -> (Sym<T>, Option<Matrix2<f64>>, f64) {
@@ -304,6 +316,32 @@ impl Viscosity {
     }
 
     fn pk2_viscous_sym<T: Real>(&self, F: &Matrix2<T>, Fdot: &Matrix2<T>) -> Sym<T> {
+        let v = ViscousKinematics::of(F, Fdot);
+        let tr = v.Ci.dot(v.Cd);
+        v.Ci.scale(v.J * tr * (0.5 * self.lambda_f))
+            .add(v.K.scale(v.J * self.mu_f))
+    }
+
+    /// Viscous first Piola–Kirchhoff stress `P_f = F S_f` [Pa]; linear in `Ḟ`, zero for
+    /// rigid motions `Ḟ = WF`, `W` skew.
+    pub fn piola_viscous<T: Real>(&self, F: &Matrix2<T>, Fdot: &Matrix2<T>) -> Matrix2<T> {
+        self.pk2_viscous_sym(F, Fdot).left_mul(F)
+    }
+}
+
+/// The in-plane pieces of the viscous stress: `J₂ = det F₂`, `C⁻¹`, `Ċ = ḞᵀF + FᵀḞ` and
+/// `K = C⁻¹ĊC⁻¹` of the in-plane blocks `F₂`, `Ḟ₂` (shared by plane strain and the hoop
+/// stretch of [`super::axisym`]).
+pub(super) struct ViscousKinematics<T> {
+    pub(super) J: T,
+    pub(super) Ci: Sym<T>,
+    pub(super) Cd: Sym<T>,
+    pub(super) K: Sym<T>,
+}
+
+impl<T: Real> ViscousKinematics<T> {
+    #[inline(always)]
+    pub(super) fn of(F: &Matrix2<T>, Fdot: &Matrix2<T>) -> Self {
         let J = F[(0, 0)] * F[(1, 1)] - F[(0, 1)] * F[(1, 0)];
         let C = Sym::gram(F);
         // C⁻¹ = adj(C)/det C, det C = J²
@@ -320,7 +358,6 @@ impl Viscosity {
             xy: a(0, 1) + a(1, 0),
             yy: a(1, 1) * 2.0,
         };
-        let tr = Ci.dot(Cd);
         // K = C⁻¹ Ċ C⁻¹ via N = C⁻¹Ċ
         let n00 = Ci.xx * Cd.xx + Ci.xy * Cd.xy;
         let n01 = Ci.xx * Cd.xy + Ci.xy * Cd.yy;
@@ -331,14 +368,7 @@ impl Viscosity {
             xy: n00 * Ci.xy + n01 * Ci.yy,
             yy: n10 * Ci.xy + n11 * Ci.yy,
         };
-        Ci.scale(J * tr * (0.5 * self.lambda_f))
-            .add(K.scale(J * self.mu_f))
-    }
-
-    /// Viscous first Piola–Kirchhoff stress `P_f = F S_f` [Pa]; linear in `Ḟ`, zero for
-    /// rigid motions `Ḟ = WF`, `W` skew.
-    pub fn piola_viscous<T: Real>(&self, F: &Matrix2<T>, Fdot: &Matrix2<T>) -> Matrix2<T> {
-        self.pk2_viscous_sym(F, Fdot).left_mul(F)
+        Self { J, Ci, Cd, K }
     }
 }
 
@@ -432,7 +462,7 @@ pub fn material_point(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use nalgebra::{SMatrix, SVector, Vector1, Vector4};
 
@@ -491,12 +521,12 @@ mod tests {
         SMatrix::from_columns(&columns)
     }
 
-    fn cytoplasm() -> Yeoh {
+    pub(in crate::physics) fn cytoplasm() -> Yeoh {
         Yeoh::from_engineering(100.0, 0.485, 0.1, 0.2).unwrap()
     }
 
     /// A symmetric active strain I − a T⊗T − b N⊗N like the model's.
-    fn active(a: f64, b: f64, phi: f64) -> Matrix2<f64> {
+    pub(in crate::physics) fn active(a: f64, b: f64, phi: f64) -> Matrix2<f64> {
         let n = nalgebra::Vector2::new(phi.cos(), phi.sin());
         let t = nalgebra::Vector2::new(-n.y, n.x);
         Matrix2::identity() - t * t.transpose() * a - n * n.transpose() * b

@@ -14,11 +14,13 @@
 //! - [`smooth`]: the C² smooth step `S(s; a, b)` and regularised Heaviside `H_ε` (§5);
 //! - [`phases`]: the time switches `t_g`, `t_as`, `t_a` and the gravity flip `s_g` (§5);
 //! - [`material`]: compressible Yeoh solid with active strain and Kelvin–Voigt viscosity (§3);
+//! - [`axisym`]: the same laws with the hoop stretch of the axisymmetric model (§10);
 //! - [`active`]: the active-strain tensor `F_a` of the PAC and bottom fibres (§6);
 //! - [`substrate`]: flat and micropillared substrates, penetration depth and normal (§5);
 //! - [`loads`]: contact, adhesion, adhesion-rate and gravity body forces (§5).
 
 pub mod active;
+pub mod axisym;
 pub mod loads;
 pub mod material;
 pub mod phases;
@@ -26,9 +28,13 @@ pub mod smooth;
 pub mod substrate;
 
 pub use active::{ActiveStrain, Bottom, Domain, Pac};
+pub use axisym::{
+    BlockDiag, KinematicModel, MaterialPointHoop, admissible_hoop, material_point_hoop,
+    piola_total_hoop,
+};
 pub use loads::{
-    Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_rate, cofactor, contact_force,
-    gravity_force, layer,
+    Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_hoop_factor, adhesion_rate,
+    cofactor, contact_force, gravity_force, layer,
 };
 pub use material::{MaterialPoint, Viscosity, Yeoh, admissible, material_point, piola_total};
 pub use phases::{Flip, Phases};

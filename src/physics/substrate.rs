@@ -143,6 +143,7 @@ impl Pillars {
     /// `d = −l/|∇l|`, `n = ∇l/|∇l|`, `l = (|u|^q + |v|^q)^{1/q} − 1`.
     /// With `ρ = |u|^q + |v|^q`, `r = ρ^{1/q}`, `g = (|u|^{q−1}sgn u/(w/2), |v|^{q−1}sgn v/(h/2))`:
     /// `∇l = r^{1−q} g`, so `d = (1 − r) ρ/(r|g|)`, `n = g/|g|`.
+    #[inline(always)]
     pub fn eval_pillar<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
         let a = 0.5 * self.width;
         let b = 0.5 * self.height;
@@ -275,7 +276,27 @@ impl Substrate {
     ///
     /// Flat: `d = y_s − y`, `n = e_y`. Pillars: the deeper of pillar and floor,
     /// `d = max(d_pillar, y_top − h − y)` (see the module notes on where this is not smooth).
+    ///
+    /// In `f64` (residuals, observables) it is inlined into its callers; with dual numbers
+    /// (tangents, several times the code) it is one function per number type. The model's
+    /// element loops, instantiated per kinematic model, call it from several places, and
+    /// left to itself the compiler inlined neither (see `model::kernels`).
+    #[inline(always)]
     pub fn eval<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
+        if T::NDERIV == 0 {
+            self.eval_inline(x)
+        } else {
+            self.eval_dual(x)
+        }
+    }
+
+    #[inline(never)]
+    fn eval_dual<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
+        self.eval_inline(x)
+    }
+
+    #[inline(always)]
+    fn eval_inline<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
         let up = Vector2::new(cst(0.0), cst(1.0));
         match self {
             Substrate::Flat { y_s } => (-x.y + *y_s, up),
