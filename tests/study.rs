@@ -7,7 +7,7 @@ use std::process::Command;
 use cellsim::case::{Case, InertiaMode};
 use cellsim::record::Observables;
 use cellsim::study::{
-    Quantity, default_dt_inertia, errors_against, fit_loglog, interp_loglog, wall_at,
+    Quantity, Role, default_dt_inertia, errors_against, fit_loglog, interp_loglog, wall_at,
 };
 
 #[test]
@@ -59,6 +59,10 @@ fn loglog_interpolation_is_exact_on_a_power_law_and_flags_extrapolation() {
     assert!(wall_at(&flat, 1e-2).is_none());
     assert!(wall_at(&flat, 5e-4).is_some());
     assert_eq!(wall_at(&pts, 1e-1).map(|w| w.1), Some(true));
+    // Nor beyond a decade past the ladder's ends (its errors span 1e-6 … 1e-2).
+    assert!(wall_at(&pts, 2e-1).is_none());
+    assert!(wall_at(&pts, 5e-8).is_none());
+    assert_eq!(wall_at(&pts, 2e-7).map(|w| w.1), Some(true));
 }
 
 #[test]
@@ -228,6 +232,42 @@ fn study_of_the_fast_scene_writes_its_files_and_finds_order_two() {
     // within a factor 2.
     let ratio = json["reference_check"]["ratio"].as_f64().expect("ratio");
     assert!((0.5..2.0).contains(&ratio), "reference check ratio {ratio}");
+    // The speed-up along the curve: one entry per error of CURVE_ERRORS, each ratio the
+    // two walls' quotient, and none where a ladder would be extrapolated past a decade.
+    let report: cellsim::study::StudyReport =
+        serde_json::from_str(&std::fs::read_to_string(out.join("study.json")).unwrap()).unwrap();
+    let errors: Vec<f64> = report.speedup_curve.iter().map(|p| p.error).collect();
+    assert_eq!(errors, cellsim::study::CURVE_ERRORS);
+    let curve = |role: Role| -> Vec<f64> {
+        report
+            .runs
+            .iter()
+            .filter(|r| r.role == role)
+            .filter_map(|r| r.error(Quantity::UyTopCurve))
+            .collect()
+    };
+    let (b, i) = (curve(Role::Bdf2), curve(Role::Ida));
+    let reach = |e: &[f64], x: f64| {
+        let lo = e.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = e.iter().copied().fold(0.0, f64::max);
+        x >= lo / 10.0 && x <= 10.0 * hi
+    };
+    for p in &report.speedup_curve {
+        if !reach(&b, p.error) {
+            assert!(p.bdf2_wall.is_none() && p.ratio.is_none(), "{p:?}");
+        }
+        if !reach(&i, p.error) {
+            assert!(p.ida_wall.is_none() && p.ratio.is_none(), "{p:?}");
+        }
+        if let (Some((bw, _)), Some((iw, _)), Some(r)) = (p.bdf2_wall, p.ida_wall, p.ratio) {
+            assert!((r - bw / iw).abs() <= 1e-12 * r, "{p:?}");
+        }
+    }
+    assert!(
+        report.speedup_curve.iter().any(|p| p.ratio.is_some()),
+        "{:?}",
+        report.speedup_curve
+    );
 
     check_png(&out.join("work-precision.png"));
     check_png(&out.join("dt-sensitivity.png"));

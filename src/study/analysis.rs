@@ -4,7 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::report::{
-    OrderFit, Quantity, ReferenceCheck, ReferenceInfo, Role, Speedup, StudyReport, StudyRow,
+    OrderFit, Quantity, ReferenceCheck, ReferenceInfo, Role, Speedup, SpeedupAt, StudyReport,
+    StudyRow,
 };
 use super::{ORDER_QUANTITY, StudyOptions, TARGET_ERROR};
 use crate::case::Case;
@@ -83,6 +84,32 @@ pub fn interp_loglog(points: &[(f64, f64)], x: f64) -> Option<(f64, bool)> {
     }
 }
 
+/// The errors of the displacement curve at which [`speedup_curve`] compares the ladders.
+pub const CURVE_ERRORS: [f64; 5] = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
+
+/// BDF2's wall over IDA's at each of `errors` of the uy_top curve, each ladder's wall
+/// from [`wall_at`] (None where either ladder does not reach).
+pub fn speedup_curve(rows: &[StudyRow], errors: &[f64]) -> Vec<SpeedupAt> {
+    let q = Quantity::UyTopCurve;
+    let (b, i) = (work_points(rows, Role::Bdf2, q), work_points(rows, Role::Ida, q));
+    errors
+        .iter()
+        .map(|&error| {
+            let (bdf2_wall, ida_wall) = (wall_at(&b, error), wall_at(&i, error));
+            let ratio = match (bdf2_wall, ida_wall) {
+                (Some((bw, _)), Some((iw, _))) if iw > 0.0 => Some(bw / iw),
+                _ => None,
+            };
+            SpeedupAt {
+                error,
+                bdf2_wall,
+                ida_wall,
+                ratio,
+            }
+        })
+        .collect()
+}
+
 /// Relative errors of `run` (its output rows) against the reference's rows.
 pub fn errors_against(
     quantities: &[Quantity],
@@ -152,10 +179,21 @@ pub fn work_points(rows: &[StudyRow], role: Role, q: Quantity) -> Vec<(f64, f64)
 
 /// Wall time at relative error `target` on a ladder's (error, wall) points, see
 /// [`interp_loglog`]; an extrapolation is refused (None) when the ladder's fit does not
-/// have cost rising as error falls (the error is not converging along the ladder).
+/// have cost rising as error falls (the error is not converging along the ladder), or
+/// when the target lies more than a decade of error beyond the ladder.
 pub fn wall_at(points: &[(f64, f64)], target: f64) -> Option<(f64, bool)> {
     let w = interp_loglog(points, target)?;
     if w.1 && !fit_loglog(points).is_some_and(|f| f.slope < 0.0) {
+        return None;
+    }
+    // Nor more than a decade of error beyond the ladder's ends: a ladder whose loosest run
+    // is already 1000× within the target says nothing about the cost at the target.
+    let (lo, hi) = points
+        .iter()
+        .map(|p| p.0)
+        .filter(|e| *e > 0.0 && e.is_finite())
+        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), e| (lo.min(e), hi.max(e)));
+    if w.1 && (target > 10.0 * hi || target < lo / 10.0) {
         return None;
     }
     Some(w)
@@ -201,16 +239,27 @@ pub(super) fn analyse(
         (Some((b, _)), Some((i, _))) if i > 0.0 => Some(b / i),
         _ => None,
     };
-    let ida_meeting_target = rows
-        .iter()
-        .filter(|r| r.role == Role::Ida && r.finished)
-        .filter(|r| r.error(q0).is_some_and(|e| e <= TARGET_ERROR))
-        .min_by(|a, b| a.wall_seconds.total_cmp(&b.wall_seconds))
-        .map(|r| (r.label.clone(), r.wall_seconds));
+    let meeting_target = |role: Role| {
+        rows.iter()
+            .filter(|r| r.role == role && r.finished)
+            .filter(|r| r.error(q0).is_some_and(|e| e <= TARGET_ERROR))
+            .min_by(|a, b| a.wall_seconds.total_cmp(&b.wall_seconds))
+            .map(|r| (r.label.clone(), r.wall_seconds))
+    };
+    let ida_meeting_target = meeting_target(Role::Ida);
+    let bdf2_meeting_target = meeting_target(Role::Bdf2);
+    // A lower bound only from BDF2's wall interpolated at the target: extrapolated beyond
+    // its ladder, it bounds nothing.
     let speedup_at_least = match (bdf2_w, &ida_meeting_target) {
-        (Some((b, _)), Some((_, i))) if *i > 0.0 => Some(b / i),
+        (Some((b, false)), Some((_, i))) if *i > 0.0 => Some(b / i),
         _ => None,
     };
+    let cheapest_ratio = match (&bdf2_meeting_target, &ida_meeting_target) {
+        (Some((_, b)), Some((_, i))) if *i > 0.0 => Some(b / i),
+        _ => None,
+    };
+
+    let speedup_curve = speedup_curve(rows, &CURVE_ERRORS);
 
     // The reference against BDF2's two smallest finished rungs.
     let bdf2_runs: Vec<(usize, &StudyRow)> = {
@@ -273,7 +322,10 @@ pub(super) fn analyse(
             ida_extrapolated: ida_w.is_some_and(|w| w.1),
             ida_meeting_target,
             ida_speedup_at_least: speedup_at_least,
+            bdf2_meeting_target,
+            cheapest_runs_ratio: cheapest_ratio,
         },
+        speedup_curve,
         interrupted,
         settings: opts.settings.clone(),
         runs: rows.to_vec(),

@@ -58,12 +58,13 @@ use crate::stop::StopFlag;
 
 use analysis::analyse;
 pub use analysis::{
-    LogLogFit, errors_against, fit_loglog, interp_loglog, ladder_points, wall_at, work_points,
+    CURVE_ERRORS, LogLogFit, errors_against, fit_loglog, interp_loglog, ladder_points,
+    speedup_curve, wall_at, work_points,
 };
 use report::{CsvWriter, fmt_num, fmt_rtol};
 pub use report::{
-    OrderFit, Quantity, ReferenceCheck, ReferenceInfo, Role, Speedup, StudyReport, StudyRow,
-    StudySettings, summary_text,
+    OrderFit, Quantity, ReferenceCheck, ReferenceInfo, Role, Speedup, SpeedupAt, StudyReport,
+    StudyRow, StudySettings, summary_text,
 };
 
 /// Relative error of the final uy_top at which the speed-up is measured.

@@ -300,8 +300,32 @@ pub struct Speedup {
     /// over this one bounds the speed-up from below without extrapolating IDA's ladder.
     pub ida_meeting_target: Option<(String, f64)>,
     /// BDF2's wall at the target over `ida_meeting_target`'s: a lower bound of the
-    /// speed-up.
+    /// speed-up (only when BDF2's wall there is interpolated, not extrapolated).
     pub ida_speedup_at_least: Option<f64>,
+    /// The cheapest BDF2 run whose error is at or below the target: (label, wall [s]).
+    #[serde(default)]
+    pub bdf2_meeting_target: Option<(String, f64)>,
+    /// The cheapest meeting BDF2 run's wall over the cheapest meeting IDA run's: what the
+    /// two ladders as run cost to meet the target. When both ladders' loosest runs are
+    /// already far within it (the speed-up's interpolation then extrapolates both), this
+    /// is the ratio that was measured.
+    #[serde(default)]
+    pub cheapest_runs_ratio: Option<f64>,
+}
+
+/// The speed-up at one error of the displacement curve (max over t of uy_top's relative
+/// error, [`Quantity::UyTopCurve`]): each ladder's wall interpolated log–log at the error
+/// (extrapolated at most a decade past its ends, see [`super::analysis::wall_at`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SpeedupAt {
+    /// The error [relative].
+    pub error: f64,
+    /// BDF2's wall there [s] and whether it was extrapolated.
+    pub bdf2_wall: Option<(f64, bool)>,
+    /// IDA's wall there [s] and whether it was extrapolated.
+    pub ida_wall: Option<(f64, bool)>,
+    /// BDF2's wall over IDA's.
+    pub ratio: Option<f64>,
 }
 
 /// study.json.
@@ -329,6 +353,12 @@ pub struct StudyReport {
     pub ida_speedup: Option<f64>,
     /// How it was obtained.
     pub ida_speedup_detail: Speedup,
+    /// The speed-up on the displacement curve at the errors 1e-3 … 1e-7 (where both
+    /// ladders reach): on a dissipative scene the final values forget the path, and both
+    /// ladders' loosest runs may already be far within the target there, so the curve is
+    /// where the integrators' accuracy shows.
+    #[serde(default)]
+    pub speedup_curve: Vec<SpeedupAt>,
     /// Whether the study was interrupted (what is here is what was done).
     pub interrupted: bool,
     /// Study settings.
@@ -464,6 +494,32 @@ pub fn summary_text(r: &StudyReport) -> String {
         let _ = writeln!(
             s,
             "ida_speedup at least {v:.2}: BDF2's wall at the target over {label}'s ({w:.2} s), the cheapest IDA run within it"
+        );
+    }
+    if let (Some(v), Some((bl, bw)), Some((il, iw))) = (
+        d.cheapest_runs_ratio,
+        &d.bdf2_meeting_target,
+        &d.ida_meeting_target,
+    ) {
+        let _ = writeln!(
+            s,
+            "cheapest runs within the target: {bl} ({bw:.2} s) over {il} ({iw:.2} s) = {v:.2}"
+        );
+    }
+    let at = |w: Option<(f64, bool)>| match w {
+        Some((v, x)) => format!("{v:.2} s{}", if x { " (extrapolated)" } else { "" }),
+        None => "—".into(),
+    };
+    for p in &r.speedup_curve {
+        let _ = writeln!(
+            s,
+            "speed-up at {:e} error of the uy_top curve: {} (BDF2 {}, IDA {})",
+            p.error,
+            p.ratio
+                .map(|v| format!("{v:.2}"))
+                .unwrap_or_else(|| "—".into()),
+            at(p.bdf2_wall),
+            at(p.ida_wall)
         );
     }
     if let Some(c) = &r.reference_check {
