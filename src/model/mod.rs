@@ -154,6 +154,8 @@ const BLOCK: usize = 64;
 struct Scratch {
     vectors: Vec<(ElementVector, Result<(), DaeError>)>,
     tangents: Vec<(Box<ElementTangent>, Result<(), DaeError>)>,
+    /// Φ(A), dΦ/dA per μ_as unknown ([`CellModel::fill_caps`]).
+    caps: Vec<(f64, f64)>,
 }
 
 impl Scratch {
@@ -396,19 +398,34 @@ impl CellModel {
         st
     }
 
-    /// The nodal μ_as = Φ(A) of `el` and dμ_as/dA when adhesion acts on it at `t_as`.
+    /// Φ(A) and dΦ/dA of every μ_as unknown, in their order, into `out` (emptied when
+    /// adhesion cannot act at `t_as`): computed once per residual or Jacobian, not once
+    /// per element that shares the node.
+    fn fill_caps(&self, y: &[f64], t_as: f64, out: &mut Vec<(f64, f64)>) {
+        out.clear();
+        let Some(ad) = &self.params.adhesion else {
+            return;
+        };
+        if t_as > 0.0 {
+            let off = self.dofs.mu_offset();
+            out.extend((0..self.dofs.n_mu()).map(|k| history::cap(y[off + k], ad.mu_as_max)));
+        }
+    }
+
+    /// The nodal μ_as = Φ(A) of `el` and dμ_as/dA when adhesion acts on it at `t_as`,
+    /// from the values of [`Self::fill_caps`].
     #[inline]
     fn gather_mu(
         &self,
         el: &Element,
-        y: &[f64],
+        caps: &[(f64, f64)],
         t_as: f64,
     ) -> Option<([f64; NODES], [f64; NODES])> {
         if !kernels::adhesion_acts(&self.params, el, t_as) {
             return None;
         }
-        let m = self.params.adhesion.as_ref()?.mu_as_max;
-        let c = el.nodes.map(|i| history::cap(y[self.dofs.mu[i]], m));
+        let off = self.dofs.mu_offset();
+        let c = el.nodes.map(|i| caps[self.dofs.mu[i] - off]);
         Some((c.map(|v| v.0), c.map(|v| v.1)))
     }
 
@@ -455,9 +472,11 @@ impl CellModel {
         r: &mut [f64],
     ) -> Result<(), DaeError> {
         let mut buf = self.scratch.take_vectors();
+        let mut caps = std::mem::take(&mut self.scratch.caps);
         r.fill(0.0);
         let p = &self.params;
         let sw = Switches::at(p, t);
+        self.fill_caps(y, sw.t_as, &mut caps);
         let inertia = self.dofs.inertia;
         if inertia {
             let n_u = self.dofs.n_u;
@@ -474,7 +493,7 @@ impl CellModel {
             K::solid_residual(e, el, law, &p.viscosity, &st, sw.t_a, fe)?;
             kernels::mass_residual(el, g_now, inertia, p.drag, &st, fe);
             if self.in_reach(el, &st.u) {
-                let mue = self.gather_mu(el, y, sw.t_as).map(|m| m.0);
+                let mue = self.gather_mu(el, &caps, sw.t_as).map(|m| m.0);
                 kernels::band_residual::<K>(e, el, &self.ctab, p, &st, mue.as_ref(), sw.t_as, fe)?;
             }
             Ok(())
@@ -483,6 +502,7 @@ impl CellModel {
             self.plan.scatter_residual(e, fe, r)
         });
         self.scratch.vectors = buf;
+        self.scratch.caps = caps;
         result?;
         let mu_off = self.dofs.mu_offset();
         for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
@@ -507,9 +527,11 @@ impl CellModel {
         v: &mut [f64],
     ) -> Result<(), DaeError> {
         let mut buf = self.scratch.take_tangents();
+        let mut caps = std::mem::take(&mut self.scratch.caps);
         v.fill(0.0);
         let p = &self.params;
         let sw = Switches::at(p, t);
+        self.fill_caps(y, sw.t_as, &mut caps);
         let inertia = self.dofs.inertia;
         self.plan.add_kinematic(cj, v);
         let element = |e: usize, tan: &mut Box<ElementTangent>| -> Result<(), DaeError> {
@@ -520,7 +542,7 @@ impl CellModel {
             K::solid_tangent(e, el, law, &p.viscosity, &st, sw.t_a, tan)?;
             kernels::mass_tangent(el, cj, inertia, p.drag, tan);
             if self.in_reach(el, &st.u) {
-                let mue = self.gather_mu(el, y, sw.t_as);
+                let mue = self.gather_mu(el, &caps, sw.t_as);
                 kernels::band_tangent::<K>(
                     el,
                     &self.ctab,
@@ -545,6 +567,7 @@ impl CellModel {
             self.plan.scatter_tangent(e, tan, cj, v)
         });
         self.scratch.tangents = buf;
+        self.scratch.caps = caps;
         result?;
         if p.adhesion.is_some() {
             for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {

@@ -91,7 +91,10 @@ pub const CURVE_ERRORS: [f64; 5] = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7];
 /// from [`wall_at`] (None where either ladder does not reach).
 pub fn speedup_curve(rows: &[StudyRow], errors: &[f64]) -> Vec<SpeedupAt> {
     let q = Quantity::UyTopCurve;
-    let (b, i) = (work_points(rows, Role::Bdf2, q), work_points(rows, Role::Ida, q));
+    let (b, i) = (
+        work_points(rows, Role::Bdf2, q),
+        work_points(rows, Role::Ida, q),
+    );
     errors
         .iter()
         .map(|&error| {
@@ -192,7 +195,9 @@ pub fn wall_at(points: &[(f64, f64)], target: f64) -> Option<(f64, bool)> {
         .iter()
         .map(|p| p.0)
         .filter(|e| *e > 0.0 && e.is_finite())
-        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), e| (lo.min(e), hi.max(e)));
+        .fold((f64::INFINITY, 0.0_f64), |(lo, hi), e| {
+            (lo.min(e), hi.max(e))
+        });
     if w.1 && (target > 10.0 * hi || target < lo / 10.0) {
         return None;
     }
