@@ -1,12 +1,14 @@
 //! Numbering of the unknowns y = (u, v, μ_as): one block after the other.
 //!
-//! - u: two displacement components per node, except u_x on the symmetry line x = 0,
-//!   which is eliminated (u_x = v_x = 0 there);
+//! - u: D displacement components per node, except those a symmetry eliminates (in the
+//!   half-plane models u_x on the symmetry line x = 0, so u_x = v_x = 0 there; in the 3-D
+//!   quarter cell u_x on x = 0 and u_z on z = 0);
 //! - v: the same layout again when inertia is modelled (offset `n_u`);
 //! - μ_as: one value per node of the membrane elements, when adhesion is modelled.
 //!
 //! Blocks make the iteration matrix `[cj·I, −I; K, cj·M + C]` visible, so the velocity can
-//! be condensed out of the linear solve.
+//! be condensed out of the linear solve. The numbering is written once for any dimension
+//! ([`DofMapOf`]); [`DofMap`] is the half-plane models'.
 
 use super::kinematics::DIM;
 use crate::fem::{Domain, Mesh};
@@ -14,13 +16,13 @@ use crate::fem::{Domain, Mesh};
 /// Marker for an eliminated (or absent) unknown (the assembly's marker).
 pub use crate::fem::assembly::NONE;
 
-/// Where each nodal unknown lives in y.
+/// Where each nodal unknown lives in y, for nodes with `D` displacement components.
 #[derive(Debug, Clone)]
-pub struct DofMap {
+pub struct DofMapOf<const D: usize> {
     /// Displacement unknowns per node ([`NONE`] where eliminated).
-    pub u: Vec<[usize; DIM]>,
+    pub u: Vec<[usize; D]>,
     /// Velocity unknowns per node (all [`NONE`] without inertia).
-    pub v: Vec<[usize; DIM]>,
+    pub v: Vec<[usize; D]>,
     /// Adhesion-coefficient unknown per node ([`NONE`] off the membrane or without adhesion).
     pub mu: Vec<usize>,
     /// The node of each μ_as unknown, in order.
@@ -33,6 +35,9 @@ pub struct DofMap {
     pub n: usize,
 }
 
+/// The numbering of the half-plane models (plane strain, axisymmetric).
+pub type DofMap = DofMapOf<DIM>;
+
 impl DofMap {
     /// Numbers the unknowns of `mesh`: u (x eliminated on the symmetry line), then v if
     /// `inertia`, then μ_as at the membrane nodes if `adhesion`.
@@ -42,12 +47,33 @@ impl DofMap {
         for &i in &mesh.symmetry_nodes {
             on_axis[i] = true;
         }
-        let mut u = vec![[NONE; DIM]; nn];
-        let mut k = 0;
         // Component 0 is normal to the symmetry line (eliminated on it).
+        Self::numbered(
+            nn,
+            |i, c| c == 0 && on_axis[i],
+            &mesh.nodes_of_domain(Domain::Membrane),
+            inertia,
+            adhesion,
+        )
+    }
+}
+
+impl<const D: usize> DofMapOf<D> {
+    /// Numbers the unknowns of `n_nodes` nodes: u node by node, component by component,
+    /// leaving out the components where `eliminated(node, component)`; then v if
+    /// `inertia`; then μ_as at the nodes where `membrane` is true if `adhesion`.
+    pub fn numbered(
+        n_nodes: usize,
+        eliminated: impl Fn(usize, usize) -> bool,
+        membrane: &[bool],
+        inertia: bool,
+        adhesion: bool,
+    ) -> Self {
+        let mut u = vec![[NONE; D]; n_nodes];
+        let mut k = 0;
         for (i, ui) in u.iter_mut().enumerate() {
             for (c, d) in ui.iter_mut().enumerate() {
-                if c == 0 && on_axis[i] {
+                if eliminated(i, c) {
                     continue;
                 }
                 *d = k;
@@ -60,14 +86,13 @@ impl DofMap {
                 .map(|d| d.map(|x| if x == NONE { NONE } else { x + n_u }))
                 .collect()
         } else {
-            vec![[NONE; DIM]; nn]
+            vec![[NONE; D]; n_nodes]
         };
         let mut next = if inertia { 2 * n_u } else { n_u };
-        let mut mu = vec![NONE; nn];
+        let mut mu = vec![NONE; n_nodes];
         let mut mu_nodes = Vec::new();
         if adhesion {
-            let on_membrane = mesh.nodes_of_domain(Domain::Membrane);
-            for (i, &m) in on_membrane.iter().enumerate() {
+            for (i, &m) in membrane.iter().enumerate() {
                 if m {
                     mu[i] = next;
                     mu_nodes.push(i);
@@ -97,17 +122,17 @@ impl DofMap {
     }
 
     /// Displacement of node `i` read from y (0 for eliminated components).
-    pub fn node_u(&self, y: &[f64], i: usize) -> [f64; DIM] {
+    pub fn node_u(&self, y: &[f64], i: usize) -> [f64; D] {
         self.u[i].map(|d| if d == NONE { 0.0 } else { y[d] })
     }
 
     /// The rows of the momentum balance of node `i`: the v rows with inertia, else the u rows.
-    pub fn momentum_rows(&self, i: usize) -> [usize; DIM] {
+    pub fn momentum_rows(&self, i: usize) -> [usize; D] {
         if self.inertia { self.v[i] } else { self.u[i] }
     }
 
     /// The unknowns whose time derivative is the velocity used in Ḟ: v with inertia, u̇ without.
-    pub fn velocity_cols(&self, i: usize) -> [usize; DIM] {
+    pub fn velocity_cols(&self, i: usize) -> [usize; D] {
         if self.inertia { self.v[i] } else { self.u[i] }
     }
 }

@@ -55,43 +55,8 @@ use crate::physics::{
 /// Element force vector, node-major: `f[a][i]`.
 pub(crate) type ElementVector = Nodal;
 
-/// The element tangents `K`, `C` (rows and columns node-major, `DIM · a + i`) and `B`
-/// (columns: the μ_as of the element's nodes).
-pub(crate) struct ElementTangent {
-    /// `K = ∂f_e/∂u`.
-    pub(crate) k: [[f64; EDOF]; EDOF],
-    /// `C = ∂f_e/∂v` (v with inertia, u̇ without).
-    pub(crate) c: [[f64; EDOF]; EDOF],
-    /// `B = ∂f_e/∂μ_as`.
-    pub(crate) b: [[f64; NODES]; EDOF],
-}
-
-impl ElementTangent {
-    /// All zero.
-    pub(crate) fn zeros() -> Self {
-        Self {
-            k: [[0.0; EDOF]; EDOF],
-            c: [[0.0; EDOF]; EDOF],
-            b: [[0.0; NODES]; EDOF],
-        }
-    }
-
-    /// Zeroes `K` and `C`, and `B` when `with_mu`.
-    #[inline]
-    pub(crate) fn reset(&mut self, with_mu: bool) {
-        for row in self.k.iter_mut() {
-            row.fill(0.0);
-        }
-        for row in self.c.iter_mut() {
-            row.fill(0.0);
-        }
-        if with_mu {
-            for row in self.b.iter_mut() {
-                row.fill(0.0);
-            }
-        }
-    }
-}
+/// The element tangents `K`, `C` and `B` of the six-node triangle.
+pub(crate) type ElementTangent = super::plan::TangentOf<EDOF, NODES>;
 
 /// The time-dependent switches of MODEL.md §5 at one time.
 #[derive(Debug, Clone, Copy)]

@@ -212,7 +212,8 @@ impl CellModel {
         let dofs = DofMap::new(&mesh, params.inertia, adhesion_unknowns);
         let ReferenceElements { elements, ctab } =
             ReferenceElements::new(&params, &mesh, adhesion_unknowns)?;
-        let plan = AssemblyPlan::new(&mesh, &dofs, &elements);
+        let plan_elements: Vec<_> = elements.iter().map(|el| (el.nodes, el.with_mu)).collect();
+        let plan = AssemblyPlan::new(&dofs, &plan_elements);
         Ok(Self {
             params,
             mesh,
@@ -573,11 +574,11 @@ impl CellModel {
             for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
                 let x = self.node_position(y, i);
                 let d = kernels::mu_rate_tangent(p, &x);
-                let pos = &self.plan.mu_rate[k];
-                v[pos[0]] += cj - d[DIM];
+                let (own, on_u) = &self.plan.mu_rate[k];
+                v[*own] += cj - d[DIM];
                 for c in 0..DIM {
-                    if pos[1 + c] != NONE {
-                        v[pos[1 + c]] -= d[c];
+                    if on_u[c] != NONE {
+                        v[on_u[c]] -= d[c];
                     }
                 }
             }

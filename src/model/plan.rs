@@ -2,26 +2,66 @@
 //! element and nodal row, where its contributions go — built once from the unknown
 //! numbering, then used to scatter the kernels' element vectors and tangents.
 //!
-//! Blocks of J (rows × columns), in terms of [`super::kernels::ElementTangent`]:
+//! Blocks of J (rows × columns), in terms of the element tangents ([`TangentOf`]):
 //!
 //! - momentum × u: `K` (with inertia), `K + cj C` (without: v = u̇);
 //! - momentum × v (inertia only): `C` (including `cj M`);
 //! - momentum × μ_as (membrane elements with adhesion): `B`;
 //! - kinematic rows (inertia only): `u̇ − v`, entries `cj` (u_k) and `−1` (v_k);
 //! - adhesion rows: `μ̇_as − r(x, μ_as)`, entries on μ_k and on the node's u.
+//!
+//! Written once for any dimension `D`, nodes per element `N` and element unknowns
+//! `E = D·N` (the three as const parameters: stable Rust cannot compute `E` from the
+//! others in a type); [`AssemblyPlan`] is the six-node triangles' of the half-plane models.
 
-use super::dofs::DofMap;
-use super::element::{EDOF, Element, NODES};
-use super::kernels::{ElementTangent, ElementVector};
+use super::dofs::DofMapOf;
+use super::element::{EDOF, NODES};
 use super::kinematics::DIM;
-use crate::fem::Mesh;
 use crate::fem::assembly::{BlockPositions, NONE, Pattern, PatternBuilder, position_or_none};
 
+/// The element tangents `K`, `C` (rows and columns node-major, `D · a + i`, E = D·N of
+/// them) and `B` (columns: the μ_as of the element's N nodes).
+pub(crate) struct TangentOf<const E: usize, const N: usize> {
+    /// `K = ∂f_e/∂u`.
+    pub(crate) k: [[f64; E]; E],
+    /// `C = ∂f_e/∂v` (v with inertia, u̇ without).
+    pub(crate) c: [[f64; E]; E],
+    /// `B = ∂f_e/∂μ_as`.
+    pub(crate) b: [[f64; N]; E],
+}
+
+impl<const E: usize, const N: usize> TangentOf<E, N> {
+    /// All zero.
+    pub(crate) fn zeros() -> Self {
+        Self {
+            k: [[0.0; E]; E],
+            c: [[0.0; E]; E],
+            b: [[0.0; N]; E],
+        }
+    }
+
+    /// Zeroes `K` and `C`, and `B` when `with_mu`.
+    #[inline]
+    pub(crate) fn reset(&mut self, with_mu: bool) {
+        for row in self.k.iter_mut() {
+            row.fill(0.0);
+        }
+        for row in self.c.iter_mut() {
+            row.fill(0.0);
+        }
+        if with_mu {
+            for row in self.b.iter_mut() {
+                row.fill(0.0);
+            }
+        }
+    }
+}
+
 /// Where one element's contributions go.
-pub(crate) struct ElementPositions {
+pub(crate) struct ElementPositions<const E: usize> {
     /// Momentum rows of the element's displacement components, node-major
     /// ([`NONE`] where eliminated): the rows of the residual scatter.
-    pub(crate) momentum_rows: [usize; EDOF],
+    pub(crate) momentum_rows: [usize; E],
     /// (momentum rows × u columns).
     pub(crate) momentum_u: BlockPositions,
     /// (momentum rows × v columns); empty without inertia.
@@ -31,66 +71,71 @@ pub(crate) struct ElementPositions {
 }
 
 /// The pattern of J and the positions of every block in it.
-pub(crate) struct AssemblyPlan {
+pub(crate) struct PlanOf<const D: usize, const N: usize, const E: usize> {
     /// The pattern of the iteration matrix.
     pub(crate) pattern: Pattern,
     /// Per element, in mesh order.
-    pub(crate) elements: Vec<ElementPositions>,
+    pub(crate) elements: Vec<ElementPositions<E>>,
     /// Kinematic rows (inertia): positions of (u_k, u_k) and (u_k, v_k).
     pub(crate) kinematic: Vec<[usize; 2]>,
-    /// Adhesion rows: positions of (μ_k, μ_k) and (μ_k, u) of its node's components.
-    pub(crate) mu_rate: Vec<[usize; 1 + DIM]>,
+    /// Adhesion rows: positions of (μ_k, μ_k) and of (μ_k, u) for its node's components.
+    pub(crate) mu_rate: Vec<(usize, [usize; D])>,
 }
+
+/// The plan of the half-plane models' six-node triangles.
+pub(crate) type AssemblyPlan = PlanOf<DIM, NODES, EDOF>;
 
 /// An element's unknowns: momentum rows, u, v and μ_as columns.
-struct ElementDofs {
-    rows: [usize; EDOF],
-    u: [usize; EDOF],
-    v: [usize; EDOF],
-    mu: [usize; NODES],
+struct ElementDofs<const N: usize, const E: usize> {
+    rows: [usize; E],
+    u: [usize; E],
+    v: [usize; E],
+    mu: [usize; N],
 }
 
-impl ElementDofs {
-    fn new(dofs: &DofMap, nodes: &[usize; NODES]) -> Self {
+impl<const N: usize, const E: usize> ElementDofs<N, E> {
+    fn new<const D: usize>(dofs: &DofMapOf<D>, nodes: &[usize; N]) -> Self {
         let mut d = Self {
-            rows: [NONE; EDOF],
-            u: [NONE; EDOF],
-            v: [NONE; EDOF],
+            rows: [NONE; E],
+            u: [NONE; E],
+            v: [NONE; E],
             mu: nodes.map(|i| dofs.mu[i]),
         };
         for (a, &n) in nodes.iter().enumerate() {
             let m = dofs.momentum_rows(n);
-            for i in 0..DIM {
-                d.rows[DIM * a + i] = m[i];
-                d.u[DIM * a + i] = dofs.u[n][i];
-                d.v[DIM * a + i] = dofs.v[n][i];
+            for i in 0..D {
+                d.rows[D * a + i] = m[i];
+                d.u[D * a + i] = dofs.u[n][i];
+                d.v[D * a + i] = dofs.v[n][i];
             }
         }
         d
     }
 }
 
-impl AssemblyPlan {
-    /// The plan for `elements` of `mesh` under the numbering `dofs`.
-    pub(crate) fn new(mesh: &Mesh, dofs: &DofMap, elements: &[Element]) -> Self {
+impl<const D: usize, const N: usize, const E: usize> PlanOf<D, N, E> {
+    /// The plan for elements given as (nodes, whether the element carries μ_as), in mesh
+    /// order, under the numbering `dofs`.
+    pub(crate) fn new(dofs: &DofMapOf<D>, elements: &[([usize; N], bool)]) -> Self {
+        assert_eq!(E, D * N, "element unknowns E must be D·N");
         let inertia = dofs.inertia;
-        let el_dofs: Vec<ElementDofs> = elements
+        let el_dofs: Vec<ElementDofs<N, E>> = elements
             .iter()
-            .map(|el| ElementDofs::new(dofs, &el.nodes))
+            .map(|(nodes, _)| ElementDofs::new(dofs, nodes))
             .collect();
         let mut b = PatternBuilder::new();
-        for (el, d) in elements.iter().zip(&el_dofs) {
+        for ((_, with_mu), d) in elements.iter().zip(&el_dofs) {
             b.add_block(&d.rows, &d.u);
             if inertia {
                 b.add_block(&d.rows, &d.v);
             }
-            if el.with_mu {
+            if *with_mu {
                 b.add_block(&d.rows, &d.mu);
             }
         }
         let kinematic_pairs: Vec<(usize, usize)> = if inertia {
-            (0..mesh.nodes.len())
-                .flat_map(|i| (0..DIM).map(move |k| (i, k)))
+            (0..dofs.u.len())
+                .flat_map(|i| (0..D).map(move |k| (i, k)))
                 .map(|(i, k)| (dofs.u[i][k], dofs.v[i][k]))
                 .filter(|&(uk, _)| uk != NONE)
                 .collect()
@@ -111,7 +156,7 @@ impl AssemblyPlan {
         let elements = elements
             .iter()
             .zip(&el_dofs)
-            .map(|(el, d)| ElementPositions {
+            .map(|((_, with_mu), d)| ElementPositions {
                 momentum_rows: d.rows,
                 momentum_u: BlockPositions::new(&pattern, &d.rows, &d.u),
                 momentum_v: if inertia {
@@ -119,7 +164,7 @@ impl AssemblyPlan {
                 } else {
                     BlockPositions::empty()
                 },
-                momentum_mu: if el.with_mu {
+                momentum_mu: if *with_mu {
                     BlockPositions::new(&pattern, &d.rows, &d.mu)
                 } else {
                     BlockPositions::empty()
@@ -136,11 +181,7 @@ impl AssemblyPlan {
             .enumerate()
             .map(|(k, &i)| {
                 let row = mu_row(k);
-                let mut p = [pos(row, row); 1 + DIM];
-                for c in 0..DIM {
-                    p[1 + c] = pos(row, dofs.u[i][c]);
-                }
-                p
+                (pos(row, row), dofs.u[i].map(|c| pos(row, c)))
             })
             .collect();
         Self {
@@ -153,11 +194,11 @@ impl AssemblyPlan {
 
     /// `r[row] += f_e[a][i]` over element `e`'s momentum rows.
     #[inline(always)]
-    pub(crate) fn scatter_residual(&self, e: usize, fe: &ElementVector, r: &mut [f64]) {
+    pub(crate) fn scatter_residual(&self, e: usize, fe: &[[f64; D]; N], r: &mut [f64]) {
         let rows = &self.elements[e].momentum_rows;
-        for a in 0..NODES {
-            for i in 0..DIM {
-                let row = rows[DIM * a + i];
+        for a in 0..N {
+            for i in 0..D {
+                let row = rows[D * a + i];
                 if row != NONE {
                     r[row] += fe[a][i];
                 }
@@ -168,7 +209,7 @@ impl AssemblyPlan {
     /// Adds element `e`'s tangents to J's values: `K` (u columns) and `C` (v columns)
     /// with inertia, `K + cj C` (u columns) without, and `B` (μ_as columns) where present.
     #[inline(always)]
-    pub(crate) fn scatter_tangent(&self, e: usize, tan: &ElementTangent, cj: f64, v: &mut [f64]) {
+    pub(crate) fn scatter_tangent(&self, e: usize, tan: &TangentOf<E, N>, cj: f64, v: &mut [f64]) {
         let ep = &self.elements[e];
         if ep.momentum_v.is_empty() {
             ep.momentum_u.scatter_combined(&tan.k, cj, &tan.c, v);
@@ -193,7 +234,7 @@ impl AssemblyPlan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::MeshParams;
+    use crate::fem::{Mesh, MeshParams};
     use crate::model::{CellModel, ModelParams};
 
     /// Every entry of every element block whose row and column exist has its place in the
@@ -213,7 +254,7 @@ mod tests {
             let m = CellModel::new(params, mesh.clone()).expect("model");
             let nnz = m.plan.pattern.compute_nnz();
             for (el, ep) in m.elements.iter().zip(&m.plan.elements) {
-                let d = ElementDofs::new(&m.dofs, &el.nodes);
+                let d: ElementDofs<NODES, EDOF> = ElementDofs::new(&m.dofs, &el.nodes);
                 assert_eq!(ep.momentum_v.is_empty(), !inertia);
                 assert_eq!(ep.momentum_mu.is_empty(), !el.with_mu);
                 let blocks: [(&BlockPositions, &[usize]); 3] = [
@@ -230,7 +271,7 @@ mod tests {
                 }
             }
             assert!(m.plan.kinematic.iter().flatten().all(|&p| p < nnz));
-            assert!(m.plan.mu_rate.iter().all(|p| p[0] < nnz));
+            assert!(m.plan.mu_rate.iter().all(|p| p.0 < nnz));
         }
     }
 }
