@@ -147,7 +147,7 @@ pub struct CellModel {
 
 /// Elements per block of the element loops: each block's element vectors or tangents
 /// are computed (in parallel, or not) into a buffer, then scattered in element order.
-const BLOCK: usize = 64;
+pub(crate) const BLOCK: usize = 64;
 
 /// The per-block buffers of the element loops, kept between calls.
 #[derive(Default)]
@@ -170,6 +170,38 @@ impl Scratch {
         b.resize_with(BLOCK, || (Box::new(ElementTangent::zeros()), Ok(())));
         b
     }
+}
+
+/// The element loop of a residual or a Jacobian over `ne` elements: for each block of
+/// [`BLOCK`] elements, `compute(e, out)` for every element of the block into `buf` (on
+/// rayon's threads when `parallel`), then `scatter(e, out)` in element order. Stops at the
+/// first element (in order) whose `compute` failed. The results are the same bits in
+/// parallel or not: each element is computed on its own and added in order.
+pub(crate) fn in_blocks<T: Send>(
+    ne: usize,
+    parallel: bool,
+    buf: &mut [(T, Result<(), DaeError>)],
+    compute: impl Fn(usize, &mut T) -> Result<(), DaeError> + Sync,
+    mut scatter: impl FnMut(usize, &T),
+) -> Result<(), DaeError> {
+    use rayon::prelude::*;
+    for start in (0..ne).step_by(BLOCK) {
+        let n = BLOCK.min(ne - start);
+        let block = &mut buf[..n];
+        let run = |(k, (out, res)): (usize, &mut (T, Result<(), DaeError>))| {
+            *res = compute(start + k, out);
+        };
+        if parallel {
+            block.par_iter_mut().enumerate().for_each(run);
+        } else {
+            block.iter_mut().enumerate().for_each(run);
+        }
+        for (k, (out, res)) in block.iter_mut().enumerate() {
+            std::mem::replace(res, Ok(()))?;
+            scatter(start + k, out);
+        }
+    }
+    Ok(())
 }
 
 impl CellModel {
@@ -238,36 +270,6 @@ impl CellModel {
     /// Whether the element loops run in parallel.
     pub fn parallel(&self) -> bool {
         self.parallel
-    }
-
-    /// For each block of [`BLOCK`] elements: `compute(e, out)` for every element of the
-    /// block into `buf` (in parallel when [`Self::set_parallel`]), then `scatter(e, out)`
-    /// in element order. Stops at the first element (in order) whose `compute` failed.
-    fn blocks<T: Send>(
-        &self,
-        buf: &mut [(T, Result<(), DaeError>)],
-        compute: impl Fn(usize, &mut T) -> Result<(), DaeError> + Sync,
-        mut scatter: impl FnMut(usize, &T),
-    ) -> Result<(), DaeError> {
-        use rayon::prelude::*;
-        let ne = self.elements.len();
-        for start in (0..ne).step_by(BLOCK) {
-            let n = BLOCK.min(ne - start);
-            let block = &mut buf[..n];
-            let run = |(k, (out, res)): (usize, &mut (T, Result<(), DaeError>))| {
-                *res = compute(start + k, out);
-            };
-            if self.parallel {
-                block.par_iter_mut().enumerate().for_each(run);
-            } else {
-                block.iter_mut().enumerate().for_each(run);
-            }
-            for (k, (out, res)) in block.iter_mut().enumerate() {
-                std::mem::replace(res, Ok(()))?;
-                scatter(start + k, out);
-            }
-        }
-        Ok(())
     }
 
     /// The nodes of the membrane elements, in the order of the μ_as unknowns.
@@ -499,9 +501,13 @@ impl CellModel {
             }
             Ok(())
         };
-        let result = self.blocks(&mut buf, element, |e, fe| {
-            self.plan.scatter_residual(e, fe, r)
-        });
+        let result = in_blocks(
+            self.elements.len(),
+            self.parallel,
+            &mut buf,
+            element,
+            |e, fe| self.plan.scatter_residual(e, fe, r),
+        );
         self.scratch.vectors = buf;
         self.scratch.caps = caps;
         result?;
@@ -564,9 +570,13 @@ impl CellModel {
             }
             Ok(())
         };
-        let result = self.blocks(&mut buf, element, |e, tan| {
-            self.plan.scatter_tangent(e, tan, cj, v)
-        });
+        let result = in_blocks(
+            self.elements.len(),
+            self.parallel,
+            &mut buf,
+            element,
+            |e, tan| self.plan.scatter_tangent(e, tan, cj, v),
+        );
         self.scratch.tangents = buf;
         self.scratch.caps = caps;
         result?;
