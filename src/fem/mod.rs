@@ -1,7 +1,7 @@
 //! Mesh, P2 elements, quadrature.
 //!
-//! - [`quadrature`]: Gauss–Legendre on [0, 1], triangle rules exact to a given degree,
-//!   sub-divided rules for thin bands, edge rules.
+//! - [`quadrature`]: Gauss–Legendre on [0, 1], triangle and tetrahedron rules exact to a
+//!   given degree, sub-divided rules for thin bands, edge rules.
 //! - [`p2`]: the six-node isoparametric triangle and the three-node edge, with
 //!   tabulation at quadrature points.
 //! - [`mesh`]: the conforming mesh of the reference half cell (nucleus, cytoplasm,
@@ -18,7 +18,7 @@ pub mod quadrature;
 
 pub use mesh::{Domain, Mesh, MeshError, MeshParams, MeshQuality, NamedPoints};
 pub use p2::{EdgeTabulation, ElementGeometry, P2Error, P2Tabulation};
-pub use quadrature::{EdgeRule, TriangleRule, gauss_legendre};
+pub use quadrature::{EdgeRule, TetRule, TriangleRule, gauss_legendre};
 
 /// The paper's cell and mesh for this layer's tests, taken from the case schema (the one
 /// place the defaults live).
