@@ -4,6 +4,8 @@
 //!   given degree, sub-divided rules for thin bands, edge rules.
 //! - [`p2`]: the six-node isoparametric triangle and the three-node edge, with
 //!   tabulation at quadrature points.
+//! - [`tet`]: the ten-node isoparametric tetrahedron and the six-node surface triangle in
+//!   3-D, with tabulation at quadrature points.
 //! - [`mesh`]: the conforming mesh of the reference half cell (nucleus, cytoplasm,
 //!   membrane), graded from the cell bottom to the nucleus, with curved P2 interfaces.
 //! - [`gmsh`]: reading and writing such meshes as gmsh 4.1 ASCII files.
@@ -15,10 +17,12 @@ pub mod gmsh;
 pub mod mesh;
 pub mod p2;
 pub mod quadrature;
+pub mod tet;
 
 pub use mesh::{Domain, Mesh, MeshError, MeshParams, MeshQuality, NamedPoints};
-pub use p2::{EdgeTabulation, ElementGeometry, P2Error, P2Tabulation};
+pub use p2::{EdgeTabulation, ElementGeometry, GeometryOf, P2Error, P2Tabulation};
 pub use quadrature::{EdgeRule, TetRule, TriangleRule, gauss_legendre};
+pub use tet::{TetError, TetGeometry, TetTabulation};
 
 /// The paper's cell and mesh for this layer's tests, taken from the case schema (the one
 /// place the defaults live).
