@@ -2,7 +2,7 @@
 # not root) before building. The two quick-start commands are `make paper` and `make test`.
 
 APT_PACKAGES := libsundials-dev libsuitesparse-dev libclang-dev pkg-config \
-                libfontconfig1-dev libfreetype-dev fonts-dejavu-core
+                libfontconfig1-dev libfreetype-dev fonts-dejavu-core gmsh
 CARGO ?= cargo
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 

@@ -4,18 +4,56 @@
 //! order is that of [`super::p2`]) on surfaces tagged with the physical groups `nucleus`,
 //! `cytoplasm` and `membrane` (case-insensitive). Points, lines and other element types
 //! are ignored; linear triangles are refused.
+//!
+//! In 3-D ([`Mesh3::read_gmsh`]): 10-node tetrahedra (type 11, the local order of
+//! [`super::tet`]) in volumes of the physical groups `nucleus`, `cytoplasm`, `membrane`,
+//! and 6-node triangles in surfaces of the physical group `outer`; other elements of the
+//! usual types are skipped, linear tetrahedra in a cell volume are refused. The nodes the
+//! tetrahedra use are renumbered compactly in the order of the file's `$Nodes`.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
 use std::path::Path;
 
 use super::mesh::{Domain, Mesh, MeshError, MeshParams, MeshParts};
+use super::mesh3::{Mesh3, Mesh3Params};
 use super::p2::EDGES;
 
 /// gmsh element type of the 6-node triangle.
 const TRIANGLE6: u32 = 9;
 /// gmsh element type of the 3-node triangle.
 const TRIANGLE3: u32 = 2;
+/// gmsh element type of the 10-node tetrahedron.
+const TET10: u32 = 11;
+/// gmsh element type of the 4-node tetrahedron.
+const TET4: u32 = 4;
+
+/// Number of nodes of the gmsh element types a 3-D file may hold (first and second order
+/// points, lines, triangles, quadrangles, tetrahedra, hexahedra, prisms, pyramids).
+fn element_nodes(etype: u32) -> Option<usize> {
+    Some(match etype {
+        15 => 1,
+        1 => 2,
+        8 => 3,
+        2 => 3,
+        9 => 6,
+        3 => 4,
+        10 => 9,
+        16 => 8,
+        4 => 4,
+        11 => 10,
+        5 => 8,
+        12 => 27,
+        17 => 20,
+        6 => 6,
+        13 => 18,
+        18 => 15,
+        7 => 5,
+        14 => 14,
+        19 => 13,
+        _ => return None,
+    })
+}
 
 /// One section of the file: its name, its first content line (1-based) and its lines.
 struct Section<'a> {
@@ -382,6 +420,308 @@ impl<'a> MshFile<'a> {
             domains.push(*d);
         }
         Ok((nodes, n_vertices, elements, domains))
+    }
+}
+
+/// A cell tetrahedron as read: its ten node tags, its domain and the line it is on.
+type TaggedTet = ([usize; 10], Domain, usize);
+/// An outer triangle as read: its six node tags and its line.
+type TaggedFace = ([usize; 6], usize);
+
+impl<'a> MshFile<'a> {
+    /// `$PhysicalNames` of a 3-D cell mesh: the 3-D physical tags of the three domains, and
+    /// the 2-D physical tags named `outer`.
+    fn physical_groups3(&self) -> Result<(HashMap<i64, Domain>, HashSet<i64>), MeshError> {
+        let mut domains: HashMap<i64, Domain> = HashMap::new();
+        let mut outer: HashSet<i64> = HashSet::new();
+        if let Some(sec) = self.find("PhysicalNames") {
+            for (i, l) in sec.lines.iter().enumerate().skip(1) {
+                let line = sec.first_line + i;
+                let mut parts = l.splitn(3, char::is_whitespace);
+                let dim = parts.next().and_then(|s| s.parse::<u32>().ok());
+                let tag = parts.next().and_then(|s| s.parse::<i64>().ok());
+                let name = parts
+                    .next()
+                    .map(|s| s.trim().trim_matches('"').to_lowercase());
+                let (Some(dim), Some(tag), Some(name)) = (dim, tag, name) else {
+                    return Err(self.err(line, format!("cannot read physical name `{l}`")));
+                };
+                let d = match name.as_str() {
+                    "nucleus" => Some(Domain::Nucleus),
+                    "cytoplasm" => Some(Domain::Cytoplasm),
+                    "membrane" => Some(Domain::Membrane),
+                    _ => None,
+                };
+                match (dim, d) {
+                    (3, Some(d)) => {
+                        domains.insert(tag, d);
+                    }
+                    (2, None) if name == "outer" => {
+                        outer.insert(tag);
+                    }
+                    _ => {}
+                }
+            }
+        }
+        let found: HashSet<Domain> = domains.values().copied().collect();
+        if found.len() < 3 {
+            return Err(self.err(
+                0,
+                "need 3-D physical groups named nucleus, cytoplasm and membrane".into(),
+            ));
+        }
+        if outer.is_empty() {
+            return Err(self.err(0, "need a 2-D physical group named outer".into()));
+        }
+        Ok((domains, outer))
+    }
+
+    /// `$Entities` of all four dimensions: for each dimension, entity tag → its physical
+    /// tags.
+    fn entity_physicals(&self) -> Result<[HashMap<i64, Vec<i64>>; 4], MeshError> {
+        let ent = self
+            .find("Entities")
+            .ok_or_else(|| self.err(0, "no $Entities".into()))?;
+        let mut t = Tokens::new(self.path, ent);
+        let counts: [usize; 4] = [
+            t.next("the number of points")?,
+            t.next("the number of curves")?,
+            t.next("the number of surfaces")?,
+            t.next("the number of volumes")?,
+        ];
+        let mut out: [HashMap<i64, Vec<i64>>; 4] = Default::default();
+        for (dim, &n) in counts.iter().enumerate() {
+            for _ in 0..n {
+                let tag: i64 = t.next("an entity tag")?;
+                let n_coords = if dim == 0 { 3 } else { 6 };
+                for _ in 0..n_coords {
+                    t.next::<f64>("an entity coordinate")?;
+                }
+                let n_phys: usize = t.next("the number of physical tags")?;
+                let mut phys = Vec::with_capacity(n_phys);
+                for _ in 0..n_phys {
+                    phys.push(t.next::<i64>("a physical tag")?);
+                }
+                if dim > 0 {
+                    let n_b: usize = t.next("the number of bounding entities")?;
+                    for _ in 0..n_b {
+                        t.next::<i64>("a bounding entity tag")?;
+                    }
+                }
+                out[dim].insert(tag, phys);
+            }
+        }
+        Ok(out)
+    }
+
+    /// `$Nodes` with three coordinates: (tag, x) in file order.
+    fn nodes3(&self) -> Result<Vec<(usize, [f64; 3])>, MeshError> {
+        let sec = self
+            .find("Nodes")
+            .ok_or_else(|| self.err(0, "no $Nodes".into()))?;
+        let mut t = Tokens::new(self.path, sec);
+        let n_blocks: usize = t.next("the number of node blocks")?;
+        let n_nodes: usize = t.next("the number of nodes")?;
+        let _min_tag: usize = t.next("the minimum node tag")?;
+        let _max_tag: usize = t.next("the maximum node tag")?;
+        let mut out = Vec::with_capacity(n_nodes.min(1 << 24));
+        for _ in 0..n_blocks {
+            let _dim: u32 = t.next("a block's entity dimension")?;
+            let _tag: i64 = t.next("a block's entity tag")?;
+            let parametric: u32 = t.next("the parametric flag")?;
+            let n: usize = t.next("a block's node count")?;
+            if parametric != 0 {
+                return Err(self.err(t.line(), "parametric nodes are not supported".into()));
+            }
+            let mut tags = Vec::with_capacity(n.min(1 << 24));
+            for _ in 0..n {
+                tags.push(t.next::<usize>("a node tag")?);
+            }
+            for tag in tags {
+                let line = t.line();
+                let p = [
+                    t.next::<f64>("a node x")?,
+                    t.next::<f64>("a node y")?,
+                    t.next::<f64>("a node z")?,
+                ];
+                if !p.iter().all(|v| v.is_finite()) {
+                    return Err(self.err(line, format!("node {tag} has a non-finite coordinate")));
+                }
+                out.push((tag, p));
+            }
+        }
+        Ok(out)
+    }
+
+    /// `$Elements`: the 10-node tetrahedra of the cell volumes and the 6-node triangles of
+    /// the outer surfaces.
+    fn cell_tets(
+        &self,
+        volume_domain: &HashMap<i64, Domain>,
+        outer_surfaces: &HashSet<i64>,
+    ) -> Result<(Vec<TaggedTet>, Vec<TaggedFace>), MeshError> {
+        let sec = self
+            .find("Elements")
+            .ok_or_else(|| self.err(0, "no $Elements".into()))?;
+        let mut t = Tokens::new(self.path, sec);
+        let n_blocks: usize = t.next("the number of element blocks")?;
+        for _ in 0..3 {
+            t.next::<usize>("an element count or tag")?;
+        }
+        let mut tets: Vec<TaggedTet> = Vec::new();
+        let mut faces: Vec<TaggedFace> = Vec::new();
+        for _ in 0..n_blocks {
+            let line = t.line();
+            let dim: u32 = t.next("a block's entity dimension")?;
+            let tag: i64 = t.next("a block's entity tag")?;
+            let etype: u32 = t.next("a block's element type")?;
+            let n: usize = t.next("a block's element count")?;
+            let per = element_nodes(etype)
+                .ok_or_else(|| self.err(line, format!("unsupported element type {etype}")))?;
+            let dom = if dim == 3 {
+                volume_domain.get(&tag).copied()
+            } else {
+                None
+            };
+            if dim == 3 && (etype == TET10 || etype == TET4) && dom.is_none() {
+                return Err(self.err(
+                    line,
+                    format!("volume {tag} is in no cell domain physical group"),
+                ));
+            }
+            if etype == TET4 && dom.is_some() {
+                return Err(self.err(
+                    line,
+                    "4-node tetrahedra: the model needs 10-node (P2)".into(),
+                ));
+            }
+            let is_tet = dom.is_some() && etype == TET10;
+            let is_face = dim == 2 && etype == TRIANGLE6 && outer_surfaces.contains(&tag);
+            if dim == 2 && etype == TRIANGLE3 && outer_surfaces.contains(&tag) {
+                return Err(self.err(line, "3-node triangles: the model needs 6-node (P2)".into()));
+            }
+            for _ in 0..n {
+                let eline = t.line();
+                let _etag: usize = t.next("an element tag")?;
+                let mut nodes = [0usize; 10];
+                for k in 0..per {
+                    let v: usize = t.next("an element node")?;
+                    if let Some(slot) = nodes.get_mut(k) {
+                        *slot = v;
+                    }
+                }
+                if let (true, Some(d)) = (is_tet, dom) {
+                    tets.push((nodes, d, eline));
+                } else if is_face {
+                    let mut f = [0usize; 6];
+                    f.copy_from_slice(&nodes[..6]);
+                    faces.push((f, eline));
+                }
+            }
+        }
+        if tets.is_empty() {
+            return Err(self.err(0, "no 10-node tetrahedra in the cell volumes".into()));
+        }
+        if faces.is_empty() {
+            return Err(self.err(0, "no 6-node triangles in the outer surface".into()));
+        }
+        Ok((tets, faces))
+    }
+}
+
+impl Mesh3 {
+    /// Reads a gmsh 4.1 ASCII mesh of 10-node tetrahedra with physical volume groups named
+    /// `nucleus`, `cytoplasm`, `membrane` and the 6-node triangles of the physical surface
+    /// `outer`, and completes it for the cell `params` (see [`super::mesh3`]: the checks
+    /// against the cell, the symmetry planes, the named points, the Jacobians).
+    pub fn read_gmsh(path: &Path, params: &Mesh3Params) -> Result<Mesh3, MeshError> {
+        params.validate()?;
+        let pstr = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| MeshError::Io {
+            path: pstr.clone(),
+            source,
+        })?;
+        Self::parse_gmsh(&text, &pstr, params)
+    }
+
+    /// As [`Mesh3::read_gmsh`], from the file's text (`path` is only used in messages).
+    pub fn parse_gmsh(text: &str, path: &str, params: &Mesh3Params) -> Result<Mesh3, MeshError> {
+        let file = MshFile::split(text, path)?;
+        file.check_format()?;
+        let (phys_domain, phys_outer) = file.physical_groups3()?;
+        let entities = file.entity_physicals()?;
+        let mut volume_domain: HashMap<i64, Domain> = HashMap::new();
+        for (tag, phys) in &entities[3] {
+            let doms: HashSet<Domain> = phys
+                .iter()
+                .filter_map(|p| phys_domain.get(p))
+                .copied()
+                .collect();
+            match doms.len() {
+                0 => {}
+                1 => {
+                    volume_domain.extend(doms.into_iter().map(|d| (*tag, d)));
+                }
+                _ => {
+                    return Err(
+                        file.err(0, format!("volume {tag} is in more than one cell domain"))
+                    );
+                }
+            }
+        }
+        let outer_surfaces: HashSet<i64> = entities[2]
+            .iter()
+            .filter(|(_, phys)| phys.iter().any(|p| phys_outer.contains(p)))
+            .map(|(tag, _)| *tag)
+            .collect();
+        let coords = file.nodes3()?;
+        let (tets, faces) = file.cell_tets(&volume_domain, &outer_surfaces)?;
+        // Compact numbering of the nodes the tetrahedra use, in file order.
+        let used: HashSet<usize> = tets.iter().flat_map(|t| t.0).collect();
+        let mut index: HashMap<usize, usize> = HashMap::with_capacity(used.len());
+        let mut nodes = Vec::with_capacity(used.len());
+        for (tag, p) in coords {
+            if used.contains(&tag) && !index.contains_key(&tag) {
+                index.insert(tag, nodes.len());
+                nodes.push(p);
+            }
+        }
+        let lookup = |tag: usize, line: usize| {
+            index
+                .get(&tag)
+                .copied()
+                .ok_or_else(|| file.err(line, format!("element uses unknown node {tag}")))
+        };
+        let mut elements = Vec::with_capacity(tets.len());
+        let mut domains = Vec::with_capacity(tets.len());
+        for (tags, d, line) in &tets {
+            let mut el = [0usize; 10];
+            for k in 0..10 {
+                el[k] = lookup(tags[k], *line)?;
+            }
+            if (0..4).any(|a| (a + 1..4).any(|b| el[a] == el[b])) {
+                return Err(file.err(*line, "degenerate tetrahedron (repeated vertex)".into()));
+            }
+            elements.push(el);
+            domains.push(*d);
+        }
+        let mut outer = Vec::with_capacity(faces.len());
+        for (tags, line) in &faces {
+            let mut f = [0usize; 6];
+            for k in 0..6 {
+                f[k] = index.get(&tags[k]).copied().ok_or_else(|| {
+                    file.err(
+                        *line,
+                        format!(
+                            "outer triangle node {} is not a node of the tetrahedra",
+                            tags[k]
+                        ),
+                    )
+                })?;
+            }
+            outer.push((f, *line));
+        }
+        Mesh3::from_parts(params, nodes, elements, domains, &outer, path)
     }
 }
 

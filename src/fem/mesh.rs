@@ -268,6 +268,38 @@ pub enum MeshError {
         /// What is wrong.
         message: String,
     },
+    /// The gmsh executable (the 3-D mesher, [`super::mesh3`]) could not be started.
+    #[error(
+        "gmsh not found on PATH: install the Debian package `gmsh` (make deps does) (tried `{program}`)"
+    )]
+    GmshNotFound {
+        /// The program that was run.
+        program: String,
+    },
+    /// gmsh ran but failed.
+    #[error("gmsh failed ({status}) on {input}: {stderr}")]
+    GmshFailed {
+        /// Its exit status.
+        status: String,
+        /// The geometry file it was given.
+        input: String,
+        /// The last lines of its error output.
+        stderr: String,
+    },
+    /// A tetrahedron's isoparametric map is not orientation preserving at a point where it
+    /// is checked (the 3-D twin of [`MeshError::NonPositiveJacobian`]).
+    #[error(
+        "tetrahedron {element}: isoparametric Jacobian {det:e} ≤ 0 at reference point ({}, {}, {})",
+        xi[0], xi[1], xi[2]
+    )]
+    NonPositiveJacobian3 {
+        /// Element index.
+        element: usize,
+        /// The smallest det J found.
+        det: f64,
+        /// Where.
+        xi: [f64; 3],
+    },
 }
 
 /// Node indices of the reference points used for output (MODEL.md §2); all are vertices on

@@ -1,24 +1,33 @@
 //! Mesh, P2 elements, quadrature.
 //!
-//! - [`quadrature`]: Gauss–Legendre on [0, 1], triangle rules exact to a given degree,
-//!   sub-divided rules for thin bands, edge rules.
+//! - [`quadrature`]: Gauss–Legendre on [0, 1], triangle and tetrahedron rules exact to a
+//!   given degree, sub-divided rules for thin bands, edge rules.
 //! - [`p2`]: the six-node isoparametric triangle and the three-node edge, with
 //!   tabulation at quadrature points.
+//! - [`tet`]: the ten-node isoparametric tetrahedron and the six-node surface triangle in
+//!   3-D, with tabulation at quadrature points.
 //! - [`mesh`]: the conforming mesh of the reference half cell (nucleus, cytoplasm,
 //!   membrane), graded from the cell bottom to the nucleus, with curved P2 interfaces.
-//! - [`gmsh`]: reading and writing such meshes as gmsh 4.1 ASCII files.
+//! - [`mesh3`]: the P2 tetrahedral mesh of the quarter cell (MODEL.md §10), made by gmsh
+//!   from a geometry written here and cached; the 2-D mesh extruded into a one-layer slab.
+//! - [`gmsh`]: reading and writing such meshes as gmsh 4.1 ASCII files (2-D: both; 3-D:
+//!   reading).
 //! - [`assembly`]: sparse patterns built once from (row, col) entries and the positions
 //!   of element blocks in them, for refilling assembled matrices.
 
 pub mod assembly;
 pub mod gmsh;
 pub mod mesh;
+pub mod mesh3;
 pub mod p2;
 pub mod quadrature;
+pub mod tet;
 
 pub use mesh::{Domain, Mesh, MeshError, MeshParams, MeshQuality, NamedPoints};
-pub use p2::{EdgeTabulation, ElementGeometry, P2Error, P2Tabulation};
-pub use quadrature::{EdgeRule, TriangleRule, gauss_legendre};
+pub use mesh3::{Mesh3, Mesh3Params, Mesh3Quality};
+pub use p2::{EdgeTabulation, ElementGeometry, GeometryOf, P2Error, P2Tabulation};
+pub use quadrature::{EdgeRule, TetRule, TriangleRule, gauss_legendre};
+pub use tet::{TetError, TetGeometry, TetTabulation};
 
 /// The paper's cell and mesh for this layer's tests, taken from the case schema (the one
 /// place the defaults live).

@@ -185,17 +185,22 @@ pub struct P2Tabulation {
     pub grads: Vec<[[f64; 2]; 6]>,
 }
 
-/// Geometry of one element at the points of a [`P2Tabulation`]: what a total-Lagrangian
-/// assembly needs, computed once on the reference configuration.
+/// Geometry of one element of dimension `D` with `N` nodes at the points of a tabulation:
+/// what a total-Lagrangian assembly needs, computed once on the reference configuration.
+/// [`ElementGeometry`] is the six-node triangle's, [`super::tet::TetGeometry`] the ten-node
+/// tetrahedron's.
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct ElementGeometry {
+pub struct GeometryOf<const D: usize, const N: usize> {
     /// Physical (reference-configuration) point x(ξ_q).
-    pub x: Vec<[f64; 2]>,
+    pub x: Vec<[f64; D]>,
     /// det J(ξ_q) · w_q: the integration weight in physical space.
     pub jxw: Vec<f64>,
     /// Physical gradients ∇ₓNₐ(ξ_q).
-    pub grads: Vec<[[f64; 2]; 6]>,
+    pub grads: Vec<[[f64; D]; N]>,
 }
+
+/// Geometry of one six-node triangle at the points of a [`P2Tabulation`].
+pub type ElementGeometry = GeometryOf<2, 6>;
 
 impl P2Tabulation {
     /// Tabulates the P2 basis at the points of `rule`.

@@ -1,11 +1,12 @@
 //! Quadrature rules: Gauss–Legendre on [0, 1], rules on the reference triangle
-//! (0,0), (1,0), (0,1), their sub-divided versions, and 1-D rules on an element edge.
+//! (0,0), (1,0), (0,1) and on the reference tetrahedron (0,0,0), (1,0,0), (0,1,0), (0,0,1),
+//! their sub-divided versions, and 1-D rules on an element edge.
 //!
 //! Every rule here has positive weights and points strictly inside its domain. Rules are
 //! generated (Newton iterations on Legendre polynomials or on moment equations), not
 //! copied from tables; the tests check exactness on every monomial of the claimed degree.
 
-use nalgebra::{Matrix4, Vector4};
+use nalgebra::{Matrix4, SMatrix, SVector, Vector4};
 
 /// Gauss–Legendre nodes and weights on [0, 1] with `n` points, exact for polynomials of
 /// degree ≤ 2n − 1. The weights sum to 1.
@@ -282,6 +283,245 @@ impl EdgeRule {
     }
 }
 
+/// A quadrature rule on the reference tetrahedron with vertices (0,0,0), (1,0,0), (0,1,0),
+/// (0,0,1): ∫_T̂ f dξ ≈ Σ_q w_q f(ξ_q). The weights sum to the tetrahedron's volume ⅙.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TetRule {
+    /// Points ξ_q = (ξ, η, ζ) in reference coordinates, all strictly inside the
+    /// tetrahedron.
+    pub points: Vec<[f64; 3]>,
+    /// Weights w_q > 0, summing to ⅙.
+    pub weights: Vec<f64>,
+}
+
+impl TetRule {
+    /// A rule exact for every polynomial of total degree ≤ `d`.
+    ///
+    /// | d | rule | points |
+    /// |---|---|---|
+    /// | 0, 1 | centroid | 1 |
+    /// | 2 | symmetric, one 4-point orbit (a, a, a, 1 − 3a), a = (5 − √5)/20, weights 1/24 | 4 |
+    /// | 3, 4, 5 | symmetric, two 4-point orbits (a, a, a, 1 − 3a) and the 6-point orbit (b, b, ½ − b, ½ − b); the six parameters solved from the moment equations by Newton | 14 |
+    /// | ≥ 6 | collapsed (Stroud conical / Duffy) Gauss–Legendre product, ⌈(d + 3)/2⌉ × ⌈(d + 2)/2⌉ × ⌈(d + 1)/2⌉ | e.g. 80 for d = 6 |
+    ///
+    /// All weights are positive and all points strictly inside (the degree-3 and degree-4
+    /// cases use the degree-5 rule: the symmetric positive-weight rules of degree 3 need as
+    /// many points). The collapsed rule maps the unit cube onto the tetrahedron by
+    /// (u, v, w) ↦ (u, v(1 − u), w(1 − u)(1 − v)), with Jacobian (1 − u)²(1 − v): the extra
+    /// factors raise the degree in u by two and in v by one, hence the extra Gauss points
+    /// in those directions.
+    pub fn degree(d: usize) -> Self {
+        match d {
+            0 | 1 => Self {
+                points: vec![[0.25, 0.25, 0.25]],
+                weights: vec![1.0 / 6.0],
+            },
+            2 => {
+                let a = (5.0 - 5f64.sqrt()) / 20.0;
+                Self::from_orbits(&[(a, 1.0 / 24.0)], &[])
+            }
+            3..=5 => {
+                // Solved once per process.
+                static ORBITS: std::sync::OnceLock<[f64; 6]> = std::sync::OnceLock::new();
+                let [a1, a2, b, w1, w2, w3] = *ORBITS.get_or_init(tet_degree5_orbits);
+                Self::from_orbits(&[(a1, w1), (a2, w2)], &[(b, w3)])
+            }
+            _ => Self::collapsed_gauss(
+                (d + 3).div_ceil(2),
+                (d + 2).div_ceil(2),
+                (d + 1).div_ceil(2),
+            ),
+        }
+    }
+
+    /// Builds a fully symmetric rule from orbits S₃₁(a) = {(a, a, a, 1 − 3a) and its 4
+    /// permutations} and S₂₂(b) = {(b, b, ½ − b, ½ − b) and its 6 permutations} of the
+    /// barycentric coordinates (λ₀, λ₁, λ₂, λ₃), ξ = (λ₁, λ₂, λ₃); every orbit point has its
+    /// orbit's weight w.
+    fn from_orbits(s31: &[(f64, f64)], s22: &[(f64, f64)]) -> Self {
+        let mut points = Vec::new();
+        let mut weights = Vec::new();
+        for &(a, w) in s31 {
+            for k in 0..4 {
+                let mut l = [a; 4];
+                l[k] = 1.0 - 3.0 * a;
+                points.push([l[1], l[2], l[3]]);
+                weights.push(w);
+            }
+        }
+        for &(b, w) in s22 {
+            let c = 0.5 - b;
+            for (i, j) in [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)] {
+                let mut l = [c; 4];
+                l[i] = b;
+                l[j] = b;
+                points.push([l[1], l[2], l[3]]);
+                weights.push(w);
+            }
+        }
+        Self { points, weights }
+    }
+
+    /// The collapsed (conical-product) Gauss rule with `nu`, `nv`, `nw` points in u, v, w:
+    /// ξ = u, η = v(1 − u), ζ = w(1 − u)(1 − v), weight w_u w_v w_w (1 − u)²(1 − v). Exact
+    /// for total degree ≤ min(2nu − 3, 2nv − 2, 2nw − 1).
+    pub fn collapsed_gauss(nu: usize, nv: usize, nw: usize) -> Self {
+        let (pu, wu) = gauss_legendre(nu);
+        let (pv, wv) = gauss_legendre(nv);
+        let (pw, ww) = gauss_legendre(nw);
+        let mut points = Vec::with_capacity(nu * nv * nw);
+        let mut weights = Vec::with_capacity(nu * nv * nw);
+        for (u, a) in pu.iter().zip(&wu) {
+            for (v, b) in pv.iter().zip(&wv) {
+                for (w, c) in pw.iter().zip(&ww) {
+                    points.push([*u, v * (1.0 - u), w * (1.0 - u) * (1.0 - v)]);
+                    weights.push(a * b * c * (1.0 - u) * (1.0 - u) * (1.0 - v));
+                }
+            }
+        }
+        Self { points, weights }
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True if the rule has no points.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// This rule applied on each of the 8^`levels` sub-tetrahedra of `levels` regular
+    /// refinements (Bey's: each tetrahedron is cut by its edge midpoints into the 4 corner
+    /// tetrahedra and the inner octahedron, split along the diagonal between the midpoints
+    /// of edges 0–2 and 1–3 into 4 more). All 8 children have ⅛ of the parent's volume, so
+    /// every weight is scaled by 8^−`levels`. Same degree of exactness, with points spread
+    /// over the whole element: use it where an integrand is only piecewise smooth, e.g. a
+    /// thin contact band crossing an element (MODEL.md §9).
+    pub fn subdivided(&self, levels: u32) -> Self {
+        let mut tets: Vec<[[f64; 3]; 4]> = vec![[
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ]];
+        for _ in 0..levels {
+            tets = tets.iter().flat_map(bey_children).collect();
+        }
+        let scale = 0.125f64.powi(levels as i32);
+        let mut points = Vec::with_capacity(self.len() * tets.len());
+        let mut weights = Vec::with_capacity(self.len() * tets.len());
+        for t in &tets {
+            for (p, w) in self.points.iter().zip(&self.weights) {
+                let mut x = t[0];
+                for (k, v) in t[1..].iter().enumerate() {
+                    for i in 0..3 {
+                        x[i] += p[k] * (v[i] - t[0][i]);
+                    }
+                }
+                points.push(x);
+                weights.push(w * scale);
+            }
+        }
+        Self { points, weights }
+    }
+}
+
+/// The 8 children of tetrahedron `t` in Bey's regular refinement: the corner tetrahedra
+/// and the octahedron split along the diagonal x₀₂–x₁₃ (xᵢⱼ the midpoint of edge i–j).
+fn bey_children(t: &[[f64; 3]; 4]) -> [[[f64; 3]; 4]; 8] {
+    let m = |i: usize, j: usize| -> [f64; 3] { std::array::from_fn(|k| 0.5 * (t[i][k] + t[j][k])) };
+    let (x01, x02, x03, x12, x13, x23) = (m(0, 1), m(0, 2), m(0, 3), m(1, 2), m(1, 3), m(2, 3));
+    [
+        [t[0], x01, x02, x03],
+        [x01, t[1], x12, x13],
+        [x02, x12, t[2], x23],
+        [x03, x13, x23, t[3]],
+        [x01, x02, x03, x13],
+        [x01, x02, x12, x13],
+        [x02, x03, x13, x23],
+        [x02, x12, x13, x23],
+    ]
+}
+
+/// Orbit parameters (a₁, a₂, b) and point weights (w₁, w₂, w₃) of the 14-point symmetric
+/// degree-5 rule on the tetrahedron, solved from the moment equations.
+///
+/// Every symmetric polynomial of degree ≤ 5 in the barycentric coordinates λ₀ … λ₃
+/// (Σλᵢ = 1) is a combination of 1, p₂, p₃, p₄, p₂², p₂p₃ with the power sums
+/// p_k = Σᵢ λᵢᵏ (the invariants e₂^α e₃^β e₄^γ of degree 2α + 3β + 4γ ≤ 5 are six). With
+/// ∫_T̂ λ^α = α!/(|α| + 3)! (multi-index notation),
+///
+///   ∫ p_k = 4 k!/(k + 3)!,  ∫ p_i p_j = [4 (i + j)! + 12 i! j!]/(i + j + 3)!,
+///
+/// and on the orbits p_k(S₃₁(a)) = 3aᵏ + (1 − 3a)ᵏ, p_k(S₂₂(b)) = 2bᵏ + 2(½ − b)ᵏ, the
+/// rule is exact to degree 5 iff 4w₁ f(a₁) + 4w₂ f(a₂) + 6w₃ f(b) = ∫ f for the six f.
+/// Newton from a two-digit guess converges in a few steps to the solution with all
+/// weights positive and all points inside (a₁ ≈ 0.0927, a₂ ≈ 0.3109, b ≈ 0.0455).
+fn tet_degree5_orbits() -> [f64; 6] {
+    let fact = |n: u32| (1..=n).map(f64::from).product::<f64>();
+    // The six moment functions of (p₂, p₃, p₄) and their exact integrals.
+    let exact_p = |k: u32| 4.0 * fact(k) / fact(k + 3);
+    let exact_pp =
+        |i: u32, j: u32| (4.0 * fact(i + j) + 12.0 * fact(i) * fact(j)) / fact(i + j + 3);
+    let exact = [
+        1.0 / 6.0,
+        exact_p(2),
+        exact_p(3),
+        exact_p(4),
+        exact_pp(2, 2),
+        exact_pp(2, 3),
+    ];
+    // f and df/dt from p_k(t) and dp_k/dt, k = 2, 3, 4.
+    let moments = |p: [f64; 3], dp: [f64; 3]| -> ([f64; 6], [f64; 6]) {
+        let [p2, p3, p4] = p;
+        let [d2, d3, d4] = dp;
+        (
+            [1.0, p2, p3, p4, p2 * p2, p2 * p3],
+            [0.0, d2, d3, d4, 2.0 * p2 * d2, d2 * p3 + p2 * d3],
+        )
+    };
+    let s31 = |a: f64| {
+        let c = 1.0 - 3.0 * a;
+        let p = [2, 3, 4].map(|k: i32| 3.0 * a.powi(k) + c.powi(k));
+        let dp = [2, 3, 4].map(|k: i32| 3.0 * f64::from(k) * (a.powi(k - 1) - c.powi(k - 1)));
+        moments(p, dp)
+    };
+    let s22 = |b: f64| {
+        let c = 0.5 - b;
+        let p = [2, 3, 4].map(|k: i32| 2.0 * b.powi(k) + 2.0 * c.powi(k));
+        let dp = [2, 3, 4].map(|k: i32| 2.0 * f64::from(k) * (b.powi(k - 1) - c.powi(k - 1)));
+        moments(p, dp)
+    };
+    // Unknowns z = (a₁, a₂, b, w₁, w₂, w₃).
+    let mut z = SVector::<f64, 6>::from([0.09, 0.31, 0.045, 0.012, 0.019, 0.007]);
+    for _ in 0..50 {
+        let (f1, df1) = s31(z[0]);
+        let (f2, df2) = s31(z[1]);
+        let (g, dg) = s22(z[2]);
+        let mut r = SVector::<f64, 6>::zeros();
+        let mut jac = SMatrix::<f64, 6, 6>::zeros();
+        for k in 0..6 {
+            r[k] = 4.0 * z[3] * f1[k] + 4.0 * z[4] * f2[k] + 6.0 * z[5] * g[k] - exact[k];
+            jac[(k, 0)] = 4.0 * z[3] * df1[k];
+            jac[(k, 1)] = 4.0 * z[4] * df2[k];
+            jac[(k, 2)] = 6.0 * z[5] * dg[k];
+            jac[(k, 3)] = 4.0 * f1[k];
+            jac[(k, 4)] = 4.0 * f2[k];
+            jac[(k, 5)] = 6.0 * g[k];
+        }
+        let Some(dz) = jac.lu().solve(&r) else {
+            break;
+        };
+        z -= dz;
+        if dz.amax() < 1e-16 {
+            break;
+        }
+    }
+    [z[0], z[1], z[2], z[3], z[4], z[5]]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -477,5 +717,173 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// ∫_T̂ ξ^a η^b ζ^c over the reference tetrahedron = a! b! c! / (a + b + c + 3)!.
+    fn exact_monomial3(a: u32, b: u32, c: u32) -> f64 {
+        let f = |n: u32| (1..=n).map(f64::from).product::<f64>();
+        f(a) * f(b) * f(c) / f(a + b + c + 3)
+    }
+
+    /// Largest relative error of `rule` over all monomials ξ^a η^b ζ^c of total degree
+    /// exactly `d`.
+    fn tet_max_error_at_degree(rule: &TetRule, d: u32) -> f64 {
+        let mut worst: f64 = 0.0;
+        for a in 0..=d {
+            for b in 0..=d - a {
+                let c = d - a - b;
+                let q: f64 = rule
+                    .points
+                    .iter()
+                    .zip(&rule.weights)
+                    .map(|(p, w)| {
+                        w * p[0].powi(a as i32) * p[1].powi(b as i32) * p[2].powi(c as i32)
+                    })
+                    .sum();
+                let e = exact_monomial3(a, b, c);
+                worst = worst.max((q - e).abs() / e);
+            }
+        }
+        worst
+    }
+
+    fn assert_tet_positive_inside(rule: &TetRule) {
+        assert!(!rule.is_empty());
+        assert_eq!(rule.points.len(), rule.weights.len());
+        for (p, w) in rule.points.iter().zip(&rule.weights) {
+            assert!(*w > 0.0, "non-positive weight {w}");
+            assert!(
+                p[0] > 0.0 && p[1] > 0.0 && p[2] > 0.0 && p[0] + p[1] + p[2] < 1.0,
+                "point {p:?} not strictly inside"
+            );
+        }
+        let s: f64 = rule.weights.iter().sum();
+        assert!((s - 1.0 / 6.0).abs() < 1e-14, "weights sum {s}");
+    }
+
+    #[test]
+    fn tet_rules_exact_to_claimed_degree() {
+        for d in 0..=14usize {
+            let rule = TetRule::degree(d);
+            assert_tet_positive_inside(&rule);
+            for k in 0..=d as u32 {
+                let e = tet_max_error_at_degree(&rule, k);
+                assert!(e < 1e-13, "degree {d} rule, monomials of degree {k}: {e}");
+            }
+        }
+    }
+
+    #[test]
+    fn tet_rules_have_the_expected_point_counts() {
+        assert_eq!(TetRule::degree(1).len(), 1);
+        assert_eq!(TetRule::degree(2).len(), 4);
+        for d in 3..=5 {
+            assert_eq!(TetRule::degree(d).len(), 14);
+        }
+        assert_eq!(TetRule::degree(6).len(), 5 * 4 * 4);
+        assert_eq!(TetRule::degree(7).len(), 5 * 5 * 4);
+    }
+
+    #[test]
+    fn tet_rules_fail_one_degree_above() {
+        // Each rule's degree is sharp: some monomial of degree d + 1 is not integrated.
+        // (d = 3, 4 use the degree-5 rule, so their sharp degree is 5.)
+        for (d, sharp) in [
+            (1, 1),
+            (2, 2),
+            (3, 5),
+            (4, 5),
+            (5, 5),
+            (6, 6),
+            (7, 7),
+            (10, 10),
+            (13, 13),
+        ] {
+            let rule = TetRule::degree(d);
+            let e = tet_max_error_at_degree(&rule, sharp + 1);
+            assert!(
+                e > 1e-11,
+                "degree {d} rule integrates degree {} exactly ({e:e})",
+                sharp + 1
+            );
+        }
+    }
+
+    /// The Newton solution is the known positive 14-point rule (two S₃₁ orbits and one S₂₂
+    /// orbit): inside, positive, and equal to the published digits (exactness itself is
+    /// checked on every monomial above).
+    #[test]
+    fn tet_degree5_orbits_are_a_converged_positive_solution() {
+        let [a1, a2, b, w1, w2, w3] = tet_degree5_orbits();
+        // Inside: 0 < a < ⅓ on S₃₁, 0 < b < ½ on S₂₂.
+        assert!(a1 > 0.0 && a1 < 1.0 / 3.0 && a2 > 0.0 && a2 < 1.0 / 3.0);
+        assert!(b > 0.0 && b < 0.5);
+        assert!(w1 > 0.0 && w2 > 0.0 && w3 > 0.0);
+        assert!((a1 - 0.0927).abs() < 1e-4 && (a2 - 0.3109).abs() < 1e-4);
+        assert!((b - 0.0455).abs() < 1e-4);
+        assert!((4.0 * (w1 + w2) + 6.0 * w3 - 1.0 / 6.0).abs() < 1e-16);
+        // The tabulated values of this rule (e.g. Walkington 2000; volume-normalised
+        // weights): a = 0.0927352503108912, 0.3108859192633006, b = 0.0455037041256496,
+        // 6w = 0.0734930431163620, 0.1126879257180159, 0.0425460207770815.
+        assert!((a1 - 0.0927352503108912).abs() < 1e-14);
+        assert!((a2 - 0.3108859192633006).abs() < 1e-14);
+        assert!((b - 0.0455037041256496).abs() < 1e-14);
+        assert!((6.0 * w1 - 0.0734930431163620).abs() < 1e-14);
+        assert!((6.0 * w2 - 0.1126879257180159).abs() < 1e-14);
+        assert!((6.0 * w3 - 0.0425460207770815).abs() < 1e-14);
+    }
+
+    #[test]
+    fn tet_subdivided_rules_exact_and_inside() {
+        for (d, levels) in [(1usize, 1u32), (2, 1), (5, 1), (5, 2), (6, 1), (2, 3)] {
+            let base = TetRule::degree(d);
+            let rule = base.subdivided(levels);
+            assert_eq!(rule.len(), base.len() * 8usize.pow(levels));
+            assert_tet_positive_inside(&rule);
+            for k in 0..=d as u32 {
+                let e = tet_max_error_at_degree(&rule, k);
+                assert!(e < 1e-13, "d={d} levels={levels} k={k}: {e}");
+            }
+            assert!(tet_max_error_at_degree(&rule, d as u32 + 2) > 1e-10);
+        }
+        assert_eq!(TetRule::degree(5).subdivided(0), TetRule::degree(5));
+    }
+
+    /// Bey's children tile the parent: equal volumes ⅛ of it, and together they integrate
+    /// a kinked function better than the unrefined rule.
+    #[test]
+    fn tet_subdivision_tiles_and_integrates_a_kink_better() {
+        let t = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        for c in bey_children(&t) {
+            let e = |k: usize| std::array::from_fn::<f64, 3, _>(|i| c[k][i] - c[0][i]);
+            let (u, v, w) = (e(1), e(2), e(3));
+            let det = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0])
+                + u[2] * (v[0] * w[1] - v[1] * w[0]);
+            assert!((det.abs() - 0.125).abs() < 1e-15, "child volume {det}");
+        }
+        // f = |ξ − a|: ∫_T̂ |ξ − a| = ∫_0^1 |ξ − a| (1 − ξ)²/2 dξ.
+        let a: f64 = 0.3;
+        let exact = {
+            let f1 = a * a * (a * a - 4.0 * a + 6.0) / 24.0; // ∫_0^a (a − ξ)(1 − ξ)²/2
+            let b = 1.0 - a;
+            f1 + b * b * b * b / 24.0 // ∫_a^1 (ξ − a)(1 − ξ)²/2 with s = 1 − ξ
+        };
+        let err = |r: &TetRule| {
+            let q: f64 = r
+                .points
+                .iter()
+                .zip(&r.weights)
+                .map(|(p, w)| w * (p[0] - a).abs())
+                .sum();
+            (q - exact).abs()
+        };
+        let base = TetRule::degree(5);
+        let (e0, e2) = (err(&base), err(&base.subdivided(2)));
+        assert!(e2 < e0 / 10.0, "{e0} → {e2}");
     }
 }
