@@ -15,6 +15,8 @@
 //! - [`phases`]: the time switches `t_g`, `t_as`, `t_a` and the gravity flip `s_g` (§5);
 //! - [`material`]: compressible Yeoh solid with active strain and Kelvin–Voigt viscosity (§3);
 //! - [`axisym`]: the same laws with the hoop stretch of the axisymmetric model (§10);
+//! - [`solid3`]: the same laws with a full 3 × 3 `F`, for the 3-D quarter cell (§10), with
+//!   a closed-form tangent;
 //! - [`active`]: the active-strain tensor `F_a` of the PAC and bottom fibres (§6);
 //! - [`substrate`]: flat and micropillared substrates, penetration depth and normal (§5);
 //! - [`loads`]: contact, adhesion, adhesion-rate and gravity body forces (§5).
@@ -25,6 +27,7 @@ pub mod loads;
 pub mod material;
 pub mod phases;
 pub mod smooth;
+pub mod solid3;
 pub mod substrate;
 
 pub use active::{ActiveStrain, Bottom, Domain, Pac};
@@ -39,6 +42,9 @@ pub use loads::{
 pub use material::{MaterialPoint, Viscosity, Yeoh, admissible, material_point, piola_total};
 pub use phases::{Flip, Phases};
 pub use smooth::{heaviside, smooth_step, smooth_step_d};
+pub use solid3::{
+    MaterialPoint3, admissible3, material_point3, material_point3_dual, piola_total3,
+};
 pub use substrate::{Pillars, Substrate};
 
 use nalgebra::RealField;
