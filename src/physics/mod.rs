@@ -18,7 +18,8 @@
 //! - [`solid3`]: the same laws with a full 3 × 3 `F`, for the 3-D quarter cell (§10), with
 //!   a closed-form tangent;
 //! - [`active`]: the active-strain tensor `F_a` of the PAC and bottom fibres (§6);
-//! - [`substrate`]: flat and micropillared substrates, penetration depth and normal (§5);
+//! - [`substrate`]: flat and micropillared substrates, penetration depth and normal (§5),
+//!   and their 3-D extension on a square lattice of pillars (§10);
 //! - [`loads`]: contact, adhesion, adhesion-rate and gravity body forces (§5).
 
 pub mod active;
@@ -45,7 +46,7 @@ pub use smooth::{heaviside, smooth_step, smooth_step_d};
 pub use solid3::{
     MaterialPoint3, admissible3, material_point3, material_point3_dual, piola_total3,
 };
-pub use substrate::{Pillars, Substrate};
+pub use substrate::{Lattice, Pillars, Substrate, Substrate3};
 
 use nalgebra::RealField;
 use num_dual::DualNum;
