@@ -20,7 +20,8 @@
 //! - [`active`]: the active-strain tensor `F_a` of the PAC and bottom fibres (§6);
 //! - [`substrate`]: flat and micropillared substrates, penetration depth and normal (§5),
 //!   and their 3-D extension on a square lattice of pillars (§10);
-//! - [`loads`]: contact, adhesion, adhesion-rate and gravity body forces (§5).
+//! - [`loads`]: contact, adhesion, adhesion-rate and gravity body forces (§5), and their
+//!   3-D twins (§10).
 
 pub mod active;
 pub mod axisym;
@@ -37,8 +38,9 @@ pub use axisym::{
     piola_total_hoop,
 };
 pub use loads::{
-    Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_hoop_factor, adhesion_rate,
-    cofactor, contact_force, gravity_force, layer,
+    Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_force3, adhesion_hoop_factor,
+    adhesion_rate, adhesion_rate3, cofactor, cofactor3, contact_force, contact_force3,
+    gravity_force, layer, layer3,
 };
 pub use material::{MaterialPoint, Viscosity, Yeoh, admissible, material_point, piola_total};
 pub use phases::{Flip, Phases};
