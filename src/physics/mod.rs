@@ -17,7 +17,8 @@
 //! - [`axisym`]: the same laws with the hoop stretch of the axisymmetric model (§10);
 //! - [`solid3`]: the same laws with a full 3 × 3 `F`, for the 3-D quarter cell (§10), with
 //!   a closed-form tangent;
-//! - [`active`]: the active-strain tensor `F_a` of the PAC and bottom fibres (§6);
+//! - [`active`]: the active-strain tensor `F_a` of the PAC and bottom fibres (§6), in 2-D
+//!   and about the vertical axis of the 3-D cell (§10);
 //! - [`substrate`]: flat and micropillared substrates, penetration depth and normal (§5),
 //!   and their 3-D extension on a square lattice of pillars (§10);
 //! - [`loads`]: contact, adhesion, adhesion-rate and gravity body forces (§5), and their
