@@ -459,6 +459,88 @@ impl Pillars {
     }
 }
 
+impl Pillars {
+    /// `y_top` such that the smallest vertical gap between the reference sphere (centre
+    /// `cell_center`, radius `r_c`) and the 3-D substrate surface on `lattice` below it is
+    /// `gap` [µm] (MODEL.md §10, placed "as in §5"); the 3-D twin of
+    /// [`Pillars::y_top_for_gap`]. Only `w, s, h, first_center, q` of `self` are used.
+    ///
+    /// On [`Lattice::Gap`] (pillars at z = 0) the smallest gap lies in the plane z = 0 and
+    /// this is the 2-D placement; on [`Lattice::FourPillars`] it lies over the pillars'
+    /// rounded corners nearest the axis.
+    pub fn y_top_for_gap3(
+        &self,
+        gap: f64,
+        lattice: Lattice,
+        cell_center: [f64; 3],
+        r_c: f64,
+    ) -> Result<f64, PhysicsError> {
+        self.validate()?;
+        check(gap.is_finite(), "gap", gap, "must be finite")?;
+        check(
+            r_c.is_finite() && r_c > 0.0,
+            "r_c",
+            r_c,
+            "must be finite and > 0",
+        )?;
+        check(
+            cell_center.iter().all(|v| v.is_finite()),
+            "cell_center",
+            cell_center.iter().sum(),
+            "must be finite",
+        )?;
+        let (_, clearance) = self.lowest_clearance3(lattice, cell_center, r_c);
+        Ok(clearance - gap)
+    }
+
+    /// `([x*, z*], G(x*, z*))` minimising `G(x, z) = sphere bottom(x, z) −
+    /// (y_surf(x, z) − y_top)` over the sphere's horizontal disk: where the vertical gap is
+    /// smallest, and `y_top + gap` there. A 201 × 201 grid over the disk's square (outside
+    /// the disk the sphere's "bottom" is its equator height, never the minimum), then
+    /// zooming 11 × 11 grids, each 2.5 × finer, down to 1e-10 µm.
+    pub fn lowest_clearance3(
+        &self,
+        lattice: Lattice,
+        cell_center: [f64; 3],
+        r_c: f64,
+    ) -> ([f64; 2], f64) {
+        let [cx, cy, cz] = cell_center;
+        let g = |x: f64, z: f64| {
+            let (dx, dz) = (x - cx, z - cz);
+            cy - (r_c * r_c - dx * dx - dz * dz).max(0.0).sqrt()
+                - (self.surface_height3(x, z, lattice) - self.y_top)
+        };
+        let n = 200;
+        let mut h = 2.0 * r_c / n as f64;
+        let mut best = ([cx, cz], g(cx, cz));
+        for i in 0..=n {
+            for j in 0..=n {
+                let (x, z) = (cx - r_c + i as f64 * h, cz - r_c + j as f64 * h);
+                let v = g(x, z);
+                if v < best.1 {
+                    best = ([x, z], v);
+                }
+            }
+        }
+        while h > 1e-10 {
+            let [x0, z0] = best.0;
+            // ±2 old steps around the best point, 11 points a side
+            let hn = 0.4 * h;
+            for i in -5..=5 {
+                for j in -5..=5 {
+                    let (x, z) = (x0 + i as f64 * hn, z0 + j as f64 * hn);
+                    let v = g(x, z);
+                    if v < best.1 {
+                        best = ([x, z], v);
+                    }
+                }
+            }
+            h = hn;
+        }
+        best
+    }
+}
+
 impl Substrate3 {
     /// Checks the parameters (those of [`Substrate::validate`]; a lattice has none).
     pub fn validate(&self) -> Result<(), PhysicsError> {
@@ -1059,5 +1141,54 @@ mod tests3 {
             lattice: Lattice::Gap,
         };
         assert!(bad.validate().is_err());
+    }
+
+    #[test]
+    fn y_top_for_gap3_gives_the_requested_gap() {
+        let p = pillars();
+        let (c, r_c) = ([0.0, 8.5, 0.0], 10.0);
+        // Gap lattice: the smallest gap lies in the plane z = 0, the 2-D placement
+        let y2 = p.y_top_for_gap(0.5, [0.0, 8.5], r_c).unwrap();
+        let yg = p.y_top_for_gap3(0.5, Lattice::Gap, c, r_c).unwrap();
+        assert!((yg - y2).abs() < 1e-9, "{yg} vs {y2}");
+        // Four pillars: brute force over a fine grid of the disk, and the minimiser on the
+        // rounded corner of a pillar, near the diagonal x = ±z (quarter symmetry)
+        let y4 = p.y_top_for_gap3(0.5, Lattice::FourPillars, c, r_c).unwrap();
+        let placed = Pillars { y_top: y4, ..p };
+        let ([xs, zs], _) = placed.lowest_clearance3(Lattice::FourPillars, c, r_c);
+        assert!((xs.abs() - zs.abs()).abs() < 1e-4, "minimiser ({xs}, {zs})");
+        assert!(xs.abs() > 4.0 && xs.abs() < 8.0);
+        let n = 1000;
+        let mut min_gap = f64::INFINITY;
+        for i in 0..=n {
+            for j in 0..=n {
+                let (x, z) = (
+                    -10.0 + 20.0 * i as f64 / n as f64,
+                    -10.0 + 20.0 * j as f64 / n as f64,
+                );
+                let rr = 100.0 - x * x - z * z;
+                if rr < 0.0 {
+                    continue;
+                }
+                let gap = 8.5 - rr.sqrt() - placed.surface_height3(x, z, Lattice::FourPillars);
+                min_gap = min_gap.min(gap);
+            }
+        }
+        // the grid's minimum is not below the true one, and above it by little (measured
+        // 4e-8 µm: a 0.02 µm grid near a smooth minimum)
+        assert!(
+            (0.5 - 1e-9..0.5 + 1e-6).contains(&min_gap),
+            "min gap {min_gap}"
+        );
+        // the four pillars' corners nearest the axis (ρ ≈ 4√2 µm) are farther from it than
+        // the gap's side faces (ρ = 4 µm), where the sphere hangs lower: higher tops
+        // (measured −0.30 µm on the gap lattice, +1.80 µm over four pillars, the smallest
+        // gap at (±5.08, ±5.08))
+        assert!(y4 > yg + 0.1, "{y4} vs {yg}");
+        // other gaps shift y_top rigidly; bad inputs are refused
+        let y41 = p.y_top_for_gap3(1.0, Lattice::FourPillars, c, r_c).unwrap();
+        assert!((y4 - y41 - 0.5).abs() < 1e-9);
+        assert!(p.y_top_for_gap3(0.5, Lattice::Gap, c, 0.0).is_err());
+        assert!(p.y_top_for_gap3(f64::NAN, Lattice::Gap, c, r_c).is_err());
     }
 }
