@@ -17,11 +17,13 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use cellsim::physics::{
-    Viscosity, Yeoh, material_point, material_point3, material_point3_dual, piola_total,
+    Contact, Lattice, Pillars, Substrate, Substrate3, Viscosity, Yeoh, contact_force,
+    contact_force3, material_point, material_point3, material_point3_dual, piola_total,
     piola_total3,
 };
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+use num_dual::DualSVec64;
 
 /// Inputs per benchmark iteration.
 const N: usize = 256;
@@ -152,12 +154,91 @@ fn laws(c: &mut Criterion) {
     g.finish();
 }
 
+/// The default pillars (MODEL.md §5; y_top as placed for the default cell).
+fn pillars() -> Pillars {
+    Pillars {
+        width: 8.0,
+        spacing: 8.0,
+        height: 8.0,
+        first_center: 8.0,
+        q: 4.0,
+        y_top: -0.3,
+    }
+}
+
+fn contact(c: &mut Criterion) {
+    type D3 = DualSVec64<3>;
+    let law = Contact {
+        mu_ct: 2e3,
+        eps: 0.1,
+    };
+    let p = pillars();
+    let s2 = Substrate::Pillars(p);
+    let s3 = Substrate3 {
+        plane: s2,
+        lattice: Lattice::FourPillars,
+    };
+    // Points within 0.1 µm of a pillar's surface (tops, rounded edges, sides) or of the
+    // floor: along the outward normal from surface points.
+    let mut r = Lcg(777);
+    let mut pts2 = Vec::with_capacity(N);
+    let mut pts3 = Vec::with_capacity(N);
+    for _ in 0..N {
+        let (t, f) = (r.uniform(-0.4, 1.5), r.uniform(0.0, std::f64::consts::TAU));
+        let cs = |v: f64| v.signum() * v.abs().powf(0.5);
+        let off = r.uniform(-0.1, 0.1);
+        let (u, v, w) = (cs(t.cos() * f.cos()), cs(t.sin()), cs(t.cos() * f.sin()));
+        let X = Vector3::new(8.0 + 4.0 * u, p.y_top - 4.0 + 4.0 * v, 8.0 + 4.0 * w);
+        let (_, n) = s3.eval(&X);
+        pts3.push(X + n * off);
+        let X2 = Vector2::new(8.0 + 4.0 * cs(t.cos()), p.y_top - 4.0 + 4.0 * v);
+        let (_, n2) = s2.eval(&X2);
+        pts2.push(X2 + n2 * off);
+    }
+    let mut g = c.benchmark_group("contact");
+    g.bench_function("contact_force-2d-dual3", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for x in &pts2 {
+                let xd = Vector2::new(
+                    D3::from_re(x.x).derivative(0),
+                    D3::from_re(x.y).derivative(1),
+                );
+                let f = contact_force(&s2, &law, black_box(&xd), D3::from_re(1.1).derivative(2));
+                acc += f.y.re;
+            }
+            acc
+        })
+    });
+    g.bench_function("contact_force3-dual3", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for x in &pts3 {
+                let xd = Vector3::from_fn(|k, _| D3::from_re(x[k]).derivative(k));
+                let f = contact_force3(&s3, &law, black_box(&xd), D3::from_re(1.1));
+                acc += f.y.re;
+            }
+            acc
+        })
+    });
+    g.bench_function("contact_force3-f64", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for x in &pts3 {
+                acc += contact_force3(&s3, &law, black_box(x), 1.1).y;
+            }
+            acc
+        })
+    });
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .sample_size(20)
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(2));
-    targets = laws
+    targets = laws, contact
 }
 criterion_main!(benches);
