@@ -15,7 +15,7 @@
 //! evaluated as `a I + (k/I₃) adj(C_e) + c C_e` (no division but the one by `I₃`). The
 //! reference stress is `S_s = J_a F_a⁻¹ S_e F_a⁻ᵀ`, `P_s = F S_s`; `F_a⁻¹` is skipped when
 //! `F_a = I` exactly (everywhere but in the active regions). Symmetric tensors are kept as
-//! their six entries ([`Sym3`]), which halves the dual-number work of the products.
+//! their six entries (`Sym3`), which halves the dual-number work of the products.
 //!
 //! **Viscosity.** `S_f = (Jλ_f/2) tr(C⁻¹Ċ) C⁻¹ + Jμ_f C⁻¹ĊC⁻¹` with `Ċ = ḞᵀF + FᵀḞ`. With
 //! `H = F⁻¹` and `L = ḞH`, `C⁻¹Ċ = 2H d F` (`d = sym L`), so `tr(C⁻¹Ċ) = 2 tr L` and
@@ -23,8 +23,9 @@
 //!
 //! `P_f = F S_f = J σ F⁻ᵀ = σ cof F`, `σ = λ_f tr(d) I + 2μ_f d`, `cof F = J F⁻ᵀ = adj(F)ᵀ`:
 //!
-//! the same stress as the `C` form of the 2-D code, computed in about half the products
-//! (`adj F`, `ḞF⁻¹`, one product with `cof F`; no `C`, `C⁻¹` or `C⁻¹ĊC⁻¹`).
+//! the same stress as the `C` form of the 2-D code, with about 60 % of its products
+//! (`adj F`, `ḞF⁻¹`, one product with `cof F`; no `C`, `C⁻¹` or `C⁻¹ĊC⁻¹`), which counts
+//! twice for dual numbers. A test checks it against MODEL.md's `S_f` literally.
 //!
 //! **Tangent.** [`material_point3`] returns `∂P/∂F` in closed form, not by dual numbers.
 //! With `M = F_a⁻¹F_a⁻ᵀ` (`I` without active strain) the push-forward through `F_a⁻¹` maps
@@ -44,7 +45,9 @@
 //!
 //! `∂P_f,iJ/∂F_kL = H_Lk P_f,iJ − P_f,iL H_Jk − Jλ_f (HL)_Lk H_Ji − Jμ_f(L_ik C⁻¹_LJ + H_Li (HL)_Jk)`,
 //!
-//! `∂P_f,iJ/∂Ḟ_kL = Jλ_f H_Lk H_Ji + Jμ_f(δ_ik C⁻¹_LJ + H_Li H_Jk)` (`P_f` is linear in `Ḟ`).
+//! `∂P_f,iJ/∂Ḟ_kL = Jλ_f H_Lk H_Ji + Jμ_f(δ_ik C⁻¹_LJ + H_Li H_Jk)`: as `P_f` is linear in
+//! `Ḟ`, its column `3k + L` is `P_f(F, E_kL)` (`E_kL` the unit matrix), the columns
+//! plane strain's `material_point` evaluates one by one; here they come in closed form.
 //!
 //! The tests check both against finite differences and against one `DualSVec64<9>` pass
 //! over `F` ([`material_point3_dual`], kept as the independent reference).
