@@ -258,6 +258,7 @@ impl ActiveStrain {
 
     /// `(p, (ρ, p_y))` for `X` in 3-D: `p = X − c`, `c = (center[0], center[1], c_z)`, and
     /// its meridian coordinates.
+    #[inline]
     fn meridian(&self, X: &Vector3<f64>, c_z: f64) -> (Vector3<f64>, Vector2<f64>) {
         let p = X - Vector3::new(self.center[0], self.center[1], c_z);
         let rho = (p.x * p.x + p.z * p.z).sqrt();
@@ -265,6 +266,7 @@ impl ActiveStrain {
     }
 
     /// The PAC indicator at the offset `q = (ρ, p_y)` from the centre.
+    #[inline]
     fn chi_pac_offset(&self, pac: &Pac, q: &Vector2<f64>) -> f64 {
         let d_out = inside_ellipse(q, pac.outer_axes);
         let d_in = -inside_ellipse(q, pac.inner_axes);
@@ -273,6 +275,7 @@ impl ActiveStrain {
     }
 
     /// The bottom indicator at the offset `q = (ρ, p_y)` from the centre.
+    #[inline]
     fn chi_bottom_offset(&self, bot: &Bottom, q: &Vector2<f64>) -> f64 {
         heaviside(-side_of_ray(q, bot.theta_deg.to_radians()), self.eps)
     }
@@ -281,6 +284,7 @@ impl ActiveStrain {
     /// meridian coordinates `(ρ, X_y − c_y)` of `X` about the vertical axis through
     /// `c = (center[0], center[1], c_z)` — between two ellipsoids of revolution, above the
     /// cone `θ = θ_PAC`. Without the domain restriction (see [`Self::fa3`]).
+    #[inline]
     pub fn chi_pac3(&self, X: &Vector3<f64>, c_z: f64) -> f64 {
         let Some(pac) = self.pac else { return 0.0 };
         let (_, q) = self.meridian(X, c_z);
@@ -290,6 +294,7 @@ impl ActiveStrain {
     /// Bottom indicator in 3-D, `χ_bot` ∈ [0, 1] (0 if no bottom fibres):
     /// [`Self::chi_bottom`] at the meridian coordinates of `X`, the region below the cone
     /// `θ = θ_bot` about the vertical axis through `c = (center[0], center[1], c_z)`.
+    #[inline]
     pub fn chi_bottom3(&self, X: &Vector3<f64>, c_z: f64) -> f64 {
         let Some(bot) = self.bottom else { return 0.0 };
         let (_, q) = self.meridian(X, c_z);
@@ -304,7 +309,9 @@ impl ActiveStrain {
     /// unit tangent of the meridian through `X` (module notes; on the vertical axis through
     /// `c`, `T⊗T` is replaced by its azimuthal mean `½(e_x⊗e_x + e_z⊗e_z)`). PAC only in the
     /// cytoplasm, bottom in cytoplasm and membrane, `F_a = I` in the nucleus and at `X = c`.
-    /// In the plane `z = c_z`, `x > c_x`, it is [`Self::fa`] `⊕ 1` exactly.
+    /// In the plane `z = c_z`, `x > c_x`, it is [`Self::fa`] `⊕ 1` exactly. Affine in `t_a`
+    /// like [`Self::fa`]: `F_a(t_a) = I − t_a (I − F_a(1))`, axis included.
+    #[inline]
     pub fn fa3(&self, X: &Vector3<f64>, c_z: f64, domain: Domain, t_a: f64) -> Matrix3<f64> {
         let I = Matrix3::identity();
         if domain == Domain::Nucleus || t_a == 0.0 {

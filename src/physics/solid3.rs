@@ -329,6 +329,7 @@ pub fn piola_total3<T: Real>(
 
 /// `true` when `F` is finite with `det F > 0` (then `det F_e = det F / det F_a > 0` for
 /// any admissible active strain, `det F_a > 0`). The stress functions assume it.
+#[inline]
 pub fn admissible3(F: &Matrix3<f64>) -> bool {
     F.iter().all(|v| v.is_finite()) && F.determinant() > 0.0
 }
@@ -359,6 +360,7 @@ pub struct MaterialPoint3 {
 /// `P` agrees with [`piola_total3`] to round-off (the same stress summed in another order).
 ///
 /// Assumes [`admissible3`]`(F)` and `det F_a > 0`.
+#[inline]
 pub fn material_point3(
     yeoh: &Yeoh,
     visc: &Viscosity,
@@ -476,6 +478,7 @@ pub fn material_point3(
 /// The independent reference for the closed form (the tests compare them) and its
 /// benchmark baseline; 3.5 × slower, so the model uses [`material_point3`].
 /// `P` is [`piola_total3`]'s exactly. Assumes [`admissible3`]`(F)` and `det F_a > 0`.
+#[inline]
 pub fn material_point3_dual(
     yeoh: &Yeoh,
     visc: &Viscosity,

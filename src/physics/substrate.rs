@@ -380,6 +380,7 @@ pub enum Lattice {
 impl Lattice {
     /// The z of the axes of the row `k = 0` [µm] for the period `period`: `P/2`
     /// ([`Lattice::FourPillars`]) or 0 ([`Lattice::Gap`]).
+    #[inline]
     pub fn z_offset(self, period: f64) -> f64 {
         match self {
             Lattice::FourPillars => 0.5 * period,
@@ -402,6 +403,7 @@ pub struct Substrate3 {
 
 impl Pillars {
     /// Axis (in z) of the pillar row nearest to `z` [µm] on `lattice`.
+    #[inline]
     pub fn nearest_axis_z(&self, z: f64, lattice: Lattice) -> f64 {
         let z0 = lattice.z_offset(self.period());
         let k = ((z - z0) / self.period()).round();
@@ -444,6 +446,7 @@ impl Pillars {
     /// Height `y` of the substrate surface at `(x, z)` [µm] on `lattice`:
     /// `y_top − h/2 + (h/2)(1 − |u|^q − |w|^q)^{1/q}` over a pillar
     /// (`|u|^q + |w|^q < 1`), else the floor `y_top − h`.
+    #[inline]
     pub fn surface_height3(&self, x: f64, z: f64, lattice: Lattice) -> f64 {
         let a = 0.5 * self.width;
         let b = 0.5 * self.height;
@@ -468,6 +471,7 @@ impl Pillars {
     /// On [`Lattice::Gap`] (pillars at z = 0) the smallest gap lies in the plane z = 0 and
     /// this is the 2-D placement; on [`Lattice::FourPillars`] it lies over the pillars'
     /// rounded corners nearest the axis.
+    #[inline]
     pub fn y_top_for_gap3(
         &self,
         gap: f64,
@@ -498,6 +502,7 @@ impl Pillars {
     /// smallest, and `y_top + gap` there. A 201 × 201 grid over the disk's square (outside
     /// the disk the sphere's "bottom" is its equator height, never the minimum), then
     /// zooming 11 × 11 grids, each 2.5 × finer, down to 1e-10 µm.
+    #[inline]
     pub fn lowest_clearance3(
         &self,
         lattice: Lattice,
@@ -543,6 +548,7 @@ impl Pillars {
 
 impl Substrate3 {
     /// Checks the parameters (those of [`Substrate::validate`]; a lattice has none).
+    #[inline]
     pub fn validate(&self) -> Result<(), PhysicsError> {
         self.plane.validate()
     }
@@ -586,6 +592,7 @@ impl Substrate3 {
 
     /// Height `y` of the substrate surface at `(x, z)` [µm], for plotting: `y_s` (flat) or
     /// [`Pillars::surface_height3`].
+    #[inline]
     pub fn surface_height(&self, x: f64, z: f64) -> f64 {
         match &self.plane {
             Substrate::Flat { y_s } => *y_s,
