@@ -7,12 +7,44 @@
 //! Heavisides `H_ε` of signed distances to the bounding curves (in reference coordinates),
 //! so `F_a` is smooth in `p`. Everything here is `f64`: it depends on the reference
 //! position and time only.
+//!
+//! The PAC indicator has no switch of its own for MODEL.md's second reading of Table 1
+//! (`active.pac.clip_to_cell`: semi-axes (10, 9) and (15, 14), ellipses leaving the cell):
+//! the ellipses are used as given and the region is clipped by the cell because the PAC
+//! acts in the cytoplasm only ([`ActiveStrain::fa`]'s domain restriction); the switch only
+//! relaxes the case validation. The same holds in 3-D.
+//!
+//! **3-D** (MODEL.md §10; [`ActiveStrain::fa3`], [`ActiveStrain::chi_pac3`],
+//! [`ActiveStrain::chi_bottom3`]). With `c = (c_x, c_y, c_z)` and `p = X − c`, the point's
+//! meridian coordinates are `ρ = √(p_x² + p_z²)` (the horizontal distance from the vertical
+//! axis through `c`) and `p_y`; the elevation is `θ = atan(p_y/ρ)`. The indicators are the
+//! 2-D ones evaluated at `(ρ, p_y)`: the ellipses become ellipsoids of revolution about the
+//! axis (horizontal semi-axis `a`, vertical `b`; the first-order distance of
+//! `l = 1 − (ρ/a)² − (p_y/b)²` in 3-D is the 2-D one in `(ρ, p_y)`), the bounding rays
+//! become cones about the axis. `N = p/|p|`, and `T = −N_y e_ρ + (ρ/|p|) e_y` is the unit
+//! tangent of the meridian through `X` (`e_ρ = (p_x, 0, p_z)/ρ`): in the plane `z = c_z`,
+//! `x > c_x` it is the 2-D `T`, so there `fa3 = fa ⊕ 1` bit for bit, and elsewhere
+//! `fa3(c + R p) = R fa3(c + p) Rᵀ` for every rotation `R` about the vertical axis.
+//!
+//! *On the axis* (`ρ = 0`) the meridian, hence `T`, is undefined: the meridian fibres of
+//! the PAC converge there and `T⊗T → e_ρ⊗e_ρ` depends on the direction of approach. We take
+//! its mean over the azimuth, `½(e_x⊗e_x + e_z⊗e_z)`, which keeps `F_a` axisymmetric and
+//! `det F_a ∈ [(1 − e_PAC)(1 − e_bot), 1]`. With the default `θ_PAC = −18°` the PAC does
+//! reach the axis: above the centre, between the ellipsoids (`p_y` ∈ (4.5, 7) µm) the cone
+//! is far away and `χ_PAC = 1`, so the cap's fibres meet at its apex. Only the axis itself
+//! (a line, on which no quadrature point of the quarter cell lies: it is an edge of the
+//! domain) sees this choice; the 2-D half cell instead takes `T = (−1, 0)` on its symmetry
+//! line, so `fa3 ≠ fa ⊕ 1` on the axis only. The bottom fibres (`N`) are defined on the
+//! axis; `F_a = I` at `X = c`. The indicators are smooth across the axis wherever the PAC or
+//! bottom region can act: `ρ` enters the ellipsoid distances through `ρ²`, and the cone
+//! distances `cos θ₀ p_y − sin θ₀ ρ` (not smooth at the axis) are beyond `±ε_a` there
+//! except within `ε_a/cos θ₀` of the centre, inside the nucleus.
 
 #![allow(non_snake_case)]
 
 use super::smooth::heaviside;
 use super::{PhysicsError, check};
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Which sub-domain of the cell a material point belongs to (MODEL.md §2; the mesh is
@@ -221,6 +253,98 @@ impl ActiveStrain {
         }
         Fa
     }
+
+    // ---- 3-D (module notes) ---------------------------------------------------------------
+
+    /// `(p, (ρ, p_y))` for `X` in 3-D: `p = X − c`, `c = (center[0], center[1], c_z)`, and
+    /// its meridian coordinates.
+    #[inline]
+    fn meridian(&self, X: &Vector3<f64>, c_z: f64) -> (Vector3<f64>, Vector2<f64>) {
+        let p = X - Vector3::new(self.center[0], self.center[1], c_z);
+        let rho = (p.x * p.x + p.z * p.z).sqrt();
+        (p, Vector2::new(rho, p.y))
+    }
+
+    /// The PAC indicator at the offset `q = (ρ, p_y)` from the centre.
+    #[inline]
+    fn chi_pac_offset(&self, pac: &Pac, q: &Vector2<f64>) -> f64 {
+        let d_out = inside_ellipse(q, pac.outer_axes);
+        let d_in = -inside_ellipse(q, pac.inner_axes);
+        let d_th = side_of_ray(q, pac.theta_deg.to_radians());
+        heaviside(d_out, self.eps) * heaviside(d_in, self.eps) * heaviside(d_th, self.eps)
+    }
+
+    /// The bottom indicator at the offset `q = (ρ, p_y)` from the centre.
+    #[inline]
+    fn chi_bottom_offset(&self, bot: &Bottom, q: &Vector2<f64>) -> f64 {
+        heaviside(-side_of_ray(q, bot.theta_deg.to_radians()), self.eps)
+    }
+
+    /// PAC indicator in 3-D, `χ_PAC` ∈ [0, 1] (0 if no PAC): [`Self::chi_pac`] at the
+    /// meridian coordinates `(ρ, X_y − c_y)` of `X` about the vertical axis through
+    /// `c = (center[0], center[1], c_z)` — between two ellipsoids of revolution, above the
+    /// cone `θ = θ_PAC`. Without the domain restriction (see [`Self::fa3`]).
+    #[inline]
+    pub fn chi_pac3(&self, X: &Vector3<f64>, c_z: f64) -> f64 {
+        let Some(pac) = self.pac else { return 0.0 };
+        let (_, q) = self.meridian(X, c_z);
+        self.chi_pac_offset(&pac, &q)
+    }
+
+    /// Bottom indicator in 3-D, `χ_bot` ∈ [0, 1] (0 if no bottom fibres):
+    /// [`Self::chi_bottom`] at the meridian coordinates of `X`, the region below the cone
+    /// `θ = θ_bot` about the vertical axis through `c = (center[0], center[1], c_z)`.
+    #[inline]
+    pub fn chi_bottom3(&self, X: &Vector3<f64>, c_z: f64) -> f64 {
+        let Some(bot) = self.bottom else { return 0.0 };
+        let (_, q) = self.meridian(X, c_z);
+        self.chi_bottom_offset(&bot, &q)
+    }
+
+    /// Active-strain tensor of the 3-D model at reference point `X` of sub-domain `domain`,
+    /// at active switch value `t_a` ∈ [0, 1], the cell centre `c = (center[0], center[1],
+    /// c_z)`:
+    ///
+    /// `F_a = I − e_PAC t_a χ_PAC T⊗T − e_bot t_a χ_bot N⊗N`, `N = (X − c)/|X − c|`, `T` the
+    /// unit tangent of the meridian through `X` (module notes; on the vertical axis through
+    /// `c`, `T⊗T` is replaced by its azimuthal mean `½(e_x⊗e_x + e_z⊗e_z)`). PAC only in the
+    /// cytoplasm, bottom in cytoplasm and membrane, `F_a = I` in the nucleus and at `X = c`.
+    /// In the plane `z = c_z`, `x > c_x`, it is [`Self::fa`] `⊕ 1` exactly. Affine in `t_a`
+    /// like [`Self::fa`]: `F_a(t_a) = I − t_a (I − F_a(1))`, axis included.
+    #[inline]
+    pub fn fa3(&self, X: &Vector3<f64>, c_z: f64, domain: Domain, t_a: f64) -> Matrix3<f64> {
+        let I = Matrix3::identity();
+        if domain == Domain::Nucleus || t_a == 0.0 {
+            return I;
+        }
+        let (p, q) = self.meridian(X, c_z);
+        let r = p.norm();
+        if r == 0.0 {
+            return I;
+        }
+        let N = p / r;
+        let mut Fa = I;
+        if let (Some(pac), Domain::Cytoplasm) = (self.pac, domain) {
+            let a = pac.e * t_a * self.chi_pac_offset(&pac, &q);
+            if a != 0.0 {
+                let rho = q.x;
+                if rho > 0.0 {
+                    let T = Vector3::new(-N.y * (p.x / rho), rho / r, -N.y * (p.z / rho));
+                    Fa -= T * T.transpose() * a;
+                } else {
+                    Fa[(0, 0)] -= 0.5 * a;
+                    Fa[(2, 2)] -= 0.5 * a;
+                }
+            }
+        }
+        if let Some(bot) = self.bottom {
+            let b = bot.e * t_a * self.chi_bottom_offset(&bot, &q);
+            if b != 0.0 {
+                Fa -= N * N.transpose() * b;
+            }
+        }
+        Fa
+    }
 }
 
 #[cfg(test)]
@@ -359,5 +483,180 @@ mod tests {
             ..both().bottom.unwrap()
         });
         assert!(a.validate().is_err());
+    }
+
+    // ---- 3-D ----------------------------------------------------------------------------
+
+    /// The active strains of the 3-D tests: the defaults, MODEL.md's clipped reading of
+    /// Table 1 (semi-axes (10, 9), (15, 14)) and a centre off the origin.
+    fn variants() -> Vec<(ActiveStrain, f64)> {
+        let d = both();
+        let clipped = ActiveStrain {
+            pac: Some(Pac {
+                inner_axes: [10.0, 9.0],
+                outer_axes: [15.0, 14.0],
+                ..d.pac.unwrap()
+            }),
+            ..d
+        };
+        let moved = ActiveStrain {
+            center: [1.5, 7.0],
+            ..d
+        };
+        vec![(d, 0.0), (clipped, 0.0), (moved, -2.5)]
+    }
+
+    const DOMAINS: [Domain; 3] = [Domain::Nucleus, Domain::Cytoplasm, Domain::Membrane];
+
+    fn embed(A: &Matrix2<f64>) -> Matrix3<f64> {
+        crate::physics::solid3::tests::embed(A, 1.0)
+    }
+
+    #[test]
+    fn in_the_plane_through_the_centre_fa3_is_fa_plus_one_exactly() {
+        // z = c_z, x > c_x: the meridian is the 2-D half plane.
+        let mut rng = crate::physics::material::tests::Rng::new(103);
+        for (a, c_z) in variants() {
+            let [cx, cy] = a.center;
+            for _ in 0..2000 {
+                let X2 = Vector2::new(cx + rng.uniform(1e-6, 10.0), cy + rng.uniform(-10.0, 10.0));
+                let X3 = Vector3::new(X2.x, X2.y, c_z);
+                assert_eq!(a.chi_pac3(&X3, c_z), a.chi_pac(&X2));
+                assert_eq!(a.chi_bottom3(&X3, c_z), a.chi_bottom(&X2));
+                for dom in DOMAINS {
+                    for t_a in [0.0, 0.4, 1.0] {
+                        let (f2, f3) = (a.fa(&X2, dom, t_a), a.fa3(&X3, c_z, dom, t_a));
+                        assert_eq!(f3, embed(&f2), "{X3:?} {dom} t_a {t_a}");
+                    }
+                }
+            }
+            // at the centre: I
+            let c3 = Vector3::new(cx, cy, c_z);
+            assert_eq!(a.fa3(&c3, c_z, Domain::Cytoplasm, 1.0), Matrix3::identity());
+        }
+    }
+
+    #[test]
+    fn fa3_is_axisymmetric() {
+        // X' = c + R(X − c) for R a rotation about the vertical axis: F_a(X') = R F_a(X) Rᵀ,
+        // on and off the axis.
+        let mut rng = crate::physics::material::tests::Rng::new(107);
+        for (a, c_z) in variants() {
+            let c = Vector3::new(a.center[0], a.center[1], c_z);
+            for i in 0..500 {
+                let p = if i % 50 == 0 {
+                    Vector3::new(0.0, rng.uniform(-10.0, 10.0), 0.0)
+                } else {
+                    Vector3::new(
+                        rng.uniform(-10.0, 10.0),
+                        rng.uniform(-10.0, 10.0),
+                        rng.uniform(-10.0, 10.0),
+                    )
+                };
+                let R = nalgebra::Rotation3::from_axis_angle(
+                    &Vector3::y_axis(),
+                    rng.uniform(-3.2, 3.2),
+                )
+                .into_inner();
+                let (X, Xr) = (c + p, c + R * p);
+                assert!((a.chi_pac3(&Xr, c_z) - a.chi_pac3(&X, c_z)).abs() < 1e-13);
+                assert!((a.chi_bottom3(&Xr, c_z) - a.chi_bottom3(&X, c_z)).abs() < 1e-13);
+                for dom in DOMAINS {
+                    let (F, Fr) = (a.fa3(&X, c_z, dom, 0.8), a.fa3(&Xr, c_z, dom, 0.8));
+                    assert!((Fr - R * F * R.transpose()).norm() < 1e-12, "{p:?} {dom}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fa3_bounds_and_indicators() {
+        // det F_a ∈ [(1 − e_PAC)(1 − e_bot), 1], F_a symmetric with eigenvalues in
+        // [1 − e, 1], indicators in [0, 1]; the fibre directions contract as stated.
+        let mut rng = crate::physics::material::tests::Rng::new(109);
+        for (a, c_z) in variants() {
+            let (ep, eb) = (a.pac.unwrap().e, a.bottom.unwrap().e);
+            let c = Vector3::new(a.center[0], a.center[1], c_z);
+            for i in 0..3000 {
+                let p = if i % 10 == 0 {
+                    Vector3::new(0.0, rng.uniform(-10.0, 10.0), 0.0)
+                } else {
+                    Vector3::new(
+                        rng.uniform(-10.0, 10.0),
+                        rng.uniform(-10.0, 10.0),
+                        rng.uniform(-10.0, 10.0),
+                    )
+                };
+                let X = c + p;
+                let (cp, cb) = (a.chi_pac3(&X, c_z), a.chi_bottom3(&X, c_z));
+                assert!((0.0..=1.0).contains(&cp) && (0.0..=1.0).contains(&cb));
+                for dom in DOMAINS {
+                    let Fa = a.fa3(&X, c_z, dom, 1.0);
+                    let det = Fa.determinant();
+                    assert!(det >= (1.0 - ep) * (1.0 - eb) - 1e-12 && det <= 1.0 + 1e-12);
+                    assert_eq!(Fa, Fa.transpose());
+                    let ev = Fa.symmetric_eigenvalues();
+                    assert!(
+                        ev.iter()
+                            .all(|&l| l >= 1.0 - ep.max(eb) - 1e-12 && l <= 1.0 + 1e-12)
+                    );
+                }
+            }
+        }
+        // the PAC contracts along the meridian, the bottom fibres along N, off the plane
+        let a = both();
+        let (t, f) = (45f64.to_radians(), 1.1f64);
+        let N = Vector3::new(t.cos() * f.cos(), t.sin(), t.cos() * f.sin());
+        let T = Vector3::new(-t.sin() * f.cos(), t.cos(), -t.sin() * f.sin());
+        let Phi = Vector3::new(-f.sin(), 0.0, f.cos()); // the azimuthal direction
+        let X = Vector3::new(0.0, 8.5, 0.0) + N * 6.2;
+        let Fa = a.fa3(&X, 0.0, Domain::Cytoplasm, 0.6);
+        assert!((Fa * T - T * (1.0 - 0.7 * 0.6)).norm() < 1e-15);
+        assert!((Fa * N - N).norm() < 1e-15 && (Fa * Phi - Phi).norm() < 1e-15);
+        let (t, f) = ((-70f64).to_radians(), -2.0f64);
+        let N = Vector3::new(t.cos() * f.cos(), t.sin(), t.cos() * f.sin());
+        let Fa = a.fa3(
+            &(Vector3::new(0.0, 8.5, 0.0) + N * 9.9),
+            0.0,
+            Domain::Membrane,
+            0.6,
+        );
+        assert!((Fa * N - N * (1.0 - 0.7 * 0.6)).norm() < 1e-15);
+    }
+
+    #[test]
+    fn on_the_axis_the_pac_reaches_the_apex_with_the_azimuthal_mean() {
+        let a = both();
+        let (e, t_a) = (a.pac.unwrap().e, 0.5);
+        // default θ_PAC: the PAC covers the axis above the centre between the ellipsoids
+        // (vertical semi-axes 4.5 and 7), not below it; the bottom covers it below
+        let top = Vector3::new(0.0, 8.5 + 5.75, 0.0);
+        assert_eq!(a.chi_pac3(&top, 0.0), 1.0);
+        assert_eq!(a.chi_pac3(&Vector3::new(0.0, 8.5 - 5.75, 0.0), 0.0), 0.0);
+        assert_eq!(a.chi_bottom3(&Vector3::new(0.0, 8.5 - 8.0, 0.0), 0.0), 1.0);
+        assert_eq!(a.chi_bottom3(&top, 0.0), 0.0);
+        // F_a there: the mean of T⊗T over the azimuth, ½(e_x⊗e_x + e_z⊗e_z)
+        let Fa = a.fa3(&top, 0.0, Domain::Cytoplasm, t_a);
+        let mean =
+            Matrix3::from_diagonal(&Vector3::new(1.0 - 0.5 * e * t_a, 1.0, 1.0 - 0.5 * e * t_a));
+        assert_eq!(Fa, mean);
+        // which is the average of F_a over a small circle about the axis
+        let n = 64;
+        let avg = (0..n)
+            .map(|k| {
+                let f = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+                a.fa3(
+                    &(top + Vector3::new(f.cos(), 0.0, f.sin()) * 1e-9),
+                    0.0,
+                    Domain::Cytoplasm,
+                    t_a,
+                )
+            })
+            .fold(Matrix3::zeros(), |s, m| s + m)
+            / n as f64;
+        assert!((avg - mean).norm() < 1e-8, "{avg}");
+        // (the 2-D half cell takes T = (−1, 0) on its symmetry line instead)
+        let f2 = a.fa(&Vector2::new(0.0, top.y), Domain::Cytoplasm, t_a);
+        assert_eq!(f2, Matrix2::new(1.0 - e * t_a, 0.0, 0.0, 1.0));
     }
 }

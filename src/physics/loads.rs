@@ -3,13 +3,20 @@
 //!
 //! Functions of the unknowns (`x`, `F`, `J`, `μ_as`) are generic over [`Real`] for exact
 //! tangents; gravity depends on time only and is `f64`.
+//!
+//! The 3-D model (MODEL.md §10) has its own twins ([`contact_force3`], [`layer3`],
+//! [`cofactor3`], [`adhesion_force3`], [`adhesion_rate3`]): the same formulas with 3-vectors,
+//! a 3 × 3 `F` and the [`Substrate3`]. They are written beside the 2-D functions rather
+//! than sharing one generic body, so the plane-strain and axisymmetric element loops keep
+//! exactly the code they were tuned with. Gravity is `−ρ₀ g s_g t_g e_y` in 3-D too: the
+//! 2-D [`gravity_force`]'s two entries with a zero z entry.
 
 #![allow(non_snake_case)]
 
 use super::smooth::{heaviside, smooth_step};
-use super::substrate::Substrate;
+use super::substrate::{Substrate, Substrate3};
 use super::{PhysicsError, Real, check, cst, sqrt};
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Penalty contact with the substrate.
@@ -207,6 +214,77 @@ pub fn adhesion_hoop_factor<T: Real>(ad: &Adhesion, hoop: T) -> T {
 /// indicator (`H_ε(d(x) + e_f)` by default).
 pub fn adhesion_rate<T: Real>(sub: &Substrate, ad: &Adhesion, x: &Vector2<T>, mu_as: T) -> T {
     let h = layer(sub, ad, x);
+    let cap = smooth_step(mu_as, 0.98 * ad.mu_as_max, ad.mu_as_max);
+    h * (-cap + 1.0) * ad.mu_as0
+}
+
+/// Contact force per unit reference volume [pN/µm³] in the 3-D model, at current position
+/// `x` with `J = det F`: `b_ct = J μ_ct H_ε(d(x)) n(x)`, as [`contact_force`].
+#[inline(always)]
+pub fn contact_force3<T: Real>(sub: &Substrate3, c: &Contact, x: &Vector3<T>, J: T) -> Vector3<T> {
+    let (d, n) = sub.eval(x);
+    let h = heaviside(d, c.eps);
+    n * (J * h * c.mu_ct)
+}
+
+/// Fibronectin-layer indicator in the 3-D model, as [`layer`]: `H_ε(d(x) + e_f)`, or
+/// `H_ε(d + e_f) − H_ε_s(d)` when the layer excludes the substrate.
+#[inline(always)]
+pub fn layer3<T: Real>(sub: &Substrate3, ad: &Adhesion, x: &Vector3<T>) -> T {
+    let (d, _) = sub.eval(x);
+    let h = heaviside(d + ad.e_f, ad.eps);
+    match ad.exclude_substrate {
+        None => h,
+        Some(eps_s) => h - heaviside(d, eps_s),
+    }
+}
+
+/// Cofactor `cof(F) = J F⁻ᵀ` of a 3 × 3 `F`, polynomial in `F`:
+/// `cof_ij = F_{i+1,j+1} F_{i+2,j+2} − F_{i+1,j+2} F_{i+2,j+1}` (indices mod 3).
+#[inline(always)]
+pub fn cofactor3<T: Real>(F: &Matrix3<T>) -> Matrix3<T> {
+    Matrix3::from_fn(|i, j| {
+        let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
+        let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
+        F[(i1, j1)] * F[(i2, j2)] - F[(i1, j2)] * F[(i2, j1)]
+    })
+}
+
+/// Adhesive spreading force per unit reference volume [pN/µm³] in the 3-D model
+/// (membrane only — the caller applies it there), as [`adhesion_force`]:
+/// `b_as = t_as μ_as g_l(x) a(F)`, `a(F) = cof(F) N` or its unit vector
+/// ([`AdhesionDirection`]), times `J = det F` when `jacobian_factor`; `N` the outward
+/// radial reference direction `(p − c)/|p − c|`.
+#[inline(always)]
+pub fn adhesion_force3<T: Real>(
+    sub: &Substrate3,
+    ad: &Adhesion,
+    x: &Vector3<T>,
+    F: &Matrix3<T>,
+    N_ref: &Vector3<f64>,
+    mu_as: T,
+    t_as: f64,
+) -> Vector3<T> {
+    let h = layer3(sub, ad, x);
+    let N: Vector3<T> = N_ref.map(cst::<T>);
+    let cof = cofactor3(F);
+    let mut a = cof * N;
+    if ad.direction == AdhesionDirection::Unit {
+        // |cof(F) N| = J |F⁻ᵀ N| > 0 for an admissible F.
+        let len = sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
+        a /= len;
+    }
+    if ad.jacobian_factor {
+        // det F = Σ_j F_0j cof_0j
+        a *= F[(0, 0)] * cof[(0, 0)] + F[(0, 1)] * cof[(0, 1)] + F[(0, 2)] * cof[(0, 2)];
+    }
+    a * (h * mu_as * t_as)
+}
+
+/// Rate of the adhesion coefficient [pN/(µm³·s)] in the 3-D model, as [`adhesion_rate`]:
+/// `μ̇_as = μ_as0 g_l(x) (1 − S(μ_as; 0.98 μ_as,max, μ_as,max))`.
+pub fn adhesion_rate3<T: Real>(sub: &Substrate3, ad: &Adhesion, x: &Vector3<T>, mu_as: T) -> T {
+    let h = layer3(sub, ad, x);
     let cap = smooth_step(mu_as, 0.98 * ad.mu_as_max, ad.mu_as_max);
     h * (-cap + 1.0) * ad.mu_as0
 }
@@ -573,6 +651,243 @@ mod tests {
                 ..excl
             };
             assert!(bad.validate().is_err(), "e_f {e_f}, ε_s {eps_s}");
+        }
+    }
+
+    // ---- 3-D twins --------------------------------------------------------------------
+
+    /// The 3-D substrates paired with the 2-D one they reduce to on the plane `z = z₀`:
+    /// flat; the pillars on the gap lattice at z₀ = 0 and on the four-pillar one at
+    /// z₀ = P/2 (planes through a row of pillar axes).
+    fn substrates3() -> Vec<(Substrate3, Substrate, f64)> {
+        use crate::physics::Lattice;
+        let p = crate::physics::reference::pillars();
+        let flat = Substrate::Flat { y_s: -2.0 };
+        let pil = Substrate::Pillars(p);
+        vec![
+            (
+                Substrate3 {
+                    plane: flat,
+                    lattice: Lattice::FourPillars,
+                },
+                flat,
+                0.0,
+            ),
+            (
+                Substrate3 {
+                    plane: pil,
+                    lattice: Lattice::Gap,
+                },
+                pil,
+                0.0,
+            ),
+            (
+                Substrate3 {
+                    plane: pil,
+                    lattice: Lattice::FourPillars,
+                },
+                pil,
+                0.5 * p.period(),
+            ),
+        ]
+    }
+
+    fn embed(F: &Matrix2<f64>) -> Matrix3<f64> {
+        crate::physics::solid3::tests::embed(F, 1.0)
+    }
+
+    #[test]
+    fn loads3_reduce_to_the_2d_ones_in_a_plane_through_the_axes() {
+        // In the plane z = z₀ with F = F₂ ⊕ 1 and N in the plane: contact, layer,
+        // adhesion force (every reading) and rate are the 2-D ones with a zero z entry.
+        let c = crate::physics::reference::contact();
+        let mut rng = crate::physics::material::tests::Rng::new(97);
+        let y_top = crate::physics::reference::pillars().y_top;
+        for (s3, s2, z0) in substrates3() {
+            for ad in adhesion_readings() {
+                for _ in 0..100 {
+                    // points across the contact and layer bands of the flat surface and
+                    // the pillars
+                    let x = rng.uniform(-20.0, 20.0);
+                    let y = if rng.uniform(0.0, 1.0) < 0.5 {
+                        rng.uniform(-2.6, 0.2)
+                    } else {
+                        y_top + rng.uniform(-5.0, 2.0)
+                    };
+                    let (X2, X3) = (Vector2::new(x, y), Vector3::new(x, y, z0));
+                    let J = rng.uniform(0.7, 1.3);
+                    let f2 = contact_force(&s2, &c, &X2, J);
+                    let f3 = contact_force3(&s3, &c, &X3, J);
+                    assert_eq!(f3, Vector3::new(f2.x, f2.y, 0.0), "{s3:?} ({x}, {y})");
+                    assert_eq!(layer3(&s3, &ad, &X3), layer(&s2, &ad, &X2));
+                    let F2 = crate::physics::material::tests::Rng::deformation(&mut rng, 0.4);
+                    let phi = rng.uniform(-3.0, 3.0);
+                    let N2 = Vector2::new(phi.cos(), phi.sin());
+                    let N3 = Vector3::new(N2.x, N2.y, 0.0);
+                    let mu = rng.uniform(0.0, 1400.0);
+                    let a2 = adhesion_force(&s2, &ad, &X2, &F2, &N2, mu, 0.7);
+                    let a3 = adhesion_force3(&s3, &ad, &X3, &embed(&F2), &N3, mu, 0.7);
+                    let scale = mu * (1.0 + F2.norm()).powi(2);
+                    assert!(
+                        (a3 - Vector3::new(a2.x, a2.y, 0.0)).norm() <= 1e-14 * scale,
+                        "{ad:?} {s3:?}: {a3} vs {a2}"
+                    );
+                    assert_eq!(
+                        adhesion_rate3(&s3, &ad, &X3, mu),
+                        adhesion_rate(&s2, &ad, &X2, mu)
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn cofactor3_is_det_f_times_the_inverse_transpose() {
+        let mut rng = crate::physics::material::tests::Rng::new(101);
+        for _ in 0..20 {
+            let F = Matrix3::identity() + Matrix3::from_fn(|_, _| rng.uniform(-0.8, 0.8));
+            let J = F.determinant();
+            if J.abs() < 1e-3 {
+                continue;
+            }
+            let exact = F.try_inverse().unwrap().transpose() * J;
+            assert!((cofactor3(&F) - exact).norm() < 1e-14 * (1.0 + exact.norm()));
+        }
+        // its plane-strain block is the 2-D cofactor
+        let F2 = Matrix2::new(1.2, 0.1, -0.3, 0.8);
+        let c3 = cofactor3(&embed(&F2));
+        assert_eq!(c3.fixed_view::<2, 2>(0, 0), cofactor(&F2));
+        assert_eq!(c3[(2, 2)], F2.determinant());
+    }
+
+    #[test]
+    fn contact3_pushes_along_the_substrate_normal() {
+        use crate::physics::Lattice;
+        let c = crate::physics::reference::contact();
+        let p = crate::physics::reference::pillars();
+        let s = Substrate3 {
+            plane: Substrate::Pillars(p),
+            lattice: Lattice::FourPillars,
+        };
+        let mid = p.y_top - 4.0;
+        // inside the z side face of the pillar at (8, 8), deep in the band: μ_ct e_z
+        let f = contact_force3(&s, &c, &Vector3::new(8.0, mid, 11.7), 1.0);
+        assert!(
+            (f - Vector3::new(0.0, 0.0, c.mu_ct)).norm() < 1e-9,
+            "f = {f}"
+        );
+        // and nothing 0.2 µm outside it
+        let f = contact_force3(&s, &c, &Vector3::new(8.0, mid, 12.2), 1.0);
+        assert_eq!(f, Vector3::zeros());
+    }
+
+    #[test]
+    fn loads3_derivatives_match_finite_differences() {
+        use crate::physics::Lattice;
+        // variables: x (3), F (9), μ_as (1); contact: x and J
+        type D = DualSVec64<13>;
+        type D4 = DualSVec64<4>;
+        let h = 1e-6;
+        let c = crate::physics::reference::contact();
+        let p = crate::physics::reference::pillars();
+        let y_top = p.y_top;
+        let F0 = Matrix3::new(1.1, 0.2, -0.1, -0.3, 0.9, 0.15, 0.05, -0.2, 1.05);
+        let N = Vector3::new(0.6, -0.64, 0.48);
+        let subs = [
+            Substrate3 {
+                plane: Substrate::Flat { y_s: -2.0 },
+                lattice: Lattice::FourPillars,
+            },
+            Substrate3 {
+                plane: Substrate::Pillars(p),
+                lattice: Lattice::FourPillars,
+            },
+            Substrate3 {
+                plane: Substrate::Pillars(p),
+                lattice: Lattice::Gap,
+            },
+        ];
+        // in the contact band, the layer's transition and the cap's transition, over the
+        // flat surface and the tops, edges and sides of a pillar of each lattice
+        let pts = [
+            (0.0, -1.97, 1.0, 700.0),
+            (1.0, -2.04, -2.0, 1380.0),
+            (2.0, -0.52, 3.0, 1390.0),
+            (8.2, y_top + 0.03, 7.7, 1200.0),
+            (8.3, 1.22, 8.4, 900.0),
+            (11.96, y_top - 3.0, 8.5, 10.0),
+            (8.4, y_top - 3.0, 11.93, 400.0),
+            (5.0, y_top - 0.4, 0.5, 800.0),
+            (11.5, y_top - 0.2, 11.2, 1000.0),
+        ];
+        for s in &subs {
+            for ad in adhesion_readings() {
+                for &(x, y, z, mu) in &pts {
+                    let mut v = [0.0; 13];
+                    v[..3].copy_from_slice(&[x, y, z]);
+                    for k in 0..9 {
+                        v[3 + k] = F0[(k / 3, k % 3)];
+                    }
+                    v[12] = mu;
+                    let dual = |i: usize| D::from_re(v[i]).derivative(i);
+                    let xd = Vector3::new(dual(0), dual(1), dual(2));
+                    let Fd = Matrix3::from_fn(|i, j| dual(3 + 3 * i + j));
+                    let f = adhesion_force3(s, &ad, &xd, &Fd, &N, dual(12), 0.7);
+                    let r = adhesion_rate3(s, &ad, &xd, dual(12));
+                    let eval = |w: &[f64; 13]| {
+                        let X = Vector3::new(w[0], w[1], w[2]);
+                        let F = Matrix3::from_fn(|i, j| w[3 + 3 * i + j]);
+                        (
+                            adhesion_force3(s, &ad, &X, &F, &N, w[12], 0.7),
+                            adhesion_rate3(s, &ad, &X, w[12]),
+                        )
+                    };
+                    for k in 0..13 {
+                        let step = if k == 12 { 1e-3 } else { h };
+                        let (mut pp, mut mm) = (v, v);
+                        pp[k] += step;
+                        mm[k] -= step;
+                        let ((fp, rp), (fm, rm)) = (eval(&pp), eval(&mm));
+                        let fd = (fp - fm) / (2.0 * step);
+                        let rd = (rp - rm) / (2.0 * step);
+                        let fscale = mu.max(1.0) / ad.eps;
+                        for cpt in 0..3 {
+                            assert!(
+                                (fd[cpt] - eps(&f[cpt])[k]).abs() < 1e-6 * fscale,
+                                "{ad:?} {s:?} f_{cpt} k={k} at ({x}, {y}, {z})"
+                            );
+                        }
+                        let rscale = ad.mu_as0 / ad.eps.min(0.02 * ad.mu_as_max);
+                        assert!((rd - eps(&r)[k]).abs() < 1e-6 * rscale, "rate k={k}");
+                    }
+                }
+            }
+            // contact: x and J
+            for &(x, y, z, _) in &pts {
+                let J = 1.1;
+                let xd = Vector3::new(
+                    D4::from_re(x).derivative(0),
+                    D4::from_re(y).derivative(1),
+                    D4::from_re(z).derivative(2),
+                );
+                let f = contact_force3(s, &c, &xd, D4::from_re(J).derivative(3));
+                let base = [x, y, z, J];
+                for k in 0..4 {
+                    let (mut pp, mut mm) = (base, base);
+                    pp[k] += 1e-7;
+                    mm[k] -= 1e-7;
+                    let fp = contact_force3(s, &c, &Vector3::new(pp[0], pp[1], pp[2]), pp[3]);
+                    let fm = contact_force3(s, &c, &Vector3::new(mm[0], mm[1], mm[2]), mm[3]);
+                    let fd = (fp - fm) / 2e-7;
+                    let scale = c.mu_ct / c.eps;
+                    for cpt in 0..3 {
+                        assert!(
+                            (fd[cpt] - eps(&f[cpt])[k]).abs() < 1e-6 * scale,
+                            "{s:?} contact f_{cpt} k={k} at ({x}, {y}, {z})"
+                        );
+                    }
+                }
+            }
         }
     }
 }

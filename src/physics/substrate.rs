@@ -26,11 +26,24 @@
 //! not smooth mid-way between two pillars (`x̃ = ±(w + s)/2`, where the nearest axis
 //! changes: `d` is continuous there by symmetry but `n` flips); there `d_pillar ≈ −s/2`
 //! (−4 µm by default), far outside every band unless `s/2 < e_f + ε`.
+//!
+//! **3-D** ([`Substrate3`], MODEL.md §10). The pillars stand on a square lattice of period
+//! `P = w + s` in x and in z ([`Lattice`]); each is the superellipsoid
+//! `|x̃/(w/2)|^q + |ỹ/(h/2)|^q + |z̃/(w/2)|^q ≤ 1`, `x̃`, `z̃` the offsets to the nearest
+//! pillar axis in x and in z, with the same homogeneous level set
+//! `l = (|u|^q + |v|^q + |w|^q)^{1/q} − 1` (`w = z̃/(w/2)`), the same first-order distance
+//! `d = −l/|∇l|`, normal `∇l/|∇l|`, and the same floor, `d = max(d_pillar, d_floor)`. It is
+//! exact above the middle of a top and beside the middle of a side face; on the plane
+//! `z̃ = 0` through a row of axes it is the 2-D [`Substrate::eval`], bit for bit. The
+//! non-smooth sets are the 2-D ones, now surfaces: the pillar/floor switch around each
+//! pillar's foot, and the mid-planes `x̃ = ±P/2` and `z̃ = ±P/2` between pillars, where the
+//! nearest axis changes (`d ≈ −s/2` there at the height of the tops, and lower between
+//! the corners of four pillars).
 
 #![allow(non_snake_case)]
 
 use super::{PhysicsError, Real, abs, check, cst, powf, powi, re, sqrt};
-use nalgebra::Vector2;
+use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Micropillar geometry. Lengths in µm.
@@ -348,6 +361,246 @@ impl Substrate {
     }
 }
 
+/// The horizontal layout of the pillars in 3-D (MODEL.md §10): a square lattice of period
+/// `P = w + s` in x and in z, the x axes at `first_center + kP` as in 2-D. With
+/// `first_center = P/2` (the default) both layouts keep the quarter symmetry of the cell,
+/// `d(x, y, z) = d(−x, y, z) = d(x, y, −z)` about the cell's axis `x = z = 0`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Lattice {
+    /// The cell centre above the centre of a square of four pillars (MODEL.md's default):
+    /// axes at `x = first_center + kP` and `z = P/2 + kP`, `z̃` measured from the nearest of
+    /// `±P/2 + kP`.
+    #[default]
+    FourPillars,
+    /// The cell centre above the middle of the gap between two pillars: axes at
+    /// `x = first_center + kP` and `z = kP`, so the section `z = 0` is the 2-D substrate.
+    Gap,
+}
+
+impl Lattice {
+    /// The z of the axes of the row `k = 0` [µm] for the period `period`: `P/2`
+    /// ([`Lattice::FourPillars`]) or 0 ([`Lattice::Gap`]).
+    #[inline]
+    pub fn z_offset(self, period: f64) -> f64 {
+        match self {
+            Lattice::FourPillars => 0.5 * period,
+            Lattice::Gap => 0.0,
+        }
+    }
+}
+
+/// The substrate of the 3-D model (MODEL.md §10): the 2-D one, flat or pillared, extended
+/// along z; the pillars become superellipsoids on the square lattice `lattice` (ignored
+/// for a flat substrate).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Substrate3 {
+    /// The section: a flat surface `y_s`, or the pillars' `w, s, h, first_center, q,
+    /// y_top` (the same fields mean the same in 3-D).
+    pub plane: Substrate,
+    /// Where the rows of pillars stand in z.
+    pub lattice: Lattice,
+}
+
+impl Pillars {
+    /// Axis (in z) of the pillar row nearest to `z` [µm] on `lattice`.
+    #[inline]
+    pub fn nearest_axis_z(&self, z: f64, lattice: Lattice) -> f64 {
+        let z0 = lattice.z_offset(self.period());
+        let k = ((z - z0) / self.period()).round();
+        z0 + k * self.period()
+    }
+
+    /// Penetration depth and outward normal of the superellipsoid pillar nearest to `x`
+    /// alone (no floor), as [`Pillars::eval_pillar`] in 3-D: with
+    /// `ρ = |u|^q + |v|^q + |w|^q`, `r = ρ^{1/q}`,
+    /// `g = (|u|^{q−1}sgn u/(w/2), |v|^{q−1}sgn v/(h/2), |w|^{q−1}sgn w/(w/2))`,
+    /// `d = (1 − r) ρ/(r|g|)`, `n = g/|g|`.
+    #[inline(always)]
+    pub fn eval_pillar3<T: Real>(&self, x: &Vector3<T>, lattice: Lattice) -> (T, Vector3<T>) {
+        let a = 0.5 * self.width;
+        let b = 0.5 * self.height;
+        let xt = x.x - self.nearest_axis(re(x.x));
+        let yt = x.y - (self.y_top - b);
+        let zt = x.z - self.nearest_axis_z(re(x.z), lattice);
+        let (pu, gu) = abs_pow(xt / a, self.q);
+        let (pv, gv) = abs_pow(yt / b, self.q);
+        let (pw, gw) = abs_pow(zt / a, self.q);
+        let rho = pu + pv + pw;
+        if re(rho) <= 0.0 {
+            // The pillar's centre: no direction; never reached in practice.
+            return (cst(a.min(b)), Vector3::new(cst(0.0), cst(1.0), cst(0.0)));
+        }
+        let r = if self.q == 4.0 {
+            sqrt(sqrt(rho))
+        } else {
+            powf(rho, 1.0 / self.q)
+        };
+        let gx = gu / a;
+        let gy = gv / b;
+        let gz = gw / a;
+        let g = sqrt(gx * gx + gy * gy + gz * gz);
+        let d = (-r + 1.0) * rho / (r * g);
+        (d, Vector3::new(gx / g, gy / g, gz / g))
+    }
+
+    /// Height `y` of the substrate surface at `(x, z)` [µm] on `lattice`:
+    /// `y_top − h/2 + (h/2)(1 − |u|^q − |w|^q)^{1/q}` over a pillar
+    /// (`|u|^q + |w|^q < 1`), else the floor `y_top − h`.
+    #[inline]
+    pub fn surface_height3(&self, x: f64, z: f64, lattice: Lattice) -> f64 {
+        let a = 0.5 * self.width;
+        let b = 0.5 * self.height;
+        let u = ((x - self.nearest_axis(x)) / a).abs();
+        let w = ((z - self.nearest_axis_z(z, lattice)) / a).abs();
+        let floor = self.y_top - self.height;
+        let s = u.powf(self.q) + w.powf(self.q);
+        if s >= 1.0 {
+            floor
+        } else {
+            (self.y_top - b + b * (1.0 - s).powf(1.0 / self.q)).max(floor)
+        }
+    }
+}
+
+impl Pillars {
+    /// `y_top` such that the smallest vertical gap between the reference sphere (centre
+    /// `cell_center`, radius `r_c`) and the 3-D substrate surface on `lattice` below it is
+    /// `gap` [µm] (MODEL.md §10, placed "as in §5"); the 3-D twin of
+    /// [`Pillars::y_top_for_gap`]. Only `w, s, h, first_center, q` of `self` are used.
+    ///
+    /// On [`Lattice::Gap`] (pillars at z = 0) the smallest gap lies in the plane z = 0 and
+    /// this is the 2-D placement; on [`Lattice::FourPillars`] it lies over the pillars'
+    /// rounded corners nearest the axis.
+    #[inline]
+    pub fn y_top_for_gap3(
+        &self,
+        gap: f64,
+        lattice: Lattice,
+        cell_center: [f64; 3],
+        r_c: f64,
+    ) -> Result<f64, PhysicsError> {
+        self.validate()?;
+        check(gap.is_finite(), "gap", gap, "must be finite")?;
+        check(
+            r_c.is_finite() && r_c > 0.0,
+            "r_c",
+            r_c,
+            "must be finite and > 0",
+        )?;
+        check(
+            cell_center.iter().all(|v| v.is_finite()),
+            "cell_center",
+            cell_center.iter().sum(),
+            "must be finite",
+        )?;
+        let (_, clearance) = self.lowest_clearance3(lattice, cell_center, r_c);
+        Ok(clearance - gap)
+    }
+
+    /// `([x*, z*], G(x*, z*))` minimising `G(x, z) = sphere bottom(x, z) −
+    /// (y_surf(x, z) − y_top)` over the sphere's horizontal disk: where the vertical gap is
+    /// smallest, and `y_top + gap` there. A 201 × 201 grid over the disk's square (outside
+    /// the disk the sphere's "bottom" is its equator height, never the minimum), then
+    /// zooming 11 × 11 grids, each 2.5 × finer, down to 1e-10 µm.
+    #[inline]
+    pub fn lowest_clearance3(
+        &self,
+        lattice: Lattice,
+        cell_center: [f64; 3],
+        r_c: f64,
+    ) -> ([f64; 2], f64) {
+        let [cx, cy, cz] = cell_center;
+        let g = |x: f64, z: f64| {
+            let (dx, dz) = (x - cx, z - cz);
+            cy - (r_c * r_c - dx * dx - dz * dz).max(0.0).sqrt()
+                - (self.surface_height3(x, z, lattice) - self.y_top)
+        };
+        let n = 200;
+        let mut h = 2.0 * r_c / n as f64;
+        let mut best = ([cx, cz], g(cx, cz));
+        for i in 0..=n {
+            for j in 0..=n {
+                let (x, z) = (cx - r_c + i as f64 * h, cz - r_c + j as f64 * h);
+                let v = g(x, z);
+                if v < best.1 {
+                    best = ([x, z], v);
+                }
+            }
+        }
+        while h > 1e-10 {
+            let [x0, z0] = best.0;
+            // ±2 old steps around the best point, 11 points a side
+            let hn = 0.4 * h;
+            for i in -5..=5 {
+                for j in -5..=5 {
+                    let (x, z) = (x0 + i as f64 * hn, z0 + j as f64 * hn);
+                    let v = g(x, z);
+                    if v < best.1 {
+                        best = ([x, z], v);
+                    }
+                }
+            }
+            h = hn;
+        }
+        best
+    }
+}
+
+impl Substrate3 {
+    /// Checks the parameters (those of [`Substrate::validate`]; a lattice has none).
+    #[inline]
+    pub fn validate(&self) -> Result<(), PhysicsError> {
+        self.plane.validate()
+    }
+
+    /// Signed penetration depth `d(x)` [µm] (> 0 inside the substrate) and outward unit
+    /// normal `n(x)` at the current position `x` [µm]. Generic, for exact tangents.
+    ///
+    /// Flat: `d = y_s − y`, `n = e_y`. Pillars: `d = max(d_pillar, y_top − h − y)` with
+    /// the normal of the deeper one (module notes). Inlined in `f64`, one function per
+    /// dual type otherwise, as [`Substrate::eval`].
+    #[inline(always)]
+    pub fn eval<T: Real>(&self, x: &Vector3<T>) -> (T, Vector3<T>) {
+        if T::NDERIV == 0 {
+            self.eval_inline(x)
+        } else {
+            self.eval_dual(x)
+        }
+    }
+
+    #[inline(never)]
+    fn eval_dual<T: Real>(&self, x: &Vector3<T>) -> (T, Vector3<T>) {
+        self.eval_inline(x)
+    }
+
+    #[inline(always)]
+    fn eval_inline<T: Real>(&self, x: &Vector3<T>) -> (T, Vector3<T>) {
+        let up = Vector3::new(cst(0.0), cst(1.0), cst(0.0));
+        match &self.plane {
+            Substrate::Flat { y_s } => (-x.y + *y_s, up),
+            Substrate::Pillars(p) => {
+                let d_floor = -x.y + (p.y_top - p.height);
+                let (d_p, n_p) = p.eval_pillar3(x, self.lattice);
+                if re(d_floor) > re(d_p) {
+                    (d_floor, up)
+                } else {
+                    (d_p, n_p)
+                }
+            }
+        }
+    }
+
+    /// Height `y` of the substrate surface at `(x, z)` [µm], for plotting: `y_s` (flat) or
+    /// [`Pillars::surface_height3`].
+    #[inline]
+    pub fn surface_height(&self, x: f64, z: f64) -> f64 {
+        match &self.plane {
+            Substrate::Flat { y_s } => *y_s,
+            Substrate::Pillars(p) => p.surface_height3(x, z, self.lattice),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -575,5 +828,374 @@ mod tests {
             Substrate::Flat { y_s: -2.0 }.outline(-1.0, 1.0, 10),
             vec![[-1.0, -2.0], [1.0, -2.0]]
         );
+    }
+}
+
+#[cfg(test)]
+mod tests3 {
+    use super::*;
+    use num_dual::DualSVec64;
+
+    type D3 = DualSVec64<3>;
+
+    fn pillars() -> Pillars {
+        crate::physics::reference::pillars()
+    }
+
+    fn both(p: Pillars) -> [Substrate3; 2] {
+        [Lattice::FourPillars, Lattice::Gap].map(|lattice| Substrate3 {
+            plane: Substrate::Pillars(p),
+            lattice,
+        })
+    }
+
+    /// All the 3-D substrates of the tests: flat, and the default pillars on both
+    /// lattices with q = 4 and with non-integer q.
+    fn substrates() -> Vec<Substrate3> {
+        let mut v = vec![Substrate3 {
+            plane: Substrate::Flat { y_s: -2.0 },
+            lattice: Lattice::FourPillars,
+        }];
+        v.extend(both(pillars()));
+        v.extend(both(Pillars {
+            q: 4.5,
+            ..pillars()
+        }));
+        v
+    }
+
+    /// A point on the superellipsoid of the pillar with axes (`ax`, `az`), elevation `t`
+    /// and azimuth `f`: `u = c(cos t cos f)`, `v = c(sin t)`, `w = c(cos t sin f)`,
+    /// `c(s) = sgn(s)|s|^{2/q}`, so `|u|^q + |v|^q + |w|^q = 1`.
+    fn on_pillar(p: &Pillars, ax: f64, az: f64, t: f64, f: f64) -> Vector3<f64> {
+        let c = |s: f64| s.signum() * s.abs().powf(2.0 / p.q);
+        let (a, b) = (0.5 * p.width, 0.5 * p.height);
+        Vector3::new(
+            ax + a * c(t.cos() * f.cos()),
+            p.y_top - b + b * c(t.sin()),
+            az + a * c(t.cos() * f.sin()),
+        )
+    }
+
+    /// Central differences of the depth: the gradient ∇d at `x`.
+    fn grad_fd(s: &Substrate3, x: &Vector3<f64>, h: f64) -> Vector3<f64> {
+        Vector3::from_fn(|k, _| {
+            let mut e = Vector3::zeros();
+            e[k] = h;
+            (s.eval(&(x + e)).0 - s.eval(&(x - e)).0) / (2.0 * h)
+        })
+    }
+
+    #[test]
+    fn flat_is_exact_in_3d() {
+        let s = Substrate3 {
+            plane: Substrate::Flat { y_s: -2.0 },
+            lattice: Lattice::Gap,
+        };
+        for (x, y, z) in [(0.0, -1.5, 3.0), (3.0, -2.0, -7.0), (-7.0, -2.3, 0.1)] {
+            let (d, n) = s.eval(&Vector3::new(x, y, z));
+            assert_eq!(d, -2.0 - y);
+            assert_eq!(n, Vector3::new(0.0, 1.0, 0.0));
+            assert_eq!(s.surface_height(x, z), -2.0);
+        }
+        s.validate().unwrap();
+    }
+
+    #[test]
+    fn flat_faces_give_the_exact_distance() {
+        let p = pillars();
+        let (a, mid) = (0.5 * p.width, p.y_top - 0.5 * p.height);
+        for s in both(p) {
+            // a pillar of this lattice: x axis 8, z axis nearest to 8
+            let Substrate::Pillars(pp) = s.plane else {
+                unreachable!()
+            };
+            let (ax, az) = (8.0, pp.nearest_axis_z(8.0, s.lattice));
+            // above the middle of the top
+            for dy in [-0.7, -0.1, 0.0, 0.05, 0.5, 1.5, 3.0] {
+                let (d, n) = s.eval(&Vector3::new(ax, p.y_top + dy, az));
+                assert!((d + dy).abs() < 1e-13, "{:?} dy = {dy}: d = {d}", s.lattice);
+                assert!((n - Vector3::y()).norm() < 1e-14);
+            }
+            // beside the middle of each side face, at mid-height
+            for dx in [-0.4, 0.3, 1.5] {
+                for (e, sign) in [
+                    (Vector3::x(), 1.0),
+                    (Vector3::z(), 1.0),
+                    (Vector3::x(), -1.0),
+                ] {
+                    let X = Vector3::new(ax, mid, az) + e * (sign * (a + dx));
+                    let (d, n) = s.eval(&X);
+                    assert!(
+                        (d + dx).abs() < 1e-13,
+                        "{:?}: d = {d}, dx = {dx}",
+                        s.lattice
+                    );
+                    assert!((n - e * sign).norm() < 1e-14);
+                }
+            }
+            // over the floor far from the pillars (the middle of a square of four pillars
+            // or of a gap; the floor is 0.2 µm below)
+            let floor = p.y_top - p.height;
+            for (x, z) in [(0.0, 0.0), (16.0, 32.0), (0.0, az + 8.0)] {
+                let (d, n) = s.eval(&Vector3::new(x, floor + 0.2, z));
+                assert!(
+                    (d + 0.2).abs() < 1e-14,
+                    "{:?} ({x}, {z}): d = {d}",
+                    s.lattice
+                );
+                assert_eq!(n, Vector3::y());
+                assert_eq!(s.surface_height(x, z), floor);
+            }
+            // the top's height at its middle, the floor between pillars
+            assert!((s.surface_height(ax, az) - p.y_top).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn surface_has_zero_depth_unit_outward_normal_and_the_depth_gradient() {
+        // On the surface l = 0, ∇d = −∇l/|∇l| = −n exactly; checked by central
+        // differences at points of the upper half and the sides of several pillars.
+        let h = 1e-6;
+        for p in [
+            pillars(),
+            Pillars {
+                q: 4.5,
+                ..pillars()
+            },
+        ] {
+            for s in both(p) {
+                for (ax, k) in [(8.0, 0.0), (-24.0, 1.0), (40.0, -2.0)] {
+                    let az = p.nearest_axis_z(0.3, s.lattice) + k * p.period();
+                    for i in 1..12 {
+                        for j in 0..16 {
+                            // elevation in (−0.5, π/2): down the sides, not into the floor
+                            let t = -0.5 + 2.0 * i as f64 / 12.0;
+                            let f = 2.0 * std::f64::consts::PI * (j as f64 + 0.3) / 16.0;
+                            let X = on_pillar(&p, ax, az, t, f);
+                            let (d, n) = s.eval(&X);
+                            assert!(d.abs() < 1e-12, "d = {d} at {X:?}");
+                            assert!((n.norm() - 1.0).abs() < 1e-14);
+                            let (d_out, _) = s.eval(&(X + n * 1e-3));
+                            assert!(d_out < 0.0);
+                            let g = grad_fd(&s, &X, h);
+                            assert!((g + n).norm() < 1e-6, "∇d = {g:?}, n = {n:?} at {X:?}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_plane_through_a_row_of_axes_is_the_2d_substrate() {
+        // z̃ = 0: z = 0 on the gap lattice, z = ±P/2 (+kP) on the four-pillar one. The same
+        // depth and in-plane normal as 2-D, bit for bit, and n_z = 0.
+        let mut rng = crate::physics::material::tests::Rng::new(83);
+        for p in [
+            pillars(),
+            Pillars {
+                q: 3.0,
+                ..pillars()
+            },
+            Pillars {
+                q: 4.5,
+                ..pillars()
+            },
+        ] {
+            let s2 = Substrate::Pillars(p);
+            for (lattice, z) in [
+                (Lattice::Gap, 0.0),
+                (Lattice::Gap, 32.0),
+                (Lattice::FourPillars, 8.0),
+                (Lattice::FourPillars, -8.0),
+            ] {
+                let s3 = Substrate3 { plane: s2, lattice };
+                for _ in 0..200 {
+                    let (x, y) = (rng.uniform(-20.0, 20.0), rng.uniform(-10.0, 1.0));
+                    let (d2, n2) = s2.eval(&Vector2::new(x, y));
+                    let (d3, n3) = s3.eval(&Vector3::new(x, y, z));
+                    assert_eq!(d3, d2, "{lattice:?} ({x}, {y}, {z})");
+                    assert_eq!(n3, Vector3::new(n2.x, n2.y, 0.0));
+                    assert_eq!(s3.surface_height(x, z), p.surface_height(x));
+                }
+            }
+        }
+        // and a flat substrate anywhere
+        let f = Substrate::Flat { y_s: -2.0 };
+        let f3 = Substrate3 {
+            plane: f,
+            lattice: Lattice::FourPillars,
+        };
+        assert_eq!(
+            f3.eval(&Vector3::new(1.0, -1.7, 5.0)).0,
+            f.eval(&Vector2::new(1.0, -1.7)).0
+        );
+    }
+
+    #[test]
+    fn dual_derivatives_match_finite_differences_in_3d() {
+        let h = 1e-6;
+        // Offsets (x̃, y, z̃) from the axes of a pillar: near the top, the rounded edges and
+        // corners, the sides, away from the pillar/floor switch and the mid-planes.
+        let pts = [
+            (0.0, -0.25, 0.0),
+            (0.3, 0.4, -0.9),
+            (-3.0, -0.2, -2.0),
+            (-3.4, -1.1, -3.3),
+            (3.2, -0.9, 1.0),
+            (-4.3, -3.5, 0.5),
+            (0.5, -4.6, 4.4),
+            (-4.8, -0.5, -5.5),
+            (-1.0, -2.0, -6.0),
+            (1.0, -0.6, -7.5),
+            (-3.5, -2.5, -7.0),
+        ];
+        for s in substrates() {
+            let az = pillars().nearest_axis_z(0.3, s.lattice);
+            for &(x, y, z) in &pts {
+                let X = Vector3::new(8.0 + x, y, az + z);
+                let Xd = Vector3::from_fn(|k, _| D3::from_re(X[k]).derivative(k));
+                let (d, n) = s.eval(&Xd);
+                let grad = |v: &D3| v.eps.unwrap_generic(nalgebra::U3, nalgebra::U1);
+                for k in 0..3 {
+                    let mut e = Vector3::zeros();
+                    e[k] = h;
+                    let (dp, np) = s.eval(&(X + e));
+                    let (dm, nm) = s.eval(&(X - e));
+                    let fd = (dp - dm) / (2.0 * h);
+                    let fn_ = (np - nm) / (2.0 * h);
+                    assert!(
+                        (fd - grad(&d)[k]).abs() < 1e-7,
+                        "{s:?} ∂d/∂x_{k} at {X:?}: {fd} vs {}",
+                        grad(&d)[k]
+                    );
+                    for c in 0..3 {
+                        assert!(
+                            (fn_[c] - grad(&n[c])[k]).abs() < 1e-7,
+                            "∂n_{c}/∂x_{k} at {X:?}"
+                        );
+                    }
+                }
+                let d64 = s.eval(&X).0;
+                assert!((d.re - d64).abs() < 1e-14 * (1.0 + d64.abs()));
+            }
+        }
+    }
+
+    #[test]
+    fn both_lattices_keep_the_quarter_symmetry_and_are_periodic() {
+        let mut rng = crate::physics::material::tests::Rng::new(89);
+        let per = pillars().period();
+        for s in both(pillars()) {
+            for _ in 0..500 {
+                let X = Vector3::new(
+                    rng.uniform(-20.0, 20.0),
+                    rng.uniform(-9.0, 1.0),
+                    rng.uniform(-20.0, 20.0),
+                );
+                let (d, n) = s.eval(&X);
+                let (dx, nx) = s.eval(&Vector3::new(-X.x, X.y, X.z));
+                let (dz, nz) = s.eval(&Vector3::new(X.x, X.y, -X.z));
+                assert!((dx - d).abs() < 1e-12 && (dz - d).abs() < 1e-12, "{X:?}");
+                // the normals mirror (except on the mid-planes, where they flip: measure
+                // zero, not drawn)
+                assert!((nx - Vector3::new(-n.x, n.y, n.z)).norm() < 1e-12);
+                assert!((nz - Vector3::new(n.x, n.y, -n.z)).norm() < 1e-12);
+                for (kx, kz) in [(1.0, 0.0), (0.0, -2.0), (-3.0, 1.0)] {
+                    let (dp, np) = s.eval(&Vector3::new(X.x + kx * per, X.y, X.z + kz * per));
+                    assert!((dp - d).abs() < 1e-12 && (np - n).norm() < 1e-12);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_lattices_place_the_pillars_as_documented() {
+        let p = pillars();
+        let [four, gap] = both(p);
+        let above = |s: &Substrate3, x: f64, z: f64| s.eval(&Vector3::new(x, p.y_top + 0.1, z)).0;
+        // 0.1 µm above a top, or at least s/2 − 0.5 µm from every pillar (a side face
+        // s/2 = 4 µm away, the first-order distance past a rounded edge a bit less)
+        let far = -0.5 * p.spacing + 0.5;
+        // four pillars: tops over (±8, ±8), none over (±8, 0) nor the cell's axis
+        for (x, z) in [
+            (8.0, 8.0),
+            (-8.0, 8.0),
+            (8.0, -8.0),
+            (-8.0, -8.0),
+            (24.0, 24.0),
+        ] {
+            assert!((above(&four, x, z) + 0.1).abs() < 1e-13);
+            assert!(above(&gap, x, z) < far);
+        }
+        // gap: tops over (±8, 0), the cell's axis above the gap between two of them
+        for (x, z) in [(8.0, 0.0), (-8.0, 0.0), (8.0, 16.0)] {
+            assert!((above(&gap, x, z) + 0.1).abs() < 1e-13);
+            assert!(above(&four, x, z) < far);
+        }
+        for s in [four, gap] {
+            assert!(above(&s, 0.0, 0.0) < far);
+        }
+        assert_eq!(p.nearest_axis_z(0.0, Lattice::Gap), 0.0);
+        assert_eq!(p.nearest_axis_z(3.0, Lattice::FourPillars), 8.0);
+        assert_eq!(p.nearest_axis_z(-3.0, Lattice::FourPillars), -8.0);
+        assert_eq!(p.nearest_axis_z(-9.0, Lattice::Gap), -16.0);
+        assert_eq!(Lattice::default(), Lattice::FourPillars);
+        // a bad parameter is refused through the section
+        let bad = Substrate3 {
+            plane: Substrate::Pillars(Pillars { q: 1.5, ..p }),
+            lattice: Lattice::Gap,
+        };
+        assert!(bad.validate().is_err());
+    }
+
+    #[test]
+    fn y_top_for_gap3_gives_the_requested_gap() {
+        let p = pillars();
+        let (c, r_c) = ([0.0, 8.5, 0.0], 10.0);
+        // Gap lattice: the smallest gap lies in the plane z = 0, the 2-D placement
+        let y2 = p.y_top_for_gap(0.5, [0.0, 8.5], r_c).unwrap();
+        let yg = p.y_top_for_gap3(0.5, Lattice::Gap, c, r_c).unwrap();
+        assert!((yg - y2).abs() < 1e-9, "{yg} vs {y2}");
+        // Four pillars: brute force over a fine grid of the disk, and the minimiser on the
+        // rounded corner of a pillar, near the diagonal x = ±z (quarter symmetry)
+        let y4 = p.y_top_for_gap3(0.5, Lattice::FourPillars, c, r_c).unwrap();
+        let placed = Pillars { y_top: y4, ..p };
+        let ([xs, zs], _) = placed.lowest_clearance3(Lattice::FourPillars, c, r_c);
+        assert!((xs.abs() - zs.abs()).abs() < 1e-4, "minimiser ({xs}, {zs})");
+        assert!(xs.abs() > 4.0 && xs.abs() < 8.0);
+        let n = 1000;
+        let mut min_gap = f64::INFINITY;
+        for i in 0..=n {
+            for j in 0..=n {
+                let (x, z) = (
+                    -10.0 + 20.0 * i as f64 / n as f64,
+                    -10.0 + 20.0 * j as f64 / n as f64,
+                );
+                let rr = 100.0 - x * x - z * z;
+                if rr < 0.0 {
+                    continue;
+                }
+                let gap = 8.5 - rr.sqrt() - placed.surface_height3(x, z, Lattice::FourPillars);
+                min_gap = min_gap.min(gap);
+            }
+        }
+        // the grid's minimum is not below the true one, and above it by little (measured
+        // 4e-8 µm: a 0.02 µm grid near a smooth minimum)
+        assert!(
+            (0.5 - 1e-9..0.5 + 1e-6).contains(&min_gap),
+            "min gap {min_gap}"
+        );
+        // the four pillars' corners nearest the axis (ρ ≈ 4√2 µm) are farther from it than
+        // the gap's side faces (ρ = 4 µm), where the sphere hangs lower: higher tops
+        // (measured −0.30 µm on the gap lattice, +1.80 µm over four pillars, the smallest
+        // gap at (±5.08, ±5.08))
+        assert!(y4 > yg + 0.1, "{y4} vs {yg}");
+        // other gaps shift y_top rigidly; bad inputs are refused
+        let y41 = p.y_top_for_gap3(1.0, Lattice::FourPillars, c, r_c).unwrap();
+        assert!((y4 - y41 - 0.5).abs() < 1e-9);
+        assert!(p.y_top_for_gap3(0.5, Lattice::Gap, c, 0.0).is_err());
+        assert!(p.y_top_for_gap3(f64::NAN, Lattice::Gap, c, r_c).is_err());
     }
 }
