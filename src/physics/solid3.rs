@@ -353,11 +353,12 @@ pub struct MaterialPoint3 {
 /// `P_f = Jσ F⁻ᵀ`.
 ///
 /// Measured with `benches/kernels3.rs` (criterion, release, 256 inputs, half with active
-/// strain; shared 2-core machine, so ratios): the closed form costs 1/3.5 of one
-/// `DualSVec64<9>` pass over `F` with `∂P/∂Ḟ` from the linearity of `P_f`
-/// ([`material_point3_dual`]: ≈ 1.3 µs against ≈ 0.37 µs per call), 3.5 × the
-/// residual-only [`piola_total3`] in `f64`, and 2 × plane strain's [`super::material_point`].
-/// `P` agrees with [`piola_total3`] to round-off (the same stress summed in another order).
+/// strain; a shared 2-core machine, so ratios, over three runs): 0.24–0.26 µs per call,
+/// 3.3–3.5 × the residual-only [`piola_total3`] in `f64` and 1.6–1.9 × plane strain's
+/// [`super::material_point`]; one `DualSVec64<9>` pass ([`material_point3_dual`]) costs
+/// 7–10 × as much (1.9–2.4 µs) instantiated in the calling crate as here, and 3.5–4.8 ×
+/// (1.2–1.3 µs) when it was compiled in this crate. `P` agrees with [`piola_total3`] to
+/// round-off (the same stress summed in another order).
 ///
 /// Assumes [`admissible3`]`(F)` and `det F_a > 0`.
 #[inline]
@@ -476,8 +477,9 @@ pub fn material_point3(
 /// [`super::material_point`] does in plane strain.
 ///
 /// The independent reference for the closed form (the tests compare them) and its
-/// benchmark baseline; 3.5 × slower, so the model uses [`material_point3`].
-/// `P` is [`piola_total3`]'s exactly. Assumes [`admissible3`]`(F)` and `det F_a > 0`.
+/// benchmark baseline; several times slower (see [`material_point3`]), so the model uses
+/// the closed form. `P` is [`piola_total3`]'s to round-off (dual arithmetic rounds the
+/// last bits differently). Assumes [`admissible3`]`(F)` and `det F_a > 0`.
 #[inline]
 pub fn material_point3_dual(
     yeoh: &Yeoh,
