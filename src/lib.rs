@@ -14,6 +14,7 @@ pub mod dae;
 pub mod fem;
 pub mod lu;
 pub mod model;
+pub mod model3d;
 pub mod output;
 pub mod paper;
 pub mod physics;

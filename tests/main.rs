@@ -9,6 +9,7 @@ mod fem3;
 mod hard;
 mod linsolve;
 mod model;
+mod model3d;
 mod plots;
 mod scenes;
 mod shared;

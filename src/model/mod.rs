@@ -32,10 +32,10 @@ mod axisym;
 pub mod dofs;
 mod element;
 pub mod history;
-mod kernels;
+pub(crate) mod kernels;
 pub mod kinematics;
 pub mod observe;
-mod plan;
+pub(crate) mod plan;
 mod switch;
 
 use crate::dae::{Dae, DaeError, FirstOrderBlocks, Pattern};

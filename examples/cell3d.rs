@@ -1,0 +1,194 @@
+//! The 3-D quarter cell (MODEL.md §10) on its gmsh mesh: the mesh's size and quality, and
+//! optionally a scene integrated by IDA, with its cost and its observables at each
+//! output time.
+//!
+//! ```sh
+//! cargo run --release --example cell3d -- [--h-bottom 0.3] [--h-nucleus 1.0] [--refine 1]
+//!     [--case cases/flat.ron] [--t-end 10000] [--outputs 20] [--rtol 1e-4]
+//!     [--drag D]   # quasi-static: inertia off with medium drag D [pN·s/µm⁴]
+//!     [--lattice four|gap] [--threads]
+//! ```
+//!
+//! Without `--t-end` it only meshes. With inertia (the case's `OffAfter`) the run keeps
+//! inertia throughout; `--drag` replaces it by the medium drag (no switch needed).
+
+use std::time::Instant;
+
+use cellsim::case::Case;
+use cellsim::dae::linsolve::{ColumnOrdering, FaerLu, LinearSolver, LinearSolverError};
+use cellsim::dae::{Atol, Dae, Integrator, LinearSolverFactory, SharedFactory};
+use cellsim::fem::{Mesh3, Mesh3Params};
+use cellsim::lu::LinearSolverKind;
+use cellsim::model3d::{Cell3, Params3};
+use cellsim::physics::Lattice;
+use cellsim::scene;
+use cellsim::sundials::{Ida, IdaOptions};
+use cellsim::sundials::{UmfpackLu, UmfpackOrdering, nested_dissection_ata};
+
+/// The LUs compared on the 3-D Jacobians.
+#[derive(Debug, Clone, Copy)]
+struct Lu(&'static str);
+
+impl LinearSolverFactory for Lu {
+    fn build_for(&self, _dae: &dyn Dae) -> Result<Box<dyn LinearSolver>, LinearSolverError> {
+        Ok(match self.0 {
+            "klu" => LinearSolverKind::Klu.build(),
+            "klu-metis" => LinearSolverKind::KluMetis.build(),
+            "umfpack" => Box::new(UmfpackLu::new(UmfpackOrdering::Amd)),
+            "umfpack-metis" => Box::new(UmfpackLu::new(UmfpackOrdering::Metis)),
+            "faer-metis-ata" => Box::new(FaerLu::with_ordering(ColumnOrdering::External {
+                name: "faer-metis-ata",
+                order: nested_dissection_ata,
+            })),
+            _ => LinearSolverKind::Faer.build(),
+        })
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let get = |name: &str| {
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
+    let num = |name: &str, default: f64| get(name).map_or(default, |v| v.parse().expect(name));
+    let case_file = get("--case").unwrap_or_else(|| "cases/flat.ron".into());
+    let mut case = Case::load(&case_file).expect("case");
+    let drag = get("--drag").map(|v| v.parse::<f64>().expect("--drag"));
+    if let Some(d) = drag {
+        case.inertia.mode = cellsim::case::InertiaMode::Off;
+        case.inertia.drag = d;
+    }
+    let g = case.geometry.clone();
+    let c = g.centre();
+    let mp = Mesh3Params {
+        center: [c[0], c[1], 0.0],
+        r_n: g.r_n,
+        r_cp: g.r_cp,
+        r_c: g.r_c,
+        h_bottom: num("--h-bottom", case.mesh.h_bottom),
+        h_nucleus: num("--h-nucleus", case.mesh.h_nucleus),
+        refine: num("--refine", case.mesh.refine),
+    };
+    let t0 = Instant::now();
+    let mesh = Mesh3::generate(&mp).expect("mesh");
+    println!(
+        "mesh: {:.2} s\n{}",
+        t0.elapsed().as_secs_f64(),
+        mesh.quality()
+    );
+    let Some(t_end) = get("--t-end").map(|v| v.parse::<f64>().expect("--t-end")) else {
+        return;
+    };
+    let inertia = drag.is_none() && scene::starts_with_inertia(&case);
+    let plane = scene::model_params(&case, &case_file, inertia).expect("params");
+    let lattice = match get("--lattice").as_deref() {
+        Some("gap") => Lattice::Gap,
+        _ => Lattice::FourPillars,
+    };
+    let t1 = Instant::now();
+    let mut m = Cell3::new(Params3 { plane, lattice }, mesh).expect("model");
+    m.set_parallel(args.iter().any(|a| a == "--threads"));
+    println!(
+        "model: {} unknowns ({} u, {} μ_as), {} elements, set-up {:.2} s",
+        m.size(),
+        m.dofs.n_u,
+        m.dofs.n_mu(),
+        m.n_elements(),
+        t1.elapsed().as_secs_f64()
+    );
+    if args.iter().any(|a| a == "--bench-lu") {
+        bench_lu(&mut m);
+        return;
+    }
+    let rtol = num("--rtol", 1e-4);
+    let atol = Atol::Vector(m.atol_vector(num("--atol", 1e-6)));
+    let mut ida = Ida::new(
+        m,
+        IdaOptions {
+            rtol,
+            atol,
+            linear_solver: {
+                let name: &'static str = match get("--lu").as_deref() {
+                    Some("klu") => "klu",
+                    Some("klu-metis") => "klu-metis",
+                    Some("umfpack") => "umfpack",
+                    Some("umfpack-metis") => "umfpack-metis",
+                    Some("faer-metis-ata") => "faer-metis-ata",
+                    _ => "faer",
+                };
+                let f: SharedFactory = std::sync::Arc::new(Lu(name));
+                f
+            },
+            ..Default::default()
+        },
+    )
+    .expect("IDA");
+    let n_out = num("--outputs", 20.0) as usize;
+    println!(
+        "t\tsteps\tjac\twall\tuy_top\tcontact_radius\tcontact_radius_ref\tcontact_area\tforce_y/weight"
+    );
+    let t2 = Instant::now();
+    for k in 1..=n_out {
+        let t = t_end * k as f64 / n_out as f64;
+        if let Err(e) = ida.advance_to(t, &mut |_, _| true) {
+            println!("failed: {e}");
+            break;
+        }
+        let (m, y) = (ida.dae(), ida.y());
+        let o = m.observe(t, y);
+        let o3 = m.observe3(y);
+        let s = ida.stats();
+        println!(
+            "{t}\t{}\t{}\t{:.2}\t{:.5}\t{:.4}\t{:.4}\t{:.4}\t{:.4}",
+            s.steps,
+            s.jacobian_evals,
+            t2.elapsed().as_secs_f64(),
+            o.uy_top,
+            o.contact_radius,
+            o.contact_radius_ref,
+            o3.contact_area,
+            m.contact_force_total(y).y / m.weight()
+        );
+    }
+}
+
+/// Times each LU on the model's iteration matrix at the rest state (cj = 0.1): analysis,
+/// numeric factorization (median of 3) and solve, and the fill where the backend says.
+fn bench_lu(m: &mut Cell3) {
+    let n = m.size();
+    let (y, yp) = (vec![0.0; n], vec![0.0; n]);
+    let pattern = m.pattern().clone();
+    let mut vals = vec![0.0; pattern.compute_nnz()];
+    m.jacobian(50.0, &y, &yp, 0.1, &mut vals).expect("jacobian");
+    println!("n = {n}, nnz(J) = {}", vals.len());
+    for name in [
+        "faer",
+        "faer-metis-ata",
+        "klu-metis",
+        "umfpack",
+        "umfpack-metis",
+    ] {
+        let mut lu = Lu(name).build_for(m).expect("lu");
+        let t = Instant::now();
+        lu.analyse(&pattern).expect("analyse");
+        let analyse = t.elapsed().as_secs_f64();
+        let mut times = Vec::new();
+        for _ in 0..3 {
+            let t = Instant::now();
+            lu.factorize(&vals).expect("factorize");
+            times.push(t.elapsed().as_secs_f64());
+        }
+        times.sort_by(f64::total_cmp);
+        let mut b = vec![1.0; n];
+        let t = Instant::now();
+        lu.solve_in_place(&mut b).expect("solve");
+        let solve = t.elapsed().as_secs_f64();
+        println!(
+            "{name:16} analyse {analyse:.3} s  factorize {:.3} s  solve {:.4} s",
+            times[1], solve
+        );
+    }
+}
