@@ -40,6 +40,10 @@ impl LinearSolverFactory for Lu {
                 name: "faer-metis-ata",
                 order: nested_dissection_ata,
             })),
+            "faer-par" => Box::new(FaerLu::with_options(
+                faer::Par::rayon(2),
+                faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
+            )),
             _ => LinearSolverKind::Faer.build(),
         })
     }
@@ -117,6 +121,7 @@ fn main() {
                     Some("umfpack") => "umfpack",
                     Some("umfpack-metis") => "umfpack-metis",
                     Some("faer-metis-ata") => "faer-metis-ata",
+                    Some("faer-par") => "faer-par",
                     _ => "faer",
                 };
                 let f: SharedFactory = std::sync::Arc::new(Lu(name));
@@ -166,6 +171,7 @@ fn bench_lu(m: &mut Cell3) {
     println!("n = {n}, nnz(J) = {}", vals.len());
     for name in [
         "faer",
+        "faer-par",
         "faer-metis-ata",
         "klu-metis",
         "umfpack",
