@@ -857,6 +857,22 @@ fn plot_command(run_dir: &Path, out: Option<PathBuf>) -> ExitCode {
 
 fn mesh_command(path: &Path, svg: Option<&Path>) -> ExitCode {
     let case = tryc!(load_case(path, &[]));
+    if scene::is_3d(&case) {
+        if svg.is_some() {
+            err!("error: {}: --svg draws 2-D meshes only", path.display());
+            return ExitCode::from(2);
+        }
+        return match cellsim::fem::Mesh3::generate(&scene::mesh3_params(&case)) {
+            Ok(mesh) => {
+                out!("{}", mesh.quality());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                err!("error: {}: mesh: {e}", path.display());
+                ExitCode::from(2)
+            }
+        };
+    }
     match Mesh::generate(&scene::mesh_params(&case)) {
         Ok(mesh) => {
             out!("{}", mesh.quality());

@@ -5,8 +5,10 @@
 use crate::case::terms::{MESH_GENERATOR, active, adhesion, contact, phases, viscosity};
 pub use crate::case::terms::{layer_checks, mesh_params, substrate};
 use crate::case::{self, Case, InertiaMode};
+use crate::fem::Mesh3Params;
 use crate::model::ModelParams;
-use crate::physics::Yeoh;
+use crate::model3d::Params3;
+use crate::physics::{KinematicModel, Lattice, Yeoh};
 
 /// A problem with a case that validation could not see (a material law rejecting its
 /// parameters, say).
@@ -77,5 +79,28 @@ pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParam
         contact_degree: case.mesh.contact_quadrature_degree as usize,
         contact_subdivisions: case.mesh.contact_subdivisions,
         extra_breakpoints: vec![case.phases.t_end],
+    })
+}
+
+/// Whether the case is the 3-D quarter cell (`geometry.model: ThreeD`).
+pub fn is_3d(case: &Case) -> bool {
+    case.geometry.model == KinematicModel::ThreeD
+}
+
+/// The 3-D mesh parameters of a case: the 2-D ones (radii, sizes, refinement) about the
+/// centre (0, c_y, 0).
+pub fn mesh3_params(case: &Case) -> Mesh3Params {
+    Mesh3Params::from_section(&mesh_params(case), 0.0)
+}
+
+/// The parameters of the 3-D model of a case ([`model_params`] and the pillar lattice).
+pub fn params3(case: &Case, file: &str, inertia: bool) -> Result<Params3, SceneError> {
+    let lattice = match &case.substrate {
+        case::Substrate::Pillars(p) => p.lattice,
+        case::Substrate::Flat(_) => Lattice::FourPillars,
+    };
+    Ok(Params3 {
+        plane: model_params(case, file, inertia)?,
+        lattice,
     })
 }

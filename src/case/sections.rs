@@ -37,7 +37,9 @@ pub struct Geometry {
     /// meridian half-plane (r, y) is meshed as the half cell (x → r; F₃₃ = 1 + u_r/r,
     /// quantities per radian: weights, forces and volume averages weighted by r; MODEL.md
     /// §10). Default `PlaneStrain`. Valid: `Axisymmetric` needs a `Flat` substrate (a
-    /// pillar array is not axisymmetric).
+    /// pillar array is not axisymmetric). `ThreeD`: the 3-D quarter cell x ≥ 0, z ≥ 0 of
+    /// the three balls (ten-node tetrahedra, meshed by gmsh; MODEL.md §10), on a flat
+    /// substrate or a square lattice of pillars (`substrate.lattice`).
     pub model: KinematicModel,
     /// Height c_y of the cell centre (µm). Default 8.5 (Table 1). Any finite value; the
     /// substrate must lie below the cell. The centre's x is 0 by construction: x = 0 is the
@@ -390,6 +392,11 @@ pub struct Pillars {
     /// the pillar tops y_top are placed (see [`Pillars::resolved_y_top`]). Default 0.5 (as on the
     /// flat substrate; MODEL.md §5). Valid: > 0. Ignored when `y_top` is given.
     pub gap: f64,
+    /// Where the pillar axes lie in z in the 3-D model (`geometry.model: ThreeD`; ignored in
+    /// the half-plane models): `FourPillars`, the cell centre above the centre of a square
+    /// of four pillars (axes at z = P/2 + kP), or `Gap`, above the middle of the gap between
+    /// two pillars (axes at z = kP). Default `FourPillars` (MODEL.md §10).
+    pub lattice: crate::physics::Lattice,
     /// Explicit height of the pillar tops (µm), overriding `gap`. Default none (derived:
     /// −0.30 µm for the defaults). Valid: the pillars must start below the cell (smallest
     /// initial gap > 0). Use [`Pillars::resolved_y_top`] for the value in effect.
@@ -405,6 +412,7 @@ impl Default for Pillars {
             first_center: 8.0,
             q: 4.0,
             gap: 0.5,
+            lattice: crate::physics::Lattice::FourPillars,
             y_top: None,
         }
     }
@@ -430,10 +438,17 @@ impl Pillars {
 
     /// Smallest vertical distance between the lower half of the undeformed cell and the
     /// substrate surface for pillar tops at `y_top` (µm); negative if they overlap.
+    /// In the 3-D model over the lattice's pillars (the cell is a ball there).
     pub fn smallest_gap(&self, geometry: &Geometry, y_top: f64) -> f64 {
-        let (_, clearance) = self
-            .at_height(y_top)
-            .lowest_clearance(geometry.centre(), geometry.r_c);
+        let pillars = self.at_height(y_top);
+        let clearance = if geometry.model == KinematicModel::ThreeD {
+            let [cx, cy] = geometry.centre();
+            pillars
+                .lowest_clearance3(self.lattice, [cx, cy, 0.0], geometry.r_c)
+                .1
+        } else {
+            pillars.lowest_clearance(geometry.centre(), geometry.r_c).1
+        };
         clearance - y_top
     }
 
@@ -493,9 +508,16 @@ enum SubstrateRepr {
         q: f64,
         #[serde(default = "default_gap")]
         gap: f64,
+        #[serde(default, skip_serializing_if = "is_four_pillars")]
+        lattice: crate::physics::Lattice,
         #[serde(default)]
         y_top: Option<f64>,
     },
+}
+
+/// The default lattice is not written out (a 2-D case prints as before).
+fn is_four_pillars(l: &crate::physics::Lattice) -> bool {
+    *l == crate::physics::Lattice::FourPillars
 }
 
 impl From<SubstrateRepr> for Substrate {
@@ -509,6 +531,7 @@ impl From<SubstrateRepr> for Substrate {
                 first_center,
                 q,
                 gap,
+                lattice,
                 y_top,
             } => Substrate::Pillars(Pillars {
                 width,
@@ -517,6 +540,7 @@ impl From<SubstrateRepr> for Substrate {
                 first_center,
                 q,
                 gap,
+                lattice,
                 y_top,
             }),
         }
@@ -534,6 +558,7 @@ impl From<Substrate> for SubstrateRepr {
                 first_center,
                 q,
                 gap,
+                lattice,
                 y_top,
             }) => SubstrateRepr::Pillars {
                 width,
@@ -542,6 +567,7 @@ impl From<Substrate> for SubstrateRepr {
                 first_center,
                 q,
                 gap,
+                lattice,
                 y_top,
             },
         }

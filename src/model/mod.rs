@@ -101,9 +101,15 @@ impl ModelParams {
     }
 }
 
+/// What a half-plane model says when asked to be the 3-D one.
+const THREE_D: &str = "the half-plane model cannot be the 3-D one (model3d::Cell3 is)";
+
 /// Why a model cannot be built.
 #[derive(Debug, Clone, thiserror::Error)]
 pub enum ModelError {
+    /// The parameters ask for the 3-D model, which is [`crate::model3d::Cell3`].
+    #[error("{THREE_D}")]
+    ThreeD,
     /// An element's reference geometry is invalid (inverted or degenerate).
     #[error("element {element}: {source}")]
     Geometry {
@@ -241,6 +247,9 @@ impl CellModel {
     }
 
     fn build(params: ModelParams, mesh: Mesh, adhesion_unknowns: bool) -> Result<Self, ModelError> {
+        if params.kinematics == KinematicModel::ThreeD {
+            return Err(ModelError::ThreeD);
+        }
         let dofs = DofMap::new(&mesh, params.inertia, adhesion_unknowns);
         let ReferenceElements { elements, ctab } =
             ReferenceElements::new(&params, &mesh, adhesion_unknowns)?;
@@ -613,6 +622,7 @@ impl Dae for CellModel {
         match self.params.kinematics {
             KinematicModel::PlaneStrain => self.residual_of::<PlaneStrain>(t, y, yp, r),
             KinematicModel::Axisymmetric => self.residual_of::<Axisymmetric>(t, y, yp, r),
+            KinematicModel::ThreeD => Err(DaeError::Fatal(THREE_D.into())),
         }
     }
 
@@ -632,6 +642,7 @@ impl Dae for CellModel {
         match self.params.kinematics {
             KinematicModel::PlaneStrain => self.jacobian_of::<PlaneStrain>(t, y, yp, cj, v),
             KinematicModel::Axisymmetric => self.jacobian_of::<Axisymmetric>(t, y, yp, cj, v),
+            KinematicModel::ThreeD => Err(DaeError::Fatal(THREE_D.into())),
         }
     }
 

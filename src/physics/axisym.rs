@@ -36,6 +36,10 @@ pub enum KinematicModel {
     /// is the meridian (r, y), `F₃₃ = 1 + u_r/r`, every integral weighted by r (per
     /// radian). A real 3-D (spherical) cell; MODEL.md §10.
     Axisymmetric,
+    /// The 3-D quarter cell x ≥ 0, z ≥ 0 on ten-node tetrahedra, meshed by gmsh
+    /// (`crate::model3d`; MODEL.md §10): no half-plane, the section z = 0 is the 2-D
+    /// model's.
+    ThreeD,
 }
 
 /// A block-diagonal 3 × 3 tensor `A₂ ⊕ a₃₃`: its meridian (r, y) block and its hoop (θθ)

@@ -555,6 +555,15 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
 /// The mesh and the cell model of a case, with the system it starts with (`defer_adhesion`:
 /// the μ_as unknowns join it at T_g0, [`CellModel::deferring_adhesion`]).
 fn build_model(case: &Case, file: &str, defer_adhesion: bool) -> Result<CellModel, RunError> {
+    if scene::is_3d(case) {
+        return Err(RunError::Model {
+            file: file.into(),
+            message: "geometry.model: ThreeD: `cellsim run` does not drive the 3-D quarter \
+                      cell yet; `cellsim mesh` meshes it and `cargo run --release --example \
+                      cell3d -- --case FILE --t-end T` integrates it (MODEL.md §10)"
+                .into(),
+        });
+    }
     let mesh = Mesh::generate(&scene::mesh_params(case)).map_err(|source| RunError::Mesh {
         file: file.into(),
         source,
