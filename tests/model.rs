@@ -757,3 +757,24 @@ fn lowest_nucleus_displacement_is_taken_over_every_nucleus_node() {
     let y = prescribed_state(&m, |_| [0.0, -1.25]);
     assert_eq!(m.observe(1.0, &y).uy_nucleus_max, -1.25);
 }
+
+#[test]
+fn element_loops_give_the_same_bits_in_parallel() {
+    // Residual and Jacobian with the element loops on rayon's pool and without.
+    let mut m = CellModel::new(active_pillars_params(true), coarse_mesh()).unwrap();
+    let (y, yp) = deformed_state(&m, 0.5, 11);
+    let t = 45_000.0;
+    let n = m.size();
+    let nnz = m.pattern().compute_nnz();
+    let mut out = Vec::new();
+    for parallel in [false, true] {
+        m.set_parallel(parallel);
+        let (mut r, mut j) = (vec![0.0; n], vec![0.0; nnz]);
+        m.residual(t, &y, &yp, &mut r).unwrap();
+        m.jacobian(t, &y, &yp, 37.0, &mut j).unwrap();
+        out.push((r, j));
+    }
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&out[0].0), bits(&out[1].0));
+    assert_eq!(bits(&out[0].1), bits(&out[1].1));
+}

@@ -271,7 +271,10 @@ impl CellModel {
 
     /// Runs the element loops (residual and Jacobian) on rayon's thread pool. The results
     /// are the same bits either way: each element's contribution is computed on its own
-    /// and the contributions are added in element order.
+    /// and the contributions are added in element order. Off in runs: on 2 cores it made
+    /// the flat gravity phase 1.17× slower at refine 1 and 2 and push-pull 1.22× (paired
+    /// runs against `RAYON_NUM_THREADS=1`, medians of 3–7, quiet machine, 2026-12-02;
+    /// perf put a fifth of the samples in the pool's `sched_yield` and futex calls).
     pub fn set_parallel(&mut self, parallel: bool) {
         self.parallel = parallel;
     }

@@ -13,19 +13,9 @@ use crate::fem::assembly::NONE;
 use crate::fem::tet::face_map;
 use crate::model::kinematics::deformation;
 use crate::model::observe::{StrainNorms, add_band_lengths};
+use crate::physics::Substrate;
 use crate::physics::contact_force3;
-use crate::record::Observables;
-
-/// The 3-D quantities beside the 2-D scene's.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Observables3 {
-    /// Area of the cell surface in contact (depth > −ε_ct), deformed [µm²], whole cell.
-    pub contact_area: f64,
-    /// The same material surface measured on the reference sphere [µm²], whole cell.
-    pub contact_area_ref: f64,
-    /// √(A/π) of the deformed contact area [µm].
-    pub contact_radius_equiv: f64,
-}
+use crate::record::{Observables, Observables3};
 
 /// Sub-triangle levels of the rule sampling each P2 surface face for the contact area.
 const FACE_LEVELS: u32 = 3;
@@ -54,10 +44,19 @@ impl Cell3 {
     /// The 3-D quantities in state `y`.
     pub fn observe3(&self, y: &[f64]) -> Observables3 {
         let (a, a_ref) = self.contact_areas(y);
+        let penetration_depth = match self.params.plane.substrate {
+            Substrate::Pillars(p) => {
+                let pb = self.mesh.points.nucleus_bottom;
+                let y_pb = self.mesh.nodes[pb][1] + self.dofs.node_u(y, pb)[1];
+                (p.y_top - y_pb).max(0.0)
+            }
+            Substrate::Flat { .. } => 0.0,
+        };
         Observables3 {
             contact_area: a,
             contact_area_ref: a_ref,
             contact_radius_equiv: (a / std::f64::consts::PI).sqrt(),
+            penetration_depth,
         }
     }
 

@@ -11,7 +11,7 @@
 pub mod observables;
 pub mod read;
 
-pub use observables::Observables;
+pub use observables::{Observables, Observables3};
 pub use read::{ReadError, RunData};
 
 use std::path::Path;
@@ -22,7 +22,7 @@ use crate::case::{self, Case};
 use crate::dae::Stats;
 use crate::fem::Domain;
 use crate::lu::LinearSolverKind;
-use crate::physics::{ActiveStrain, Substrate};
+use crate::physics::{ActiveStrain, Substrate, Substrate3};
 
 /// Integration settings of one run: the case's `solver` section, possibly overridden on
 /// the command line.
@@ -373,6 +373,63 @@ pub struct Snapshot {
     pub element_strain: Vec<f64>,
     /// Per element: reference-area mean of det F.
     pub element_jacobian: Vec<f64>,
+}
+
+/// What the mesh file of a 3-D run (`mesh3.json`) records: the quarter cell's ten-node
+/// tetrahedra and its outer surface, with what the figures draw beside it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Mesh3File {
+    /// Reference node coordinates [µm].
+    pub nodes: Vec<[f64; 3]>,
+    /// Ten-node tetrahedra (gmsh's node order, [`crate::fem::tet`]).
+    pub elements: Vec<[usize; 10]>,
+    /// Domain of each element.
+    pub domains: Vec<Domain>,
+    /// Six-node triangles of the outer sphere r = r_c (the quarter's cell surface).
+    pub outer_faces: Vec<[usize; 6]>,
+    /// The substrate in 3-D.
+    pub substrate: Substrate3,
+    /// Active strain regions, if any.
+    pub active: Option<ActiveStrain>,
+    /// Contact band half-width ε_ct [µm].
+    pub contact_eps: f64,
+    /// Fibronectin layer thickness e_f [µm], with adhesion.
+    pub layer_thickness: Option<f64>,
+    /// Cell centre [µm].
+    pub center: [f64; 3],
+    /// Phase end times T_g0, T_as0, T_a0 and the end time [s].
+    pub phase_times: [f64; 4],
+}
+
+/// The state of the 3-D cell at one output time (`state_<phase>.json` of a 3-D run, and
+/// what a VTU frame or a figure is drawn from).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Snapshot3 {
+    /// Time [s].
+    pub t: f64,
+    /// Displacement of every node [µm].
+    pub u: Vec<[f64; 3]>,
+    /// Velocity of every node [µm/s]: the v unknowns with inertia, u̇ without.
+    pub v: Vec<[f64; 3]>,
+    /// μ_as per node [pN/µm³] (`None` off the membrane or without adhesion).
+    pub mu_as: Vec<Option<f64>>,
+    /// Per element: reference-volume mean of ‖E‖_F.
+    pub element_strain: Vec<f64>,
+    /// Per element: reference-volume mean of det F.
+    pub element_jacobian: Vec<f64>,
+}
+
+/// A 3-D run's state file: the phase, its snapshot and the observables then.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct StateFile3 {
+    /// Phase name: "gravity", "spreading", "active" or "end".
+    pub phase: String,
+    /// The state.
+    pub state: Snapshot3,
+    /// The 2-D scene's observables (section z = 0).
+    pub observables: Observables,
+    /// The 3-D ones.
+    pub observables3: Observables3,
 }
 
 /// Writes `value` as pretty JSON to `path` through a temporary file and a rename, so that

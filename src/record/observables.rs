@@ -176,6 +176,42 @@ pub fn interpolate(rows: &[Observables], t: f64) -> Option<Observables> {
     Some(Observables::from_values(v))
 }
 
+/// The 3-D quantities of one output row of a 3-D run (MODEL.md §10), written after the
+/// 2-D columns of `timeseries.csv` ([`Observables3::CSV_COLUMNS`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Observables3 {
+    /// Area of the cell surface in contact (depth > −ε_ct), deformed [µm²], whole cell.
+    pub contact_area: f64,
+    /// The same material surface measured on the reference sphere [µm²], whole cell.
+    pub contact_area_ref: f64,
+    /// √(A/π) of the deformed contact area [µm].
+    pub contact_radius_equiv: f64,
+    /// How far the nucleus bottom p_b went below the pillar tops [µm] (0 above them and on
+    /// a flat substrate): max(0, y_top − (c_y − r_n + u_y(p_b))).
+    pub penetration_depth: f64,
+}
+
+impl Observables3 {
+    /// The 3-D columns, after [`Observables::CSV_HEADER`]'s.
+    pub const CSV_COLUMNS: &'static str =
+        "contact_area,contact_area_ref,contact_radius_equiv,penetration_depth";
+
+    /// The values in column order.
+    pub fn values(&self) -> [f64; 4] {
+        [
+            self.contact_area,
+            self.contact_area_ref,
+            self.contact_radius_equiv,
+            self.penetration_depth,
+        ]
+    }
+
+    /// Whether every value is finite.
+    pub fn is_finite(&self) -> bool {
+        self.values().iter().all(|v| v.is_finite())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -458,40 +458,6 @@ impl Solver {
             Solver::Bdf2(b) => b.dae(),
         }
     }
-
-    fn model_mut(&mut self) -> &mut CellModel {
-        match self {
-            Solver::Ida(i) => i.dae_mut(),
-            Solver::Bdf2(b) => b.dae_mut(),
-        }
-    }
-}
-
-/// Runs in progress in this process (`paper`, `study` and `sweep` run several at once).
-static ACTIVE_RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-
-/// A run counted in [`ACTIVE_RUNS`] while it lives.
-struct ActiveRun;
-
-impl ActiveRun {
-    fn start() -> Self {
-        ACTIVE_RUNS.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-        ActiveRun
-    }
-
-    /// Whether the element loops should use the thread pool now: only while this is the
-    /// one run of the process (several runs already share the cores), and only with more
-    /// than one thread. Same bits either way ([`CellModel::set_parallel`]).
-    fn alone() -> bool {
-        ACTIVE_RUNS.load(std::sync::atomic::Ordering::SeqCst) == 1
-            && rayon::current_num_threads() > 1
-    }
-}
-
-impl Drop for ActiveRun {
-    fn drop(&mut self) {
-        ACTIVE_RUNS.fetch_sub(1, std::sync::atomic::Ordering::SeqCst);
-    }
 }
 
 /// A progress bar for a scene (hidden when `visible` is false).
@@ -664,7 +630,6 @@ impl Driver {
     /// switch time and the contact carries the cell.
     fn advance_to(&mut self, tout: f64) -> Advance {
         self.guard.next_output(tout);
-        self.solver.model_mut().set_parallel(ActiveRun::alone());
         // Why the driver stopped the integrator, and when (the integrator itself only
         // says "interrupted").
         let mut stopped: Option<(StopCause, f64)> = None;

@@ -292,7 +292,6 @@ impl Context<'_, '_> {
     }
 
     fn run_task(&self, task: Task) {
-        let _active = super::ActiveRun::start();
         let Task { members, start } = task;
         let mut tracks = members;
         // The leader (first) is the member that runs longest: the system is built from
