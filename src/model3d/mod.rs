@@ -17,6 +17,7 @@
 mod element;
 mod kernels;
 pub mod observe;
+mod switch;
 
 use nalgebra::Vector3;
 

@@ -15,7 +15,7 @@ use crate::model::kinematics::deformation;
 use crate::model::observe::{StrainNorms, add_band_lengths};
 use crate::physics::Substrate;
 use crate::physics::contact_force3;
-use crate::record::{Observables, Observables3};
+use crate::record::{Mesh3File, Observables, Observables3, Snapshot3};
 
 /// Sub-triangle levels of the rule sampling each P2 surface face for the contact area.
 const FACE_LEVELS: u32 = 3;
@@ -142,6 +142,58 @@ impl Cell3 {
             }
         }
         s
+    }
+
+    /// Per-element reference-volume means of ‖E‖_F and of det F, for output.
+    pub fn element_strain_and_jacobian(&self, y: &[f64]) -> Vec<(f64, f64)> {
+        self.elements
+            .iter()
+            .map(|el| {
+                let ue = self.element_displacements(&el.nodes, y);
+                let (mut se, mut sj, mut v) = (0.0, 0.0, 0.0);
+                for q in 0..el.geo.jxw.len() {
+                    let f = deformation(&ue, &el.geo.grads[q]);
+                    let e = (f.transpose() * f - Matrix3::identity()) * 0.5;
+                    se += el.geo.jxw[q] * e.norm();
+                    sj += el.geo.jxw[q] * f.determinant();
+                    v += el.geo.jxw[q];
+                }
+                (se / v, sj / v)
+            })
+            .collect()
+    }
+
+    /// The state at time `t` as the output writers take it.
+    pub fn snapshot(&self, t: f64, y: &[f64], yp: &[f64]) -> Snapshot3 {
+        let per_el = self.element_strain_and_jacobian(y);
+        Snapshot3 {
+            t,
+            u: (0..self.mesh.nodes.len())
+                .map(|i| self.dofs.node_u(y, i))
+                .collect(),
+            v: self.nodal_velocities(y, yp),
+            mu_as: self.nodal_mu_as(y),
+            element_strain: per_el.iter().map(|p| p.0).collect(),
+            element_jacobian: per_el.iter().map(|p| p.1).collect(),
+        }
+    }
+
+    /// What `mesh3.json` records of this model, with the scene's phase end times.
+    pub fn mesh_file(&self, phase_times: [f64; 4]) -> Mesh3File {
+        let p = &self.params.plane;
+        let c = self.params.center();
+        Mesh3File {
+            nodes: self.mesh.nodes.clone(),
+            elements: self.mesh.elements.clone(),
+            domains: self.mesh.domains.clone(),
+            outer_faces: self.mesh.outer_faces.clone(),
+            substrate: self.substrate,
+            active: p.active,
+            contact_eps: p.contact.eps,
+            layer_thickness: p.adhesion.map(|a| a.e_f),
+            center: [c.x, c.y, c.z],
+            phase_times,
+        }
     }
 
     /// The smallest vertical displacement over every node of the nucleus elements [µm].

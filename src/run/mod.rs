@@ -19,6 +19,7 @@ use crate::dae::bdf2::{Bdf2, Bdf2Options};
 use crate::dae::{Atol, Dae, Integrator, IntegratorError, Stats};
 use crate::fem::{Mesh, MeshError};
 use crate::model::{CellModel, Restart};
+use crate::model3d::Cell3;
 use crate::output::{SnapshotOptions, SnapshotWriter};
 use crate::record::Observables;
 use crate::record::{
@@ -29,7 +30,9 @@ use crate::scene::{self, SceneError};
 use crate::stop::{StopFlag, signal_name};
 use crate::sundials::{Ida, IdaOptions};
 
+mod cell;
 mod shared;
+use cell::Cell;
 pub use shared::{Member, run_all, shared_until};
 
 /// How a run reports progress.
@@ -395,12 +398,12 @@ pub fn output_times(case: &Case) -> Vec<f64> {
 
 /// Either integrator on the cell model.
 enum Solver {
-    Ida(Box<Ida<CellModel>>),
-    Bdf2(Box<Bdf2<CellModel>>),
+    Ida(Box<Ida<Cell>>),
+    Bdf2(Box<Bdf2<Cell>>),
 }
 
 impl Solver {
-    fn new(model: CellModel, s: &RunSettings) -> Result<Self, IntegratorError> {
+    fn new(model: Cell, s: &RunSettings) -> Result<Self, IntegratorError> {
         let atol = Atol::Vector(model.atol_vector(s.atol));
         // The condensed solver needs the (u, v) pairs: without inertia, its full-size LU.
         let linear_solver = if model.first_order_blocks().is_some() {
@@ -423,7 +426,7 @@ impl Solver {
             }
             case::Integrator::Bdf2 => {
                 let dt = match s.dt_inertia {
-                    Some(h) if model.dofs.inertia => s.dt.min(h),
+                    Some(h) if model.inertia() => s.dt.min(h),
                     _ => s.dt,
                 };
                 let opts = Bdf2Options {
@@ -452,7 +455,7 @@ impl Solver {
         }
     }
 
-    fn model(&self) -> &CellModel {
+    fn model(&self) -> &Cell {
         match self {
             Solver::Ida(i) => i.dae(),
             Solver::Bdf2(b) => b.dae(),
@@ -520,30 +523,35 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
 
 /// The mesh and the cell model of a case, with the system it starts with (`defer_adhesion`:
 /// the μ_as unknowns join it at T_g0, [`CellModel::deferring_adhesion`]).
-fn build_model(case: &Case, file: &str, defer_adhesion: bool) -> Result<CellModel, RunError> {
+fn build_model(case: &Case, file: &str, defer_adhesion: bool) -> Result<Cell, RunError> {
+    let model_err = |message: String| RunError::Model {
+        file: file.into(),
+        message,
+    };
+    let inertia = scene::starts_with_inertia(case);
     if scene::is_3d(case) {
-        return Err(RunError::Model {
-            file: file.into(),
-            message: "geometry.model: ThreeD: `cellsim run` does not drive the 3-D quarter \
-                      cell yet; `cellsim mesh` meshes it and `cargo run --release --example \
-                      cell3d -- --case FILE --t-end T` integrates it (MODEL.md §10)"
-                .into(),
-        });
+        let mesh = crate::fem::Mesh3::generate(&scene::mesh3_params(case)).map_err(|source| {
+            RunError::Mesh {
+                file: file.into(),
+                source,
+            }
+        })?;
+        let params = scene::params3(case, file, inertia)?;
+        return Cell3::new(params, mesh)
+            .map(|m| Cell::Quarter(Box::new(m)))
+            .map_err(|e| model_err(e.to_string()));
     }
     let mesh = Mesh::generate(&scene::mesh_params(case)).map_err(|source| RunError::Mesh {
         file: file.into(),
         source,
     })?;
-    let params = scene::model_params(case, file, scene::starts_with_inertia(case))?;
+    let params = scene::model_params(case, file, inertia)?;
     let model = if defer_adhesion {
         CellModel::deferring_adhesion(params, mesh)
     } else {
         CellModel::new(params, mesh)
     };
-    model.map_err(|e| RunError::Model {
-        file: file.into(),
-        message: e.to_string(),
-    })
+    model.map(Cell::Plane).map_err(|e| model_err(e.to_string()))
 }
 
 /// How an advance to an output time ended.
@@ -574,7 +582,7 @@ struct Driver {
 }
 
 impl Driver {
-    fn new(case: &Case, opts: &RunOptions, model: CellModel) -> Result<Self, IntegratorError> {
+    fn new(case: &Case, opts: &RunOptions, model: Cell) -> Result<Self, IntegratorError> {
         let ph = &case.phases;
         let adhesion_at = (model.adhesion_deferred() && ph.t_g0 < ph.t_end).then_some(ph.t_g0);
         let solver = Solver::new(model, &opts.settings)?;
@@ -621,7 +629,7 @@ impl Driver {
     }
 
     /// The model and (y, ẏ) at the last output time reached.
-    fn state(&self) -> (&CellModel, &[f64], &[f64]) {
+    fn state(&self) -> (&Cell, &[f64], &[f64]) {
         let i = self.solver.integ_ref();
         (self.solver.model(), i.y(), i.yp())
     }
@@ -666,8 +674,7 @@ impl Driver {
         let m2 = self
             .solver
             .model()
-            .with_adhesion_unknowns(t, integ.y(), integ.yp())
-            .map_err(|e| e.to_string())?;
+            .with_adhesion_unknowns(t, integ.y(), integ.yp())?;
         // The solution goes on smoothly: start from a tenth of the last step rather than
         // IDA's estimate (which started 4000× below it and took a dozen steps to regain it).
         let mut settings = self.settings.clone();
@@ -790,7 +797,8 @@ struct RunWriter {
     out: PathBuf,
     csv_path: PathBuf,
     csv: BufWriter<File>,
-    frames: SnapshotWriter,
+    /// The VTU and GIF writers (half-plane models only).
+    frames: Option<SnapshotWriter>,
     phase_states: bool,
     phases: [(f64, &'static str); 4],
     tolerance: f64,
@@ -803,37 +811,57 @@ struct RunWriter {
 
 impl RunWriter {
     /// Creates the directory, writes `mesh.json` and the CSV header, and starts the summary.
-    fn create(
-        case: &Case,
-        file: &str,
-        opts: &RunOptions,
-        model: &CellModel,
-    ) -> Result<Self, RunError> {
+    fn create(case: &Case, file: &str, opts: &RunOptions, model: &Cell) -> Result<Self, RunError> {
         let out = opts.out.clone();
         std::fs::create_dir_all(&out).map_err(io_err(&out))?;
-        let (mesh, params, ph) = (&model.mesh, &model.params, &case.phases);
-        let mesh_file = MeshFile {
-            nodes: mesh.nodes.clone(),
-            elements: mesh.elements.clone(),
-            domains: mesh.domains.clone(),
-            outer_edges: mesh.outer_edges.clone(),
-            nucleus_edges: mesh.nucleus_edges.clone(),
-            membrane_inner_edges: mesh.membrane_inner_edges.clone(),
-            substrate: params.substrate,
-            active: params.active,
-            contact_eps: params.contact.eps,
-            layer_thickness: params.adhesion.map(|a| a.e_f),
-            center: params.center,
-            phase_times: [ph.t_g0, ph.t_as0, ph.t_a0, ph.t_end],
-        };
-        write_json(&out.join("mesh.json"), &mesh_file)?;
+        let ph = &case.phases;
+        let phase_times = [ph.t_g0, ph.t_as0, ph.t_a0, ph.t_end];
         let n_outputs = output_times(case).len() + 1;
-        let frames = SnapshotWriter::new(&out, &case.name, &mesh_file, opts.snapshots, n_outputs)?;
+        let (frames, header) = match model {
+            Cell::Plane(m) => {
+                let (mesh, params) = (&m.mesh, &m.params);
+                let mesh_file = MeshFile {
+                    nodes: mesh.nodes.clone(),
+                    elements: mesh.elements.clone(),
+                    domains: mesh.domains.clone(),
+                    outer_edges: mesh.outer_edges.clone(),
+                    nucleus_edges: mesh.nucleus_edges.clone(),
+                    membrane_inner_edges: mesh.membrane_inner_edges.clone(),
+                    substrate: params.substrate,
+                    active: params.active,
+                    contact_eps: params.contact.eps,
+                    layer_thickness: params.adhesion.map(|a| a.e_f),
+                    center: params.center,
+                    phase_times,
+                };
+                write_json(&out.join("mesh.json"), &mesh_file)?;
+                let frames =
+                    SnapshotWriter::new(&out, &case.name, &mesh_file, opts.snapshots, n_outputs)?;
+                (Some(frames), Observables::CSV_HEADER.to_string())
+            }
+            Cell::Quarter(m) => {
+                if opts.snapshots.any() {
+                    return Err(RunError::Model {
+                        file: file.into(),
+                        message: "--vtu and --gif are not written for the 3-D model yet (its \
+                                  states are in state_<phase>.json)"
+                            .into(),
+                    });
+                }
+                write_json(&out.join("mesh3.json"), &m.mesh_file(phase_times))?;
+                let header = format!(
+                    "{},{}",
+                    Observables::CSV_HEADER,
+                    crate::record::Observables3::CSV_COLUMNS
+                );
+                (None, header)
+            }
+        };
         let csv_path = out.join("timeseries.csv");
         let mut csv = BufWriter::new(File::create(&csv_path).map_err(io_err(&csv_path))?);
-        writeln!(csv, "{}", Observables::CSV_HEADER).map_err(io_err(&csv_path))?;
-        let (nu, nv, _) = model.block_sizes();
-        let nm = model.n_mu_as();
+        writeln!(csv, "{header}").map_err(io_err(&csv_path))?;
+        let (nu, nv, nm) = model.unknowns();
+        let (mesh_elements, mesh_nodes) = model.mesh_size();
         let summary = Summary {
             case: case.name.clone(),
             case_file: file.to_string(),
@@ -845,8 +873,8 @@ impl RunWriter {
                 v: nv,
                 mu_as: nm,
             },
-            mesh_elements: mesh.elements.len(),
-            mesh_nodes: mesh.nodes.len(),
+            mesh_elements,
+            mesh_nodes,
             wall_seconds: 0.0,
             setup_seconds: 0.0,
             stats: Stats::default(),
@@ -891,38 +919,59 @@ impl RunWriter {
 
     /// Writes everything due at output time `t`: the CSV row, a snapshot, and at a phase
     /// end the state file. Nothing is written for a non-finite state.
-    fn output(
-        &mut self,
-        model: &CellModel,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-    ) -> Result<(), OutputStop> {
-        let obs = model.observe(t, y);
-        if !obs.is_finite() || y.iter().any(|v| !v.is_finite()) {
+    fn output(&mut self, model: &Cell, t: f64, y: &[f64], yp: &[f64]) -> Result<(), OutputStop> {
+        let (obs, obs3) = model.observe(t, y);
+        if !obs.is_finite()
+            || obs3.is_some_and(|o| !o.is_finite())
+            || y.iter().any(|v| !v.is_finite())
+        {
             // Not expected (the residual reports non-finite values as inadmissible, and
             // the integrators cut the step), but a run must never write NaN.
             return Err(OutputStop::NonFinite(t));
         }
-        writeln!(self.csv, "{}", obs.csv_row())
+        let mut row = obs.csv_row();
+        if let Some(o3) = &obs3 {
+            for v in o3.values() {
+                row.push(',');
+                row.push_str(&v.to_string());
+            }
+        }
+        writeln!(self.csv, "{row}")
             .and_then(|_| self.csv.flush())
             .map_err(io_err(&self.csv_path))?;
-        let mu_as = model
-            .nodal_mu_as(t, y)
-            .map_err(|why| OutputStop::State(t, why))?;
-        if self.frames.is_active() {
-            self.frames
-                .write(&snapshot(model, t, y, yp, mu_as.clone()))?;
-        }
         self.summary.outputs += 1;
         self.summary.final_values = Some(obs);
-        if let Some(phase) = self.phase_at(t).filter(|_| self.phase_states && t > 0.0) {
-            let name = format!("state_{phase}.json");
-            write_json(
-                &self.out.join(&name),
-                &state_file(model, phase, t, y, mu_as, obs),
-            )?;
-            self.summary.states.push(name);
+        let phase = self.phase_at(t).filter(|_| self.phase_states && t > 0.0);
+        match model {
+            Cell::Plane(m) => {
+                let mu_as = m
+                    .nodal_mu_as(t, y)
+                    .map_err(|why| OutputStop::State(t, why))?;
+                if let Some(frames) = self.frames.as_mut().filter(|f| f.is_active()) {
+                    frames.write(&snapshot(m, t, y, yp, mu_as.clone()))?;
+                }
+                if let Some(phase) = phase {
+                    let name = format!("state_{phase}.json");
+                    write_json(
+                        &self.out.join(&name),
+                        &state_file(m, phase, t, y, mu_as, obs),
+                    )?;
+                    self.summary.states.push(name);
+                }
+            }
+            Cell::Quarter(m) => {
+                if let (Some(phase), Some(observables3)) = (phase, obs3) {
+                    let name = format!("state_{phase}.json");
+                    let state = crate::record::StateFile3 {
+                        phase: phase.to_string(),
+                        state: m.snapshot(t, y, yp),
+                        observables: obs,
+                        observables3,
+                    };
+                    write_json(&self.out.join(&name), &state)?;
+                    self.summary.states.push(name);
+                }
+            }
         }
         Ok(())
     }
@@ -969,7 +1018,7 @@ impl RunWriter {
                 wall,
             ));
         }
-        if let Err(e) = frames.finish() {
+        if let Err(e) = frames.map_or(Ok(Vec::new()), |f| f.finish()) {
             stopped.get_or_insert((
                 FailureKind::Output,
                 format!("writing the VTU/GIF output: {e}"),

@@ -5,7 +5,7 @@
 //! time they part ([`shared_until`]). [`run_all`] integrates such a group once up to that
 //! time (writing every member's outputs as it goes), and then each subgroup that still
 //! agrees goes on by itself: every one of them restarts the integrator at the parting time
-//! from the state there, with its own case's model ([`CellModel::branched`]), so that
+//! from the state there, with its own case's model ([`crate::model::CellModel::branched`]), so that
 //! subgroups compared with each other (upside-down against its control) start alike. Their
 //! results agree with their own runs' to the integrator's tolerance (measured in the
 //! tests); a group from which members only end goes on with the same integrator. Every
@@ -17,14 +17,13 @@
 use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
+use super::Cell;
 use super::{
     Advance, Driver, Progress, RunError, RunOptions, RunWriter, Solver, build_model, output_times,
 };
 use crate::case::{Case, Output, Phases};
 use crate::dae::Stats;
-use crate::model::CellModel;
 use crate::record::{FailureKind, Parting, Summary};
-use crate::scene;
 
 /// The time up to which runs of `a` and `b` are the same computation: the earlier end
 /// time when the cases differ only in their names, descriptions, end times and outputs; the
@@ -195,7 +194,7 @@ enum Start {
 
 /// What a restarted subgroup takes from the stretch before it.
 struct Branch {
-    model: CellModel,
+    model: Cell,
     stats: Stats,
     switch_after: Option<f64>,
     switched_at: Option<f64>,
@@ -353,7 +352,7 @@ impl Context<'_, '_> {
     /// Creates the files of every member (failures end that member) and the driver on the
     /// leader's system. `None` when no member could start.
     fn fresh(&self, tracks: &mut Vec<Track>, ropts: &RunOptions) -> Result<Option<Driver>, String> {
-        let mut trunk: Option<CellModel> = None;
+        let mut trunk: Option<Cell> = None;
         let mut kept = Vec::new();
         for mut tr in std::mem::take(tracks) {
             let m = &self.members[tr.k];
@@ -361,7 +360,7 @@ impl Context<'_, '_> {
             let started =
                 build_model(m.case, m.file, m.opts.settings.defer_adhesion).and_then(|model| {
                     let mut files = RunWriter::create(m.case, m.file, &m.opts, &model)?;
-                    let y0 = vec![0.0; model.dofs.n];
+                    let y0 = vec![0.0; model.n()];
                     if let Err(stop) = files.output(&model, 0.0, &y0, &y0) {
                         let (_, message) = stop.into_stop()?;
                         return Err(RunError::Model {
@@ -568,9 +567,7 @@ impl Context<'_, '_> {
         let (model, y, yp) = driver.state();
         let t = driver.solver.integ_ref().t();
         let lead = &self.members[sub[0].k];
-        let built = scene::model_params(lead.case, lead.file, model.dofs.inertia)
-            .map_err(|e| e.to_string())
-            .and_then(|params| model.branched(params, t, y, yp).map_err(|e| e.to_string()));
+        let built = model.branched(lead.case, lead.file, t, y, yp);
         match built {
             Ok(model) => self.push(Task {
                 members: sub,

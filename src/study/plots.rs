@@ -240,9 +240,19 @@ pub fn work_precision_figure(path: &Path, report: &StudyReport) -> Result<(), Ou
         let (ip, il) = labelled_work(rows, Role::Ida, q);
         let x = log_range_from_decade(bp.iter().chain(&ip).map(|p| p.1));
         let mut ys: Vec<f64> = bp.iter().chain(&ip).map(|p| p.0).collect();
-        if q == Quantity::UyTop {
-            ys.push(TARGET_ERROR);
-        }
+        // The errors at which the speed-up was measured on this quantity: the final uy_top
+        // at the target, the curve at each error both ladders reach.
+        let measured: Vec<f64> = match q {
+            Quantity::UyTop if report.ida_speedup.is_some() => vec![TARGET_ERROR],
+            Quantity::UyTopCurve => report
+                .speedup_curve
+                .iter()
+                .filter(|p| p.ratio.is_some())
+                .map(|p| p.error)
+                .collect(),
+            _ => Vec::new(),
+        };
+        ys.extend(&measured);
         let y = log_range(ys.into_iter());
         // Headroom above the data for the legend.
         let y = (y.0, y.1 * 30.0);
@@ -257,17 +267,18 @@ pub fn work_precision_figure(path: &Path, report: &StudyReport) -> Result<(), Ou
             "relative error (–)",
         )
         .map_err(d)?;
-        if q == Quantity::UyTop {
-            let t = TARGET_ERROR;
+        if !measured.is_empty() {
+            let at = measured
+                .iter()
+                .map(|t| format!("{t:.0e}"))
+                .collect::<Vec<_>>()
+                .join(", ");
             chart
-                .draw_series(std::iter::once(DashedPathElement::new(
-                    vec![(x.0, t), (x.1, t)],
-                    8,
-                    6,
-                    GREY.stroke_width(2),
-                )))
+                .draw_series(measured.iter().map(|&t| {
+                    DashedPathElement::new(vec![(x.0, t), (x.1, t)], 8, 6, GREY.stroke_width(2))
+                }))
                 .map_err(|x| d(x.to_string()))?
-                .label(format!("speed-up measured at {t:.0e}"))
+                .label(format!("speed-up measured at {at}"))
                 .legend(|(x, y)| {
                     DashedPathElement::new(vec![(x, y), (x + 30, y)], 6, 4, GREY.stroke_width(2))
                 });

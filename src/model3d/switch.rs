@@ -1,0 +1,139 @@
+//! Changing the 3-D system during a run, as the half-plane models do
+//! (`crate::model::switch`): inertia switched off once the contact carries the cell, the
+//! cell placed at rest in equilibrium; and a case that agrees with another up to a time
+//! branched from its state.
+
+use super::{Cell3, Model3Error, Params3};
+use crate::dae::{Atol, consistent_init};
+use crate::model::Restart;
+use crate::model::history;
+
+impl Cell3 {
+    /// Whether at time `t` the contact carries the cell's current weight (gravity ramped
+    /// and signed as at `t`; false while there is no downward load).
+    pub fn contact_carries_weight(&self, t: f64, y: &[f64]) -> bool {
+        let ph = &self.params.plane.phases;
+        let load = self.weight() * ph.t_g(t) * ph.gravity_sign(t);
+        load > 0.0 && self.contact_force_total(y).y >= load
+    }
+
+    /// The time the integration starts from: 0, or that of [`Cell3::set_initial`].
+    pub fn initial_time(&self) -> f64 {
+        self.initial_state.as_ref().map_or(0.0, |s| s.0)
+    }
+
+    /// The state of this model (with inertia) mapped to the same model without inertia:
+    /// u and the exposures carried over, u̇ = v. Returns (y, ẏ) of the smaller system.
+    pub fn drop_inertia_state(&self, y: &[f64], yp: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let (n_u, n_mu, off) = (self.dofs.n_u, self.dofs.n_mu(), self.dofs.mu_offset());
+        let mut y2 = Vec::with_capacity(n_u + n_mu);
+        let mut yp2 = Vec::with_capacity(n_u + n_mu);
+        y2.extend_from_slice(&y[..n_u]);
+        if self.dofs.inertia {
+            yp2.extend_from_slice(&y[n_u..2 * n_u]);
+        } else {
+            yp2.extend_from_slice(&yp[..n_u]);
+        }
+        y2.extend_from_slice(&y[off..off + n_mu]);
+        yp2.extend_from_slice(&yp[off..off + n_mu]);
+        (y2, yp2)
+    }
+
+    /// The same cell without inertia, set to restart at time `t` from (`y`, `yp`), placed
+    /// at rest in equilibrium: u̇ = 0 and u solved from F(u, u̇ = 0, A) = 0, the exposures
+    /// kept with a consistent Ȧ (see `CellModel::without_inertia_at_rest` for why).
+    pub fn without_inertia_at_rest(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        restart: &Restart,
+    ) -> Result<Cell3, Model3Error> {
+        let (mut y2, mut yp2) = self.drop_inertia_state(y, yp);
+        yp2[..self.dofs.n_u].iter_mut().for_each(|v| *v = 0.0);
+        let mut params = self.params.clone();
+        params.plane.inertia = false;
+        let mut m = Cell3::with_constraints(params, self.mesh.clone(), self.constraints)?;
+        let atol = Atol::Vector(m.atol_vector(restart.atol));
+        let for_y: Vec<bool> = (0..m.dofs.n).map(|i| i < m.dofs.n_u).collect();
+        consistent_init(
+            &mut m,
+            t,
+            &mut y2,
+            &mut yp2,
+            &for_y,
+            restart.linear_solver,
+            restart.rtol,
+            &atol,
+        )
+        .map_err(|source| Model3Error::Restart {
+            what: "switching inertia off",
+            t,
+            source: Box::new(source),
+        })?;
+        m.set_initial(t, y2, yp2);
+        Ok(m)
+    }
+
+    /// The same system as this one now with the parameters `params` of another case that
+    /// agrees with this one's up to `t`, set to restart at `t` from (`y`, `yp`).
+    pub fn branched(
+        &self,
+        mut params: Params3,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<Cell3, Model3Error> {
+        params.plane.inertia = self.dofs.inertia;
+        let refuse = |message: String| Model3Error::Restart {
+            what: "branching",
+            t,
+            source: Box::new(crate::dae::IntegratorError::Problem { t, message }),
+        };
+        if params.plane.adhesion.is_some() != self.params.plane.adhesion.is_some() {
+            return Err(refuse("one case has adhesion and the other not".into()));
+        }
+        let mut m = Cell3::with_constraints(params, self.mesh.clone(), self.constraints)?;
+        if m.dofs.n != self.dofs.n || y.len() != m.dofs.n || yp.len() != m.dofs.n {
+            return Err(refuse(format!(
+                "the systems differ: {} unknowns against {}",
+                m.dofs.n, self.dofs.n
+            )));
+        }
+        m.set_initial(t, y.to_vec(), yp.to_vec());
+        Ok(m)
+    }
+
+    /// μ_as = Φ(A) per mesh node (`None` off the membrane or without adhesion).
+    pub fn nodal_mu_as(&self, y: &[f64]) -> Vec<Option<f64>> {
+        let n = self.mesh.nodes.len();
+        let Some(ad) = &self.params.plane.adhesion else {
+            return vec![None; n];
+        };
+        (0..n)
+            .map(|i| {
+                let d = self.dofs.mu[i];
+                (d != crate::fem::assembly::NONE).then(|| history::cap(y[d], ad.mu_as_max).0)
+            })
+            .collect()
+    }
+
+    /// Velocity of every node: the v unknowns with inertia, u̇ without.
+    pub fn nodal_velocities(&self, y: &[f64], yp: &[f64]) -> Vec<[f64; 3]> {
+        (0..self.mesh.nodes.len())
+            .map(|i| {
+                if self.dofs.inertia {
+                    self.dofs.v[i].map(|d| {
+                        if d == crate::fem::assembly::NONE {
+                            0.0
+                        } else {
+                            y[d]
+                        }
+                    })
+                } else {
+                    self.dofs.node_u(yp, i)
+                }
+            })
+            .collect()
+    }
+}
