@@ -12,7 +12,7 @@ use crate::scene;
 /// A run's model.
 pub(crate) enum Cell {
     /// The half-plane models.
-    Plane(CellModel),
+    Plane(Box<CellModel>),
     /// The 3-D quarter cell.
     Quarter(Box<Cell3>),
 }
@@ -84,7 +84,7 @@ impl Cell {
         match self {
             Cell::Plane(m) => m
                 .with_adhesion_unknowns(t, y, yp)
-                .map(Cell::Plane)
+                .map(|m| Cell::Plane(Box::new(m)))
                 .map_err(|e| e.to_string()),
             Cell::Quarter(_) => Err("the 3-D model has its μ_as unknowns from the start".into()),
         }
@@ -109,7 +109,7 @@ impl Cell {
         match self {
             Cell::Plane(m) => m
                 .without_inertia_at_rest(t, y, yp, restart)
-                .map(Cell::Plane)
+                .map(|m| Cell::Plane(Box::new(m)))
                 .map_err(|e| e.to_string()),
             Cell::Quarter(m) => m
                 .without_inertia_at_rest(t, y, yp, restart)
@@ -133,7 +133,7 @@ impl Cell {
             Cell::Plane(m) => scene::model_params(case, file, inertia)
                 .map_err(|e| e.to_string())
                 .and_then(|p| m.branched(p, t, y, yp).map_err(|e| e.to_string()))
-                .map(Cell::Plane),
+                .map(|m| Cell::Plane(Box::new(m))),
             Cell::Quarter(m) => scene::params3(case, file, inertia)
                 .map_err(|e| e.to_string())
                 .and_then(|p| m.branched(p, t, y, yp).map_err(|e| e.to_string()))

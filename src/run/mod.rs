@@ -551,7 +551,9 @@ fn build_model(case: &Case, file: &str, defer_adhesion: bool) -> Result<Cell, Ru
     } else {
         CellModel::new(params, mesh)
     };
-    model.map(Cell::Plane).map_err(|e| model_err(e.to_string()))
+    model
+        .map(|m| Cell::Plane(Box::new(m)))
+        .map_err(|e| model_err(e.to_string()))
 }
 
 /// How an advance to an output time ended.
