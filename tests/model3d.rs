@@ -610,3 +610,51 @@ fn the_cli_meshes_checks_and_runs_a_3d_case() {
     assert_eq!(vtu.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&vtu.stderr).contains("not written for the 3-D model"));
 }
+
+#[test]
+fn deferred_exposures_leave_the_same_cell_and_join_consistently() {
+    // Before T_g0 the 3-D system without its exposure unknowns is the same cell (the same
+    // residual rows, bit for bit); joining them at T_g0 keeps every row consistent.
+    let mut c = Case::reference_active();
+    c.substrate = case::Substrate::pillars();
+    let mut p = scene::model_params(&c, "pillars-3d", false).expect("a valid case");
+    p.drag = 1e-3;
+    if let Substrate::Pillars(pl) = &mut p.substrate {
+        pl.y_top = pl
+            .y_top_for_gap3(0.5, Lattice::Gap, [p.center[0], p.center[1], 0.0], 10.0)
+            .expect("placed");
+    }
+    let params = Params3 {
+        plane: p,
+        lattice: Lattice::Gap,
+    };
+    let mesh = coarse3();
+    let mut full = Cell3::new(params.clone(), mesh.clone()).unwrap();
+    let mut small = Cell3::deferring_adhesion(params, mesh, Constraints::Quarter).unwrap();
+    assert!(small.adhesion_deferred() && !full.adhesion_deferred());
+    let n_mu = full.dofs.n_mu();
+    assert!(n_mu > 0 && small.size() + n_mu == full.size());
+    let (y, yp) = deformed_state(&full, 0.5, 11);
+    let m = small.size();
+    let t = 5.0; // in the gravity phase of the reference case (t_g0 = 10 000 s)
+    let (mut r_full, mut r_small) = (vec![0.0; full.size()], vec![0.0; m]);
+    full.residual(t, &y, &yp, &mut r_full).unwrap();
+    small.residual(t, &y[..m], &yp[..m], &mut r_small).unwrap();
+    assert_eq!(&r_full[..m], &r_small[..]);
+
+    let t0 = small.params.plane.phases.t_g0;
+    small.accepted_step(t0, &y[..m], &yp[..m]);
+    let mut big = small.with_adhesion_unknowns(t0, &y[..m], &yp[..m]).unwrap();
+    let (t, y2, yp2) = big.initial();
+    assert_eq!(t, t0);
+    let mut r = vec![0.0; big.size()];
+    big.residual(t, &y2, &yp2, &mut r).unwrap();
+    let mut r_small = vec![0.0; m];
+    small.residual(t, &y[..m], &yp[..m], &mut r_small).unwrap();
+    assert_eq!(&r[..m], &r_small[..]);
+    assert!(r[m..].iter().all(|v| v.abs() < 1e-9));
+    // The nodes that sank into the layer got an exposure from the history.
+    let a = &y2[m..];
+    assert!(a.iter().any(|&v| v > 0.0) && a.iter().all(|&v| v >= 0.0));
+    assert!(big.with_adhesion_unknowns(t, &y2, &yp2).is_err());
+}

@@ -20,20 +20,41 @@
 //! smooth drive). The values between the last two accepted steps (the output times, the
 //! inertia switch) are integrated the same way over the part of the step.
 
-use super::kinematics::{DIM, Vector};
-use crate::physics::{Adhesion, Substrate, layer};
+use nalgebra::{Vector2, Vector3};
+
+use super::kinematics::DIM;
+use crate::physics::{Adhesion, Substrate, Substrate3, layer, layer3};
+
+/// A substrate whose fibronectin layer indicator can be evaluated at a position in `D`
+/// dimensions: the drive of the exposure is `μ_as0` times it.
+pub trait LayerField<const D: usize>: Copy + std::fmt::Debug {
+    /// `g_l(x)` ([`layer`], [`layer3`]) at the position `x` [µm].
+    fn layer_at(&self, ad: &Adhesion, x: [f64; D]) -> f64;
+}
+
+impl LayerField<2> for Substrate {
+    fn layer_at(&self, ad: &Adhesion, x: [f64; 2]) -> f64 {
+        layer(self, ad, &Vector2::from(x))
+    }
+}
+
+impl LayerField<3> for Substrate3 {
+    fn layer_at(&self, ad: &Adhesion, x: [f64; 3]) -> f64 {
+        layer3(self, ad, &Vector3::from(x))
+    }
+}
 
 /// Positions and velocities of the membrane nodes at one time.
 #[derive(Debug, Clone)]
-struct Sample {
+struct Sample<const D: usize> {
     t: f64,
-    x: Vec<[f64; DIM]>,
-    xdot: Vec<[f64; DIM]>,
+    x: Vec<[f64; D]>,
+    xdot: Vec<[f64; D]>,
 }
 
-impl Sample {
+impl<const D: usize> Sample<D> {
     /// Position of node `k` at `t` in [self.t, next.t] on the cubic Hermite interpolant.
-    fn hermite(&self, next: &Sample, k: usize, t: f64) -> [f64; DIM] {
+    fn hermite(&self, next: &Sample<D>, k: usize, t: f64) -> [f64; D] {
         let h = next.t - self.t;
         if h <= 0.0 {
             return next.x[k];
@@ -53,27 +74,31 @@ impl Sample {
     }
 }
 
-/// The exposure at the membrane nodes while it is not an unknown of the system.
+/// The exposure at the membrane nodes while it is not an unknown of the system, for
+/// nodes in `D` dimensions over the substrate `S`.
 #[derive(Debug, Clone)]
-pub struct AdhesionHistory {
+pub struct AdhesionHistoryOf<const D: usize, S: LayerField<D>> {
     adhesion: Adhesion,
-    substrate: Substrate,
+    substrate: S,
     /// The exposure A at `last.t`, per membrane node.
     exposure: Vec<f64>,
-    last: Sample,
+    last: Sample<D>,
     /// The sample and μ_as before the last step (none before the first step).
-    prev: Option<(Sample, Vec<f64>)>,
+    prev: Option<(Sample<D>, Vec<f64>)>,
 }
 
-impl AdhesionHistory {
+/// The history of the half-plane models.
+pub type AdhesionHistory = AdhesionHistoryOf<DIM, Substrate>;
+
+impl<const D: usize, S: LayerField<D>> AdhesionHistoryOf<D, S> {
     /// Starts at time `t` with exposure `exposure` and the nodes at `x` moving with `xdot`.
     pub fn new(
         adhesion: Adhesion,
-        substrate: Substrate,
+        substrate: S,
         t: f64,
         exposure: Vec<f64>,
-        x: Vec<[f64; DIM]>,
-        xdot: Vec<[f64; DIM]>,
+        x: Vec<[f64; D]>,
+        xdot: Vec<[f64; D]>,
     ) -> Self {
         assert!(exposure.len() == x.len() && x.len() == xdot.len());
         Self {
@@ -101,14 +126,12 @@ impl AdhesionHistory {
     }
 
     /// The drive `a = μ_as0 H_ε(d(x) + e_f)` at position `x`.
-    fn drive(&self, x: [f64; DIM]) -> f64 {
-        let ad = &self.adhesion;
-        let xv = Vector::<f64>::from_fn(|k, _| x[k]);
-        ad.mu_as0 * layer(&self.substrate, ad, &xv)
+    fn drive(&self, x: [f64; D]) -> f64 {
+        self.adhesion.mu_as0 * self.substrate.layer_at(&self.adhesion, x)
     }
 
     /// The exposure at time `t` in [s0.t, s1.t] from `mu0` at `s0.t`.
-    fn integrate(&self, s0: &Sample, mu0: &[f64], s1: &Sample, t: f64) -> Vec<f64> {
+    fn integrate(&self, s0: &Sample<D>, mu0: &[f64], s1: &Sample<D>, t: f64) -> Vec<f64> {
         let h = t - s0.t;
         if h <= 0.0 {
             return mu0.to_vec();
@@ -126,7 +149,7 @@ impl AdhesionHistory {
 
     /// Advances over an accepted step to time `t`, where the nodes are at `x` moving with
     /// `xdot`. A step that does not move forward is ignored.
-    pub fn advance(&mut self, t: f64, x: Vec<[f64; DIM]>, xdot: Vec<[f64; DIM]>) {
+    pub fn advance(&mut self, t: f64, x: Vec<[f64; D]>, xdot: Vec<[f64; D]>) {
         if t <= self.last.t {
             return;
         }
@@ -157,12 +180,7 @@ impl AdhesionHistory {
 
     /// The history continued from time `t` (within the last step) on a restarted system
     /// whose nodes are at `x` moving with `xdot`.
-    pub fn restarted(
-        &self,
-        t: f64,
-        x: Vec<[f64; DIM]>,
-        xdot: Vec<[f64; DIM]>,
-    ) -> Result<Self, String> {
+    pub fn restarted(&self, t: f64, x: Vec<[f64; D]>, xdot: Vec<[f64; D]>) -> Result<Self, String> {
         let a = self.at(t)?;
         Ok(Self::new(self.adhesion, self.substrate, t, a, x, xdot))
     }

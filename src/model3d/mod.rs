@@ -11,8 +11,9 @@
 //! fixes u_z on every node instead ([`Constraints::Slab`]), which reproduces plane strain
 //! on a 2-D mesh extruded one layer thick.
 //!
-//! The μ_as unknowns (exposures A, μ_as = Φ(A), `crate::model::history`) are in the
-//! system from t = 0: the deferral of the half-plane models is not carried over yet.
+//! The μ_as unknowns are the exposures A (μ_as = Φ(A), `crate::model::history`); as in
+//! the half-plane models they can be left out of the system until T_g0
+//! ([`Cell3::deferring_adhesion`]), A integrated beside it along the accepted steps.
 
 mod element;
 mod kernels;
@@ -26,7 +27,7 @@ use crate::fem::assembly::NONE;
 use crate::fem::tet::TetTabulation;
 use crate::fem::{Domain, Mesh3};
 use crate::model::dofs::DofMapOf;
-use crate::model::history;
+use crate::model::history::{self, AdhesionHistoryOf};
 use crate::model::kernels::Switches;
 use crate::model::plan::PlanOf;
 use crate::model::{BLOCK, ModelParams, in_blocks};
@@ -111,6 +112,9 @@ pub struct Cell3 {
     ctab: TetTabulation,
     plan: PlanOf<3, NODES, EDOF>,
     initial_state: Option<(f64, Vec<f64>, Vec<f64>)>,
+    /// The exposures integrated beside the system while their unknowns are left out
+    /// (before T_g0).
+    history: Option<AdhesionHistoryOf<3, Substrate3>>,
     parallel: bool,
     scratch: Scratch3,
 }
@@ -128,6 +132,48 @@ impl Cell3 {
         mesh: Mesh3,
         constraints: Constraints,
     ) -> Result<Self, Model3Error> {
+        let adhesion = params.plane.adhesion.is_some();
+        Self::build(params, mesh, constraints, adhesion)
+    }
+
+    /// As [`Self::with_constraints`], but with adhesion modelled its exposure unknowns
+    /// are left out until adhesion can act (T_g0): A is integrated beside the system along
+    /// the accepted steps, and [`Self::with_adhesion_unknowns`] adds the unknowns (see
+    /// `crate::model::CellModel::deferring_adhesion`). Starting at T_g0 or later, the
+    /// unknowns are there from the start.
+    pub fn deferring_adhesion(
+        params: Params3,
+        mesh: Mesh3,
+        constraints: Constraints,
+    ) -> Result<Self, Model3Error> {
+        let Some(ad) = params.plane.adhesion else {
+            return Self::with_constraints(params, mesh, constraints);
+        };
+        if params.plane.phases.t_g0 <= 0.0 {
+            return Self::with_constraints(params, mesh, constraints);
+        }
+        let mut m = Self::build(params, mesh, constraints, false)?;
+        let nodes = m.membrane_nodes();
+        let x = nodes.iter().map(|&i| m.mesh.nodes[i]).collect();
+        let xdot = vec![[0.0; 3]; nodes.len()];
+        m.history = Some(AdhesionHistoryOf::new(
+            ad,
+            m.substrate,
+            0.0,
+            vec![0.0; nodes.len()],
+            x,
+            xdot,
+        ));
+        Ok(m)
+    }
+
+    /// The model on `mesh`, with the exposure unknowns when `adhesion_unknowns`.
+    fn build(
+        params: Params3,
+        mesh: Mesh3,
+        constraints: Constraints,
+        adhesion_unknowns: bool,
+    ) -> Result<Self, Model3Error> {
         let nn = mesh.nodes.len();
         let (mut on_x, mut on_z) = (vec![false; nn], vec![false; nn]);
         for &i in &mesh.symmetry_x {
@@ -137,16 +183,15 @@ impl Cell3 {
             on_z[i] = true;
         }
         let slab = constraints == Constraints::Slab;
-        let adhesion = params.plane.adhesion.is_some();
         let dofs = DofMapOf::<3>::numbered(
             nn,
             |i, c| (c == 0 && on_x[i]) || (c == 2 && (slab || on_z[i])),
             &nodes_of_domain(&mesh, Domain::Membrane),
             params.plane.inertia,
-            adhesion,
+            adhesion_unknowns,
         );
         let ReferenceElements3 { elements, ctab } =
-            ReferenceElements3::new(&params, &mesh, adhesion)?;
+            ReferenceElements3::new(&params, &mesh, adhesion_unknowns)?;
         let plan_elements: Vec<_> = elements.iter().map(|el| (el.nodes, el.with_mu)).collect();
         let plan = PlanOf::new(&dofs, &plan_elements);
         Ok(Self {
@@ -159,9 +204,40 @@ impl Cell3 {
             ctab,
             plan,
             initial_state: None,
+            history: None,
             parallel: false,
             scratch: Scratch3::default(),
         })
+    }
+
+    /// The nodes of the membrane elements, in the order of the exposure unknowns.
+    fn membrane_nodes(&self) -> Vec<usize> {
+        let on = nodes_of_domain(&self.mesh, Domain::Membrane);
+        (0..on.len()).filter(|&i| on[i]).collect()
+    }
+
+    /// Whether the exposure unknowns are left out until adhesion can act.
+    pub fn adhesion_deferred(&self) -> bool {
+        self.history.is_some()
+    }
+
+    /// Number of μ_as values (unknowns, or integrated beside the system while deferred).
+    pub fn n_mu_as(&self) -> usize {
+        self.history.as_ref().map_or(self.dofs.n_mu(), |h| h.len())
+    }
+
+    /// Positions and velocities of the membrane nodes from (y, ẏ) (velocity u̇).
+    fn membrane_motion(&self, y: &[f64], yp: &[f64]) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        let nodes = self.membrane_nodes();
+        let x = nodes
+            .iter()
+            .map(|&i| {
+                let u = self.dofs.node_u(y, i);
+                std::array::from_fn(|k| self.mesh.nodes[i][k] + u[k])
+            })
+            .collect();
+        let xdot = nodes.iter().map(|&i| self.dofs.node_u(yp, i)).collect();
+        (x, xdot)
     }
 
     /// Runs the element loops on rayon's thread pool (the same bits either way).
@@ -464,6 +540,16 @@ impl Dae for Cell3 {
             let n_u = self.dofs.n_u;
             FirstOrderBlocks::contiguous(0, n_u, n_u)
         })
+    }
+
+    /// Advances the exposure history (while deferred) over the accepted step.
+    fn accepted_step(&mut self, t: f64, y: &[f64], yp: &[f64]) {
+        if self.history.is_some() {
+            let (x, xdot) = self.membrane_motion(y, yp);
+            if let Some(h) = &mut self.history {
+                h.advance(t, x, xdot);
+            }
+        }
     }
 
     fn breakpoints(&self) -> Vec<f64> {

@@ -163,19 +163,20 @@ impl Cell3 {
             .collect()
     }
 
-    /// The state at time `t` as the output writers take it.
-    pub fn snapshot(&self, t: f64, y: &[f64], yp: &[f64]) -> Snapshot3 {
+    /// The state at time `t` as the output writers take it (`t` within the integrator's
+    /// last step while the exposures are deferred).
+    pub fn snapshot(&self, t: f64, y: &[f64], yp: &[f64]) -> Result<Snapshot3, String> {
         let per_el = self.element_strain_and_jacobian(y);
-        Snapshot3 {
+        Ok(Snapshot3 {
             t,
             u: (0..self.mesh.nodes.len())
                 .map(|i| self.dofs.node_u(y, i))
                 .collect(),
             v: self.nodal_velocities(y, yp),
-            mu_as: self.nodal_mu_as(y),
+            mu_as: self.nodal_mu_as(t, y)?,
             element_strain: per_el.iter().map(|p| p.0).collect(),
             element_jacobian: per_el.iter().map(|p| p.1).collect(),
-        }
+        })
     }
 
     /// What `mesh3.json` records of this model, with the scene's phase end times.

@@ -53,7 +53,13 @@ impl Cell3 {
         yp2[..self.dofs.n_u].iter_mut().for_each(|v| *v = 0.0);
         let mut params = self.params.clone();
         params.plane.inertia = false;
-        let mut m = Cell3::with_constraints(params, self.mesh.clone(), self.constraints)?;
+        let deferred = self.history.is_some();
+        let mut m = Cell3::build(
+            params,
+            self.mesh.clone(),
+            self.constraints,
+            !deferred && self.params.plane.adhesion.is_some(),
+        )?;
         let atol = Atol::Vector(m.atol_vector(restart.atol));
         let for_y: Vec<bool> = (0..m.dofs.n).map(|i| i < m.dofs.n_u).collect();
         consistent_init(
@@ -71,6 +77,51 @@ impl Cell3 {
             t,
             source: Box::new(source),
         })?;
+        if let Some(h) = &self.history {
+            let (x, xdot) = m.membrane_motion(&y2, &yp2);
+            m.history = Some(h.restarted(t, x, xdot).map_err(|e| Model3Error::Restart {
+                what: "switching inertia off",
+                t,
+                source: Box::new(crate::dae::IntegratorError::Problem { t, message: e }),
+            })?);
+        }
+        m.set_initial(t, y2, yp2);
+        Ok(m)
+    }
+
+    /// The same cell with its exposure unknowns, set to restart at `t` (T_g0) from the
+    /// state of this model, which defers them (see
+    /// `crate::model::CellModel::with_adhesion_unknowns`).
+    pub fn with_adhesion_unknowns(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<Cell3, Model3Error> {
+        let restart_err = |e: String| Model3Error::Restart {
+            what: "adding the adhesion unknowns",
+            t,
+            source: Box::new(crate::dae::IntegratorError::Problem { t, message: e }),
+        };
+        let h = self
+            .history
+            .as_ref()
+            .ok_or_else(|| restart_err("the adhesion unknowns are already there".into()))?;
+        let exposure = h.at(t).map_err(restart_err)?;
+        let mut m =
+            Cell3::with_constraints(self.params.clone(), self.mesh.clone(), self.constraints)?;
+        let (mut y2, mut yp2) = (y.to_vec(), yp.to_vec());
+        y2.extend_from_slice(&exposure);
+        let ad = self
+            .params
+            .plane
+            .adhesion
+            .as_ref()
+            .expect("deferred adhesion");
+        for &i in &m.dofs.mu_nodes {
+            let x = m.position(y, i);
+            yp2.push(crate::physics::adhesion_rate3(&m.substrate, ad, &x, 0.0));
+        }
         m.set_initial(t, y2, yp2);
         Ok(m)
     }
@@ -93,29 +144,52 @@ impl Cell3 {
         if params.plane.adhesion.is_some() != self.params.plane.adhesion.is_some() {
             return Err(refuse("one case has adhesion and the other not".into()));
         }
-        let mut m = Cell3::with_constraints(params, self.mesh.clone(), self.constraints)?;
+        let deferred = self.history.is_some();
+        let mut m = Cell3::build(
+            params,
+            self.mesh.clone(),
+            self.constraints,
+            !deferred && self.params.plane.adhesion.is_some(),
+        )?;
         if m.dofs.n != self.dofs.n || y.len() != m.dofs.n || yp.len() != m.dofs.n {
             return Err(refuse(format!(
                 "the systems differ: {} unknowns against {}",
                 m.dofs.n, self.dofs.n
             )));
         }
+        if let Some(h) = &self.history {
+            let (x, xdot) = m.membrane_motion(y, yp);
+            m.history = Some(h.restarted(t, x, xdot).map_err(refuse)?);
+        }
         m.set_initial(t, y.to_vec(), yp.to_vec());
         Ok(m)
     }
 
-    /// μ_as = Φ(A) per mesh node (`None` off the membrane or without adhesion).
-    pub fn nodal_mu_as(&self, y: &[f64]) -> Vec<Option<f64>> {
+    /// μ_as = Φ(A) per mesh node at time `t` in state `y` (`None` off the membrane or
+    /// without adhesion): the unknowns, or while deferred the history's values (`t`
+    /// within the integrator's last step).
+    pub fn nodal_mu_as(&self, t: f64, y: &[f64]) -> Result<Vec<Option<f64>>, String> {
         let n = self.mesh.nodes.len();
         let Some(ad) = &self.params.plane.adhesion else {
-            return vec![None; n];
+            return Ok(vec![None; n]);
         };
-        (0..n)
-            .map(|i| {
-                let d = self.dofs.mu[i];
-                (d != crate::fem::assembly::NONE).then(|| history::cap(y[d], ad.mu_as_max).0)
-            })
-            .collect()
+        let mu = |a: f64| history::cap(a, ad.mu_as_max).0;
+        match &self.history {
+            None => Ok((0..n)
+                .map(|i| {
+                    let d = self.dofs.mu[i];
+                    (d != crate::fem::assembly::NONE).then(|| mu(y[d]))
+                })
+                .collect()),
+            Some(h) => {
+                let a = h.at(t)?;
+                let mut out = vec![None; n];
+                for (k, i) in self.membrane_nodes().into_iter().enumerate() {
+                    out[i] = Some(mu(a[k]));
+                }
+                Ok(out)
+            }
+        }
     }
 
     /// Velocity of every node: the v unknowns with inertia, u̇ without.

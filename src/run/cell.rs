@@ -52,7 +52,7 @@ impl Cell {
             }
             Cell::Quarter(m) => {
                 let nv = if m.dofs.inertia { m.dofs.n_u } else { 0 };
-                (m.dofs.n_u, nv, m.dofs.n_mu())
+                (m.dofs.n_u, nv, m.n_mu_as())
             }
         }
     }
@@ -65,11 +65,11 @@ impl Cell {
         }
     }
 
-    /// Whether the μ_as unknowns are left out until T_g0 (half-plane models only).
+    /// Whether the μ_as unknowns are left out until T_g0.
     pub(crate) fn adhesion_deferred(&self) -> bool {
         match self {
             Cell::Plane(m) => m.adhesion_deferred(),
-            Cell::Quarter(_) => false,
+            Cell::Quarter(m) => m.adhesion_deferred(),
         }
     }
 
@@ -86,7 +86,10 @@ impl Cell {
                 .with_adhesion_unknowns(t, y, yp)
                 .map(|m| Cell::Plane(Box::new(m)))
                 .map_err(|e| e.to_string()),
-            Cell::Quarter(_) => Err("the 3-D model has its μ_as unknowns from the start".into()),
+            Cell::Quarter(m) => m
+                .with_adhesion_unknowns(t, y, yp)
+                .map(|m| Cell::Quarter(Box::new(m)))
+                .map_err(|e| e.to_string()),
         }
     }
 

@@ -537,7 +537,13 @@ fn build_model(case: &Case, file: &str, defer_adhesion: bool) -> Result<Cell, Ru
             }
         })?;
         let params = scene::params3(case, file, inertia)?;
-        return Cell3::new(params, mesh)
+        let quarter = crate::model3d::Constraints::Quarter;
+        let model = if defer_adhesion {
+            Cell3::deferring_adhesion(params, mesh, quarter)
+        } else {
+            Cell3::with_constraints(params, mesh, quarter)
+        };
+        return model
             .map(|m| Cell::Quarter(Box::new(m)))
             .map_err(|e| model_err(e.to_string()));
     }
@@ -966,7 +972,9 @@ impl RunWriter {
                     let name = format!("state_{phase}.json");
                     let state = crate::record::StateFile3 {
                         phase: phase.to_string(),
-                        state: m.snapshot(t, y, yp),
+                        state: m
+                            .snapshot(t, y, yp)
+                            .map_err(|why| OutputStop::State(t, why))?,
                         observables: obs,
                         observables3,
                     };
