@@ -15,6 +15,8 @@
 //! - [`figures`]: the PNG figures (time series, strain bars, shapes);
 //! - [`vtu`]: `.vtu` files (quadratic triangles) and the `.pvd` collection;
 //! - [`movie`]: the deformation as an animated GIF;
+//! - [`vtu3`]: the same for the 3-D quarter cell (a [`crate::record::Mesh3File`] and its
+//!   [`crate::record::Snapshot3`]s): ParaView files of quadratic tetrahedra;
 //! - [`snapshot`]: what the run loop hands over at each output time, and the writer that
 //!   feeds [`vtu`] and [`movie`];
 //! - [`paper`]: `cellsim paper` — the five scenes, the paper's reported values and the
@@ -28,6 +30,7 @@ pub mod paper;
 pub mod snapshot;
 pub mod table;
 pub mod vtu;
+pub mod vtu3;
 
 pub use crate::record::RunData;
 pub use snapshot::{SnapshotOptions, SnapshotWriter};

@@ -1,0 +1,217 @@
+//! The 3-D cell's outputs (`output::vtu3`) on the default quarter mesh: the ParaView file
+//! read back.
+
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use cellsim::case::{self, Case};
+use cellsim::fem::tet;
+use cellsim::fem::{Mesh3, Mesh3Params, TetRule};
+use cellsim::output::vtu3::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu3};
+use cellsim::physics::{Lattice, Substrate, Substrate3};
+use cellsim::record::{Mesh3File, Snapshot3};
+use cellsim::scene;
+
+/// A fresh scratch directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("output3-{name}"));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("create scratch dir");
+    d
+}
+
+/// The default quarter mesh (`Mesh3Params::reference()`), meshed once.
+fn mesh() -> &'static Mesh3 {
+    static MESH: OnceLock<Mesh3> = OnceLock::new();
+    MESH.get_or_init(|| Mesh3::generate(&Mesh3Params::reference()).expect("the default mesh"))
+}
+
+/// The mesh file of the default mesh over MODEL.md's pillars on `lattice` (tops placed
+/// for the 0.5 µm gap in 3-D), with both active regions and the fibronectin layer.
+fn mesh_file(lattice: Lattice) -> Mesh3File {
+    let m = mesh();
+    let mut c = Case::reference_active();
+    c.substrate = case::Substrate::pillars();
+    let mut p = scene::model_params(&c, "pillars-3d", false).expect("a valid case");
+    if let Substrate::Pillars(pl) = &mut p.substrate {
+        let c3 = [p.center[0], p.center[1], 0.0];
+        pl.y_top = pl.y_top_for_gap3(0.5, lattice, c3, 10.0).expect("placed");
+    }
+    Mesh3File {
+        nodes: m.nodes.clone(),
+        elements: m.elements.clone(),
+        domains: m.domains.clone(),
+        outer_faces: m.outer_faces.clone(),
+        substrate: Substrate3 {
+            plane: p.substrate,
+            lattice,
+        },
+        active: p.active,
+        contact_eps: p.contact.eps,
+        layer_thickness: p.adhesion.map(|a| a.e_f),
+        center: [p.center[0], p.center[1], 0.0],
+        phase_times: [10_000.0, 40_000.0, 50_000.0, 50_000.0],
+    }
+}
+
+/// A smooth deformation keeping the symmetry planes (u_x = 0 on x = 0, u_z = 0 on z = 0),
+/// scaled by `w`: the cell sinks and its bottom spreads; made-up element values.
+fn snapshot(mesh: &Mesh3File, w: f64, t: f64) -> Snapshot3 {
+    let c = mesh.center;
+    let u: Vec<[f64; 3]> = mesh
+        .nodes
+        .iter()
+        .map(|x| {
+            let low = (-(x[1] - c[1] + 10.0).powi(2) / 18.0).exp();
+            [
+                w * 0.08 * low * (x[0] - c[0]),
+                -w * (0.5 + 0.8 * low),
+                w * 0.08 * low * (x[2] - c[2]),
+            ]
+        })
+        .collect();
+    let n = u.len();
+    let ne = mesh.elements.len();
+    Snapshot3 {
+        t,
+        v: u.iter().map(|d| d.map(|v| 1e-3 * v)).collect(),
+        mu_as: (0..n).map(|i| (i % 3 == 0).then_some(i as f64)).collect(),
+        element_strain: (0..ne).map(|e| w * 0.3 * (e % 7) as f64 / 7.0).collect(),
+        element_jacobian: (0..ne).map(|e| 1.0 - 0.01 * (e % 5) as f64).collect(),
+        u,
+    }
+}
+
+/// VTK's quadratic tetrahedron: shape functions in VTK's node order (vertices, then the
+/// mid-nodes of (0,1), (1,2), (2,0), (0,3), (1,3), (2,3)) and their gradients, written out
+/// from VTK's definition, independently of `fem::tet`.
+const VTK_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]];
+
+fn vtk_volume(x: &[[f64; 3]]) -> (f64, f64) {
+    let rule = TetRule::degree(4);
+    let (mut vol, mut min_det) = (0.0, f64::INFINITY);
+    for (xi, w) in rule.points.iter().zip(&rule.weights) {
+        let l = [1.0 - xi[0] - xi[1] - xi[2], xi[0], xi[1], xi[2]];
+        // ∂λ/∂ξ
+        let dl = [
+            [-1.0, -1.0, -1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let mut grads = [[0.0; 3]; 10];
+        for i in 0..4 {
+            for k in 0..3 {
+                grads[i][k] = (4.0 * l[i] - 1.0) * dl[i][k];
+            }
+        }
+        for (e, [i, j]) in VTK_EDGES.iter().enumerate() {
+            for k in 0..3 {
+                grads[4 + e][k] = 4.0 * (dl[*i][k] * l[*j] + l[*i] * dl[*j][k]);
+            }
+        }
+        let mut jac = nalgebra::Matrix3::<f64>::zeros();
+        for a in 0..10 {
+            for r in 0..3 {
+                for k in 0..3 {
+                    jac[(r, k)] += x[a][r] * grads[a][k];
+                }
+            }
+        }
+        let det = jac.determinant();
+        min_det = min_det.min(det);
+        vol += w * det;
+    }
+    (vol, min_det)
+}
+
+#[test]
+fn vtu3_reads_back_with_quadratic_tetrahedra_in_vtk_order() {
+    let mf = mesh_file(Lattice::FourPillars);
+    let s = snapshot(&mf, 1.0, 5_000.0);
+    let d = scratch("vtu");
+    let p = d.join("cell.vtu");
+    write_vtu3(&p, &mf, &s).expect("write vtu");
+    let g = read_vtu_grid(&p).expect("read vtu");
+    let v = &g.summary;
+    assert_eq!(v.points, mf.nodes.len());
+    assert_eq!(v.cells, mf.elements.len());
+    assert!(v.cell_types.iter().all(|&t| t == QUADRATIC_TETRA));
+    // The 2-D file's names, so ParaView states carry over.
+    assert_eq!(v.point_arrays, ["displacement", "velocity", "mu_as"]);
+    assert_eq!(v.cell_arrays, ["domain", "mean_E_norm", "det_F"]);
+    let disp = v.displacement.as_ref().expect("displacement array");
+    for (i, u) in s.u.iter().enumerate() {
+        assert_eq!([disp[3 * i], disp[3 * i + 1], disp[3 * i + 2]], *u);
+    }
+    assert_eq!(g.points, mf.nodes);
+    // Every cell: VTK's node order of the element, a positive VTK volume equal to the
+    // element's own (gmsh order, fem::tet), each mid-node nearest to the midpoint of
+    // VTK's edge of its index.
+    let rule = TetRule::degree(4);
+    let (mut total_vtk, mut total) = (0.0, 0.0);
+    for (cell, el) in g.cells.iter().zip(&mf.elements) {
+        assert_eq!(cell.len(), 10);
+        let expected: Vec<usize> = GMSH_OF_VTK.iter().map(|&a| el[a]).collect();
+        assert_eq!(*cell, expected);
+        let x: Vec<[f64; 3]> = cell.iter().map(|&i| g.points[i]).collect();
+        let (vol, min_det) = vtk_volume(&x);
+        assert!(min_det > 0.0, "cell {cell:?}: VTK det J {min_det:e}");
+        let xe = el.map(|i| mf.nodes[i]);
+        let own: f64 = rule
+            .points
+            .iter()
+            .zip(&rule.weights)
+            .map(|(xi, w)| w * tet::map(&xe, *xi).2)
+            .sum();
+        assert!(
+            (vol - own).abs() < 1e-12 * own,
+            "VTK volume {vol} against {own}"
+        );
+        total_vtk += vol;
+        total += own;
+        for (k, [i, j]) in VTK_EDGES.iter().enumerate() {
+            let dist = |e: &[usize; 2]| {
+                let m = [0, 1, 2].map(|c| 0.5 * (x[e[0]][c] + x[e[1]][c]));
+                (0..3).map(|c| (x[4 + k][c] - m[c]).powi(2)).sum::<f64>()
+            };
+            let own = dist(&[*i, *j]);
+            assert!(
+                VTK_EDGES.iter().all(|e| dist(e) >= own),
+                "mid-node {k} is not on VTK's edge ({i}, {j})"
+            );
+        }
+    }
+    let ball = 4.0 / 3.0 * PI * 1000.0 / 4.0;
+    assert!(
+        (total_vtk - ball).abs() < 2e-3 * ball,
+        "quarter volume {total_vtk} ({total}) against {ball}"
+    );
+
+    // A snapshot that does not fit the mesh is refused, naming the file.
+    let mut bad = s.clone();
+    bad.element_strain.pop();
+    let e = write_vtu3(&d.join("bad.vtu"), &mf, &bad).expect_err("short snapshot");
+    assert!(e.to_string().contains("bad.vtu"), "{e}");
+}
+
+#[test]
+fn vtu3_series_writes_a_collection() {
+    let mf = mesh_file(Lattice::Gap);
+    let d = scratch("pvd");
+    let mut series = VtuSeries3::new(&d, "cell3", &mf).expect("series");
+    for k in 0..3 {
+        series
+            .write(&snapshot(&mf, k as f64 / 2.0, 1000.0 * k as f64))
+            .expect("write");
+    }
+    let pvd = std::fs::read_to_string(series.pvd_path()).expect("pvd");
+    assert_eq!(pvd.matches("<DataSet ").count(), 3);
+    for k in 0..3 {
+        let f = format!("vtu/cell3_{k:05}.vtu");
+        assert!(pvd.contains(&f), "{pvd}");
+        assert!(d.join(&f).exists());
+    }
+    assert!(pvd.contains("timestep=\"2e3\""), "{pvd}");
+}
