@@ -1,5 +1,5 @@
-//! The 3-D cell's outputs (`output::vtu3`) on the default quarter mesh: the ParaView file
-//! read back.
+//! The 3-D cell's outputs (`output::vtu3`, `figures3`) on the default quarter
+//! mesh: the ParaView file read back, the sections' areas against the balls', every figure.
 
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -7,11 +7,14 @@ use std::sync::OnceLock;
 
 use cellsim::case::{self, Case};
 use cellsim::fem::tet;
-use cellsim::fem::{Mesh3, Mesh3Params, TetRule};
+use cellsim::fem::{Domain, Mesh3, Mesh3Params, TetRule};
+use cellsim::output::figures::ShapeStyleOptions;
+use cellsim::output::figures3::{self, FIGURE_SIZE, Section, SectionShape, section_figure};
 use cellsim::output::vtu3::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu3};
 use cellsim::physics::{Lattice, Substrate, Substrate3};
 use cellsim::record::{Mesh3File, Snapshot3};
 use cellsim::scene;
+use plotters::prelude::*;
 
 /// A fresh scratch directory for one test.
 fn scratch(name: &str) -> PathBuf {
@@ -214,4 +217,189 @@ fn vtu3_series_writes_a_collection() {
         assert!(d.join(&f).exists());
     }
     assert!(pvd.contains("timestep=\"2e3\""), "{pvd}");
+}
+
+/// The reference radii of the default cell.
+const RADII: [f64; 3] = [5.0, 9.75, 10.0];
+
+/// The section of the undeformed cell by `plane`, mirrored, has the areas of the full disks
+/// of the three balls (the plane passes through the centre), to `tol` relative.
+fn section_areas_are_the_disks(plane: Section, tol: [f64; 3]) {
+    let mf = mesh_file(Lattice::FourPillars);
+    let zero = vec![[0.0; 3]; mf.nodes.len()];
+    let half = SectionShape::new(&mf, &zero, plane);
+    let full = half.mirrored();
+    let [r_n, r_cp, r_c] = RADII;
+    let exact = [
+        PI * r_n * r_n,
+        PI * (r_cp * r_cp - r_n * r_n),
+        PI * (r_c * r_c - r_cp * r_cp),
+    ];
+    for (k, d) in Domain::ALL.into_iter().enumerate() {
+        let a = full.area(d);
+        assert!(
+            (full.area(d) - 2.0 * half.area(d)).abs() < 1e-9 * a,
+            "the mirror doubles the area"
+        );
+        let rel = (a - exact[k]) / exact[k];
+        eprintln!(
+            "section {}: {d} area {a:.5} µm² against {:.5} ({rel:+.2e})",
+            plane.name(),
+            exact[k]
+        );
+        assert!(
+            rel.abs() < tol[k],
+            "{d}: {a} against {} ({rel:e})",
+            exact[k]
+        );
+    }
+    // Nothing outside the ball r_c, and the ball's extent is reached.
+    let b = full.bounds();
+    let c = mf.center;
+    assert!(b.x_max <= r_c + 1e-9 && b.x_min >= -r_c - 1e-9, "{b:?}");
+    assert!(
+        (b.x_max - r_c).abs() < 5e-3 && (b.y_min - (c[1] - r_c)).abs() < 5e-3,
+        "{b:?}"
+    );
+    // The active outlines: PAC between the nucleus and the outer ellipse (semi-axes 7.5
+    // and 7 µm), above θ = −18°; the bottom region's below θ = −35° (both ±ε_a).
+    let at = |p: &[f64; 2]| (p[0], p[1] - c[1]);
+    assert!(!full.pac.is_empty() && !full.bottom.is_empty());
+    for p in full.pac.iter().flatten() {
+        let (h, y) = at(p);
+        let r = (h * h + y * y).sqrt();
+        assert!(r > r_n - 0.05, "PAC point {p:?} inside the nucleus");
+        assert!(
+            (h / 7.5).powi(2) + (y / 7.0).powi(2) < 1.08,
+            "PAC point {p:?}"
+        );
+        assert!(y > -r * (18f64 + 3.0).to_radians().sin(), "PAC point {p:?}");
+    }
+    for p in full.bottom.iter().flatten() {
+        let (h, y) = at(p);
+        let r = (h * h + y * y).sqrt();
+        assert!(r > r_n - 0.05 && r < r_c + 0.05, "bottom point {p:?}");
+        assert!(
+            y < -r * (35f64 - 3.0).to_radians().sin(),
+            "bottom point {p:?}"
+        );
+    }
+    // The markers p_t, c, p_b on the axis.
+    assert_eq!(full.markers.len(), 3);
+    for (m, y) in full.markers.iter().zip([c[1] + r_n, c[1], c[1] - r_n]) {
+        assert!(m[0].abs() < 1e-9 && (m[1] - y).abs() < 1e-9, "{m:?}");
+    }
+}
+
+#[test]
+fn section_z0_of_the_reference_cell_has_the_disks_areas() {
+    section_areas_are_the_disks(Section::Z0, [2e-4, 5e-5, 1e-4]);
+}
+
+#[test]
+fn diagonal_section_of_the_reference_cell_has_the_disks_areas() {
+    section_areas_are_the_disks(Section::Diagonal, [2e-4, 5e-5, 1e-4]);
+}
+
+#[test]
+fn sections_follow_the_deformation() {
+    // A rigid translation moves the section with it: down by 1 µm in both planes; along
+    // (1, 0, 1) by a µm, the diagonal section by √2 a sideways (the half section; z = 0
+    // sees a). Areas unchanged.
+    let mf = mesh_file(Lattice::Gap);
+    let n = mf.nodes.len();
+    for plane in Section::ALL {
+        let zero = SectionShape::new(&mf, &vec![[0.0; 3]; n], plane);
+        let down = SectionShape::new(&mf, &vec![[0.0, -1.0, 0.0]; n], plane);
+        let side = SectionShape::new(&mf, &vec![[0.3, 0.0, 0.3]; n], plane);
+        let (b0, b1, b2) = (zero.bounds(), down.bounds(), side.bounds());
+        let shift = match plane {
+            Section::Z0 => 0.3,
+            Section::Diagonal => 0.3 * 2f64.sqrt(),
+        };
+        assert!((b1.y_min - (b0.y_min - 1.0)).abs() < 1e-9, "{b0:?} {b1:?}");
+        assert!((b1.y_max - (b0.y_max - 1.0)).abs() < 1e-9, "{b0:?} {b1:?}");
+        assert!(
+            (b2.x_max - (b0.x_max + shift)).abs() < 1e-9,
+            "{b0:?} {b2:?}"
+        );
+        for d in Domain::ALL {
+            assert!((down.area(d) - zero.area(d)).abs() < 1e-9 * zero.area(d));
+        }
+    }
+}
+
+/// Checks a PNG's size and that it is not blank (more than `min_frac` of its pixels not
+/// white); returns its pixels.
+fn check_png(path: &Path, size: (u32, u32), min_frac: f64) -> Vec<[u8; 3]> {
+    let meta = std::fs::metadata(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert!(
+        meta.len() > 10_000,
+        "{}: {} bytes",
+        path.display(),
+        meta.len()
+    );
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb8();
+    assert_eq!(img.dimensions(), size, "{}", path.display());
+    let px: Vec<[u8; 3]> = img.pixels().map(|p| p.0).collect();
+    let inked = px.iter().filter(|p| **p != [255, 255, 255]).count();
+    assert!(
+        inked as f64 > min_frac * px.len() as f64,
+        "{}: almost blank ({inked} non-white pixels)",
+        path.display()
+    );
+    px
+}
+
+fn count(px: &[[u8; 3]], c: RGBColor) -> usize {
+    px.iter().filter(|p| **p == [c.0, c.1, c.2]).count()
+}
+
+#[test]
+fn section_figures_draw_the_cell_and_the_substrate() {
+    use cellsim::output::figures::{CYTOPLASM, MEMBRANE, NUCLEUS, SUBSTRATE};
+    let d = scratch("sections");
+    for lattice in [Lattice::FourPillars, Lattice::Gap] {
+        let mf = mesh_file(lattice);
+        let s = snapshot(&mf, 1.0, 10_000.0);
+        for plane in Section::ALL {
+            let p = d.join(format!("{lattice:?}-{}.png", plane.tag()));
+            section_figure(&p, &mf, &s, plane, "a section").expect("section figure");
+            let px = check_png(&p, FIGURE_SIZE, 0.3);
+            // Each domain filled (the nucleus most), the substrate below.
+            let (n, c, m) = (
+                count(&px, NUCLEUS),
+                count(&px, CYTOPLASM),
+                count(&px, MEMBRANE),
+            );
+            assert!(
+                n > 20_000 && c > n && m > 1_000,
+                "{}: {n} {c} {m}",
+                p.display()
+            );
+            assert!(count(&px, SUBSTRATE) > 20_000, "{}", p.display());
+        }
+    }
+    // Equal scales: 1 µm has the same length on both axes.
+    let mf = mesh_file(Lattice::FourPillars);
+    let s = snapshot(&mf, 1.0, 10_000.0);
+    let (w, h) = (900u32, 700u32);
+    let mut buf = vec![0u8; 3 * (w * h) as usize];
+    let area = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+    let view = figures3::section_view(&mf, &[&s], Section::Diagonal);
+    let opts = ShapeStyleOptions {
+        title: "scale".into(),
+        legend: false,
+        font: 20,
+        mesh_lines: false,
+        gravity: None,
+    };
+    let scale = figures3::draw_section(&area, &mf, &s.u, Section::Diagonal, view, &opts, &mut None)
+        .expect("draw");
+    assert!(
+        (scale.px_per_um_x - scale.px_per_um_y).abs() < 0.11,
+        "{scale:?}"
+    );
 }
