@@ -9,7 +9,9 @@ use cellsim::case::{self, Case};
 use cellsim::fem::tet;
 use cellsim::fem::{Domain, Mesh3, Mesh3Params, TetRule};
 use cellsim::output::figures::ShapeStyleOptions;
-use cellsim::output::figures3::{self, FIGURE_SIZE, Section, SectionShape, section_figure};
+use cellsim::output::figures3::{
+    self, Coloring, FIGURE_SIZE, Section, SectionShape, section_figure, surface_figure,
+};
 use cellsim::output::vtu3::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu3};
 use cellsim::physics::{Lattice, Substrate, Substrate3};
 use cellsim::record::{Mesh3File, Snapshot3};
@@ -402,4 +404,43 @@ fn section_figures_draw_the_cell_and_the_substrate() {
         (scale.px_per_um_x - scale.px_per_um_y).abs() < 0.11,
         "{scale:?}"
     );
+}
+
+#[test]
+fn surface_figures_show_the_shaded_cell_on_its_pillars() {
+    let d = scratch("surface");
+    for lattice in [Lattice::FourPillars, Lattice::Gap] {
+        let mf = mesh_file(lattice);
+        let s = snapshot(&mf, 1.0, 10_000.0);
+        for coloring in [Coloring::Domain, Coloring::Strain] {
+            let p = d.join(format!("{lattice:?}-{coloring:?}.png"));
+            surface_figure(&p, &mf, &s, coloring, "the cell").expect("surface figure");
+            let px = check_png(&p, FIGURE_SIZE, 0.15);
+            // Grey substrate (r = g = b) and the cell: shaded membrane green, or the strain
+            // colours (the low end of viridis is violet), not both. Thresholds: half of
+            // what the figures show (the strain figure's view from above is half as wide).
+            let grey = px
+                .iter()
+                .filter(|p| p[0] == p[1] && p[1] == p[2] && p[0] < 250 && p[0] > 40)
+                .count();
+            let green = px
+                .iter()
+                .filter(|p| p[1] as i32 > p[0] as i32 + 30 && p[1] as i32 > p[2] as i32 + 30)
+                .count();
+            let violet = px
+                .iter()
+                .filter(|p| p[2] as i32 > p[1] as i32 + 20 && p[0] as i32 > p[1] as i32)
+                .count();
+            let what = format!(
+                "{}: {grey} grey, {green} green, {violet} violet",
+                p.display()
+            );
+            match coloring {
+                Coloring::Domain => {
+                    assert!(grey > 100_000 && green > 80_000 && violet == 0, "{what}")
+                }
+                Coloring::Strain => assert!(grey > 30_000 && violet > 25_000, "{what}"),
+            }
+        }
+    }
 }

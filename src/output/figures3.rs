@@ -27,12 +27,28 @@
 //! floor with their full width (the undercut below a superellipsoid's rounded foot, which
 //! the model leaves open, is drawn filled).
 //!
+//! **Surface view** ([`surface_figure`]): the whole deformed cell (the quarter's outer faces
+//! mirrored about x = 0 and z = 0) standing on the substrate — the floor and the pillars of
+//! the lattice around the cell, or the flat plane — seen from above at an angle
+//! ([`Camera::DEFAULT`]: elevation 30°, azimuth 35°), orthographic. It shows what no section
+//! does: how the cell nests between the four pillars, or sags into the gap between two. A
+//! renderer of its own: each curved six-node face subdivided into small flat triangles with
+//! the exact normals of the P2 surface at their corners, the pillars as superellipsoid
+//! caps on prisms, rasterised with a depth buffer at twice the resolution and averaged
+//! down (smooth outlines), Lambert shading with one light, the picture blitted into a
+//! plotters bitmap that adds the title, the legend or colour bar and the axes. Coloured by
+//! domain (the outer surface is the membrane: its green, shaded) or by the mean ‖E‖ of the
+//! element under each face ([`Coloring`]) with a colour bar; the strain is largest where
+//! the cell touches the substrate, which no view from above shows, so the strain figure
+//! has a second panel: the cell alone from 60° below ([`Camera::below`]), shaded at half
+//! strength so that the colours can be read against the bar.
+//!
 //! **Accuracy.** The sections of the reference cell through its centre are the disks of
 //! the three balls to 1e-4 of their areas (the P2 spheres and the chords that trace them;
 //! `tests/output3.rs`).
 
 use std::collections::{HashMap, HashSet};
-use std::f64::consts::FRAC_1_SQRT_2;
+use std::f64::consts::{FRAC_1_SQRT_2, PI};
 use std::path::Path;
 
 use nalgebra::Vector3;
@@ -41,7 +57,7 @@ use plotters::prelude::*;
 
 use super::OutputError;
 use super::figures::{
-    BOTTOM, FONT, GravityMark, LAYER, LAYER_EDGE, PAC, SHAPE_SIZE, SUBSTRATE, ShapeScale,
+    BOTTOM, FONT, GravityMark, LAYER, LAYER_EDGE, MEMBRANE, PAC, SHAPE_SIZE, SUBSTRATE, ShapeScale,
     ShapeStyleOptions, darker, domain_color, draw_gravity,
 };
 use super::geometry::{ACTIVE_LEVEL, Bounds, Pt, Rect, contour, element_polygon, intervals};
@@ -50,7 +66,7 @@ use crate::fem::{Domain, p2, tet};
 use crate::physics::{ActiveStrain, Substrate, Substrate3, smooth_step};
 use crate::record::{Mesh3File, Snapshot3};
 
-/// Pixel size of the section figures (as the 2-D shape figures).
+/// Pixel size of the section and surface figures (as the 2-D shape figures).
 pub const FIGURE_SIZE: (u32, u32) = SHAPE_SIZE;
 
 /// Straight pieces per curved side of a face in the section z = 0.
@@ -68,6 +84,21 @@ const EDGE_CLIP_PIECES: usize = 16;
 
 /// Step of the contour of the fibronectin layer's edge [µm].
 const LAYER_STEP: f64 = 0.05;
+
+/// Divisions per side of a curved outer face in the surface view.
+pub const SURFACE_DIVISIONS: usize = 4;
+
+/// Supersampling factor of the surface view (per axis).
+const SUPERSAMPLE: usize = 2;
+
+/// Fill colour of the floor in the surface view (the pillars are [`SUBSTRATE`]).
+pub const FLOOR: RGBColor = RGBColor(200, 200, 200);
+
+/// Shading of the surface view: a surface's colour times AMBIENT + KEY cos(key light) +
+/// FILL cos(fill light from the viewer), each cosine clamped at 0.
+const AMBIENT: f64 = 0.32;
+const KEY: f64 = 0.5;
+const FILL: f64 = 0.3;
 
 /// The vertical plane through the cell's axis a section figure cuts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -1037,5 +1068,785 @@ pub fn section_figure(
     };
     draw_section(&root, mesh, &s.u, plane, view, &opts, &mut None)
         .map_err(|x| OutputError::draw(path, x))?;
+    root.present().map_err(|x| OutputError::draw(path, x))
+}
+
+// ---------------------------------------------------------------------------------------
+// The surface view.
+
+/// How the surface view colours the cell.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coloring {
+    /// By domain: the outer surface is the membrane (green), shaded.
+    Domain,
+    /// By the mean ‖E‖ of the element under each face, with a colour bar.
+    Strain,
+}
+
+/// Where the surface view is seen from: orthographic, looking at the cell from the
+/// direction (cos el sin az, sin el, cos el cos az).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Angle of the line of sight above the horizontal [°].
+    pub elevation_deg: f64,
+    /// Angle of the line of sight about the vertical axis, from +z towards +x [°].
+    pub azimuth_deg: f64,
+}
+
+impl Camera {
+    /// From above at an angle: elevation 30°, azimuth 35°.
+    pub const DEFAULT: Camera = Camera {
+        elevation_deg: 30.0,
+        azimuth_deg: 35.0,
+    };
+
+    /// The same azimuth, from 60° below the horizontal: the cell's underside, where it
+    /// touches the substrate, nearly face on.
+    pub fn below(&self) -> Camera {
+        Camera {
+            elevation_deg: -60.0,
+            azimuth_deg: self.azimuth_deg,
+        }
+    }
+
+    /// The screen's right and up directions and the direction towards the viewer (a
+    /// right-handed orthonormal frame).
+    pub fn basis(&self) -> [[f64; 3]; 3] {
+        let (se, ce) = self.elevation_deg.to_radians().sin_cos();
+        let (sa, ca) = self.azimuth_deg.to_radians().sin_cos();
+        let right = [ca, 0.0, -sa];
+        let up = [-se * sa, ce, -se * ca];
+        let toward = [ce * sa, se, ce * ca];
+        [right, up, toward]
+    }
+
+    /// The directions towards the lights: the key light from the upper left in front, the
+    /// fill light from the viewer.
+    fn lights(&self) -> [[f64; 3]; 2] {
+        let [r, u, d] = self.basis();
+        [
+            normalize([0, 1, 2].map(|k| -0.45 * r[k] + 0.75 * u[k] + 0.5 * d[k])),
+            d,
+        ]
+    }
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn normalize(a: [f64; 3]) -> [f64; 3] {
+    let n = dot(a, a).sqrt();
+    if n > 0.0 { a.map(|v| v / n) } else { a }
+}
+
+/// A point of a rendered surface and its unit normal.
+#[derive(Debug, Clone, Copy)]
+struct Vertex {
+    p: [f64; 3],
+    n: [f64; 3],
+}
+
+/// A flat triangle of a rendered surface, with its colour.
+#[derive(Debug, Clone, Copy)]
+struct Triangle {
+    v: [Vertex; 3],
+    color: [f64; 3],
+}
+
+fn rgb(c: RGBColor) -> [f64; 3] {
+    [c.0 as f64, c.1 as f64, c.2 as f64]
+}
+
+/// The substrate's extent and the framing of a surface view.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurfaceFrame {
+    /// The camera.
+    pub camera: Camera,
+    /// Half-widths of the floor drawn, in x and in z, about the cell's axis [µm].
+    pub floor: [f64; 2],
+    /// The box (right, up) in the camera's coordinates [µm] the picture shows.
+    pub screen: Bounds,
+    /// The box the view from below ([`Camera::below`], the cell alone) shows: the cell,
+    /// with room for its contact to spread to 1.4 r_c.
+    pub below: Bounds,
+}
+
+/// `b` grown by 3 % of its larger side on every side.
+fn padded(b: Bounds) -> Bounds {
+    let pad = 0.03 * (b.x_max - b.x_min).max(b.y_max - b.y_min);
+    Bounds {
+        x_min: b.x_min - pad,
+        x_max: b.x_max + pad,
+        y_min: b.y_min - pad,
+        y_max: b.y_max + pad,
+    }
+}
+
+/// Half-width of the floor in one horizontal direction: the first line midway between
+/// pillar rows at least 1.5 r_c from the axis (so the pillars drawn are whole), or 1.6 r_c
+/// on a flat substrate.
+fn floor_half_width(p: Option<(f64, f64)>, c: f64, r: f64) -> f64 {
+    match p {
+        None => 1.6 * r,
+        Some((first_axis, period)) => {
+            // Mid-lines at first_axis + P/2 + kP.
+            let base = first_axis + 0.5 * period - c;
+            let k = ((1.5 * r - base) / period).ceil();
+            base + k * period
+        }
+    }
+}
+
+impl SurfaceFrame {
+    /// The frame showing the substrate around the cell of `mesh` and the cell of every state
+    /// in `states` (the reference cell at least), seen by `camera`.
+    pub fn new(mesh: &Mesh3File, states: &[&Snapshot3], camera: Camera) -> Self {
+        let c = mesh.center;
+        let r = cell_radius(mesh);
+        let floor = match &mesh.substrate.plane {
+            Substrate::Flat { .. } => [1.6 * r, 1.6 * r],
+            Substrate::Pillars(p) => {
+                let z0 = mesh.substrate.lattice.z_offset(p.period());
+                [
+                    floor_half_width(Some((p.first_center, p.period())), c[0], r),
+                    floor_half_width(Some((z0, p.period())), c[2], r),
+                ]
+            }
+        };
+        let mut frame = SurfaceFrame {
+            camera,
+            floor,
+            screen: Bounds::empty(),
+            below: Bounds::empty(),
+        };
+        let deformed: Vec<Vec<[f64; 3]>> = states
+            .iter()
+            .filter(|s| s.u.len() == mesh.nodes.len())
+            .map(|s| deformed3(mesh, &s.u))
+            .collect();
+        // The reference cell's silhouette and the deformed cells, seen by `cam`.
+        let cell_box = |cam: Camera| {
+            let [right, up, _] = cam.basis();
+            let mut b = Bounds::empty();
+            let mut add = |p: [f64; 3]| b.include([dot(p, right), dot(p, up)]);
+            for k in 0..64 {
+                let (dy, dx) = (2.0 * PI * k as f64 / 64.0).sin_cos();
+                add([0, 1, 2].map(|i| c[i] + r * (dx * right[i] + dy * up[i])));
+            }
+            for x in &deformed {
+                for &p in x {
+                    for m in mirrors(c) {
+                        add(m(p));
+                    }
+                }
+            }
+            (b, right, up)
+        };
+        let (mut b, right, up) = cell_box(camera);
+        for t in substrate_triangles(mesh, &frame) {
+            for v in t.v {
+                b.include([dot(v.p, right), dot(v.p, up)]);
+            }
+        }
+        frame.screen = padded(b);
+        let (mut b, right, up) = cell_box(camera.below());
+        for k in 0..64 {
+            let (sz, sx) = (2.0 * PI * k as f64 / 64.0).sin_cos();
+            let p = [c[0] + 1.4 * r * sx, c[1] - r, c[2] + 1.4 * r * sz];
+            b.include([dot(p, right), dot(p, up)]);
+        }
+        frame.below = padded(b);
+        frame
+    }
+}
+
+/// The four mirror images about x = c_x and z = c_z (the identity first).
+fn mirrors(c: [f64; 3]) -> [impl Fn([f64; 3]) -> [f64; 3]; 4] {
+    [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)].map(|(sx, sz)| {
+        move |p: [f64; 3]| [c[0] + sx * (p[0] - c[0]), p[1], c[2] + sz * (p[2] - c[2])]
+    })
+}
+
+/// The floor and the pillars within the frame's floor, as shaded-surface triangles.
+fn substrate_triangles(mesh: &Mesh3File, frame: &SurfaceFrame) -> Vec<Triangle> {
+    let c = mesh.center;
+    let [lx, lz] = frame.floor;
+    let mut out = Vec::new();
+    let up = [0.0, 1.0, 0.0];
+    let quad = |out: &mut Vec<Triangle>, v: [Vertex; 4], color: [f64; 3]| {
+        out.push(Triangle {
+            v: [v[0], v[1], v[2]],
+            color,
+        });
+        out.push(Triangle {
+            v: [v[0], v[2], v[3]],
+            color,
+        });
+    };
+    let floor_y = super::geometry::substrate_floor(&mesh.substrate.plane);
+    let corner = |sx: f64, sz: f64| Vertex {
+        p: [c[0] + sx * lx, floor_y, c[2] + sz * lz],
+        n: up,
+    };
+    quad(
+        &mut out,
+        [
+            corner(-1.0, -1.0),
+            corner(1.0, -1.0),
+            corner(1.0, 1.0),
+            corner(-1.0, 1.0),
+        ],
+        rgb(FLOOR),
+    );
+    let Substrate::Pillars(p) = &mesh.substrate.plane else {
+        return out;
+    };
+    let (a, b, q) = (0.5 * p.width, 0.5 * p.height, p.q);
+    let per = p.period();
+    let z0 = mesh.substrate.lattice.z_offset(per);
+    let axes = |first: f64, lo: f64, hi: f64| -> Vec<f64> {
+        let k0 = ((lo + a - first) / per).ceil() as i64;
+        let k1 = ((hi - a - first) / per).floor() as i64;
+        (k0..=k1).map(|k| first + k as f64 * per).collect()
+    };
+    let f = |t: f64| t.signum() * t.abs().powf(2.0 / q);
+    let g = |s: f64| s.signum() * s.abs().powf(q - 1.0);
+    let (na, ne) = (96usize, 24usize);
+    let color = rgb(SUBSTRATE);
+    let y_mid = p.y_top - b;
+    for &ax in &axes(p.first_center, c[0] - lx, c[0] + lx) {
+        for &az in &axes(z0, c[2] - lz, c[2] + lz) {
+            let cap = |i: usize, j: usize| {
+                let om = 2.0 * PI * i as f64 / na as f64;
+                let eta = 0.5 * PI * j as f64 / ne as f64;
+                let (ce, se) = (eta.cos(), eta.sin());
+                let (xt, zt, yt) = (a * f(ce) * f(om.cos()), a * f(ce) * f(om.sin()), b * f(se));
+                let n = normalize([g(xt / a) / a, g(yt / b) / b, g(zt / a) / a]);
+                Vertex {
+                    p: [ax + xt, y_mid + yt, az + zt],
+                    n,
+                }
+            };
+            for i in 0..na {
+                for j in 0..ne {
+                    quad(
+                        &mut out,
+                        [cap(i, j), cap(i + 1, j), cap(i + 1, j + 1), cap(i, j + 1)],
+                        color,
+                    );
+                }
+                // The side below the equator, down to the floor.
+                let (top0, top1) = (cap(i, 0), cap(i + 1, 0));
+                let low = |v: Vertex| Vertex {
+                    p: [v.p[0], p.y_top - p.height, v.p[2]],
+                    n: v.n,
+                };
+                quad(&mut out, [low(top0), low(top1), top1, top0], color);
+            }
+        }
+    }
+    out
+}
+
+/// The membrane colour, or the colour of `value` on [0, `max`] (viridis).
+fn strain_color(value: f64, max: f64) -> [f64; 3] {
+    let c: RGBColor =
+        ViridisRGB.get_color_normalized(value.clamp(0.0, max) as f32, 0.0, max as f32);
+    rgb(c)
+}
+
+/// The whole deformed cell's outer surface: the quarter's outer faces subdivided and
+/// mirrored four times, coloured by `coloring` (strain on [0, `strain_max`]).
+fn cell_triangles(
+    mesh: &Mesh3File,
+    s: &Snapshot3,
+    coloring: Coloring,
+    strain_max: f64,
+) -> Vec<Triangle> {
+    let c = mesh.center;
+    let x = deformed3(mesh, &s.u);
+    let element_of: HashMap<[usize; 3], usize> = {
+        let outer = outer_set(mesh);
+        let mut m = HashMap::new();
+        for (e, el) in mesh.elements.iter().enumerate() {
+            for f in tet::TET_FACES {
+                let key = sorted3([el[f[0]], el[f[1]], el[f[2]]]);
+                if outer.contains(&key) {
+                    m.insert(key, e);
+                }
+            }
+        }
+        m
+    };
+    let n = SURFACE_DIVISIONS;
+    let mut out = Vec::with_capacity(4 * mesh.outer_faces.len() * n * n);
+    for f in &mesh.outer_faces {
+        let color = match coloring {
+            Coloring::Domain => rgb(MEMBRANE),
+            Coloring::Strain => {
+                let e = element_of.get(&sorted3([f[0], f[1], f[2]]));
+                let v = e.map_or(0.0, |&e| s.element_strain[e]);
+                strain_color(v, strain_max)
+            }
+        };
+        let xd: [[f64; 3]; 6] = f.map(|i| x[i]);
+        let at = |i: usize, j: usize| {
+            let (p, nrm) = tet::face_map(&xd, [i as f64 / n as f64, j as f64 / n as f64]);
+            Vertex {
+                p,
+                n: normalize(nrm),
+            }
+        };
+        let mut quarter = Vec::with_capacity(n * n);
+        for i in 0..n {
+            for j in 0..n - i {
+                quarter.push([at(i, j), at(i + 1, j), at(i, j + 1)]);
+                if i + j + 1 < n {
+                    quarter.push([at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]);
+                }
+            }
+        }
+        for (k, m) in mirrors(c).iter().enumerate() {
+            let (sx, sz) = (
+                if k % 2 == 1 { -1.0 } else { 1.0 },
+                if k >= 2 { -1.0 } else { 1.0 },
+            );
+            for t in &quarter {
+                out.push(Triangle {
+                    v: t.map(|v| Vertex {
+                        p: m(v.p),
+                        n: [sx * v.n[0], v.n[1], sz * v.n[2]],
+                    }),
+                    color,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// A depth-buffered raster of shaded triangles.
+struct Raster {
+    w: usize,
+    h: usize,
+    rgb: Vec<[f32; 3]>,
+    depth: Vec<f64>,
+}
+
+impl Raster {
+    fn new(w: usize, h: usize) -> Self {
+        Raster {
+            w,
+            h,
+            rgb: vec![[255.0; 3]; w * h],
+            depth: vec![f64::NEG_INFINITY; w * h],
+        }
+    }
+
+    /// Draws `t` with its vertices at screen points `s` (x right, y down, depth towards
+    /// the viewer), normals interpolated and shaded by the key and the fill light
+    /// `light` (unit directions towards them); `strength` ∈ [0, 1] scales the shading
+    /// (0: the flat colour).
+    fn triangle(&mut self, s: [[f64; 3]; 3], t: &Triangle, light: [[f64; 3]; 2], strength: f64) {
+        let area =
+            (s[1][0] - s[0][0]) * (s[2][1] - s[0][1]) - (s[2][0] - s[0][0]) * (s[1][1] - s[0][1]);
+        if area.abs() < 1e-12 {
+            return;
+        }
+        let xmin = s
+            .iter()
+            .map(|p| p[0])
+            .fold(f64::INFINITY, f64::min)
+            .floor()
+            .max(0.0) as usize;
+        let ymin = s
+            .iter()
+            .map(|p| p[1])
+            .fold(f64::INFINITY, f64::min)
+            .floor()
+            .max(0.0) as usize;
+        let xmax = (s
+            .iter()
+            .map(|p| p[0])
+            .fold(f64::NEG_INFINITY, f64::max)
+            .ceil() as usize)
+            .min(self.w);
+        let ymax = (s
+            .iter()
+            .map(|p| p[1])
+            .fold(f64::NEG_INFINITY, f64::max)
+            .ceil() as usize)
+            .min(self.h);
+        let edge = |a: [f64; 3], b: [f64; 3], x: f64, y: f64| {
+            (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
+        };
+        for py in ymin..ymax {
+            for px in xmin..xmax {
+                let (x, y) = (px as f64 + 0.5, py as f64 + 0.5);
+                let w0 = edge(s[1], s[2], x, y) / area;
+                let w1 = edge(s[2], s[0], x, y) / area;
+                let w2 = edge(s[0], s[1], x, y) / area;
+                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                    continue;
+                }
+                let z = w0 * s[0][2] + w1 * s[1][2] + w2 * s[2][2];
+                let k = py * self.w + px;
+                if z <= self.depth[k] {
+                    continue;
+                }
+                self.depth[k] = z;
+                let n = normalize(
+                    [0, 1, 2].map(|i| w0 * t.v[0].n[i] + w1 * t.v[1].n[i] + w2 * t.v[2].n[i]),
+                );
+                let lit =
+                    AMBIENT + KEY * dot(n, light[0]).max(0.0) + FILL * dot(n, light[1]).max(0.0);
+                let shade = 1.0 - strength + strength * lit;
+                self.rgb[k] = t.color.map(|c| (c * shade).clamp(0.0, 255.0) as f32);
+            }
+        }
+    }
+
+    /// The raster averaged over `f` × `f` blocks, as RGB bytes.
+    fn downsample(&self, f: usize) -> (usize, usize, Vec<u8>) {
+        let (w, h) = (self.w / f, self.h / f);
+        let mut out = Vec::with_capacity(3 * w * h);
+        for y in 0..h {
+            for x in 0..w {
+                let mut acc = [0.0f32; 3];
+                for dy in 0..f {
+                    for dx in 0..f {
+                        let p = self.rgb[(f * y + dy) * self.w + f * x + dx];
+                        for k in 0..3 {
+                            acc[k] += p[k];
+                        }
+                    }
+                }
+                for a in acc {
+                    out.push((a / (f * f) as f32).round().clamp(0.0, 255.0) as u8);
+                }
+            }
+        }
+        (w, h, out)
+    }
+}
+
+/// The largest element mean ‖E‖ under the outer faces (at least 1e-3): the top of the
+/// colour bar.
+fn outer_strain_max(mesh: &Mesh3File, s: &Snapshot3) -> f64 {
+    let outer = outer_set(mesh);
+    mesh.elements
+        .iter()
+        .enumerate()
+        .filter(|(_, el)| {
+            tet::TET_FACES
+                .iter()
+                .any(|f| outer.contains(&sorted3([el[f[0]], el[f[1]], el[f[2]]])))
+        })
+        .map(|(e, _)| s.element_strain[e])
+        .filter(|v| v.is_finite())
+        .fold(1e-3, f64::max)
+}
+
+/// Options of [`draw_surface`].
+#[derive(Debug, Clone)]
+pub struct SurfaceStyleOptions {
+    /// Title above the drawing.
+    pub title: String,
+    /// How the cell is coloured.
+    pub coloring: Coloring,
+    /// Font size of the title (other texts scale with it).
+    pub font: u32,
+    /// Draw the legend (domain colouring), the axes and the caption.
+    pub legend: bool,
+}
+
+/// Shading strength of the strain colouring: half, so that the colours stay readable
+/// against the colour bar.
+const STRAIN_SHADING: f64 = 0.5;
+
+/// `tris` seen by `camera` over the box `screen` (equal scales, centred) in a picture of
+/// `pw` × `ph` pixels, as RGB bytes, white where nothing is.
+fn render(
+    tris: &[Triangle],
+    camera: Camera,
+    screen: Bounds,
+    (pw, ph): (usize, usize),
+    strength: f64,
+) -> Vec<u8> {
+    let f = SUPERSAMPLE;
+    let sb = screen;
+    let scale = (pw as f64 / (sb.x_max - sb.x_min)).min(ph as f64 / (sb.y_max - sb.y_min));
+    let (ox, oy) = (
+        0.5 * (pw as f64 - scale * (sb.x_max - sb.x_min)),
+        0.5 * (ph as f64 - scale * (sb.y_max - sb.y_min)),
+    );
+    let [right, up, toward] = camera.basis();
+    let to_screen = |p: [f64; 3]| -> [f64; 3] {
+        [
+            f as f64 * (ox + scale * (dot(p, right) - sb.x_min)),
+            f as f64 * (oy + scale * (sb.y_max - dot(p, up))),
+            dot(p, toward),
+        ]
+    };
+    let mut raster = Raster::new(f * pw, f * ph);
+    let light = camera.lights();
+    for t in tris {
+        raster.triangle(t.v.map(|v| to_screen(v.p)), t, light, strength);
+    }
+    raster.downsample(f).2
+}
+
+/// What one panel of a surface view shows and how.
+struct Panel<'a> {
+    /// The camera.
+    camera: Camera,
+    /// The box of the camera's plane shown.
+    screen: Bounds,
+    /// Shading strength (see [`Raster::triangle`]).
+    strength: f64,
+    /// Text in the upper left corner.
+    label: Option<&'a str>,
+}
+
+/// One panel of a surface view: the picture of `tris` as `panel` says, with the axes (x,
+/// y, z as the camera sees them) in its lower left corner if `axes`.
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    tris: &[Triangle],
+    panel: &Panel,
+    axes: bool,
+    fs: f64,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    let Panel {
+        camera,
+        screen,
+        strength,
+        label,
+    } = *panel;
+    let (pw, ph) = area.dim_in_pixel();
+    if pw < 8 || ph < 8 {
+        return Err("drawing area too small".into());
+    }
+    let bytes = render(tris, camera, screen, (pw as usize, ph as usize), strength);
+    let image = BitMapElement::<(i32, i32)>::with_owned_buffer((0, 0), (pw, ph), bytes)
+        .ok_or("the rendered picture has the wrong size")?;
+    area.draw(&image).map_err(e)?;
+    let text = |size: f64| TextStyle::from((FONT, (size * fs) as i32).into_font());
+    if axes {
+        let [right, up, _] = camera.basis();
+        let origin = ((2.4 * fs) as i32, ph as i32 - (2.6 * fs) as i32);
+        let len = 1.6 * fs;
+        for (k, name) in ["x", "y", "z"].iter().enumerate() {
+            let mut unit = [0.0; 3];
+            unit[k] = 1.0;
+            let (dx, dy) = (dot(unit, right) * len, -dot(unit, up) * len);
+            let tip = (origin.0 + dx as i32, origin.1 + dy as i32);
+            area.draw(&PathElement::new(vec![origin, tip], BLACK.stroke_width(2)))
+                .map_err(e)?;
+            area.draw(&Text::new(
+                name.to_string(),
+                (
+                    origin.0 + (1.25 * dx) as i32 - (0.2 * fs) as i32,
+                    origin.1 + (1.25 * dy) as i32 - (0.35 * fs) as i32,
+                ),
+                text(0.6),
+            ))
+            .map_err(e)?;
+        }
+    }
+    if let Some(l) = label {
+        area.draw(&Text::new(
+            l.to_string(),
+            ((0.6 * fs) as i32, (0.4 * fs) as i32),
+            text(0.65),
+        ))
+        .map_err(e)?;
+    }
+    Ok(())
+}
+
+/// Draws the surface view of the deformed whole cell of `s` on its substrate into `area`,
+/// framed by `frame` (see the module notes). Coloured by strain, a second panel shows the
+/// cell from below ([`Camera::below`], the substrate not drawn), where the contact is.
+pub fn draw_surface<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    mesh: &Mesh3File,
+    s: &Snapshot3,
+    frame: &SurfaceFrame,
+    opts: &SurfaceStyleOptions,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    check_snapshot3(mesh, s)?;
+    let fs = opts.font as f64;
+    let area = area
+        .titled(&opts.title, (FONT, opts.font as i32))
+        .map_err(e)?;
+    let (aw, ah) = area.dim_in_pixel();
+    let bar_w = match opts.coloring {
+        Coloring::Strain => (5.5 * fs) as u32,
+        Coloring::Domain => 0,
+    };
+    let pw = aw.saturating_sub(bar_w);
+    let (pic, bar) = area.split_horizontally(pw);
+    let caption_h = if opts.legend { (1.4 * fs) as u32 } else { 0 };
+    let (pic, caption) = pic.split_vertically(ah.saturating_sub(caption_h));
+    let strain_max = outer_strain_max(mesh, s);
+    let cell = cell_triangles(mesh, s, opts.coloring, strain_max);
+    let mut all = substrate_triangles(mesh, frame);
+    all.extend_from_slice(&cell);
+    let cam = frame.camera;
+    match opts.coloring {
+        Coloring::Domain => {
+            let panel = Panel {
+                camera: cam,
+                screen: frame.screen,
+                strength: 1.0,
+                label: None,
+            };
+            draw_panel(&pic, &all, &panel, opts.legend, fs)?;
+        }
+        Coloring::Strain => {
+            let (left, right) = pic.split_horizontally(pw / 2);
+            let above = Panel {
+                camera: cam,
+                screen: frame.screen,
+                strength: STRAIN_SHADING,
+                label: Some("from above"),
+            };
+            draw_panel(&left, &all, &above, opts.legend, fs)?;
+            let below = Panel {
+                camera: cam.below(),
+                screen: frame.below,
+                strength: STRAIN_SHADING,
+                label: Some("from below (substrate not drawn)"),
+            };
+            draw_panel(&right, &cell, &below, opts.legend, fs)?;
+        }
+    }
+    let text = |size: f64| TextStyle::from((FONT, (size * fs) as i32).into_font());
+    if opts.legend {
+        let seen = match opts.coloring {
+            Coloring::Domain => format!(
+                "seen from elevation {}°, azimuth {}°",
+                cam.elevation_deg, cam.azimuth_deg
+            ),
+            Coloring::Strain => format!(
+                "seen from elevation {}° (left) and {}° (right), azimuth {}°",
+                cam.elevation_deg,
+                cam.below().elevation_deg,
+                cam.azimuth_deg
+            ),
+        };
+        caption
+            .draw(&Text::new(
+                format!("The whole cell: the quarter cell mirrored about x = 0 and z = 0; {seen}."),
+                ((0.6 * fs) as i32, (0.3 * fs) as i32),
+                text(0.5),
+            ))
+            .map_err(e)?;
+    }
+    if opts.legend && opts.coloring == Coloring::Domain {
+        let pillars = matches!(mesh.substrate.plane, Substrate::Pillars(_));
+        let entries: Vec<(RGBColor, &str)> = [
+            (MEMBRANE, "membrane (the cell's outer surface)"),
+            (SUBSTRATE, "pillars"),
+            (FLOOR, "substrate floor"),
+        ]
+        .into_iter()
+        .filter(|(c, _)| *c != SUBSTRATE || pillars)
+        .collect();
+        let style = text(0.55);
+        let sz = (0.55 * fs) as i32;
+        let line = (0.9 * fs) as i32;
+        let mut text_w = 0;
+        for (_, name) in &entries {
+            text_w = text_w.max(pic.estimate_text_size(name, &style).map_err(e)?.0 as i32);
+        }
+        let box_w = 2 * sz + 24 + text_w;
+        let x1 = pw as i32 - (0.4 * fs) as i32;
+        let x0 = x1 - box_w;
+        let y0 = (0.4 * fs) as i32;
+        let box_h = line * entries.len() as i32 + (0.4 * fs) as i32;
+        pic.draw(&Rectangle::new(
+            [(x0, y0), (x1, y0 + box_h)],
+            WHITE.mix(0.9).filled(),
+        ))
+        .map_err(e)?;
+        pic.draw(&Rectangle::new([(x0, y0), (x1, y0 + box_h)], BLACK))
+            .map_err(e)?;
+        for (k, (c, name)) in entries.iter().enumerate() {
+            let y = y0 + (0.3 * fs) as i32 + k as i32 * line;
+            pic.draw(&Rectangle::new(
+                [(x0 + 8, y + 2), (x0 + 8 + 2 * sz, y + 2 + sz)],
+                c.filled(),
+            ))
+            .map_err(e)?;
+            pic.draw(&Text::new(
+                name.to_string(),
+                (x0 + 2 * sz + 16, y),
+                style.clone(),
+            ))
+            .map_err(e)?;
+        }
+    }
+    if opts.coloring == Coloring::Strain {
+        let mut chart = ChartBuilder::on(&bar)
+            .margin_top((1.0 * fs) as u32)
+            .margin_bottom((1.0 * fs) as u32)
+            .margin_right((0.4 * fs) as u32)
+            .y_label_area_size((3.2 * fs) as u32)
+            .build_cartesian_2d(0.0..1.0, 0.0..strain_max)
+            .map_err(e)?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .disable_y_mesh()
+            .disable_x_axis()
+            .y_desc("element mean ‖E‖")
+            .axis_desc_style((FONT, (0.6 * fs) as i32))
+            .label_style((FONT, (0.5 * fs) as i32))
+            .draw()
+            .map_err(e)?;
+        let steps = 200;
+        chart
+            .draw_series((0..steps).map(|k| {
+                let (v0, v1) = (
+                    strain_max * k as f64 / steps as f64,
+                    strain_max * (k + 1) as f64 / steps as f64,
+                );
+                let c: RGBColor = ViridisRGB.get_color_normalized(
+                    (0.5 * (v0 + v1)) as f32,
+                    0.0,
+                    strain_max as f32,
+                );
+                Rectangle::new([(0.0, v0), (1.0, v1)], c.filled())
+            }))
+            .map_err(e)?;
+    }
+    Ok(())
+}
+
+/// The surface view of the deformed whole cell of `s` on its substrate, coloured by
+/// `coloring`, as a PNG of [`FIGURE_SIZE`] at `path` (see the module notes).
+pub fn surface_figure(
+    path: &Path,
+    mesh: &Mesh3File,
+    s: &Snapshot3,
+    coloring: Coloring,
+    title: &str,
+) -> Result<(), OutputError> {
+    check_snapshot3(mesh, s).map_err(|m| OutputError::draw(path, m))?;
+    let frame = SurfaceFrame::new(mesh, &[s], Camera::DEFAULT);
+    let root = BitMapBackend::new(path, FIGURE_SIZE).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
+    let opts = SurfaceStyleOptions {
+        title: title.to_string(),
+        coloring,
+        font: 28,
+        legend: true,
+    };
+    draw_surface(&root, mesh, s, &frame, &opts).map_err(|x| OutputError::draw(path, x))?;
     root.present().map_err(|x| OutputError::draw(path, x))
 }

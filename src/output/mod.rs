@@ -17,7 +17,7 @@
 //! - [`movie`]: the deformation as an animated GIF;
 //! - [`vtu3`], [`figures3`]: the same for the 3-D quarter cell (a
 //!   [`crate::record::Mesh3File`] and its [`crate::record::Snapshot3`]s): ParaView files of
-//!   quadratic tetrahedra, sections through the axis;
+//!   quadratic tetrahedra, sections through the axis and a shaded view of the whole cell;
 //! - [`snapshot`]: what the run loop hands over at each output time, and the writer that
 //!   feeds [`vtu`] and [`movie`];
 //! - [`paper`]: `cellsim paper` — the five scenes, the paper's reported values and the
