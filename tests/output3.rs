@@ -1,5 +1,6 @@
-//! The 3-D cell's outputs (`output::vtu3`, `figures3`) on the default quarter
-//! mesh: the ParaView file read back, the sections' areas against the balls', every figure.
+//! The 3-D cell's outputs (`output::vtu3`, `figures3`, `movie3`) on the default quarter
+//! mesh: the ParaView file read back, the sections' areas against the balls', every figure
+//! and the GIF.
 
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -12,6 +13,7 @@ use cellsim::output::figures::ShapeStyleOptions;
 use cellsim::output::figures3::{
     self, Coloring, FIGURE_SIZE, Section, SectionShape, section_figure, surface_figure,
 };
+use cellsim::output::movie3::{FRAME_SIZE, MAX_FRAMES, Movie3, MovieView};
 use cellsim::output::vtu3::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu3};
 use cellsim::physics::{Lattice, Substrate, Substrate3};
 use cellsim::record::{Mesh3File, Snapshot3};
@@ -443,4 +445,57 @@ fn surface_figures_show_the_shaded_cell_on_its_pillars() {
             }
         }
     }
+}
+
+#[test]
+fn movie3_has_one_frame_per_offered_state() {
+    let mf = mesh_file(Lattice::FourPillars);
+    let d = scratch("movie");
+    for (view, name) in [
+        (MovieView::Section(Section::Z0), "section"),
+        (MovieView::Section(Section::Diagonal), "diagonal"),
+        (MovieView::Surface(Coloring::Domain), "surface"),
+    ] {
+        let p = d.join(format!("{name}.gif"));
+        let n = 4;
+        let mut m = Movie3::with_view(&p, "cell", &mf, n, view).expect("movie");
+        for k in 0..n {
+            let w = k as f64 / (n - 1) as f64;
+            m.frame(&snapshot(&mf, w, 10_000.0 * w)).expect("frame");
+        }
+        assert_eq!(m.frames(), n);
+        m.finish().expect("finish");
+        let dec = gif::DecodeOptions::new()
+            .read_info(std::fs::File::open(&p).expect("open"))
+            .expect("gif header");
+        assert_eq!(
+            (dec.width(), dec.height()),
+            (FRAME_SIZE.0 as u16, FRAME_SIZE.1 as u16)
+        );
+        assert_eq!(gif_frames(&p), n, "{name}");
+    }
+    // The default movie (the section z = 0) with more outputs announced than MAX_FRAMES:
+    // every third state, and the last one offered although skipped.
+    let p = d.join("default.gif");
+    let mut m = Movie3::new(&p, "cell", &mf, 3 * MAX_FRAMES).expect("movie");
+    for k in 0..5 {
+        m.frame(&snapshot(&mf, k as f64 / 4.0, 1000.0 * k as f64))
+            .expect("frame");
+    }
+    assert_eq!(m.frames(), 2);
+    m.finish().expect("finish");
+    assert_eq!(gif_frames(&p), 3);
+}
+
+fn gif_frames(p: &Path) -> usize {
+    let mut opts = gif::DecodeOptions::new();
+    opts.set_color_output(gif::ColorOutput::Indexed);
+    let mut dec = opts
+        .read_info(std::fs::File::open(p).expect("open"))
+        .expect("gif header");
+    let mut frames = 0;
+    while dec.read_next_frame().expect("frame").is_some() {
+        frames += 1;
+    }
+    frames
 }
