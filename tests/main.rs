@@ -10,6 +10,7 @@ mod hard;
 mod linsolve;
 mod model;
 mod model3d;
+mod output3;
 mod plots;
 mod scenes;
 mod shared;

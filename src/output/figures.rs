@@ -38,7 +38,7 @@ pub const UPSIDE_DOWN_SIZE: (u32, u32) = (1200, 1000);
 const LEGEND_GLYPH: i32 = 40;
 
 /// Font family of every text.
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 /// Fill colour of the nucleus (the paper's red).
 pub const NUCLEUS: RGBColor = RGBColor(214, 72, 66);
@@ -78,7 +78,7 @@ pub fn domain_color(d: Domain) -> RGBColor {
     }
 }
 
-fn darker(c: RGBColor, f: f64) -> RGBColor {
+pub(crate) fn darker(c: RGBColor, f: f64) -> RGBColor {
     let s = |v: u8| (v as f64 * f).round().clamp(0.0, 255.0) as u8;
     RGBColor(s(c.0), s(c.1), s(c.2))
 }
@@ -1698,7 +1698,7 @@ pub fn draw_shape<DB: DrawingBackend>(
 /// Draws the gravity arrow of `g` in the upper left corner of `chart`'s plotting area: a
 /// vertical arrow pointing along gravity (its length scales with |factor|), "g" beside it
 /// and the note to its right, on a white box.
-fn draw_gravity<DB: DrawingBackend>(
+pub(crate) fn draw_gravity<DB: DrawingBackend>(
     raw: &DrawingArea<DB, Shift>,
     g: &GravityMark,
     fs: f64,

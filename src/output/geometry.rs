@@ -362,7 +362,7 @@ pub type Rect = [f64; 4];
 
 /// The intervals of `[y0, y1]` where `f(y) ≥ 0`, found by a downward scan in steps of
 /// [`SCAN_STEP`] with each sign change bisected to 1e-9 µm.
-fn intervals(f: impl Fn(f64) -> f64, y0: f64, y1: f64) -> Vec<[f64; 2]> {
+pub(crate) fn intervals(f: impl Fn(f64) -> f64, y0: f64, y1: f64) -> Vec<[f64; 2]> {
     let bisect = |mut inside: f64, mut outside: f64| {
         for _ in 0..40 {
             let mid = 0.5 * (inside + outside);
@@ -437,7 +437,7 @@ fn clip_x(line: &[Pt], x0: f64, x1: f64) -> Vec<Vec<Pt>> {
 /// Segments of the zero level of `f` over the box, by marching squares on a grid of
 /// spacing about `h` (linear interpolation on the cell edges; saddles split by the cell
 /// centre's value).
-fn contour(f: impl Fn(f64, f64) -> f64, b: [f64; 4], h: f64) -> Vec<[Pt; 2]> {
+pub(crate) fn contour(f: impl Fn(f64, f64) -> f64, b: [f64; 4], h: f64) -> Vec<[Pt; 2]> {
     let [x0, x1, y0, y1] = b;
     let nx = ((x1 - x0) / h).ceil().max(1.0) as usize;
     let ny = ((y1 - y0) / h).ceil().max(1.0) as usize;

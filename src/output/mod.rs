@@ -15,6 +15,10 @@
 //! - [`figures`]: the PNG figures (time series, strain bars, shapes);
 //! - [`vtu`]: `.vtu` files (quadratic triangles) and the `.pvd` collection;
 //! - [`movie`]: the deformation as an animated GIF;
+//! - [`vtu3`], [`figures3`], [`movie3`]: the same for the 3-D quarter cell (a
+//!   [`crate::record::Mesh3File`] and its [`crate::record::Snapshot3`]s): ParaView files of
+//!   quadratic tetrahedra, sections through the axis and a shaded view of the whole cell,
+//!   the GIF;
 //! - [`snapshot`]: what the run loop hands over at each output time, and the writer that
 //!   feeds [`vtu`] and [`movie`];
 //! - [`paper`]: `cellsim paper` — the five scenes, the paper's reported values and the
@@ -22,12 +26,15 @@
 //! - [`table`]: `cellsim table` — a markdown row per run from its summary.
 
 pub mod figures;
+pub mod figures3;
 pub mod geometry;
 pub mod movie;
+pub mod movie3;
 pub mod paper;
 pub mod snapshot;
 pub mod table;
 pub mod vtu;
+pub mod vtu3;
 
 pub use crate::record::RunData;
 pub use snapshot::{SnapshotOptions, SnapshotWriter};

@@ -187,17 +187,24 @@ impl VtuSeries {
     }
 
     fn write_pvd(&self) -> Result<(), OutputError> {
-        let mut text = String::from(
-            "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
-        );
-        for (t, f) in &self.entries {
-            text.push_str(&format!(
-                "    <DataSet timestep=\"{t:e}\" group=\"\" part=\"0\" file=\"{f}\"/>\n"
-            ));
-        }
-        text.push_str("  </Collection>\n</VTKFile>\n");
-        let tmp = self.pvd.with_extension("pvd.tmp");
-        std::fs::write(&tmp, text).map_err(|e| OutputError::write(&tmp, e))?;
-        std::fs::rename(&tmp, &self.pvd).map_err(|e| OutputError::write(&self.pvd, e))
+        write_pvd(&self.pvd, &self.entries)
     }
+}
+
+/// Writes the `.pvd` collection `pvd` listing `entries` (time [s], file path relative to
+/// the collection), through a temporary file and a rename so that ParaView never reads half
+/// a file. Shared by the 2-D and the 3-D series ([`super::vtu3::VtuSeries3`]).
+pub fn write_pvd(pvd: &Path, entries: &[(f64, String)]) -> Result<(), OutputError> {
+    let mut text = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n  <Collection>\n",
+    );
+    for (t, f) in entries {
+        text.push_str(&format!(
+            "    <DataSet timestep=\"{t:e}\" group=\"\" part=\"0\" file=\"{f}\"/>\n"
+        ));
+    }
+    text.push_str("  </Collection>\n</VTKFile>\n");
+    let tmp = pvd.with_extension("pvd.tmp");
+    std::fs::write(&tmp, text).map_err(|e| OutputError::write(&tmp, e))?;
+    std::fs::rename(&tmp, pvd).map_err(|e| OutputError::write(pvd, e))
 }
