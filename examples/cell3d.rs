@@ -40,6 +40,7 @@ impl LinearSolverFactory for Lu {
                 name: "faer-metis-ata",
                 order: nested_dissection_ata,
             })),
+            "faer-metis" => Box::new(FaerLu::with_ordering(cellsim::lu::METIS_ORDERING)),
             "faer-par" => Box::new(FaerLu::with_options(
                 faer::Par::rayon(2),
                 faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
@@ -172,6 +173,7 @@ fn bench_lu(m: &mut Cell3) {
     for name in [
         "faer",
         "faer-par",
+        "faer-metis",
         "faer-metis-ata",
         "klu-metis",
         "umfpack",

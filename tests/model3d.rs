@@ -533,11 +533,13 @@ fn the_cli_meshes_checks_and_runs_a_3d_case() {
     let o = out.to_str().unwrap();
     let run = cellsim(&[
         "run",
-        "cases/fast/flat-3d.ron",
+        "cases/fast/flat-3d-coarse.ron",
         "--set",
         "phases.t_end=110.0",
         "--out",
         o,
+        "--vtu",
+        "--gif",
         "--quiet",
     ]);
     assert!(
@@ -598,17 +600,28 @@ fn the_cli_meshes_checks_and_runs_a_3d_case() {
         state.state.u.len(),
         s["mesh_nodes"].as_u64().unwrap() as usize
     );
-    // ParaView and GIF output are refused for the 3-D model for now, with the reason.
-    let vtu = cellsim(&[
-        "run",
-        "cases/fast/flat-3d.ron",
-        "--out",
-        o,
-        "--vtu",
-        "--quiet",
-    ]);
-    assert_eq!(vtu.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&vtu.stderr).contains("not written for the 3-D model"));
+    // ParaView output: one file of quadratic tetrahedra (VTK type 24) per CSV row, all
+    // in the collection; the GIF of the section z = 0.
+    let rows = csv.lines().count() - 1;
+    let vtus: Vec<_> = std::fs::read_dir(out.join("vtu"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(vtus.len(), rows);
+    let pvd = std::fs::read_to_string(out.join("flat-3d-coarse.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), rows);
+    let grid = cellsim::output::vtu::read_vtu(
+        &out.join("vtu")
+            .join(format!("flat-3d-coarse_{:05}.vtu", rows - 1)),
+    )
+    .unwrap();
+    assert_eq!(grid.cells, 3320);
+    assert!(grid.cell_types.iter().all(|&t| t == 24));
+    let gif = std::fs::metadata(out.join("flat-3d-coarse.gif"))
+        .unwrap()
+        .len();
+    assert!(gif > 10_000, "GIF of {gif} bytes");
+    let _ = std::fs::remove_dir_all(&out);
 }
 
 #[test]

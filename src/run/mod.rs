@@ -20,7 +20,7 @@ use crate::dae::{Atol, Dae, Integrator, IntegratorError, Stats};
 use crate::fem::{Mesh, MeshError};
 use crate::model::{CellModel, Restart};
 use crate::model3d::Cell3;
-use crate::output::{SnapshotOptions, SnapshotWriter};
+use crate::output::{SnapshotOptions, SnapshotWriter, SnapshotWriter3};
 use crate::record::Observables;
 use crate::record::{
     self, Failure, FailureKind, MeshFile, RunSettings, Snapshot, StateFile, Summary, TimeBreakdown,
@@ -754,6 +754,12 @@ impl Driver {
     }
 }
 
+/// The per-output-time writers of a run's model.
+enum Frames {
+    Plane(SnapshotWriter),
+    Quarter(SnapshotWriter3),
+}
+
 /// Why an output could not be written at an output time.
 enum OutputStop {
     /// The state or its observables are not finite (nothing written): the run stops.
@@ -805,8 +811,8 @@ struct RunWriter {
     out: PathBuf,
     csv_path: PathBuf,
     csv: BufWriter<File>,
-    /// The VTU and GIF writers (half-plane models only).
-    frames: Option<SnapshotWriter>,
+    /// The VTU and GIF writers.
+    frames: Frames,
     phase_states: bool,
     phases: [(f64, &'static str); 4],
     tolerance: f64,
@@ -845,24 +851,19 @@ impl RunWriter {
                 write_json(&out.join("mesh.json"), &mesh_file)?;
                 let frames =
                     SnapshotWriter::new(&out, &case.name, &mesh_file, opts.snapshots, n_outputs)?;
-                (Some(frames), Observables::CSV_HEADER.to_string())
+                (Frames::Plane(frames), Observables::CSV_HEADER.to_string())
             }
             Cell::Quarter(m) => {
-                if opts.snapshots.any() {
-                    return Err(RunError::Model {
-                        file: file.into(),
-                        message: "--vtu and --gif are not written for the 3-D model yet (its \
-                                  states are in state_<phase>.json)"
-                            .into(),
-                    });
-                }
-                write_json(&out.join("mesh3.json"), &m.mesh_file(phase_times))?;
+                let mesh_file = m.mesh_file(phase_times);
+                write_json(&out.join("mesh3.json"), &mesh_file)?;
+                let frames =
+                    SnapshotWriter3::new(&out, &case.name, &mesh_file, opts.snapshots, n_outputs)?;
                 let header = format!(
                     "{},{}",
                     Observables::CSV_HEADER,
                     crate::record::Observables3::CSV_COLUMNS
                 );
-                (None, header)
+                (Frames::Quarter(frames), header)
             }
         };
         let csv_path = out.join("timeseries.csv");
@@ -955,8 +956,10 @@ impl RunWriter {
                 let mu_as = m
                     .nodal_mu_as(t, y)
                     .map_err(|why| OutputStop::State(t, why))?;
-                if let Some(frames) = self.frames.as_mut().filter(|f| f.is_active()) {
-                    frames.write(&snapshot(m, t, y, yp, mu_as.clone()))?;
+                if let Frames::Plane(frames) = &mut self.frames {
+                    if frames.is_active() {
+                        frames.write(&snapshot(m, t, y, yp, mu_as.clone()))?;
+                    }
                 }
                 if let Some(phase) = phase {
                     let name = format!("state_{phase}.json");
@@ -968,13 +971,24 @@ impl RunWriter {
                 }
             }
             Cell::Quarter(m) => {
+                let frames = match &mut self.frames {
+                    Frames::Quarter(f) if f.is_active() => Some(f),
+                    _ => None,
+                };
+                if frames.is_none() && phase.is_none() {
+                    return Ok(());
+                }
+                let snap = m
+                    .snapshot(t, y, yp)
+                    .map_err(|why| OutputStop::State(t, why))?;
+                if let Some(f) = frames {
+                    f.write(&snap)?;
+                }
                 if let (Some(phase), Some(observables3)) = (phase, obs3) {
                     let name = format!("state_{phase}.json");
                     let state = crate::record::StateFile3 {
                         phase: phase.to_string(),
-                        state: m
-                            .snapshot(t, y, yp)
-                            .map_err(|why| OutputStop::State(t, why))?,
+                        state: snap,
                         observables: obs,
                         observables3,
                     };
@@ -1028,7 +1042,11 @@ impl RunWriter {
                 wall,
             ));
         }
-        if let Err(e) = frames.map_or(Ok(Vec::new()), |f| f.finish()) {
+        let finished = match frames {
+            Frames::Plane(f) => f.finish(),
+            Frames::Quarter(f) => f.finish(),
+        };
+        if let Err(e) = finished {
             stopped.get_or_insert((
                 FailureKind::Output,
                 format!("writing the VTU/GIF output: {e}"),
