@@ -7,6 +7,7 @@
 //!     [--case cases/flat.ron] [--t-end 10000] [--outputs 20] [--rtol 1e-4]
 //!     [--drag D]   # quasi-static: inertia off with medium drag D [pN·s/µm⁴]
 //!     [--lattice four|gap] [--threads]
+//!     [--bench-lu [--lu faer,umfpack,...]]   # time the LUs on the Jacobian at rest
 //! ```
 //!
 //! Without `--t-end` it only meshes. With inertia (the case's `OffAfter`) the run keeps
@@ -36,6 +37,7 @@ impl LinearSolverFactory for Lu {
             "klu-metis" => LinearSolverKind::KluMetis.build(),
             "umfpack" => Box::new(UmfpackLu::new(UmfpackOrdering::Amd)),
             "umfpack-metis" => Box::new(UmfpackLu::new(UmfpackOrdering::Metis)),
+            "umfpack-noir" => Box::new(UmfpackLu::new(UmfpackOrdering::Amd).without_refinement()),
             "faer-metis-ata" => Box::new(FaerLu::with_ordering(ColumnOrdering::External {
                 name: "faer-metis-ata",
                 order: nested_dissection_ata,
@@ -105,7 +107,7 @@ fn main() {
         t1.elapsed().as_secs_f64()
     );
     if args.iter().any(|a| a == "--bench-lu") {
-        bench_lu(&mut m);
+        bench_lu(&mut m, get("--lu").as_deref());
         return;
     }
     let rtol = num("--rtol", 1e-4);
@@ -163,7 +165,7 @@ fn main() {
 
 /// Times each LU on the model's iteration matrix at the rest state (cj = 0.1): analysis,
 /// numeric factorization (median of 3) and solve, and the fill where the backend says.
-fn bench_lu(m: &mut Cell3) {
+fn bench_lu(m: &mut Cell3, only: Option<&str>) {
     let n = m.size();
     let (y, yp) = (vec![0.0; n], vec![0.0; n]);
     let pattern = m.pattern().clone();
@@ -178,7 +180,11 @@ fn bench_lu(m: &mut Cell3) {
         "klu-metis",
         "umfpack",
         "umfpack-metis",
+        "umfpack-noir",
     ] {
+        if only.is_some_and(|o| !o.split(',').any(|x| x == name)) {
+            continue;
+        }
         let mut lu = Lu(name).build_for(m).expect("lu");
         let t = Instant::now();
         lu.analyse(&pattern).expect("analyse");

@@ -72,6 +72,10 @@ enum LinearSolverArg {
     KluMetis,
     /// SuiteSparse's UMFPACK (AMD ordering).
     Umfpack,
+    /// UMFPACK without iterative refinement.
+    UmfpackUnrefined,
+    /// UMFPACK without refinement, on the condensed system while inertia is on.
+    UmfpackCondensed,
 }
 
 impl From<LinearSolverArg> for LinearSolverKind {
@@ -82,6 +86,8 @@ impl From<LinearSolverArg> for LinearSolverKind {
             LinearSolverArg::FaerCondensed => LinearSolverKind::FaerCondensed,
             LinearSolverArg::KluMetis => LinearSolverKind::KluMetis,
             LinearSolverArg::Umfpack => LinearSolverKind::Umfpack,
+            LinearSolverArg::UmfpackUnrefined => LinearSolverKind::UmfpackUnrefined,
+            LinearSolverArg::UmfpackCondensed => LinearSolverKind::UmfpackCondensed,
         }
     }
 }

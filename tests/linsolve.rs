@@ -76,6 +76,14 @@ fn condensed_solve_matches_the_full_lu_on_the_cell_jacobian() {
         let full = solve(LinearSolverKind::Faer, &m, &values, &b);
         let klu = solve(LinearSolverKind::Klu, &m, &values, &b);
         let cond = solve(LinearSolverKind::FaerCondensed, &m, &values, &b);
+        // The same condensation factorized by UMFPACK without refinement.
+        let cond_u = solve(LinearSolverKind::UmfpackCondensed, &m, &values, &b);
+        let du: Vec<f64> = full.iter().zip(&cond_u).map(|(a, c)| a - c).collect();
+        let rel_u = norm(&du) / norm(&full);
+        assert!(
+            rel_u < 1e-7,
+            "cj = {cj:.3e}: condensed UMFPACK differs by {rel_u:.2e}"
+        );
         let diff: Vec<f64> = full.iter().zip(&cond).map(|(a, c)| a - c).collect();
         let rel = norm(&diff) / norm(&full);
         // Residual of the condensed solution in J's own scale.
@@ -124,6 +132,7 @@ fn every_backend_and_ordering_solves_the_cell_jacobian() {
                 LinearSolverKind::Klu,
                 LinearSolverKind::KluMetis,
                 LinearSolverKind::Umfpack,
+                LinearSolverKind::UmfpackUnrefined,
             ] {
                 let x = solve(kind, &m, &values, &b);
                 let d: Vec<f64> = x.iter().zip(&reference).map(|(a, c)| a - c).collect();
@@ -142,7 +151,15 @@ fn every_backend_and_ordering_solves_the_cell_jacobian() {
                      {rel:.1e}, scaled residual {res:.1e}"
                 );
                 assert!(rel < 1e-7, "{kind:?}: differs from faer by {rel:.2e}");
-                assert!(res < 1e-14, "{kind:?}: scaled residual {res:.2e}");
+                // UMFPACK's threshold pivoting without iterative refinement leaves a
+                // larger backward error (measured 2.4e-14 when it was the default), for
+                // Newton to correct; every other backend is at round-off.
+                let bound = if kind == LinearSolverKind::UmfpackUnrefined {
+                    1e-12
+                } else {
+                    1e-14
+                };
+                assert!(res < bound, "{kind:?}: scaled residual {res:.2e}");
             }
         }
     }

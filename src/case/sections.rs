@@ -867,6 +867,10 @@ pub enum LinearSolver {
     /// faer's LU on the half-size system left after eliminating the velocities (inertia
     /// on); the full-size faer LU once inertia is off.
     FaerCondensed,
+    /// SuiteSparse's UMFPACK without iterative refinement, on the condensed system while
+    /// inertia is on and the full one after: the faster LU on the 3-D cell's Jacobians
+    /// (docs/benchmarks.md).
+    UmfpackCondensed,
 }
 
 /// Time integration and linear algebra settings.
@@ -889,7 +893,7 @@ pub struct Solver {
     /// Maximum number of internal steps between two output times (IDA's mxstep).
     /// Default 5000. Valid: ≥ 1.
     pub max_steps: u64,
-    /// `Faer`, `Klu` or `FaerCondensed`. Default `FaerCondensed`: faer's LU with the
+    /// `Faer`, `Klu`, `FaerCondensed` or `UmfpackCondensed`. Default `FaerCondensed`: faer's LU with the
     /// velocities eliminated while inertia is on (0.75× the CPU time of `Faer` on the flat
     /// gravity phase), the same faer LU once inertia is off. faer is 1.3× faster than KLU
     /// on the fine mesh, 1.05× slower on the default one (whole runs, docs/benchmarks.md).
@@ -901,6 +905,15 @@ pub struct Solver {
     /// T_g0 the μ_as rows change nothing else but limit the steps (MODEL.md §8). `false`
     /// keeps them in the system from t = 0.
     pub defer_adhesion: bool,
+    /// IDA re-forms and factorizes the Jacobian when its coefficient cj = α/h changed by
+    /// more than this fraction since the last factorization (IDASetDeltaCjLSetup; the
+    /// solution is rescaled by 2/(1 + cj/cj_old) in between). Default 0.25 (IDA's).
+    /// Larger values keep a factorization across more step-size changes: worth it where a
+    /// factorization costs many residuals (the 3-D cell). Valid: 0 < delta_cj < 1.
+    pub delta_cj: f64,
+    /// Most Newton iterations per IDA step (IDASetMaxNonlinIters). Default 4 (IDA's).
+    /// Valid: 1 ≤ newton_iters ≤ 50.
+    pub newton_iters: u32,
 }
 
 impl Default for Solver {
@@ -915,6 +928,8 @@ impl Default for Solver {
             linear_solver: LinearSolver::FaerCondensed,
             initial_step: None,
             defer_adhesion: true,
+            delta_cj: 0.25,
+            newton_iters: 4,
         }
     }
 }

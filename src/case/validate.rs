@@ -606,6 +606,13 @@ impl Checker<'_> {
         self.positive("solver.bdf2_dt", s.bdf2_dt);
         self.int_range("solver.max_order", s.max_order.into(), 1, Some(5));
         self.int_range("solver.max_steps", s.max_steps, 1, None);
+        self.range(
+            "solver.delta_cj",
+            s.delta_cj,
+            s.delta_cj > 0.0 && s.delta_cj < 1.0,
+            "0 < delta_cj < 1",
+        );
+        self.int_range("solver.newton_iters", s.newton_iters.into(), 1, Some(50));
         if let Some(h0) = s.initial_step {
             self.positive("solver.initial_step", h0);
         }

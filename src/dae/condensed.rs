@@ -90,7 +90,7 @@ struct Plan {
 /// unknowns instead of n (m the number of pairs).
 pub struct CondensedLu {
     blocks: Option<FirstOrderBlocks>,
-    inner: FaerLu,
+    inner: Box<dyn LinearSolver>,
     plan: Option<Plan>,
     factorized: bool,
 }
@@ -98,12 +98,12 @@ pub struct CondensedLu {
 impl CondensedLu {
     /// A solver for a problem with the (position, velocity) pairs `blocks`.
     pub fn new(blocks: FirstOrderBlocks) -> Self {
-        Self::with_inner(blocks, FaerLu::new())
+        Self::with_inner(blocks, Box::new(FaerLu::new()))
     }
 
     /// A solver for a problem with the (position, velocity) pairs `blocks` that factorizes
-    /// the condensed system with `inner` (e.g. faer's LU with another column ordering).
-    pub fn with_inner(blocks: FirstOrderBlocks, inner: FaerLu) -> Self {
+    /// the condensed system with `inner` (faer's LU with another column ordering, UMFPACK).
+    pub fn with_inner(blocks: FirstOrderBlocks, inner: Box<dyn LinearSolver>) -> Self {
         Self {
             blocks: Some(blocks),
             inner,
@@ -113,8 +113,8 @@ impl CondensedLu {
     }
 
     /// The LU of the condensed system.
-    pub fn inner(&self) -> &FaerLu {
-        &self.inner
+    pub fn inner(&self) -> &dyn LinearSolver {
+        self.inner.as_ref()
     }
 
     /// A solver that does not know the problem's pairs: `analyse` fails with
@@ -123,7 +123,7 @@ impl CondensedLu {
     pub fn unconfigured() -> Self {
         Self {
             blocks: None,
-            inner: FaerLu::new(),
+            inner: Box::new(FaerLu::new()),
             plan: None,
             factorized: false,
         }

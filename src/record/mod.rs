@@ -59,6 +59,20 @@ pub struct RunSettings {
     /// μ_as beside it until then ([`crate::model::history`]).
     #[serde(default = "yes")]
     pub defer_adhesion: bool,
+    /// IDA's change of cj that triggers a new Jacobian (IDASetDeltaCjLSetup).
+    #[serde(default = "default_delta_cj")]
+    pub delta_cj: f64,
+    /// IDA's most Newton iterations per step.
+    #[serde(default = "default_newton_iters")]
+    pub newton_iters: u32,
+}
+
+fn default_delta_cj() -> f64 {
+    0.25
+}
+
+fn default_newton_iters() -> u32 {
+    4
 }
 
 fn yes() -> bool {
@@ -78,6 +92,7 @@ impl RunSettings {
                 case::LinearSolver::Faer => LinearSolverKind::Faer,
                 case::LinearSolver::Klu => LinearSolverKind::Klu,
                 case::LinearSolver::FaerCondensed => LinearSolverKind::FaerCondensed,
+                case::LinearSolver::UmfpackCondensed => LinearSolverKind::UmfpackCondensed,
             },
             max_order: s.max_order,
             max_steps: s.max_steps,
@@ -85,6 +100,8 @@ impl RunSettings {
             dt_inertia: None,
             max_wall_seconds: None,
             defer_adhesion: s.defer_adhesion,
+            delta_cj: s.delta_cj,
+            newton_iters: s.newton_iters,
         }
     }
 }

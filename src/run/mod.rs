@@ -420,6 +420,8 @@ impl Solver {
                     init_step: s.initial_step,
                     max_steps: s.max_steps as i64,
                     linear_solver: linear_solver.into(),
+                    delta_cj: Some(s.delta_cj),
+                    max_newton_iters: Some(s.newton_iters as i32),
                     ..Default::default()
                 };
                 Solver::Ida(Box::new(Ida::new(model, opts)?))

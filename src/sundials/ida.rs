@@ -66,6 +66,8 @@ pub struct IdaOptions {
     pub max_conv_fails: Option<i32>,
     /// Most error-test failures per step (IDA's default 10).
     pub max_err_test_fails: Option<i32>,
+    /// Relative change of cj that triggers a new Jacobian (IDA's default 0.25).
+    pub delta_cj: Option<f64>,
 }
 
 impl Default for IdaOptions {
@@ -84,6 +86,7 @@ impl Default for IdaOptions {
             max_newton_iters: None,
             max_conv_fails: None,
             max_err_test_fails: None,
+            delta_cj: None,
         }
     }
 }
@@ -315,6 +318,9 @@ impl<D: Dae> Ida<D> {
             }
             if let Some(m) = opts.max_conv_fails {
                 self.check("IDASetMaxConvFails", sys::IDASetMaxConvFails(mem, m))?;
+            }
+            if let Some(d) = opts.delta_cj {
+                self.check("IDASetDeltaCjLSetup", sys::IDASetDeltaCjLSetup(mem, d))?;
             }
             if let Some(m) = opts.max_err_test_fails {
                 self.check("IDASetMaxErrTestFails", sys::IDASetMaxErrTestFails(mem, m))?;
