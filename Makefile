@@ -1,8 +1,10 @@
 # cellsim: every target installs the system packages it needs (apt-get, with sudo when
 # not root) before building. The two quick-start commands are `make paper` and `make test`.
 
+# libopenblas0-pthread: the BLAS behind UMFPACK's fronts in the 3-D runs (the reference
+# BLAS that libsuitesparse-dev would otherwise bring is several times slower).
 APT_PACKAGES := libsundials-dev libsuitesparse-dev libclang-dev pkg-config \
-                libfontconfig1-dev libfreetype-dev fonts-dejavu-core gmsh
+                libfontconfig1-dev libfreetype-dev fonts-dejavu-core gmsh libopenblas0-pthread
 CARGO ?= cargo
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 

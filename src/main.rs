@@ -171,6 +171,10 @@ enum Command {
         /// Where to write the figures [default: <run_dir>/plots].
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Other runs to draw beside this one in compare-*.png (contact radius,
+        /// displacement, strain over time): a 3-D scene beside its 2-D run, say.
+        #[arg(long = "with", value_name = "RUN_DIR")]
+        with: Vec<PathBuf>,
     },
     /// Generate the mesh of a case and print its quality report.
     Mesh {
@@ -457,7 +461,7 @@ fn main() -> ExitCode {
         Command::Paper(args) => paper_command(args),
         Command::Study(args) => study_command(args),
         Command::Sweep(args) => sweep_command(args),
-        Command::Plot { run_dir, out } => plot_command(&run_dir, out),
+        Command::Plot { run_dir, out, with } => plot_command(&run_dir, out, &with),
         Command::Mesh { case, svg } => mesh_command(&case, svg.as_deref()),
         Command::Check { case, set } => check_command(&case, &set),
         Command::Table { run_dirs } => table_command(&run_dirs),
@@ -835,19 +839,30 @@ fn sweep_command(a: SweepArgs) -> ExitCode {
     }
 }
 
-fn plot_command(run_dir: &Path, out: Option<PathBuf>) -> ExitCode {
-    let run = match RunData::load(run_dir) {
-        Ok(r) => r,
-        Err(e) => {
-            err!("error: {e}");
-            return ExitCode::from(2);
+fn plot_command(run_dir: &Path, out: Option<PathBuf>, with: &[PathBuf]) -> ExitCode {
+    let mut runs = Vec::new();
+    for dir in std::iter::once(run_dir).chain(with.iter().map(PathBuf::as_path)) {
+        match RunData::load(dir) {
+            Ok(r) => runs.push(r),
+            Err(e) => {
+                err!("error: {e}");
+                return ExitCode::from(2);
+            }
         }
-    };
-    for n in &run.notes {
+    }
+    for n in runs.iter().flat_map(|r| &r.notes) {
         err!("note: {n}");
     }
+    let run = &runs[0];
     let out = out.unwrap_or_else(|| run_dir.join("plots"));
-    match output::figures::plot_run(&run, &out) {
+    let figures = output::figures::plot_run(run, &out).and_then(|mut files| {
+        if runs.len() > 1 {
+            let all: Vec<&RunData> = runs.iter().collect();
+            files.extend(output::figures::compare_runs(&all, &out)?);
+        }
+        Ok(files)
+    });
+    match figures {
         Ok(files) => {
             for f in files {
                 out!("{}", f.display());

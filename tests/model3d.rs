@@ -621,6 +621,56 @@ fn the_cli_meshes_checks_and_runs_a_3d_case() {
         .unwrap()
         .len();
     assert!(gif > 10_000, "GIF of {gif} bytes");
+    // `plot` reads the 3-D run back and draws its figures, and beside it the same case
+    // in plane strain.
+    let out2 = dir.join("flat-2d");
+    let o2 = out2.to_str().unwrap();
+    let run2 = cellsim(&[
+        "run",
+        "cases/fast/flat-3d-coarse.ron",
+        "--set",
+        "phases.t_end=110.0",
+        "--set",
+        "geometry.model=PlaneStrain",
+        "--set",
+        "solver.linear_solver=Faer",
+        "--out",
+        o2,
+        "--quiet",
+    ]);
+    assert!(
+        run2.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run2.stderr)
+    );
+    let plots = out.join("plots");
+    let plot = cellsim(&["plot", o, "--with", o2, "--out", plots.to_str().unwrap()]);
+    assert!(
+        plot.status.success(),
+        "{}",
+        String::from_utf8_lossy(&plot.stderr)
+    );
+    let listed = String::from_utf8_lossy(&plot.stdout).to_string();
+    for f in [
+        "contact-radius.png",
+        "contact-3d.png",
+        "shape-gravity-z0.png",
+        "shape-gravity-diagonal.png",
+        "surface-gravity.png",
+        "surface-gravity-strain.png",
+        "compare-contact-radius.png",
+        "compare-displacement.png",
+    ] {
+        assert!(
+            plots.join(f).exists() && listed.contains(f),
+            "{f}: {listed}"
+        );
+    }
+    assert!(
+        !plots.join("penetration.png").exists(),
+        "no pillars, no penetration plot"
+    );
+    let _ = std::fs::remove_dir_all(&out2);
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -670,4 +720,72 @@ fn deferred_exposures_leave_the_same_cell_and_join_consistently() {
     let a = &y2[m..];
     assert!(a.iter().any(|&v| v > 0.0) && a.iter().all(|&v| v >= 0.0));
     assert!(big.with_adhesion_unknowns(t, &y2, &yp2).is_err());
+}
+
+/// The 3-D Hertz run: a homogeneous ball (E, ν = 0.485, ρ = 1000 kg/m³) settled on the
+/// flat substrate by its weight, quasi-statically. Returns (contact radius along the
+/// meridian, √(A/π) of the contact area, Hertz's radius, contact force / weight).
+fn hertz3(e: f64, h_bottom: f64, eps_ct: f64, mu_ct: f64, degree: u32, sub: u32) -> [f64; 4] {
+    let text = format!(
+        r#"(
+        name: "hertz-3d",
+        geometry: (model: ThreeD),
+        mesh: (h_bottom: {h_bottom}, h_nucleus: 1.5, contact_quadrature_degree: {degree}, contact_subdivisions: {sub}),
+        materials: (
+            nucleus: (e: {e}, nu: 0.485, rho_kg_m3: 1000.0),
+            cytoplasm: (e: {e}, nu: 0.485, rho_kg_m3: 1000.0),
+            membrane: (e: {e}, nu: 0.485, rho_kg_m3: 1000.0),
+        ),
+        substrate: Flat(y_s: -1.51),
+        contact: (mu_ct_n_m3: {mu_ct:e}, eps_ct: {eps_ct}),
+        adhesion: None,
+        phases: (t_g0: 100.0, t_as0: 200.0, t_a0: 300.0, t_end: 150.0),
+        inertia: (mode: Off, drag: 1e-8),
+    )"#
+    );
+    let case = Case::from_str(&text, "hertz-3d.ron").unwrap();
+    let p = scene::model_params(&case, "hertz-3d.ron", false).unwrap();
+    let m = Cell3::new(params3(p), mesh3(h_bottom, 1.5)).unwrap();
+    let atol = m.atol_vector(1e-6);
+    let ida = ida_to(m, atol, 150.0);
+    let (m, y) = (ida.dae(), ida.y());
+    // Whole ball: four quarters.
+    let weight = 4.0 * m.weight();
+    let force = 4.0 * m.contact_force_total(y).y;
+    let r = case.geometry.r_c;
+    let a_hertz = (3.0 * weight * r / (4.0 * e / (1.0 - 0.485f64.powi(2)))).cbrt();
+    [
+        m.observe(150.0, y).contact_radius,
+        m.observe3(y).contact_radius_equiv,
+        a_hertz,
+        force / weight,
+    ]
+}
+
+#[test]
+#[ignore = "about 8 minutes: cargo test --release --test integration -- --ignored hertz"]
+fn hertz_contact_radius_of_a_ball_in_3d() {
+    // Hertz: a = (3PR/(4E*))^{1/3}, E* = E/(1 − ν²), P the ball's weight (E = 100 Pa,
+    // R = 10 µm). What it took: the penalty of the axisymmetric Hertz test (ε_ct 0.002
+    // µm, μ_ct 2e15 N/m³) on the 3-D mesh with 0.3 µm at the bottom and 1.5 µm inside
+    // (4 291 tetrahedra, 19 974 displacement unknowns), the band rule of degree 10 on 8
+    // sub-tetrahedra. Measured
+    // (2026-12-02): a = 1.3313 µm along the meridian against Hertz's 1.3308 µm (1.0003);
+    // √(A/π) of the contact area 1.2877 µm (0.968: the area is sampled at the points of
+    // a rule on each face's sub-triangles, a coarser measure of the patch's edge than the
+    // meridian's); contact force = weight to 1e-14.
+    let [a, a_eq, a_hertz, f] = hertz3(100.0, 0.3, 0.002, 2e15, 10, 1);
+    eprintln!(
+        "3-D Hertz: contact radius {a:.4} µm (√(A/π) {a_eq:.4}), Hertz {a_hertz:.4} µm; \
+         force / weight {f}"
+    );
+    assert!((f - 1.0).abs() < 1e-3, "contact force / weight {f}");
+    assert!(
+        (a / a_hertz - 1.0).abs() < 0.05,
+        "contact radius {a:.4} µm, Hertz {a_hertz:.4} µm"
+    );
+    assert!(
+        (a_eq / a_hertz - 1.0).abs() < 0.05,
+        "√(A/π) {a_eq:.4} µm, Hertz {a_hertz:.4} µm"
+    );
 }

@@ -1109,7 +1109,7 @@ pub const FLIP_PHASE: &str = "gravity flips ↓→↑";
 
 /// Name of the interval after T_a0 for `run`: [`FLIP_PHASE`] if its gravity flips there
 /// ([`run_phases`]), else "rest".
-fn after_active_name(run: Option<&RunData>) -> String {
+pub(crate) fn after_active_name(run: Option<&RunData>) -> String {
     match run.and_then(run_phases) {
         Some(p) if p.flip.is_some() => FLIP_PHASE.into(),
         _ => "rest".into(),
@@ -1805,9 +1805,41 @@ pub fn shape_figure_cached(
     Ok(scale)
 }
 
+/// The time curves of several runs on the same axes (a 3-D scene beside its 2-D one,
+/// say), into `out`: `compare-contact-radius.png`, `compare-displacement.png`,
+/// `compare-strain.png`. Returns the files written.
+pub fn compare_runs(runs: &[&RunData], out: &Path) -> Result<Vec<PathBuf>, OutputError> {
+    super::create_dir(out)?;
+    let files = [
+        out.join("compare-contact-radius.png"),
+        out.join("compare-displacement.png"),
+        out.join("compare-strain.png"),
+    ];
+    // Runs of one case (a 3-D scene and the same case in 2-D) go by their directories.
+    let names: Vec<&str> = runs.iter().map(|r| r.name.as_str()).collect();
+    let unique = names.iter().collect::<std::collections::HashSet<_>>().len() == names.len();
+    let renamed: Vec<RunData> = runs
+        .iter()
+        .map(|r| {
+            let mut r = (*r).clone();
+            if !unique {
+                if let Some(d) = r.dir.file_name() {
+                    r.name = d.to_string_lossy().into_owned();
+                }
+            }
+            r
+        })
+        .collect();
+    let runs: Vec<&RunData> = renamed.iter().collect();
+    contact_radius_figure(&files[0], &runs, &[], "")?;
+    displacement_figure(&files[1], &runs, &[], "")?;
+    strain_time_figure(&files[2], &runs)?;
+    Ok(files.to_vec())
+}
+
 /// All of one run's figures into `out`: `contact-radius.png` (both frames), `displacement.png`
 /// (p_t, c, p_b and the nucleus's lowest point), `strain.png` (mean ‖E‖ over time) and `shape-<phase>.png` for each
-/// state file written. Works on partial runs (fewer rows, missing states). Returns the
+/// state file written; for a 3-D run, [`super::figures3::plot_run3`]'s instead of the shapes. Works on partial runs (fewer rows, missing states). Returns the
 /// files written.
 pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> {
     super::create_dir(out)?;
@@ -1874,6 +1906,9 @@ pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> 
         let p = out.join(format!("shape-{}.png", s.phase));
         shape_figure(&p, &run.name, &run.mesh, s, view, phases.as_ref())?;
         written.push(p);
+    }
+    if let Some(r3) = &run.three_d {
+        written.extend(super::figures3::plot_run3(run, r3, out)?);
     }
     Ok(written)
 }

@@ -49,7 +49,7 @@
 
 use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
 use plotters::coord::Shift;
@@ -64,7 +64,8 @@ use super::geometry::{ACTIVE_LEVEL, Bounds, Pt, Rect, contour, element_polygon, 
 use super::vtu3::check_snapshot3;
 use crate::fem::{Domain, p2, tet};
 use crate::physics::{ActiveStrain, Substrate, Substrate3, smooth_step};
-use crate::record::{Mesh3File, Snapshot3};
+use crate::record::read::Run3Data;
+use crate::record::{Mesh3File, RunData, Snapshot3};
 
 /// Pixel size of the section and surface figures (as the 2-D shape figures).
 pub const FIGURE_SIZE: (u32, u32) = SHAPE_SIZE;
@@ -1849,4 +1850,96 @@ pub fn surface_figure(
     };
     draw_surface(&root, mesh, s, &frame, &opts).map_err(|x| OutputError::draw(path, x))?;
     root.present().map_err(|x| OutputError::draw(path, x))
+}
+
+/// A 3-D run's own figures into `out` (besides the time plots of its 2-D columns, which
+/// [`super::figures::plot_run`] draws): `contact-3d.png`, the contact radius along the
+/// section z = 0 against √(A/π) of the contact area (equal for a round patch, apart where
+/// the pillars break it); `penetration.png` on pillars; for each state file
+/// `shape-<phase>-z0.png` and `shape-<phase>-diagonal.png` ([`section_figure`]),
+/// `surface-<phase>.png` and `surface-<phase>-strain.png` ([`surface_figure`]).
+pub fn plot_run3(run: &RunData, r3: &Run3Data, out: &Path) -> Result<Vec<PathBuf>, OutputError> {
+    use super::figures::{
+        Curve, PALETTE, Stroke, TimePlot, after_active_name, points, time_figure,
+    };
+    let mut written = Vec::new();
+    let t3: Vec<(f64, &crate::record::Observables3)> =
+        run.series.iter().map(|o| o.t).zip(&r3.series).collect();
+    let plot = |title: String, y_desc: &str, curves: Vec<Curve>| TimePlot {
+        title,
+        y_desc: y_desc.into(),
+        curves,
+        marks: vec![],
+        links: vec![],
+        notes: vec![],
+        from_zero: true,
+        phase_times: run.mesh.phase_times,
+        after_active: after_active_name(Some(run)),
+        t_max: run.t_end(),
+        legend: SeriesLabelPosition::UpperLeft,
+    };
+    let p = out.join("contact-3d.png");
+    time_figure(
+        &p,
+        &plot(
+            format!("{}: contact radius in 3-D", run.name),
+            "contact radius (µm)",
+            vec![
+                Curve {
+                    label: "along the section z = 0".into(),
+                    points: points(&run.series, |o| o.contact_radius),
+                    color: PALETTE[0],
+                    stroke: Stroke::Solid,
+                },
+                Curve {
+                    label: "√(A/π) of the contact area A".into(),
+                    points: t3
+                        .iter()
+                        .map(|(t, o)| (*t, o.contact_radius_equiv))
+                        .collect(),
+                    color: PALETTE[1],
+                    stroke: Stroke::Dashed,
+                },
+            ],
+        ),
+    )?;
+    written.push(p);
+    if matches!(r3.mesh.substrate.plane, Substrate::Pillars(_)) {
+        let p = out.join("penetration.png");
+        time_figure(
+            &p,
+            &plot(
+                format!("{}: nucleus bottom below the pillar tops", run.name),
+                "penetration depth (µm)",
+                vec![Curve {
+                    label: "max(0, y_top − y(p_b))".into(),
+                    points: t3.iter().map(|(t, o)| (*t, o.penetration_depth)).collect(),
+                    color: PALETTE[0],
+                    stroke: Stroke::Solid,
+                }],
+            ),
+        )?;
+        written.push(p);
+    }
+    for s in &r3.states {
+        let title = if s.phase == "end" {
+            format!("{}, at the end (t = {} s)", run.name, s.state.t)
+        } else {
+            format!(
+                "{}, end of the {} phase (t = {} s)",
+                run.name, s.phase, s.state.t
+            )
+        };
+        for (plane, name) in [(Section::Z0, "z0"), (Section::Diagonal, "diagonal")] {
+            let p = out.join(format!("shape-{}-{name}.png", s.phase));
+            section_figure(&p, &r3.mesh, &s.state, plane, &title)?;
+            written.push(p);
+        }
+        for (coloring, name) in [(Coloring::Domain, ""), (Coloring::Strain, "-strain")] {
+            let p = out.join(format!("surface-{}{name}.png", s.phase));
+            surface_figure(&p, &r3.mesh, &s.state, coloring, &title)?;
+            written.push(p);
+        }
+    }
+    Ok(written)
 }

@@ -13,8 +13,8 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
-use super::observables::{COLUMNS, OLD_CSV_HEADER, Observables, interpolate};
-use super::{MeshFile, StateFile, Summary};
+use super::observables::{COLUMNS, N_COLUMNS, OLD_CSV_HEADER, Observables, interpolate};
+use super::{Mesh3File, MeshFile, Observables3, StateFile, StateFile3, Summary};
 
 /// Why a run directory's file could not be loaded.
 #[derive(Debug, thiserror::Error)]
@@ -67,6 +67,89 @@ pub struct RunData {
     pub summary: Option<Summary>,
     /// What was missing or cut short (empty for a complete run).
     pub notes: Vec<String>,
+    /// A 3-D run's own files (`mesh3.json` instead of `mesh.json`). Its [`Self::mesh`]
+    /// then holds only what the time plots use (substrate section, active regions, phase
+    /// times), no elements, and [`Self::states`] is empty.
+    pub three_d: Option<Run3Data>,
+}
+
+/// What a 3-D run writes besides the 2-D columns.
+#[derive(Debug, Clone)]
+pub struct Run3Data {
+    /// `mesh3.json`.
+    pub mesh: Mesh3File,
+    /// The 3-D columns of `timeseries.csv`, one per row of [`RunData::series`].
+    pub series: Vec<Observables3>,
+    /// The state files present, in phase order.
+    pub states: Vec<StateFile3>,
+}
+
+/// The time plots' view of a 3-D mesh file: no elements, the section's substrate.
+fn section_of(m: &Mesh3File) -> MeshFile {
+    MeshFile {
+        nodes: Vec::new(),
+        elements: Vec::new(),
+        domains: Vec::new(),
+        outer_edges: Vec::new(),
+        nucleus_edges: Vec::new(),
+        membrane_inner_edges: Vec::new(),
+        substrate: m.substrate.plane,
+        active: m.active,
+        contact_eps: m.contact_eps,
+        layer_thickness: m.layer_thickness,
+        center: [m.center[0], m.center[1]],
+        phase_times: m.phase_times,
+    }
+}
+
+/// Reads `mesh3.json` and checks its indices.
+pub fn read_mesh3(path: &Path) -> Result<Mesh3File, ReadError> {
+    let mesh: Mesh3File = read_json(path)?;
+    let n = mesh.nodes.len();
+    let bad = |what: String| ReadError::malformed(path, what);
+    if mesh.elements.is_empty() {
+        return Err(bad("no elements".into()));
+    }
+    if mesh.domains.len() != mesh.elements.len() {
+        return Err(bad(format!(
+            "{} domains for {} elements",
+            mesh.domains.len(),
+            mesh.elements.len()
+        )));
+    }
+    let out = |ids: &[usize]| ids.iter().any(|&i| i >= n);
+    if let Some(k) = mesh.elements.iter().position(|e| out(e)) {
+        return Err(bad(format!("element {k} refers to a node ≥ {n}")));
+    }
+    if let Some(k) = mesh.outer_faces.iter().position(|f| out(f)) {
+        return Err(bad(format!("outer face {k} refers to a node ≥ {n}")));
+    }
+    Ok(mesh)
+}
+
+/// Reads a 3-D state file and checks its sizes against the mesh.
+pub fn read_state3(path: &Path, mesh: &Mesh3File) -> Result<StateFile3, ReadError> {
+    let s: StateFile3 = read_json(path)?;
+    let (nn, ne) = (mesh.nodes.len(), mesh.elements.len());
+    if s.state.u.len() != nn {
+        return Err(ReadError::malformed(
+            path,
+            format!(
+                "{} displacements for the mesh's {nn} nodes",
+                s.state.u.len()
+            ),
+        ));
+    }
+    if s.state.element_strain.len() != ne || s.state.element_jacobian.len() != ne {
+        return Err(ReadError::malformed(
+            path,
+            format!("per-element arrays do not match the mesh's {ne} elements"),
+        ));
+    }
+    if s.state.u.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(ReadError::malformed(path, "non-finite displacement"));
+    }
+    Ok(s)
 }
 
 fn read_text(path: &Path) -> Result<String, ReadError> {
@@ -151,14 +234,24 @@ fn new_columns() -> String {
 }
 
 /// Parses `timeseries.csv`. The header must be exactly
-/// [`Observables::CSV_HEADER`]; a file with the header of an older cellsim
-/// ([`OLD_CSV_HEADER`]) is refused with a message saying so. A last line without its newline that does not parse is
-/// taken as cut short by an interruption and dropped (reported in the second value);
-/// any other bad line is an error naming the line.
+/// [`Observables::CSV_HEADER`], or it followed by [`Observables3::CSV_COLUMNS`] (a 3-D
+/// run: those columns are read by [`parse_timeseries3`]); a file with the header of an
+/// older cellsim ([`OLD_CSV_HEADER`]) is refused with a message saying so. A last line
+/// without its newline that does not parse is taken as cut short by an interruption and
+/// dropped (reported in the second value); any other bad line is an error naming the line.
 pub fn parse_timeseries(
     path: &Path,
     text: &str,
 ) -> Result<(Vec<Observables>, Option<String>), ReadError> {
+    parse_timeseries3(path, text).map(|(rows, _, cut)| (rows, cut))
+}
+
+/// The rows of a time series, the 3-D columns of each row (empty for a 2-D run), and a
+/// note if the last line was cut short.
+pub type Rows3 = (Vec<Observables>, Vec<Observables3>, Option<String>);
+
+/// [`parse_timeseries`] with the 3-D columns of each row.
+pub fn parse_timeseries3(path: &Path, text: &str) -> Result<Rows3, ReadError> {
     let mut lines = text.split_inclusive('\n').enumerate();
     let header = match lines.next() {
         Some((_, h)) => h.trim_end(),
@@ -175,7 +268,9 @@ pub fn parse_timeseries(
             ),
         ));
     }
-    if header != Observables::CSV_HEADER {
+    let three_d = format!("{},{}", Observables::CSV_HEADER, Observables3::CSV_COLUMNS);
+    let extra = if header == three_d { 4 } else { 0 };
+    if header != Observables::CSV_HEADER && extra == 0 {
         return Err(ReadError::malformed(
             path,
             format!(
@@ -185,6 +280,7 @@ pub fn parse_timeseries(
         ));
     }
     let mut rows = Vec::new();
+    let mut rows3 = Vec::new();
     let mut cut = None;
     for (k, raw) in lines {
         let complete = raw.ends_with('\n');
@@ -192,8 +288,21 @@ pub fn parse_timeseries(
         if line.is_empty() {
             continue;
         }
-        match Observables::parse_csv_row(line) {
-            Ok(o) => rows.push(o),
+        let parsed = if extra == 0 {
+            Observables::parse_csv_row(line).map(|o| (o, None))
+        } else {
+            split_3d_row(line).and_then(|(two, three)| {
+                Ok((
+                    Observables::parse_csv_row(two)?,
+                    Some(parse_3d_columns(three)?),
+                ))
+            })
+        };
+        match parsed {
+            Ok((o, o3)) => {
+                rows.push(o);
+                rows3.extend(o3);
+            }
             Err(msg) if !complete => {
                 cut = Some(format!(
                     "{}: last line {} cut short ({msg}); dropped",
@@ -209,7 +318,46 @@ pub fn parse_timeseries(
     if rows.windows(2).any(|w| !(w[1].t >= w[0].t)) {
         return Err(ReadError::malformed(path, "times are not increasing"));
     }
-    Ok((rows, cut))
+    Ok((rows, rows3, cut))
+}
+
+/// A 3-D row split after its 2-D columns.
+fn split_3d_row(line: &str) -> Result<(&str, &str), String> {
+    let at = line
+        .match_indices(',')
+        .nth(N_COLUMNS - 1)
+        .map(|(i, _)| i)
+        .ok_or_else(|| format!("fewer than {} fields", N_COLUMNS + 4))?;
+    Ok((&line[..at], &line[at + 1..]))
+}
+
+fn parse_3d_columns(text: &str) -> Result<Observables3, String> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|f| {
+            f.trim()
+                .parse::<f64>()
+                .map_err(|_| format!("`{f}` is not a number"))
+        })
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [
+            contact_area,
+            contact_area_ref,
+            contact_radius_equiv,
+            penetration_depth,
+        ] => Ok(Observables3 {
+            contact_area,
+            contact_area_ref,
+            contact_radius_equiv,
+            penetration_depth,
+        }),
+        _ => Err(format!(
+            "{} fields, expected {}",
+            N_COLUMNS + v.len(),
+            N_COLUMNS + 4
+        )),
+    }
 }
 
 /// Reads a state file and checks its sizes against the mesh.
@@ -247,9 +395,24 @@ impl RunData {
                 ),
             });
         }
-        let mesh = read_mesh(&dir.join("mesh.json"))?;
+        let mesh3_path = dir.join("mesh3.json");
+        let mesh3 = if !dir.join("mesh.json").exists() && mesh3_path.exists() {
+            Some(read_mesh3(&mesh3_path)?)
+        } else {
+            None
+        };
+        let mesh = match &mesh3 {
+            Some(m) => section_of(m),
+            None => read_mesh(&dir.join("mesh.json"))?,
+        };
         let csv_path = dir.join("timeseries.csv");
-        let (series, cut) = parse_timeseries(&csv_path, &read_text(&csv_path)?)?;
+        let (series, series3, cut) = parse_timeseries3(&csv_path, &read_text(&csv_path)?)?;
+        if mesh3.is_some() && series3.len() != series.len() {
+            return Err(ReadError::malformed(
+                &csv_path,
+                "a 3-D run (mesh3.json) without the 3-D columns",
+            ));
+        }
         let mut notes: Vec<String> = cut.into_iter().collect();
         if series.is_empty() {
             notes.push(format!("{}: no data rows", csv_path.display()));
@@ -262,12 +425,21 @@ impl RunData {
             None
         };
         let mut states = Vec::new();
+        let mut states3 = Vec::new();
         for phase in PHASES {
             let p = dir.join(format!("state_{phase}.json"));
             if p.exists() {
-                states.push(read_state(&p, &mesh)?);
+                match &mesh3 {
+                    Some(m) => states3.push(read_state3(&p, m)?),
+                    None => states.push(read_state(&p, &mesh)?),
+                }
             }
         }
+        let three_d = mesh3.map(|mesh| Run3Data {
+            mesh,
+            series: series3,
+            states: states3,
+        });
         if let Some(s) = &summary {
             if !s.finished {
                 let why = s
@@ -296,6 +468,7 @@ impl RunData {
             states,
             summary,
             notes,
+            three_d,
         })
     }
 
