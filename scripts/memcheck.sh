@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Memory check of the cell model under valgrind memcheck: short runs through IDA with every
-# C library behind the FFI (SuiteSparse's KLU on METIS's ordering, and UMFPACK), covering
+# C library behind the FFI (SuiteSparse's KLU on METIS's ordering, and UMFPACK refined and, on
+# the condensed system, unrefined), covering
 # the fall, the landing and the inertia switch (cases/fast/flat-gravity.ron to t = 10.5 s).
 # With --all, also faer's LU, KLU on its own ordering, the condensed faer LU and a run on
 # micropillars with adhesion and both active regions (cases/fast/push-pull-short.ron to
@@ -24,7 +25,7 @@ sed 's/t_end: 200.0,/t_end: 10.5,/' cases/fast/flat-gravity.ron > "$tmp/fall.ron
 sed 's/t_end: 600.0,/t_end: 110.0,/' cases/fast/push-pull-short.ron > "$tmp/pillars.ron"
 grep -q 't_end: 10.5' "$tmp/fall.ron" && grep -q 't_end: 110.0' "$tmp/pillars.ron"
 
-runs="fall:klu-metis fall:umfpack"
+runs="fall:klu-metis fall:umfpack fall:umfpack-condensed"
 if [ "${1:-}" = "--all" ]; then
     runs="$runs fall:faer fall:klu fall:faer-condensed pillars:faer"
 fi
