@@ -789,3 +789,48 @@ fn hertz_contact_radius_of_a_ball_in_3d() {
         "√(A/π) {a_eq:.4} µm, Hertz {a_hertz:.4} µm"
     );
 }
+
+#[test]
+fn a_fast_3d_pillar_case_lands_on_the_four_pillar_tops() {
+    // cases/fast/push-pull-3d-coarse.ron through its gravity phase: the cell's centre is
+    // above the middle of a square of four pillars, whose tops (y_top = +1.80 µm) stand
+    // above its lowest point, so it lands on the four tops. The section z = 0 runs along
+    // the gap between two rows of pillars: nothing is in contact there while the contact
+    // area on the tops carries the weight.
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("pillars-3d");
+    let _ = std::fs::remove_dir_all(&dir);
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_cellsim"))
+        .args([
+            "run",
+            "cases/fast/push-pull-3d-coarse.ron",
+            "--set",
+            "phases.t_end=100.0",
+            "--out",
+            dir.to_str().unwrap(),
+            "--quiet",
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let last: Vec<f64> = csv
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let col = |name: &str| last[header.iter().position(|c| *c == name).unwrap()];
+    assert_eq!(col("t"), 100.0);
+    assert_eq!(col("contact_radius"), 0.0, "contact in the gap at z = 0");
+    let (area, down) = (col("contact_area"), col("uy_centre"));
+    assert!(area > 1.0, "contact area on the pillar tops {area} µm²");
+    assert!(down < -0.1, "the cell did not come down: u_y(c) = {down}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
