@@ -514,3 +514,18 @@ fn ida_reports_bad_input_as_errors() {
     run_to(&mut ida, 1.0);
     assert!(ida.advance_to(0.5, &mut |_, _| true).is_err());
 }
+
+#[test]
+fn ida_reports_the_weighted_local_errors_of_its_last_step() {
+    // Before the first step IDA has no estimate (zeros); after it, one finite value per
+    // unknown, IDA's local error estimate times its error weight, whose norm IDA's error
+    // test accepted: at most of order one.
+    let mut ida = robertson(LinearSolverKind::Faer);
+    assert_eq!(ida.weighted_local_errors().unwrap(), vec![0.0; 3]);
+    run_to(&mut ida, 0.4);
+    let e = ida.weighted_local_errors().unwrap();
+    let wrms = (e.iter().map(|v| v * v).sum::<f64>() / 3.0).sqrt();
+    eprintln!("weighted local errors {e:?}, WRMS {wrms:.3e}");
+    assert!(e.iter().all(|v| v.is_finite()), "{e:?}");
+    assert!(wrms > 0.0 && wrms < 10.0, "WRMS {wrms}");
+}

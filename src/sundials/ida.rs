@@ -393,6 +393,34 @@ impl<D: Dae> Ida<D> {
         self.t_internal
     }
 
+    /// The last step's estimated local error of each component times its error weight
+    /// (IDAGetEstLocalErrors, IDAGetErrWeights): the components whose |value| is near 1
+    /// are those limiting the step. Zeros before the first step.
+    pub fn weighted_local_errors(&self) -> Result<Vec<f64>, IntegratorError> {
+        let n = self.user.dae.size();
+        let ctx = IntegratorError::Input;
+        let ele = NVector::new(n, &self.ctx).map_err(ctx)?;
+        let ewt = NVector::new(n, &self.ctx).map_err(ctx)?;
+        // SAFETY: valid IDA memory; two serial vectors of the problem's length, owned here.
+        let flags = unsafe {
+            (
+                sys::IDAGetEstLocalErrors(self.mem, ele.0),
+                sys::IDAGetErrWeights(self.mem, ewt.0),
+            )
+        };
+        if flags != (0, 0) {
+            return Err(ctx(format!(
+                "IDAGetEstLocalErrors/IDAGetErrWeights returned {flags:?}"
+            )));
+        }
+        Ok(ele
+            .as_slice()
+            .iter()
+            .zip(ewt.as_slice())
+            .map(|(e, w)| e * w)
+            .collect())
+    }
+
     fn getter(
         &self,
         function: &'static str,
