@@ -93,20 +93,18 @@ impl LinearSolverKind {
                         blocks,
                         Box::new(unrefined_umfpack()),
                     ))),
-                    None => Err(LinearSolverError::Unsupported(format!(
-                        "the condensed solver ({}) needs a first-order (u, v) system, and this \
-                     problem has no velocity unknowns (inertia off?): use {}",
-                        if self == LinearSolverKind::FaerCondensed {
-                            "faer-condensed"
+                    None => {
+                        let (name, instead) = if self == LinearSolverKind::FaerCondensed {
+                            ("faer-condensed", "faer or klu")
                         } else {
-                            "umfpack-condensed"
-                        },
-                        if self == LinearSolverKind::FaerCondensed {
-                            "faer or klu"
-                        } else {
-                            "umfpack-unrefined"
-                        }
-                    ))),
+                            ("umfpack-condensed", "umfpack-unrefined")
+                        };
+                        Err(LinearSolverError::Unsupported(format!(
+                            "the condensed solver ({name}) needs a first-order (u, v) system, \
+                             and this problem has no velocity unknowns (inertia off?): use \
+                             {instead}"
+                        )))
+                    }
                 }
             }
             other => Ok(other.build()),

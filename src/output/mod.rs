@@ -37,7 +37,7 @@ pub mod vtu;
 pub mod vtu3;
 
 pub use crate::record::RunData;
-pub use snapshot::{SnapshotOptions, SnapshotWriter, SnapshotWriter3};
+pub use snapshot::{FrameSink, SnapshotOptions, SnapshotWriter, SnapshotWriter3, SnapshotWriterOf};
 
 use std::path::Path;
 

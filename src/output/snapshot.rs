@@ -4,6 +4,7 @@
 //! A [`Snapshot`] is plain data — the same kind a state file holds, plus velocities — so
 //! these writers, like the figures, never see the solver.
 
+use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
 
 use super::OutputError;
@@ -29,11 +30,63 @@ impl SnapshotOptions {
     }
 }
 
-/// Writes the per-output-time files of one run.
-pub struct SnapshotWriter {
-    vtu: Option<VtuSeries>,
-    movie: Option<Movie>,
+/// One of the per-output-time files: a VTU series or a GIF, of either model.
+pub trait FrameSink<S> {
+    /// Adds the output time `s`.
+    fn add(&mut self, s: &S) -> Result<(), OutputError>;
+    /// Closes the file; returns it (the `.pvd` of a VTU series, the `.gif`).
+    fn close(self) -> Result<PathBuf, OutputError>;
 }
+
+impl FrameSink<Snapshot> for VtuSeries {
+    fn add(&mut self, s: &Snapshot) -> Result<(), OutputError> {
+        self.write(s).map(|_| ())
+    }
+    fn close(self) -> Result<PathBuf, OutputError> {
+        Ok(self.pvd_path().to_path_buf())
+    }
+}
+
+impl FrameSink<Snapshot3> for VtuSeries3 {
+    fn add(&mut self, s: &Snapshot3) -> Result<(), OutputError> {
+        self.write(s).map(|_| ())
+    }
+    fn close(self) -> Result<PathBuf, OutputError> {
+        Ok(self.pvd_path().to_path_buf())
+    }
+}
+
+impl FrameSink<Snapshot> for Movie {
+    fn add(&mut self, s: &Snapshot) -> Result<(), OutputError> {
+        self.frame(s)
+    }
+    fn close(self) -> Result<PathBuf, OutputError> {
+        self.finish()
+    }
+}
+
+impl FrameSink<Snapshot3> for Movie3 {
+    fn add(&mut self, s: &Snapshot3) -> Result<(), OutputError> {
+        self.frame(s)
+    }
+    fn close(self) -> Result<PathBuf, OutputError> {
+        self.finish()
+    }
+}
+
+/// Writes the per-output-time files of one run: its VTU series `V` and its GIF `M`, each
+/// if asked for, from snapshots `S`.
+pub struct SnapshotWriterOf<S, V, M> {
+    vtu: Option<V>,
+    movie: Option<M>,
+    snapshot: PhantomData<fn(&S)>,
+}
+
+/// The writer of the half-plane models.
+pub type SnapshotWriter = SnapshotWriterOf<Snapshot, VtuSeries, Movie>;
+/// The writer of the 3-D model: quadratic tetrahedra and the section z = 0
+/// ([`super::vtu3`], [`super::movie3`]).
+pub type SnapshotWriter3 = SnapshotWriterOf<Snapshot3, VtuSeries3, Movie3>;
 
 impl SnapshotWriter {
     /// A writer into `out` for the run `name` on `mesh`; `outputs` is the number of
@@ -45,60 +98,16 @@ impl SnapshotWriter {
         opts: SnapshotOptions,
         outputs: usize,
     ) -> Result<Self, OutputError> {
-        let vtu = if opts.vtu {
-            Some(VtuSeries::new(out, name, mesh)?)
-        } else {
-            None
-        };
-        let movie = if opts.gif {
-            Some(Movie::new(
-                &out.join(format!("{name}.gif")),
-                name,
-                mesh,
-                outputs,
-            )?)
-        } else {
-            None
-        };
-        Ok(Self { vtu, movie })
+        let gif = out.join(format!("{name}.gif"));
+        Ok(Self::of(
+            opts.vtu
+                .then(|| VtuSeries::new(out, name, mesh))
+                .transpose()?,
+            opts.gif
+                .then(|| Movie::new(&gif, name, mesh, outputs))
+                .transpose()?,
+        ))
     }
-
-    /// Whether anything is written (the run builds snapshots only then).
-    pub fn is_active(&self) -> bool {
-        self.vtu.is_some() || self.movie.is_some()
-    }
-
-    /// Writes the files of one output time.
-    pub fn write(&mut self, s: &Snapshot) -> Result<(), OutputError> {
-        if let Some(v) = &mut self.vtu {
-            v.write(s)?;
-        }
-        if let Some(m) = &mut self.movie {
-            m.frame(s)?;
-        }
-        Ok(())
-    }
-
-    /// Closes the files (the GIF gets its last frame and trailer); returns the files
-    /// written (the `.pvd` and the `.gif`).
-    pub fn finish(self) -> Result<Vec<PathBuf>, OutputError> {
-        let mut out = Vec::new();
-        if let Some(v) = self.vtu {
-            out.push(v.pvd_path().to_path_buf());
-        }
-        if let Some(m) = self.movie {
-            out.push(m.finish()?);
-        }
-        Ok(out)
-    }
-}
-
-/// Writes the per-output-time files of one 3-D run: the `.vtu` files of quadratic
-/// tetrahedra with their `.pvd` ([`super::vtu3`]) and the GIF of the section z = 0
-/// ([`super::movie3`]).
-pub struct SnapshotWriter3 {
-    vtu: Option<VtuSeries3>,
-    movie: Option<Movie3>,
 }
 
 impl SnapshotWriter3 {
@@ -110,48 +119,52 @@ impl SnapshotWriter3 {
         opts: SnapshotOptions,
         outputs: usize,
     ) -> Result<Self, OutputError> {
-        let vtu = if opts.vtu {
-            Some(VtuSeries3::new(out, name, mesh)?)
-        } else {
-            None
-        };
-        let movie = if opts.gif {
-            Some(Movie3::new(
-                &out.join(format!("{name}.gif")),
-                name,
-                mesh,
-                outputs,
-            )?)
-        } else {
-            None
-        };
-        Ok(Self { vtu, movie })
+        let gif = out.join(format!("{name}.gif"));
+        Ok(Self::of(
+            opts.vtu
+                .then(|| VtuSeries3::new(out, name, mesh))
+                .transpose()?,
+            opts.gif
+                .then(|| Movie3::new(&gif, name, mesh, outputs))
+                .transpose()?,
+        ))
+    }
+}
+
+impl<S, V: FrameSink<S>, M: FrameSink<S>> SnapshotWriterOf<S, V, M> {
+    fn of(vtu: Option<V>, movie: Option<M>) -> Self {
+        Self {
+            vtu,
+            movie,
+            snapshot: PhantomData,
+        }
     }
 
-    /// Whether anything is written.
+    /// Whether anything is written (the run builds snapshots only then).
     pub fn is_active(&self) -> bool {
         self.vtu.is_some() || self.movie.is_some()
     }
 
     /// Writes the files of one output time.
-    pub fn write(&mut self, s: &Snapshot3) -> Result<(), OutputError> {
+    pub fn write(&mut self, s: &S) -> Result<(), OutputError> {
         if let Some(v) = &mut self.vtu {
-            v.write(s)?;
+            v.add(s)?;
         }
         if let Some(m) = &mut self.movie {
-            m.frame(s)?;
+            m.add(s)?;
         }
         Ok(())
     }
 
-    /// Closes the files; returns those written (the `.pvd` and the `.gif`).
+    /// Closes the files (the GIF gets its last frame and trailer); returns the files
+    /// written (the `.pvd` and the `.gif`).
     pub fn finish(self) -> Result<Vec<PathBuf>, OutputError> {
         let mut out = Vec::new();
         if let Some(v) = self.vtu {
-            out.push(v.pvd_path().to_path_buf());
+            out.push(v.close()?);
         }
         if let Some(m) = self.movie {
-            out.push(m.finish()?);
+            out.push(m.close()?);
         }
         Ok(out)
     }

@@ -130,26 +130,42 @@ pub fn read_mesh3(path: &Path) -> Result<Mesh3File, ReadError> {
 /// Reads a 3-D state file and checks its sizes against the mesh.
 pub fn read_state3(path: &Path, mesh: &Mesh3File) -> Result<StateFile3, ReadError> {
     let s: StateFile3 = read_json(path)?;
-    let (nn, ne) = (mesh.nodes.len(), mesh.elements.len());
-    if s.state.u.len() != nn {
+    let st = &s.state;
+    check_state(
+        path,
+        mesh.nodes.len(),
+        mesh.elements.len(),
+        &st.u,
+        [st.element_strain.len(), st.element_jacobian.len()],
+    )?;
+    Ok(s)
+}
+
+/// A state's sizes against its mesh's `nn` nodes and `ne` elements (`per_element`: the
+/// lengths of its per-element arrays), and its displacements finite.
+fn check_state<const D: usize>(
+    path: &Path,
+    nn: usize,
+    ne: usize,
+    u: &[[f64; D]],
+    per_element: [usize; 2],
+) -> Result<(), ReadError> {
+    if u.len() != nn {
         return Err(ReadError::malformed(
             path,
-            format!(
-                "{} displacements for the mesh's {nn} nodes",
-                s.state.u.len()
-            ),
+            format!("{} displacements for the mesh's {nn} nodes", u.len()),
         ));
     }
-    if s.state.element_strain.len() != ne || s.state.element_jacobian.len() != ne {
+    if per_element != [ne, ne] {
         return Err(ReadError::malformed(
             path,
             format!("per-element arrays do not match the mesh's {ne} elements"),
         ));
     }
-    if s.state.u.iter().flatten().any(|v| !v.is_finite()) {
+    if u.iter().flatten().any(|v| !v.is_finite()) {
         return Err(ReadError::malformed(path, "non-finite displacement"));
     }
-    Ok(s)
+    Ok(())
 }
 
 fn read_text(path: &Path) -> Result<String, ReadError> {
@@ -363,22 +379,13 @@ fn parse_3d_columns(text: &str) -> Result<Observables3, String> {
 /// Reads a state file and checks its sizes against the mesh.
 pub fn read_state(path: &Path, mesh: &MeshFile) -> Result<StateFile, ReadError> {
     let s: StateFile = read_json(path)?;
-    let (nn, ne) = (mesh.nodes.len(), mesh.elements.len());
-    if s.u.len() != nn {
-        return Err(ReadError::malformed(
-            path,
-            format!("{} displacements for the mesh's {nn} nodes", s.u.len()),
-        ));
-    }
-    if s.element_strain.len() != ne || s.element_jacobian.len() != ne {
-        return Err(ReadError::malformed(
-            path,
-            format!("per-element arrays do not match the mesh's {ne} elements"),
-        ));
-    }
-    if s.u.iter().flatten().any(|v| !v.is_finite()) {
-        return Err(ReadError::malformed(path, "non-finite displacement"));
-    }
+    check_state(
+        path,
+        mesh.nodes.len(),
+        mesh.elements.len(),
+        &s.u,
+        [s.element_strain.len(), s.element_jacobian.len()],
+    )?;
     Ok(s)
 }
 
