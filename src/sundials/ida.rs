@@ -395,9 +395,14 @@ impl<D: Dae> Ida<D> {
 
     /// The last step's estimated local error of each component times its error weight
     /// (IDAGetEstLocalErrors, IDAGetErrWeights): the components whose |value| is near 1
-    /// are those limiting the step. Zeros before the first step.
+    /// are those limiting the step. Zeros before the first step (IDA has no estimate yet).
     pub fn weighted_local_errors(&self) -> Result<Vec<f64>, IntegratorError> {
         let n = self.user.dae.size();
+        // Before the first step IDA's error vector holds whatever its allocation held (not
+        // zeros), so it is not read.
+        if self.getter("IDAGetNumSteps", sys::IDAGetNumSteps) == 0 {
+            return Ok(vec![0.0; n]);
+        }
         let ctx = IntegratorError::Input;
         let ele = NVector::new(n, &self.ctx).map_err(ctx)?;
         let ewt = NVector::new(n, &self.ctx).map_err(ctx)?;
