@@ -238,6 +238,11 @@ fn sigterm_and_sighup_stop_a_run_cleanly_with_128_plus_the_signal() {
             rows.last().unwrap()[0],
             s["final_values"]["t"].as_f64().unwrap()
         );
+        // With the state where the signal stopped it.
+        assert!(
+            std::path::Path::new(&format!("{out}/state_stopped.json")).exists(),
+            "{s}"
+        );
     }
 }
 
@@ -266,8 +271,42 @@ fn a_collapsed_step_stops_the_run_with_a_stall_diagnostic() {
     ] {
         assert!(reason.contains(needle), "{reason}");
     }
-    // The outputs before the stall are kept.
+    // The outputs before the stall are kept, and the state where it stalled (past the
+    // last output time) is written, listed and drawn by `plot`.
     assert!(s["outputs"].as_u64().unwrap() > 10, "{s}");
+    let listed: Vec<&str> = s["states"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert!(listed.contains(&"state_stopped.json"), "{s}");
+    let stopped: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(format!("{out}/state_stopped.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(stopped["phase"], "stopped");
+    let t_stopped = stopped["t"].as_f64().unwrap();
+    let t_last = s["final_values"]["t"].as_f64().unwrap();
+    let t_stall: f64 = reason["stalled at t = ".len()..]
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(t_stopped > t_last, "{t_stopped} vs last output {t_last}");
+    assert!(
+        (t_stopped - t_stall).abs() <= 1e-6 * t_stall,
+        "{t_stopped} vs {reason}"
+    );
+    let plots = format!("{out}/plots");
+    let res = cellsim(&["plot", &out, "--out", &plots]);
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    assert!(std::path::Path::new(&format!("{plots}/shape-stopped.png")).exists());
 }
 
 #[test]

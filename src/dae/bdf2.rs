@@ -444,6 +444,10 @@ impl<D: Dae> Integrator for Bdf2<D> {
         &self.yp_out
     }
 
+    fn last_step(&self) -> (f64, &[f64], &[f64]) {
+        (self.tn, &self.yn, &self.ypn)
+    }
+
     fn stats(&self) -> Stats {
         self.stats.clone()
     }

@@ -378,6 +378,9 @@ pub trait Integrator {
     fn y(&self) -> &[f64];
     /// ẏ at the current output time.
     fn yp(&self) -> &[f64];
+    /// The last accepted step: its time, y and ẏ (at or past the current output time;
+    /// where a run that stops between output times got to).
+    fn last_step(&self) -> (f64, &[f64], &[f64]);
     /// Statistics so far.
     fn stats(&self) -> Stats;
 }

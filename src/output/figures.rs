@@ -1751,6 +1751,7 @@ pub fn phase_title(phase: &str) -> &str {
         "spreading" => "end of the spreading phase",
         "active" => "end of the active phase",
         "end" => "end of the run",
+        "stopped" => "where the run stopped",
         other => other,
     }
 }

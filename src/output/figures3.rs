@@ -1922,14 +1922,12 @@ pub fn plot_run3(run: &RunData, r3: &Run3Data, out: &Path) -> Result<Vec<PathBuf
         written.push(p);
     }
     for s in &r3.states {
-        let title = if s.phase == "end" {
-            format!("{}, at the end (t = {} s)", run.name, s.state.t)
-        } else {
-            format!(
-                "{}, end of the {} phase (t = {} s)",
-                run.name, s.phase, s.state.t
-            )
-        };
+        let title = format!(
+            "{}, {} (t = {} s)",
+            run.name,
+            super::figures::phase_title(&s.phase),
+            s.state.t
+        );
         for (plane, name) in [(Section::Z0, "z0"), (Section::Diagonal, "diagonal")] {
             let p = out.join(format!("shape-{}-{name}.png", s.phase));
             section_figure(&p, &r3.mesh, &s.state, plane, &title)?;

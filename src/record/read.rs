@@ -50,6 +50,10 @@ impl ReadError {
 /// The phases whose end a state file records, in time order (`state_<phase>.json`).
 pub const PHASES: [&str; 4] = ["gravity", "spreading", "active", "end"];
 
+/// The name of the state file a run that stopped before its end writes at its last
+/// accepted step (`state_stopped.json`), read after the phases' ones.
+pub const STOPPED: &str = "stopped";
+
 /// Everything a run directory holds, as read back from its files.
 #[derive(Debug, Clone)]
 pub struct RunData {
@@ -61,7 +65,7 @@ pub struct RunData {
     pub mesh: MeshFile,
     /// `timeseries.csv`: one row per output time written, in time order.
     pub series: Vec<Observables>,
-    /// The state files present, in phase order.
+    /// The state files present, in phase order (a stopped run's last state last).
     pub states: Vec<StateFile>,
     /// `summary.json`, if present.
     pub summary: Option<Summary>,
@@ -80,7 +84,7 @@ pub struct Run3Data {
     pub mesh: Mesh3File,
     /// The 3-D columns of `timeseries.csv`, one per row of [`RunData::series`].
     pub series: Vec<Observables3>,
-    /// The state files present, in phase order.
+    /// The state files present, in phase order (a stopped run's last state last).
     pub states: Vec<StateFile3>,
 }
 
@@ -433,7 +437,7 @@ impl RunData {
         };
         let mut states = Vec::new();
         let mut states3 = Vec::new();
-        for phase in PHASES {
+        for phase in PHASES.into_iter().chain([STOPPED]) {
             let p = dir.join(format!("state_{phase}.json"));
             if p.exists() {
                 match &mesh3 {

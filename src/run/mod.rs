@@ -22,6 +22,7 @@ use crate::model::{CellModel, Restart};
 use crate::model3d::Cell3;
 use crate::output::{SnapshotOptions, SnapshotWriter, SnapshotWriter3};
 use crate::record::Observables;
+use crate::record::read::STOPPED;
 use crate::record::{
     self, Failure, FailureKind, MeshFile, RunSettings, Snapshot, StateFile, Summary, TimeBreakdown,
     Unknowns,
@@ -952,54 +953,90 @@ impl RunWriter {
             .map_err(io_err(&self.csv_path))?;
         self.summary.outputs += 1;
         self.summary.final_values = Some(obs);
-        let phase = self.phase_at(t).filter(|_| self.phase_states && t > 0.0);
-        match model {
-            Cell::Plane(m) => {
+        match (model, &mut self.frames) {
+            (Cell::Plane(m), Frames::Plane(frames)) if frames.is_active() => {
                 let mu_as = m
                     .nodal_mu_as(t, y)
                     .map_err(|why| OutputStop::State(t, why))?;
-                if let Frames::Plane(frames) = &mut self.frames {
-                    if frames.is_active() {
-                        frames.write(&snapshot(m, t, y, yp, mu_as.clone()))?;
-                    }
-                }
-                if let Some(phase) = phase {
-                    let name = format!("state_{phase}.json");
-                    write_json(
-                        &self.out.join(&name),
-                        &state_file(m, phase, t, y, mu_as, obs),
-                    )?;
-                    self.summary.states.push(name);
-                }
+                frames.write(&snapshot(m, t, y, yp, mu_as))?;
             }
-            Cell::Quarter(m) => {
-                let frames = match &mut self.frames {
-                    Frames::Quarter(f) if f.is_active() => Some(f),
-                    _ => None,
-                };
-                if frames.is_none() && phase.is_none() {
-                    return Ok(());
-                }
+            (Cell::Quarter(m), Frames::Quarter(frames)) if frames.is_active() => {
                 let snap = m
                     .snapshot(t, y, yp)
                     .map_err(|why| OutputStop::State(t, why))?;
-                if let Some(f) = frames {
-                    f.write(&snap)?;
-                }
-                if let (Some(phase), Some(observables3)) = (phase, obs3) {
-                    let name = format!("state_{phase}.json");
-                    let state = crate::record::StateFile3 {
-                        phase: phase.to_string(),
-                        state: snap,
-                        observables: obs,
-                        observables3,
-                    };
-                    write_json(&self.out.join(&name), &state)?;
-                    self.summary.states.push(name);
-                }
+                frames.write(&snap)?;
             }
+            _ => {}
+        }
+        if let Some(phase) = self.phase_at(t).filter(|_| self.phase_states && t > 0.0) {
+            self.write_state(model, phase, t, y, yp, obs, obs3)?;
         }
         Ok(())
+    }
+
+    /// Writes `state_<phase>.json`, the state at `t` with its observables, and lists it in
+    /// the summary.
+    #[allow(clippy::too_many_arguments)]
+    fn write_state(
+        &mut self,
+        model: &Cell,
+        phase: &str,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        obs: Observables,
+        obs3: Option<crate::record::Observables3>,
+    ) -> Result<(), OutputStop> {
+        let name = format!("state_{phase}.json");
+        let path = self.out.join(&name);
+        match (model, obs3) {
+            (Cell::Plane(m), _) => {
+                let mu_as = m
+                    .nodal_mu_as(t, y)
+                    .map_err(|why| OutputStop::State(t, why))?;
+                write_json(&path, &state_file(m, phase, t, y, mu_as, obs))?;
+            }
+            (Cell::Quarter(m), Some(observables3)) => {
+                let state = crate::record::StateFile3 {
+                    phase: phase.to_string(),
+                    state: m
+                        .snapshot(t, y, yp)
+                        .map_err(|why| OutputStop::State(t, why))?,
+                    observables: obs,
+                    observables3,
+                };
+                write_json(&path, &state)?;
+            }
+            (Cell::Quarter(_), None) => {
+                return Err(OutputStop::State(t, "no 3-D observables".into()));
+            }
+        }
+        self.summary.states.push(name);
+        Ok(())
+    }
+
+    /// Writes `state_stopped.json`: where a run that stops before its end got to (`t`,
+    /// `y`, `ẏ`: its last accepted step, usually past the last output time), so that the
+    /// state at a failure can be looked at and plotted. Nothing is written for a
+    /// non-finite state, nor when the case turned the state files off.
+    fn stopped_state(
+        &mut self,
+        model: &Cell,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<(), OutputStop> {
+        if !self.phase_states {
+            return Ok(());
+        }
+        let (obs, obs3) = model.observe(t, y);
+        if !obs.is_finite()
+            || obs3.is_some_and(|o| !o.is_finite())
+            || y.iter().any(|v| !v.is_finite())
+        {
+            return Err(OutputStop::NonFinite(t));
+        }
+        self.write_state(model, STOPPED, t, y, yp, obs, obs3)
     }
 
     fn write_summary(&mut self) -> Result<(), RunError> {

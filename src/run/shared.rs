@@ -417,8 +417,19 @@ impl Context<'_, '_> {
                 tr.wall_before += wall;
             }
             if let Some(stop) = stop {
-                for tr in tracks {
-                    self.end(tr, driver.stats(), Some(stop.clone()));
+                for mut tr in tracks {
+                    let mut stop = stop.clone();
+                    if let Some(files) = tr.files.as_mut() {
+                        let (t, y, yp) = driver.solver.integ_ref().last_step();
+                        if let Err(e) = files.stopped_state(driver.solver.model(), t, y, yp) {
+                            let why = match e.into_stop() {
+                                Ok((_, why)) => why,
+                                Err(e) => e.to_string(),
+                            };
+                            stop.1 = format!("{} (its last state not written: {why})", stop.1);
+                        }
+                    }
+                    self.end(tr, driver.stats(), Some(stop));
                 }
                 return;
             }

@@ -529,6 +529,13 @@ impl<D: Dae> Integrator for Ida<D> {
         self.out_yp.as_slice()
     }
 
+    fn last_step(&self) -> (f64, &[f64], &[f64]) {
+        // IDASolve in one-step mode returns the solution at its internal time in these
+        // vectors (the initial values before the first step); a failed step leaves them
+        // at the last accepted one.
+        (self.t_internal, self.yy.as_slice(), self.yp.as_slice())
+    }
+
     fn stats(&self) -> Stats {
         let mut order: c_int = 0;
         let mut h = 0.0;
