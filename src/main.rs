@@ -150,7 +150,7 @@ enum IntegratorArg {
 #[derive(Subcommand)]
 enum Command {
     /// Run one scene: writes timeseries.csv, summary.json, mesh.json and state_<phase>.json
-    /// as it goes.
+    /// as it goes (and state_stopped.json where a run stops early).
     Run(RunArgs),
     /// Run the five paper scenes (and the upside-down control) and write the paper's
     /// figures and comparison.md.
