@@ -121,6 +121,34 @@ impl<const D: usize> DofMapOf<D> {
         self.mu_nodes.len()
     }
 
+    /// A state (`y`, `yp`) of this layout mapped to the same one without inertia: u and
+    /// μ_as carried over, u̇ = v (u̇ itself without inertia), μ̇_as kept. Returns (y, ẏ)
+    /// of the smaller system.
+    pub fn drop_inertia(&self, y: &[f64], yp: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let (n_u, n_mu, off) = (self.n_u, self.n_mu(), self.mu_offset());
+        let mut y2 = Vec::with_capacity(n_u + n_mu);
+        let mut yp2 = Vec::with_capacity(n_u + n_mu);
+        y2.extend_from_slice(&y[..n_u]);
+        if self.inertia {
+            yp2.extend_from_slice(&y[n_u..2 * n_u]);
+        } else {
+            yp2.extend_from_slice(&yp[..n_u]);
+        }
+        y2.extend_from_slice(&y[off..off + n_mu]);
+        yp2.extend_from_slice(&yp[off..off + n_mu]);
+        (y2, yp2)
+    }
+
+    /// Velocity of node `i`: its v unknowns with inertia (from `y`), u̇ without (from
+    /// `yp`); 0 for eliminated components.
+    pub fn node_velocity(&self, y: &[f64], yp: &[f64], i: usize) -> [f64; D] {
+        if self.inertia {
+            self.v[i].map(|d| if d == NONE { 0.0 } else { y[d] })
+        } else {
+            self.node_u(yp, i)
+        }
+    }
+
     /// Displacement of node `i` read from y (0 for eliminated components).
     pub fn node_u(&self, y: &[f64], i: usize) -> [f64; D] {
         self.u[i].map(|d| if d == NONE { 0.0 } else { y[d] })

@@ -349,25 +349,6 @@ impl CellModel {
         self.initial_state.as_ref().map_or(0.0, |s| s.0)
     }
 
-    /// The state of this model (with inertia) mapped to the same model without inertia:
-    /// u and μ_as carried over, u̇ = v, μ̇_as kept. Returns (y, ẏ) of the smaller system.
-    pub fn drop_inertia_state(&self, y: &[f64], yp: &[f64]) -> (Vec<f64>, Vec<f64>) {
-        let n_u = self.dofs.n_u;
-        let n_mu = self.dofs.n_mu();
-        let off = self.dofs.mu_offset();
-        let mut y2 = Vec::with_capacity(n_u + n_mu);
-        let mut yp2 = Vec::with_capacity(n_u + n_mu);
-        y2.extend_from_slice(&y[..n_u]);
-        if self.dofs.inertia {
-            yp2.extend_from_slice(&y[n_u..2 * n_u]);
-        } else {
-            yp2.extend_from_slice(&yp[..n_u]);
-        }
-        y2.extend_from_slice(&y[off..off + n_mu]);
-        yp2.extend_from_slice(&yp[off..off + n_mu]);
-        (y2, yp2)
-    }
-
     /// Per-component absolute tolerances: `atol` [µm] on displacements, `atol`/s on
     /// velocities, `atol` · μ_as,max/µm on the adhesion coefficient (so each block is
     /// measured against its own scale).

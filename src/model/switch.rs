@@ -43,7 +43,7 @@ impl CellModel {
         yp: &[f64],
         restart: &Restart,
     ) -> Result<CellModel, ModelError> {
-        let (mut y2, mut yp2) = self.drop_inertia_state(y, yp);
+        let (mut y2, mut yp2) = self.dofs.drop_inertia(y, yp);
         yp2[..self.dofs.n_u].iter_mut().for_each(|v| *v = 0.0);
         let mut params = self.params.clone();
         params.inertia = false;

@@ -172,7 +172,9 @@ impl Cell3 {
             u: (0..self.mesh.nodes.len())
                 .map(|i| self.dofs.node_u(y, i))
                 .collect(),
-            v: self.nodal_velocities(y, yp),
+            v: (0..self.mesh.nodes.len())
+                .map(|i| self.dofs.node_velocity(y, yp, i))
+                .collect(),
             mu_as: self.nodal_mu_as(t, y)?,
             element_strain: per_el.iter().map(|p| p.0).collect(),
             element_jacobian: per_el.iter().map(|p| p.1).collect(),

@@ -22,23 +22,6 @@ impl Cell3 {
         self.initial_state.as_ref().map_or(0.0, |s| s.0)
     }
 
-    /// The state of this model (with inertia) mapped to the same model without inertia:
-    /// u and the exposures carried over, u̇ = v. Returns (y, ẏ) of the smaller system.
-    pub fn drop_inertia_state(&self, y: &[f64], yp: &[f64]) -> (Vec<f64>, Vec<f64>) {
-        let (n_u, n_mu, off) = (self.dofs.n_u, self.dofs.n_mu(), self.dofs.mu_offset());
-        let mut y2 = Vec::with_capacity(n_u + n_mu);
-        let mut yp2 = Vec::with_capacity(n_u + n_mu);
-        y2.extend_from_slice(&y[..n_u]);
-        if self.dofs.inertia {
-            yp2.extend_from_slice(&y[n_u..2 * n_u]);
-        } else {
-            yp2.extend_from_slice(&yp[..n_u]);
-        }
-        y2.extend_from_slice(&y[off..off + n_mu]);
-        yp2.extend_from_slice(&yp[off..off + n_mu]);
-        (y2, yp2)
-    }
-
     /// The same cell without inertia, set to restart at time `t` from (`y`, `yp`), placed
     /// at rest in equilibrium: u̇ = 0 and u solved from F(u, u̇ = 0, A) = 0, the exposures
     /// kept with a consistent Ȧ (see `CellModel::without_inertia_at_rest` for why).
@@ -49,7 +32,7 @@ impl Cell3 {
         yp: &[f64],
         restart: &Restart,
     ) -> Result<Cell3, Model3Error> {
-        let (mut y2, mut yp2) = self.drop_inertia_state(y, yp);
+        let (mut y2, mut yp2) = self.dofs.drop_inertia(y, yp);
         yp2[..self.dofs.n_u].iter_mut().for_each(|v| *v = 0.0);
         let mut params = self.params.clone();
         params.plane.inertia = false;
@@ -190,24 +173,5 @@ impl Cell3 {
                 Ok(out)
             }
         }
-    }
-
-    /// Velocity of every node: the v unknowns with inertia, u̇ without.
-    pub fn nodal_velocities(&self, y: &[f64], yp: &[f64]) -> Vec<[f64; 3]> {
-        (0..self.mesh.nodes.len())
-            .map(|i| {
-                if self.dofs.inertia {
-                    self.dofs.v[i].map(|d| {
-                        if d == crate::fem::assembly::NONE {
-                            0.0
-                        } else {
-                            y[d]
-                        }
-                    })
-                } else {
-                    self.dofs.node_u(yp, i)
-                }
-            })
-            .collect()
     }
 }

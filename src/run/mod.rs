@@ -1198,20 +1198,10 @@ fn snapshot(model: &CellModel, t: f64, y: &[f64], yp: &[f64], mu_as: Vec<Option<
     let n = model.mesh.nodes.len();
     let per_el = model.element_strain_and_jacobian(y);
     let d = &model.dofs;
-    let velocity = |i: usize| {
-        let (src, cols) = if d.inertia { (y, d.v[i]) } else { (yp, d.u[i]) };
-        cols.map(|k| {
-            if k == crate::model::dofs::NONE {
-                0.0
-            } else {
-                src[k]
-            }
-        })
-    };
     Snapshot {
         t,
         u: (0..n).map(|i| d.node_u(y, i)).collect(),
-        v: (0..n).map(velocity).collect(),
+        v: (0..n).map(|i| d.node_velocity(y, yp, i)).collect(),
         mu_as,
         element_strain: per_el.iter().map(|p| p.0).collect(),
         element_jacobian: per_el.iter().map(|p| p.1).collect(),
