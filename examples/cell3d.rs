@@ -164,7 +164,8 @@ fn main() {
 }
 
 /// Times each LU on the model's iteration matrix at the rest state (cj = 0.1): analysis,
-/// numeric factorization (median of 3) and solve, and the fill where the backend says.
+/// numeric factorization (median of 3) and solve; for UMFPACK also its strategy, fill and
+/// flop count.
 fn bench_lu(m: &mut Cell3, only: Option<&str>) {
     let n = m.size();
     let (y, yp) = (vec![0.0; n], vec![0.0; n]);
@@ -181,28 +182,66 @@ fn bench_lu(m: &mut Cell3, only: Option<&str>) {
         "umfpack",
         "umfpack-metis",
         "umfpack-noir",
+        "umfpack-sym",
+        "umfpack-unsym",
+        "umfpack-metis-sym",
     ] {
         if only.is_some_and(|o| !o.split(',').any(|x| x == name)) {
             continue;
         }
-        let mut lu = Lu(name).build_for(m).expect("lu");
-        let t = Instant::now();
-        lu.analyse(&pattern).expect("analyse");
-        let analyse = t.elapsed().as_secs_f64();
-        let mut times = Vec::new();
-        for _ in 0..3 {
-            let t = Instant::now();
-            lu.factorize(&vals).expect("factorize");
-            times.push(t.elapsed().as_secs_f64());
+        let umfpack = match name {
+            "umfpack" => Some(UmfpackLu::new(UmfpackOrdering::Amd)),
+            "umfpack-metis" => Some(UmfpackLu::new(UmfpackOrdering::Metis)),
+            "umfpack-noir" => Some(UmfpackLu::new(UmfpackOrdering::Amd).without_refinement()),
+            "umfpack-metis-sym" => Some(
+                UmfpackLu::new(UmfpackOrdering::Metis)
+                    .without_refinement()
+                    .with_symmetric_strategy(true),
+            ),
+            "umfpack-sym" | "umfpack-unsym" => Some(
+                UmfpackLu::new(UmfpackOrdering::Amd)
+                    .without_refinement()
+                    .with_symmetric_strategy(name == "umfpack-sym"),
+            ),
+            _ => None,
+        };
+        match umfpack {
+            Some(mut lu) => {
+                let line = time_lu(&mut lu, &pattern, &vals);
+                println!(
+                    "{name:16} {line}  symmetric strategy {:?}, fill {:?}, flops {:.3e}",
+                    lu.used_symmetric_strategy(),
+                    lu.factor_nnz(),
+                    lu.factor_flops().unwrap_or(f64::NAN)
+                );
+            }
+            None => {
+                let mut lu = Lu(name).build_for(m).expect("lu");
+                println!("{name:16} {}", time_lu(lu.as_mut(), &pattern, &vals));
+            }
         }
-        times.sort_by(f64::total_cmp);
-        let mut b = vec![1.0; n];
-        let t = Instant::now();
-        lu.solve_in_place(&mut b).expect("solve");
-        let solve = t.elapsed().as_secs_f64();
-        println!(
-            "{name:16} analyse {analyse:.3} s  factorize {:.3} s  solve {:.4} s",
-            times[1], solve
-        );
     }
+}
+
+/// Analysis, median of 3 numeric factorizations and one solve of `lu` on `vals`.
+fn time_lu(lu: &mut dyn LinearSolver, pattern: &cellsim::dae::Pattern, vals: &[f64]) -> String {
+    let n = pattern.ncols();
+    let t = Instant::now();
+    lu.analyse(pattern).expect("analyse");
+    let analyse = t.elapsed().as_secs_f64();
+    let mut times = Vec::new();
+    for _ in 0..3 {
+        let t = Instant::now();
+        lu.factorize(vals).expect("factorize");
+        times.push(t.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    let mut b = vec![1.0; n];
+    let t = Instant::now();
+    lu.solve_in_place(&mut b).expect("solve");
+    let solve = t.elapsed().as_secs_f64();
+    format!(
+        "analyse {analyse:.3} s  factorize {:.3} s  solve {:.4} s",
+        times[1], solve
+    )
 }

@@ -66,7 +66,7 @@ fn main() {
         IdaOptions {
             rtol: case.solver.rtol,
             atol,
-            linear_solver: LinearSolverKind::UmfpackUnrefined.into(),
+            linear_solver: LinearSolverKind::UmfpackNd.into(),
             delta_cj: Some(case.solver.delta_cj),
             ..Default::default()
         },

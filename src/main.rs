@@ -72,9 +72,9 @@ enum LinearSolverArg {
     KluMetis,
     /// SuiteSparse's UMFPACK (AMD ordering).
     Umfpack,
-    /// UMFPACK without iterative refinement.
-    UmfpackUnrefined,
-    /// UMFPACK without refinement, on the condensed system while inertia is on.
+    /// UMFPACK on METIS's nested dissection (symmetric strategy, no iterative refinement).
+    UmfpackNd,
+    /// umfpack-nd on the condensed system while inertia is on.
     UmfpackCondensed,
 }
 
@@ -86,7 +86,7 @@ impl From<LinearSolverArg> for LinearSolverKind {
             LinearSolverArg::FaerCondensed => LinearSolverKind::FaerCondensed,
             LinearSolverArg::KluMetis => LinearSolverKind::KluMetis,
             LinearSolverArg::Umfpack => LinearSolverKind::Umfpack,
-            LinearSolverArg::UmfpackUnrefined => LinearSolverKind::UmfpackUnrefined,
+            LinearSolverArg::UmfpackNd => LinearSolverKind::UmfpackNd,
             LinearSolverArg::UmfpackCondensed => LinearSolverKind::UmfpackCondensed,
         }
     }

@@ -867,9 +867,9 @@ pub enum LinearSolver {
     /// faer's LU on the half-size system left after eliminating the velocities (inertia
     /// on); the full-size faer LU once inertia is off.
     FaerCondensed,
-    /// SuiteSparse's UMFPACK without iterative refinement, on the condensed system while
-    /// inertia is on and the full one after: the faster LU on the 3-D cell's Jacobians
-    /// (docs/benchmarks.md).
+    /// SuiteSparse's UMFPACK on METIS's nested dissection (symmetric strategy, no
+    /// iterative refinement), on the condensed system while inertia is on and the full one
+    /// after: the faster LU on the 3-D cell's Jacobians (docs/benchmarks.md).
     UmfpackCondensed,
 }
 

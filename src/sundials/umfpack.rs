@@ -23,6 +23,11 @@ const UMFPACK_UNZ: usize = 44;
 const UMFPACK_ORDERING_AMD: f64 = 1.0;
 const UMFPACK_ORDERING_METIS: f64 = 3.0;
 // Status.
+const UMFPACK_STRATEGY: usize = 5;
+const UMFPACK_STRATEGY_USED: usize = 18;
+const UMFPACK_FLOPS: usize = 42;
+const UMFPACK_STRATEGY_UNSYMMETRIC: f64 = 1.0;
+const UMFPACK_STRATEGY_SYMMETRIC: f64 = 3.0;
 const UMFPACK_OK: c_int = 0;
 const UMFPACK_WARNING_SINGULAR_MATRIX: c_int = 1;
 const UMFPACK_A: c_int = 0;
@@ -128,6 +133,29 @@ impl UmfpackLu {
     pub fn without_refinement(mut self) -> Self {
         self.control[UMFPACK_IRSTEP] = 0.0;
         self
+    }
+
+    /// The same solver with UMFPACK's strategy fixed instead of chosen from the pattern:
+    /// `true` the symmetric one (AMD on A + Aᵀ, diagonal pivots preferred), `false` the
+    /// unsymmetric one (COLAMD on A).
+    pub fn with_symmetric_strategy(mut self, symmetric: bool) -> Self {
+        self.control[UMFPACK_STRATEGY] = if symmetric {
+            UMFPACK_STRATEGY_SYMMETRIC
+        } else {
+            UMFPACK_STRATEGY_UNSYMMETRIC
+        };
+        self
+    }
+
+    /// Whether the last analysis used the symmetric strategy (`None` before one).
+    pub fn used_symmetric_strategy(&self) -> Option<bool> {
+        (!self.symbolic.is_null())
+            .then(|| self.info[UMFPACK_STRATEGY_USED] == UMFPACK_STRATEGY_SYMMETRIC)
+    }
+
+    /// Floating-point operations of the last numeric factorization.
+    pub fn factor_flops(&self) -> Option<f64> {
+        (!self.numeric.is_null()).then(|| self.info[UMFPACK_FLOPS])
     }
 
     /// nnz(L) + nnz(U) (both with their diagonal) of the last factorization.
