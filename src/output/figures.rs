@@ -1405,14 +1405,7 @@ pub fn shape_view(mesh: &MeshFile, states: &[&StateFile]) -> Bounds {
             b = b.union(CellShape::new(mesh, &s.u).bounds());
         }
     }
-    let half = b.x_max.abs().max(b.x_min.abs()) + 1.5;
-    let floor = substrate_floor(&mesh.substrate);
-    Bounds {
-        x_min: -half,
-        x_max: half,
-        y_min: b.y_min.min(floor) - 1.5,
-        y_max: b.y_max + 1.5,
-    }
+    b.around_axis(substrate_floor(&mesh.substrate))
 }
 
 /// What [`draw_shape`] drew, for checks: pixels per µm along x and along y (equal when
@@ -1509,26 +1502,94 @@ fn xy(points: &[Pt]) -> Vec<(f64, f64)> {
     points.iter().map(|p| (p[0], p[1])).collect()
 }
 
-/// Draws the deformed full cell of `mesh` displaced by `u` into `area` over `view`, with
-/// equal aspect: the view is widened along one axis so 1 µm has the same length in
-/// pixels on both. `backdrop` caches the substrate drawing between calls with the same
-/// view (pass `&mut None` for a single drawing).
-pub fn draw_shape<DB: DrawingBackend>(
+/// Checks that `u` holds one displacement per node of a mesh of `nodes` nodes.
+pub(crate) fn check_displacements<const D: usize>(
+    u: &[[f64; D]],
+    nodes: usize,
+) -> Result<(), String> {
+    if u.len() != nodes {
+        return Err(format!("{} displacements for {} nodes", u.len(), nodes));
+    }
+    Ok(())
+}
+
+/// The substrate and the fibronectin layer as [`draw_in_plane`] draws them, computed for
+/// one view: the 2-D [`Backdrop`] and a 3-D section's
+/// [`super::figures3::SectionBackdrop`].
+pub(crate) trait PlaneBackdrop {
+    /// The fibronectin layer as column rectangles.
+    fn layer(&self) -> &[Rect];
+    /// The layer's upper edge (segments).
+    fn layer_edge(&self) -> &[[Pt; 2]];
+    /// The pillars' feet as column rectangles, drawn under the substrate (none in a
+    /// section).
+    fn foot(&self) -> &[Rect];
+    /// The substrate as column rectangles.
+    fn substrate(&self) -> &[Rect];
+    /// The substrate's surface line (polylines).
+    fn surface(&self) -> &[Vec<Pt>];
+}
+
+impl PlaneBackdrop for Backdrop {
+    fn layer(&self) -> &[Rect] {
+        &self.layer
+    }
+    fn layer_edge(&self) -> &[[Pt; 2]] {
+        &self.layer_edge
+    }
+    fn foot(&self) -> &[Rect] {
+        &self.foot
+    }
+    fn substrate(&self) -> &[Rect] {
+        &self.substrate
+    }
+    fn surface(&self) -> &[Vec<Pt>] {
+        &self.surface
+    }
+}
+
+/// What [`draw_in_plane`] draws: the deformed full cell in a drawing plane, borrowed from
+/// the 2-D [`CellShape`] or a 3-D [`super::figures3::SectionShape`] (mirrored), and what
+/// else differs between the two drawings.
+pub(crate) struct PlaneDrawing<'a> {
+    /// Label of the horizontal axis.
+    pub x_label: &'a str,
+    /// Legend entry of the substrate.
+    pub substrate_label: String,
+    /// Whether the substrate carries a fibronectin layer (with adhesion).
+    pub layer: bool,
+    /// Filled pieces and their domains.
+    pub fills: &'a [(Domain, Vec<Pt>)],
+    /// The elements' outlines, drawn in darker shades when the options ask for the mesh,
+    /// if the pieces are not the elements (a section's cut polygons); `None` if they are
+    /// (2-D): their own outlines, darker, are the mesh then.
+    pub mesh_lines: Option<&'a [(Domain, Vec<Pt>)]>,
+    /// The cell's outline (polylines).
+    pub outer: &'a [Vec<Pt>],
+    /// The nucleus and membrane interfaces (polylines).
+    pub interfaces: &'a [Vec<Pt>],
+    /// Outline of the PAC region (segments).
+    pub pac: &'a [[Pt; 2]],
+    /// Outline of the bottom region (segments).
+    pub bottom: &'a [[Pt; 2]],
+    /// Positions of the nucleus top p_t, the centre c and the nucleus bottom p_b.
+    pub markers: &'a [Pt],
+}
+
+/// Draws `cell` into `area` over `view`, with equal aspect: the view is widened along one
+/// axis so 1 µm has the same length in pixels on both. The substrate drawing is
+/// `backdrop_for(cached, final view [x0, x1, y0, y1], plotting area width in pixels)`,
+/// `cached` taken from `backdrop`, which keeps the one drawn. What [`draw_shape`] and
+/// [`super::figures3::draw_section`] share.
+pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
     area: &DrawingArea<DB, Shift>,
-    mesh: &MeshFile,
-    u: &[[f64; 2]],
+    cell: &PlaneDrawing<'_>,
     view: Bounds,
     opts: &ShapeStyleOptions,
-    backdrop: &mut Option<Backdrop>,
+    backdrop: &mut Option<B>,
+    backdrop_for: impl FnOnce(Option<B>, [f64; 4], usize) -> B,
 ) -> Result<ShapeScale, String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-    if u.len() != mesh.nodes.len() {
-        return Err(format!(
-            "{} displacements for {} nodes",
-            u.len(),
-            mesh.nodes.len()
-        ));
-    }
     let fs = opts.font as f64;
     let label_x = (2.6 * fs) as u32;
     let label_y = (3.2 * fs) as u32;
@@ -1562,7 +1623,7 @@ pub fn draw_shape<DB: DrawingBackend>(
         .map_err(e)?;
     chart
         .configure_mesh()
-        .x_desc("x (µm)")
+        .x_desc(cell.x_label)
         .y_desc("y (µm)")
         .axis_desc_style((FONT, (0.8 * fs) as i32))
         .label_style((FONT, (0.65 * fs) as i32))
@@ -1573,47 +1634,42 @@ pub fn draw_shape<DB: DrawingBackend>(
 
     // Substrate and fibronectin layer, one strip per pixel column (computed once per
     // view: a movie reuses it for every frame).
-    let key = [x0, x1, y0, y1];
-    let back = match backdrop.take() {
-        Some(b) if b.view == key => b,
-        _ => Backdrop::new(&mesh.substrate, mesh.layer_thickness, key, pw as usize),
-    };
+    let back = backdrop_for(backdrop.take(), [x0, x1, y0, y1], pw as usize);
     let rect = |r: &Rect, c: RGBColor| Rectangle::new([(r[0], r[3]), (r[1], r[2])], c.filled());
-    if mesh.layer_thickness.is_some() {
+    if cell.layer {
         chart
-            .draw_series(back.layer.iter().map(|r| rect(r, LAYER)))
+            .draw_series(back.layer().iter().map(|r| rect(r, LAYER)))
             .map_err(e)?
             .label("fibronectin layer")
             .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], LAYER.filled()));
         // The layer's edge under the cell: the cell hides it where it lies in the layer.
         chart
             .draw_series(
-                back.layer_edge
+                back.layer_edge()
                     .iter()
                     .map(|l| PathElement::new(xy(&l[..]), LAYER_EDGE.stroke_width(2))),
             )
             .map_err(e)?;
     }
-    if !back.foot.is_empty() {
+    if !back.foot().is_empty() {
         chart
-            .draw_series(back.foot.iter().map(|r| rect(r, FOOT)))
+            .draw_series(back.foot().iter().map(|r| rect(r, FOOT)))
             .map_err(e)?
             .label("pillar foot (not substrate in the model)")
             .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], FOOT.filled()));
     }
     chart
-        .draw_series(back.substrate.iter().map(|r| rect(r, SUBSTRATE)))
+        .draw_series(back.substrate().iter().map(|r| rect(r, SUBSTRATE)))
         .map_err(e)?
-        .label("substrate")
+        .label(cell.substrate_label.as_str())
         .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], SUBSTRATE.filled()));
 
-    // The cell, mirrored to the full cell.
-    let shape = CellShape::new(mesh, u).mirrored();
+    // The cell.
     for d in Domain::ALL {
         let color = domain_color(d);
         let edge = darker(color, 0.82);
-        let polys: Vec<&Vec<Pt>> = shape
-            .elements
+        let polys: Vec<&Vec<Pt>> = cell
+            .fills
             .iter()
             .filter(|(dd, _)| *dd == d)
             .map(|(_, p)| p)
@@ -1623,9 +1679,13 @@ pub fn draw_shape<DB: DrawingBackend>(
             .map_err(e)?
             .label(d.to_string())
             .legend(move |(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], color.filled()));
-        // Element edges in a darker shade: shows the mesh and closes the hairline gaps
-        // between neighbouring fills.
-        let line_color = if opts.mesh_lines { edge } else { color };
+        // Each piece's outline closes the hairline gaps between neighbouring fills; in the
+        // darker shade it shows the mesh, where the pieces are the elements.
+        let line_color = if opts.mesh_lines && cell.mesh_lines.is_none() {
+            edge
+        } else {
+            color
+        };
         chart
             .draw_series(polys.iter().map(|p| {
                 let mut v = xy(p);
@@ -1635,6 +1695,16 @@ pub fn draw_shape<DB: DrawingBackend>(
                 PathElement::new(v, line_color.stroke_width(1))
             }))
             .map_err(e)?;
+        if let (true, Some(lines)) = (opts.mesh_lines, cell.mesh_lines) {
+            chart
+                .draw_series(
+                    lines
+                        .iter()
+                        .filter(|(dd, _)| *dd == d)
+                        .map(|(_, l)| PathElement::new(xy(l), edge.stroke_width(1))),
+                )
+                .map_err(e)?;
+        }
     }
     // Each polyline of a list (points [x, y]) as one path in a style.
     macro_rules! paths {
@@ -1644,11 +1714,11 @@ pub fn draw_shape<DB: DrawingBackend>(
                 .map_err(e)?
         };
     }
-    paths!(shape.interfaces, RGBColor(40, 40, 40).stroke_width(2));
-    paths!(shape.outer, BLACK.stroke_width(2));
+    paths!(cell.interfaces, RGBColor(40, 40, 40).stroke_width(2));
+    paths!(cell.outer, BLACK.stroke_width(2));
     for (segs, color, name) in [
-        (&shape.pac, PAC, "active: PAC (push)"),
-        (&shape.bottom, BOTTOM, "active: bottom (pull)"),
+        (cell.pac, PAC, "active: PAC (push)"),
+        (cell.bottom, BOTTOM, "active: bottom (pull)"),
     ] {
         if segs.is_empty() {
             continue;
@@ -1660,12 +1730,11 @@ pub fn draw_shape<DB: DrawingBackend>(
             });
     }
     // The substrate's surface on top, as the paper's black line.
-    paths!(back.surface, BLACK.stroke_width(2));
+    paths!(back.surface(), BLACK.stroke_width(2));
     *backdrop = Some(back);
     chart
         .draw_series(
-            shape
-                .markers
+            cell.markers
                 .iter()
                 .map(|p| Circle::new((p[0], p[1]), 4, BLACK.filled())),
         )
@@ -1693,6 +1762,46 @@ pub fn draw_shape<DB: DrawingBackend>(
         px_per_um_x: (px.0 - o.0).abs() as f64 / 10.0,
         px_per_um_y: (py.1 - o.1).abs() as f64 / 10.0,
     })
+}
+
+/// Draws the deformed full cell of `mesh` displaced by `u` into `area` over `view`, with
+/// equal aspect: the view is widened along one axis so 1 µm has the same length in
+/// pixels on both. `backdrop` caches the substrate drawing between calls with the same
+/// view (pass `&mut None` for a single drawing).
+pub fn draw_shape<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    mesh: &MeshFile,
+    u: &[[f64; 2]],
+    view: Bounds,
+    opts: &ShapeStyleOptions,
+    backdrop: &mut Option<Backdrop>,
+) -> Result<ShapeScale, String> {
+    check_displacements(u, mesh.nodes.len())?;
+    // The cell, mirrored to the full cell.
+    let shape = CellShape::new(mesh, u).mirrored();
+    let cell = PlaneDrawing {
+        x_label: "x (µm)",
+        substrate_label: "substrate".to_string(),
+        layer: mesh.layer_thickness.is_some(),
+        fills: &shape.elements,
+        mesh_lines: None,
+        outer: &shape.outer,
+        interfaces: &shape.interfaces,
+        pac: &shape.pac,
+        bottom: &shape.bottom,
+        markers: &shape.markers,
+    };
+    draw_in_plane(
+        area,
+        &cell,
+        view,
+        opts,
+        backdrop,
+        |cached, key, columns| match cached {
+            Some(b) if b.view == key => b,
+            _ => Backdrop::new(&mesh.substrate, mesh.layer_thickness, key, columns),
+        },
+    )
 }
 
 /// Draws the gravity arrow of `g` in the upper left corner of `chart`'s plotting area: a

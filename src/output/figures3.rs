@@ -57,8 +57,8 @@ use plotters::prelude::*;
 
 use super::OutputError;
 use super::figures::{
-    BOTTOM, FONT, GravityMark, LAYER, LAYER_EDGE, MEMBRANE, PAC, SHAPE_SIZE, SUBSTRATE, ShapeScale,
-    ShapeStyleOptions, darker, domain_color, draw_gravity,
+    FONT, GravityMark, MEMBRANE, PlaneBackdrop, PlaneDrawing, SHAPE_SIZE, SUBSTRATE, ShapeScale,
+    ShapeStyleOptions, check_displacements, draw_in_plane,
 };
 use super::geometry::{ACTIVE_LEVEL, Bounds, Pt, Rect, contour, element_polygon, intervals};
 use super::vtu3::check_snapshot3;
@@ -811,6 +811,24 @@ impl SectionBackdrop {
     }
 }
 
+impl PlaneBackdrop for SectionBackdrop {
+    fn layer(&self) -> &[Rect] {
+        &self.layer
+    }
+    fn layer_edge(&self) -> &[[Pt; 2]] {
+        &self.layer_edge
+    }
+    fn foot(&self) -> &[Rect] {
+        &[]
+    }
+    fn substrate(&self) -> &[Rect] {
+        &self.substrate
+    }
+    fn surface(&self) -> &[Vec<Pt>] {
+        std::slice::from_ref(&self.surface)
+    }
+}
+
 /// The region a set of section drawings shares: the reference cell and the deformed
 /// sections of `states` and the substrate below them, with a margin of 1.5 µm, symmetric
 /// about the axis.
@@ -828,14 +846,7 @@ pub fn section_view(mesh: &Mesh3File, states: &[&Snapshot3], plane: Section) -> 
             b = b.union(SectionShape::new(mesh, &s.u, plane).mirrored().bounds());
         }
     }
-    let half = b.x_max.abs().max(b.x_min.abs()) + 1.5;
-    let floor = super::geometry::substrate_floor(&mesh.substrate.plane);
-    Bounds {
-        x_min: -half,
-        x_max: half,
-        y_min: b.y_min.min(floor) - 1.5,
-        y_max: b.y_max + 1.5,
-    }
+    b.around_axis(super::geometry::substrate_floor(&mesh.substrate.plane))
 }
 
 /// Gravity at time `t` with the phase times of `mesh`: down, ramped in over [0, T_g0]. (The
@@ -845,11 +856,6 @@ pub fn gravity_at(mesh: &Mesh3File, t: f64) -> GravityMark {
         factor: smooth_step(t, 0.0, mesh.phase_times[0]),
         note: "gravity".to_string(),
     }
-}
-
-/// Points [x, y] as plotters' coordinate pairs.
-fn xy(points: &[Pt]) -> Vec<(f64, f64)> {
-    points.iter().map(|p| (p[0], p[1])).collect()
 }
 
 /// Draws the deformed whole cell of `mesh` displaced by `u`, cut by `plane`, into `area`
@@ -865,185 +871,38 @@ pub fn draw_section<DB: DrawingBackend>(
     opts: &ShapeStyleOptions,
     backdrop: &mut Option<SectionBackdrop>,
 ) -> Result<ShapeScale, String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-    if u.len() != mesh.nodes.len() {
-        return Err(format!(
-            "{} displacements for {} nodes",
-            u.len(),
-            mesh.nodes.len()
-        ));
-    }
-    let fs = opts.font as f64;
-    let label_x = (2.6 * fs) as u32;
-    let label_y = (3.2 * fs) as u32;
-    let area = area
-        .titled(&opts.title, (FONT, opts.font as i32))
-        .map_err(e)?;
-    let margin = (0.6 * fs) as u32;
-    let (pw, ph) = {
-        let chart = ChartBuilder::on(&area)
-            .margin(margin)
-            .x_label_area_size(label_x)
-            .y_label_area_size(label_y)
-            .build_cartesian_2d(view.x_min..view.x_max, view.y_min..view.y_max)
-            .map_err(e)?;
-        chart.plotting_area().dim_in_pixel()
-    };
-    let (w, h) = (view.x_max - view.x_min, view.y_max - view.y_min);
-    let s = (pw as f64 / w).min(ph as f64 / h);
-    let (cx, cy) = (
-        0.5 * (view.x_min + view.x_max),
-        0.5 * (view.y_min + view.y_max),
-    );
-    let (hw, hh) = (0.5 * pw as f64 / s, 0.5 * ph as f64 / s);
-    let (x0, x1, y0, y1) = (cx - hw, cx + hw, cy - hh, cy + hh);
-    let mut chart = ChartBuilder::on(&area)
-        .margin(margin)
-        .x_label_area_size(label_x)
-        .y_label_area_size(label_y)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(e)?;
-    chart
-        .configure_mesh()
-        .x_desc(plane.axis_label())
-        .y_desc("y (µm)")
-        .axis_desc_style((FONT, (0.8 * fs) as i32))
-        .label_style((FONT, (0.65 * fs) as i32))
-        .light_line_style(RGBColor(238, 238, 238))
-        .bold_line_style(RGBColor(215, 215, 215))
-        .draw()
-        .map_err(e)?;
-
-    let key = [x0, x1, y0, y1];
-    let back = match backdrop.take() {
-        Some(b) if b.view == key && b.plane == plane => b,
-        _ => SectionBackdrop::new(
-            &mesh.substrate,
-            mesh.layer_thickness,
-            plane,
-            mesh.center,
-            key,
-            pw as usize,
-        ),
-    };
-    let rect = |r: &Rect, c: RGBColor| Rectangle::new([(r[0], r[3]), (r[1], r[2])], c.filled());
-    if mesh.layer_thickness.is_some() {
-        chart
-            .draw_series(back.layer.iter().map(|r| rect(r, LAYER)))
-            .map_err(e)?
-            .label("fibronectin layer")
-            .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], LAYER.filled()));
-        chart
-            .draw_series(
-                back.layer_edge
-                    .iter()
-                    .map(|l| PathElement::new(xy(&l[..]), LAYER_EDGE.stroke_width(2))),
-            )
-            .map_err(e)?;
-    }
-    chart
-        .draw_series(back.substrate.iter().map(|r| rect(r, SUBSTRATE)))
-        .map_err(e)?
-        .label(format!("substrate (section {})", plane.name()))
-        .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], SUBSTRATE.filled()));
-
+    check_displacements(u, mesh.nodes.len())?;
     let shape = SectionShape::new(mesh, u, plane).mirrored();
-    for d in Domain::ALL {
-        let color = domain_color(d);
-        let polys: Vec<&Vec<Pt>> = shape
-            .fills
-            .iter()
-            .filter(|(dd, _)| *dd == d)
-            .map(|(_, p)| p)
-            .collect();
-        chart
-            .draw_series(polys.iter().map(|p| Polygon::new(xy(p), color.filled())))
-            .map_err(e)?
-            .label(d.to_string())
-            .legend(move |(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], color.filled()));
-        // Each piece's outline in its own colour closes the hairline gaps between fills.
-        chart
-            .draw_series(polys.iter().map(|p| {
-                let mut v = xy(p);
-                if let Some(f) = v.first().copied() {
-                    v.push(f);
-                }
-                PathElement::new(v, color.stroke_width(1))
-            }))
-            .map_err(e)?;
-        if opts.mesh_lines {
-            let edge = darker(color, 0.82);
-            chart
-                .draw_series(
-                    shape
-                        .mesh_lines
-                        .iter()
-                        .filter(|(dd, _)| *dd == d)
-                        .map(|(_, l)| PathElement::new(xy(l), edge.stroke_width(1))),
-                )
-                .map_err(e)?;
-        }
-    }
-    macro_rules! paths {
-        ($lines:expr, $style:expr) => {
-            chart
-                .draw_series($lines.iter().map(|l| PathElement::new(xy(&l[..]), $style)))
-                .map_err(e)?
-        };
-    }
-    paths!(shape.interfaces, RGBColor(40, 40, 40).stroke_width(2));
-    paths!(shape.outer, BLACK.stroke_width(2));
-    for (segs, color, name) in [
-        (&shape.pac, PAC, "active: PAC (push)"),
-        (&shape.bottom, BOTTOM, "active: bottom (pull)"),
-    ] {
-        if segs.is_empty() {
-            continue;
-        }
-        paths!(segs, color.stroke_width(3))
-            .label(name)
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
-            });
-    }
-    chart
-        .draw_series(std::iter::once(PathElement::new(
-            xy(&back.surface),
-            BLACK.stroke_width(2),
-        )))
-        .map_err(e)?;
-    *backdrop = Some(back);
-    chart
-        .draw_series(
-            shape
-                .markers
-                .iter()
-                .map(|p| Circle::new((p[0], p[1]), 4, BLACK.filled())),
-        )
-        .map_err(e)?
-        .label("p_t, c, p_b")
-        .legend(|(x, y)| Circle::new((x + 11, y), 4, BLACK.filled()));
-    if let Some(g) = &opts.gravity {
-        draw_gravity(&chart.plotting_area().strip_coord_spec(), g, fs).map_err(e)?;
-    }
-    if opts.legend {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .margin(10)
-            .label_font((FONT, (0.65 * fs) as i32))
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .draw()
-            .map_err(e)?;
-    }
-    let o = chart.backend_coord(&(0.0, 0.0));
-    let px = chart.backend_coord(&(10.0, 0.0));
-    let py = chart.backend_coord(&(0.0, 10.0));
-    Ok(ShapeScale {
-        px_per_um_x: (px.0 - o.0).abs() as f64 / 10.0,
-        px_per_um_y: (py.1 - o.1).abs() as f64 / 10.0,
-    })
+    let cell = PlaneDrawing {
+        x_label: plane.axis_label(),
+        substrate_label: format!("substrate (section {})", plane.name()),
+        layer: mesh.layer_thickness.is_some(),
+        fills: &shape.fills,
+        mesh_lines: Some(&shape.mesh_lines),
+        outer: &shape.outer,
+        interfaces: &shape.interfaces,
+        pac: &shape.pac,
+        bottom: &shape.bottom,
+        markers: &shape.markers,
+    };
+    draw_in_plane(
+        area,
+        &cell,
+        view,
+        opts,
+        backdrop,
+        |cached, key, columns| match cached {
+            Some(b) if b.view == key && b.plane == plane => b,
+            _ => SectionBackdrop::new(
+                &mesh.substrate,
+                mesh.layer_thickness,
+                plane,
+                mesh.center,
+                key,
+                columns,
+            ),
+        },
+    )
 }
 
 /// The deformed cell of `s` cut by `plane`, as a PNG of [`FIGURE_SIZE`] at `path` (see

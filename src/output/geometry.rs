@@ -349,6 +349,19 @@ impl Bounds {
     pub fn is_empty(&self) -> bool {
         !(self.x_min <= self.x_max && self.y_min <= self.y_max)
     }
+
+    /// The view of drawings of the full cell that this box holds: made symmetric about
+    /// x = 0, extended down to `floor` (the substrate's, [`substrate_floor`]), with a
+    /// margin of 1.5 µm on every side.
+    pub fn around_axis(self, floor: f64) -> Bounds {
+        let half = self.x_max.abs().max(self.x_min.abs()) + 1.5;
+        Bounds {
+            x_min: -half,
+            x_max: half,
+            y_min: self.y_min.min(floor) - 1.5,
+            y_max: self.y_max + 1.5,
+        }
+    }
 }
 
 /// Step of the vertical scans and of the contouring grid [µm].

@@ -2,11 +2,16 @@
 //! time — at most [`MAX_FRAMES`], evenly picked, the last one always — each the full cell
 //! drawn as in the shape figures (plotters into an RGB buffer), over a fixed frame chosen
 //! from the reference cell and the substrate, encoded with the `gif` crate.
+//!
+//! [`MovieOf`] is the GIF of either model: the encoder, the choice of frames and their
+//! titles; a [`FramePainter`] draws each frame — [`ShapePainter`] the 2-D cell here, the
+//! 3-D views in [`super::movie3`].
 
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
+use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::OutputError;
@@ -25,18 +30,74 @@ pub const FRAME_DELAY_MS: u32 = 80;
 /// colours, so the fastest setting loses nothing visible.
 const QUANT_SPEED: i32 = 30;
 
-/// An animated GIF being written.
-pub struct Movie {
+/// What draws the frames of a [`MovieOf`]: the 2-D cell ([`ShapePainter`]) or a view of
+/// the 3-D cell ([`super::movie3::View3Painter`]).
+pub trait FramePainter {
+    /// The state of one output time.
+    type State: Clone;
+    /// The time of `s` [s].
+    fn time(s: &Self::State) -> f64;
+    /// NeuQuant speed of the colour quantisation of a frame (1 best … 30 fastest).
+    fn quant_speed(&self) -> i32;
+    /// Draws `s` with the title `title` into the frame `area` (filled white).
+    fn paint(
+        &mut self,
+        area: &DrawingArea<BitMapBackend<'_>, Shift>,
+        s: &Self::State,
+        title: String,
+    ) -> Result<(), String>;
+}
+
+/// An animated GIF being written, each frame drawn by the painter `P`.
+pub struct MovieOf<P: FramePainter> {
     encoder: gif::Encoder<BufWriter<File>>,
-    mesh: MeshFile,
-    view: Bounds,
+    painter: P,
+    phase_times: [f64; 4],
     name: String,
     path: PathBuf,
     stride: usize,
     offered: usize,
     frames: usize,
-    skipped: Option<Snapshot>,
+    skipped: Option<P::State>,
+}
+
+/// An animated GIF of a 2-D run being written.
+pub type Movie = MovieOf<ShapePainter>;
+
+/// Draws the frames of a 2-D movie: the full cell as in the shape figures, without legend
+/// or mesh lines, over the fixed [`movie_view`].
+pub struct ShapePainter {
+    mesh: MeshFile,
+    view: Bounds,
     backdrop: Option<Backdrop>,
+}
+
+impl FramePainter for ShapePainter {
+    type State = Snapshot;
+
+    fn time(s: &Snapshot) -> f64 {
+        s.t
+    }
+
+    fn quant_speed(&self) -> i32 {
+        QUANT_SPEED
+    }
+
+    fn paint(
+        &mut self,
+        area: &DrawingArea<BitMapBackend<'_>, Shift>,
+        s: &Snapshot,
+        title: String,
+    ) -> Result<(), String> {
+        let opts = ShapeStyleOptions {
+            title,
+            legend: false,
+            font: 20,
+            mesh_lines: false,
+            gravity: None,
+        };
+        draw_shape(area, &self.mesh, &s.u, self.view, &opts, &mut self.backdrop).map(|_| ())
+    }
 }
 
 /// The frame of a movie: the reference cell widened to 2.1 cell radii on each side of
@@ -48,13 +109,20 @@ pub fn movie_view(mesh: &MeshFile) -> Bounds {
         .iter()
         .map(|p| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)).sqrt())
         .fold(0.0f64, f64::max);
-    let half = c[0].abs() + 2.1 * r;
-    let floor = substrate_floor(&mesh.substrate);
+    movie_bounds(c[0].abs(), c[1], r, substrate_floor(&mesh.substrate))
+}
+
+/// The frame of a movie of a cell of radius `r` whose centre is at height `c_y` and at
+/// `axis_offset` from the symmetry axis: `axis_offset` + 2.1 `r` on each side of the axis,
+/// from 1 µm below the cell's bottom or the substrate's `floor` (the lower) to 1.5 µm
+/// above the cell's top. Shared by [`movie_view`] and [`super::movie3::movie_view3`].
+pub(crate) fn movie_bounds(axis_offset: f64, c_y: f64, r: f64, floor: f64) -> Bounds {
+    let half = axis_offset + 2.1 * r;
     Bounds {
         x_min: -half,
         x_max: half,
-        y_min: floor.min(c[1] - r) - 1.0,
-        y_max: c[1] + r + 1.5,
+        y_min: floor.min(c_y - r) - 1.0,
+        y_max: c_y + r + 1.5,
     }
 }
 
@@ -73,6 +141,26 @@ impl Movie {
         mesh: &MeshFile,
         outputs: usize,
     ) -> Result<Self, OutputError> {
+        let painter = ShapePainter {
+            mesh: mesh.clone(),
+            view: movie_view(mesh),
+            backdrop: None,
+        };
+        Self::start(path, name, mesh.phase_times, outputs, painter)
+    }
+}
+
+impl<P: FramePainter> MovieOf<P> {
+    /// Starts a GIF at `path` whose frames `painter` draws, titled with the run's `name`,
+    /// the time and its phase (from `phase_times`: T_g0, T_as0, T_a0, the end time);
+    /// `outputs` is the number of output times expected.
+    pub fn start(
+        path: &Path,
+        name: &str,
+        phase_times: [f64; 4],
+        outputs: usize,
+        painter: P,
+    ) -> Result<Self, OutputError> {
         let file = File::create(path).map_err(|e| OutputError::write(path, e))?;
         let (w, h) = FRAME_SIZE;
         let mut encoder = gif::Encoder::new(BufWriter::new(file), w as u16, h as u16, &[])
@@ -82,20 +170,19 @@ impl Movie {
             .map_err(|e| gif_err(path, e))?;
         Ok(Self {
             encoder,
-            mesh: mesh.clone(),
-            view: movie_view(mesh),
+            painter,
+            phase_times,
             name: name.to_string(),
             path: path.to_path_buf(),
             stride: outputs.div_ceil(MAX_FRAMES).max(1),
             offered: 0,
             frames: 0,
             skipped: None,
-            backdrop: None,
         })
     }
 
     fn phase_name(&self, t: f64) -> &'static str {
-        let [tg, tas, ta, _] = self.mesh.phase_times;
+        let [tg, tas, ta, _] = self.phase_times;
         if t <= tg {
             "gravity"
         } else if t <= tas {
@@ -107,37 +194,22 @@ impl Movie {
         }
     }
 
-    fn draw(&mut self, s: &Snapshot) -> Result<(), OutputError> {
+    fn draw(&mut self, s: &P::State) -> Result<(), OutputError> {
         let path = self.path.clone();
         let (w, h) = FRAME_SIZE;
         let mut rgb = vec![0u8; 3 * (w * h) as usize];
+        let t = P::time(s);
+        let title = format!("{}   t = {:.0} s ({})", self.name, t, self.phase_name(t));
         {
             let area = BitMapBackend::with_buffer(&mut rgb, FRAME_SIZE).into_drawing_area();
             area.fill(&WHITE).map_err(|e| OutputError::draw(&path, e))?;
-            let opts = ShapeStyleOptions {
-                title: format!(
-                    "{}   t = {:.0} s ({})",
-                    self.name,
-                    s.t,
-                    self.phase_name(s.t)
-                ),
-                legend: false,
-                font: 20,
-                mesh_lines: false,
-                gravity: None,
-            };
-            draw_shape(
-                &area,
-                &self.mesh,
-                &s.u,
-                self.view,
-                &opts,
-                &mut self.backdrop,
-            )
-            .map_err(|e| OutputError::draw(&path, e))?;
+            self.painter
+                .paint(&area, s, title)
+                .map_err(|e| OutputError::draw(&path, e))?;
             area.present().map_err(|e| OutputError::draw(&path, e))?;
         }
-        let mut frame = gif::Frame::from_rgb_speed(w as u16, h as u16, &rgb, QUANT_SPEED);
+        let speed = self.painter.quant_speed();
+        let mut frame = gif::Frame::from_rgb_speed(w as u16, h as u16, &rgb, speed);
         frame.delay = (FRAME_DELAY_MS / 10) as u16;
         self.encoder
             .write_frame(&frame)
@@ -147,7 +219,7 @@ impl Movie {
     }
 
     /// Offers the state of one output time; every `stride`-th becomes a frame.
-    pub fn frame(&mut self, s: &Snapshot) -> Result<(), OutputError> {
+    pub fn frame(&mut self, s: &P::State) -> Result<(), OutputError> {
         let take = self.offered % self.stride == 0;
         self.offered += 1;
         if take {

@@ -18,15 +18,15 @@
 //! tetrahedron as positive when vertex 3 lies on the side of the face (0, 1, 2) its
 //! right-hand normal points to, so the orientation carries over unchanged.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use vtkio::model::{
-    Attribute, Attributes, ByteOrder, CellType, Cells, DataSet, UnstructuredGridPiece, Version,
-    VertexNumbers, Vtk,
-};
+use vtkio::model::{CellType, Vtk};
 
 use super::OutputError;
-use super::vtu::{VtuSummary, domain_code, read_vtu, write_pvd};
+use super::vtu::{
+    GridData, VtuMesh, VtuSeriesOf, VtuSummary, check_lengths, load_piece, summarise, vtk_err,
+    write_vtu,
+};
 use crate::record::{Mesh3File, Snapshot3};
 
 /// The VTK cell type of a ten-node tetrahedron (VTK_QUADRATIC_TETRA).
@@ -35,26 +35,15 @@ pub const QUADRATIC_TETRA: u8 = 24;
 /// VTK's local node `a` of a quadratic tetrahedron is gmsh's local node `GMSH_OF_VTK[a]`.
 pub const GMSH_OF_VTK: [usize; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 9, 8];
 
-fn vtk_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
-    OutputError::Vtk {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    }
-}
-
 /// Checks that the snapshot's arrays fit the mesh.
 pub fn check_snapshot3(mesh: &Mesh3File, s: &Snapshot3) -> Result<(), String> {
-    let (nn, ne) = (mesh.nodes.len(), mesh.elements.len());
-    if s.u.len() != nn || s.v.len() != nn || s.mu_as.len() != nn {
-        return Err(format!(
-            "snapshot has per-node arrays of the wrong length ({nn} nodes)"
-        ));
-    }
-    if s.element_strain.len() != ne || s.element_jacobian.len() != ne {
-        return Err(format!(
-            "snapshot has per-element arrays of the wrong length ({ne} elements)"
-        ));
-    }
+    let ne = mesh.elements.len();
+    check_lengths(
+        mesh.nodes.len(),
+        ne,
+        [s.u.len(), s.v.len(), s.mu_as.len()],
+        [s.element_strain.len(), s.element_jacobian.len()],
+    )?;
     if mesh.domains.len() != ne {
         return Err(format!(
             "mesh has {} domains for {ne} elements",
@@ -67,51 +56,36 @@ pub fn check_snapshot3(mesh: &Mesh3File, s: &Snapshot3) -> Result<(), String> {
 /// The VTK model of one output time of the 3-D cell (see the module documentation).
 pub fn vtk_model3(mesh: &Mesh3File, s: &Snapshot3) -> Result<Vtk, String> {
     check_snapshot3(mesh, s)?;
-    let ne = mesh.elements.len();
-    let flat = |v: &[[f64; 3]]| -> Vec<f64> { v.iter().flatten().copied().collect() };
-    let connectivity: Vec<u64> = mesh
-        .elements
-        .iter()
-        .flat_map(|el| GMSH_OF_VTK.map(|a| el[a] as u64))
-        .collect();
-    let offsets: Vec<u64> = (1..=ne as u64).map(|k| 10 * k).collect();
-    let mu: Vec<f64> = s.mu_as.iter().map(|m| m.unwrap_or(0.0)).collect();
-    let domains: Vec<i32> = mesh.domains.iter().map(|&d| domain_code(d)).collect();
-    let piece = UnstructuredGridPiece {
-        points: flat(&mesh.nodes).into(),
-        cells: Cells {
-            cell_verts: VertexNumbers::XML {
-                connectivity,
-                offsets,
-            },
-            types: vec![CellType::QuadraticTetra; ne],
-        },
-        data: Attributes {
-            point: vec![
-                Attribute::generic("displacement", 3).with_data(flat(&s.u)),
-                Attribute::generic("velocity", 3).with_data(flat(&s.v)),
-                Attribute::scalars("mu_as", 1).with_data(mu),
-            ],
-            cell: vec![
-                Attribute::scalars("domain", 1).with_data(domains),
-                Attribute::scalars("mean_E_norm", 1).with_data(s.element_strain.clone()),
-                Attribute::scalars("det_F", 1).with_data(s.element_jacobian.clone()),
-            ],
-        },
-    };
-    Ok(Vtk {
-        version: Version::new_xml(1, 0),
+    Ok(GridData {
+        nodes: &mesh.nodes,
+        elements: &mesh.elements,
+        vtk_order: GMSH_OF_VTK,
+        cell_type: CellType::QuadraticTetra,
+        domains: &mesh.domains,
+        u: &s.u,
+        v: &s.v,
+        mu_as: &s.mu_as,
+        element_strain: &s.element_strain,
+        element_jacobian: &s.element_jacobian,
         title: format!("cellsim 3-D t = {} s", s.t),
-        byte_order: ByteOrder::LittleEndian,
-        data: DataSet::inline(piece),
-        file_path: None,
-    })
+    }
+    .into_vtk())
 }
 
-/// Writes the `.vtu` of one output time of the 3-D cell at `path`.
+impl VtuMesh for Mesh3File {
+    type Snapshot = Snapshot3;
+    fn time(s: &Snapshot3) -> f64 {
+        s.t
+    }
+    fn vtk_model(&self, s: &Snapshot3) -> Result<Vtk, String> {
+        vtk_model3(self, s)
+    }
+}
+
+/// Writes the `.vtu` of one output time of the 3-D cell at `path` ([`write_vtu`] on a
+/// [`Mesh3File`]).
 pub fn write_vtu3(path: &Path, mesh: &Mesh3File, s: &Snapshot3) -> Result<(), OutputError> {
-    let vtk = vtk_model3(mesh, s).map_err(|m| vtk_err(path, m))?;
-    vtk.export(path).map_err(|e| vtk_err(path, e))
+    write_vtu(path, mesh, s)
 }
 
 /// A `.vtu` read back with its geometry, for checks.
@@ -125,20 +99,11 @@ pub struct VtuGrid {
     pub cells: Vec<Vec<usize>>,
 }
 
-/// Reads a `.vtu` back through vtkio: its [`VtuSummary`] ([`read_vtu`]), points and
-/// connectivity.
+/// Reads a `.vtu` back through vtkio: its [`VtuSummary`] (as [`super::vtu::read_vtu`]),
+/// points and connectivity.
 pub fn read_vtu_grid(path: &Path) -> Result<VtuGrid, OutputError> {
-    let summary = read_vtu(path)?;
-    let vtk = Vtk::import(path).map_err(|e| vtk_err(path, e))?;
-    let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
-        return Err(vtk_err(path, "not an unstructured grid"));
-    };
-    let Some(piece) = pieces.into_iter().next() else {
-        return Err(vtk_err(path, "no piece"));
-    };
-    let piece = piece
-        .into_loaded_piece_data(Some(path))
-        .map_err(|e| vtk_err(path, e))?;
+    let piece = load_piece(path)?;
+    let summary = summarise(&piece);
     let coords: Vec<f64> = piece
         .points
         .cast_into::<f64>()
@@ -169,40 +134,4 @@ pub fn read_vtu_grid(path: &Path) -> Result<VtuGrid, OutputError> {
 
 /// The `.vtu` files of one 3-D run and their `.pvd` collection (the 3-D
 /// [`super::vtu::VtuSeries`]).
-pub struct VtuSeries3 {
-    mesh: Mesh3File,
-    dir: PathBuf,
-    pvd: PathBuf,
-    name: String,
-    entries: Vec<(f64, String)>,
-}
-
-impl VtuSeries3 {
-    /// A series written into `out/vtu/<name>_NNNNN.vtu`, collected in `out/<name>.pvd`.
-    pub fn new(out: &Path, name: &str, mesh: &Mesh3File) -> Result<Self, OutputError> {
-        let dir = out.join("vtu");
-        super::create_dir(&dir)?;
-        Ok(Self {
-            mesh: mesh.clone(),
-            dir,
-            pvd: out.join(format!("{name}.pvd")),
-            name: name.to_string(),
-            entries: Vec::new(),
-        })
-    }
-
-    /// The collection file.
-    pub fn pvd_path(&self) -> &Path {
-        &self.pvd
-    }
-
-    /// Writes the next output time and rewrites the collection; returns the `.vtu` path.
-    pub fn write(&mut self, s: &Snapshot3) -> Result<PathBuf, OutputError> {
-        let file = format!("{}_{:05}.vtu", self.name, self.entries.len());
-        let path = self.dir.join(&file);
-        write_vtu3(&path, &self.mesh, s)?;
-        self.entries.push((s.t, format!("vtu/{file}")));
-        write_pvd(&self.pvd, &self.entries)?;
-        Ok(path)
-    }
-}
+pub type VtuSeries3 = VtuSeriesOf<Mesh3File>;
