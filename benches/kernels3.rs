@@ -163,6 +163,8 @@ fn pillars() -> Pillars {
         first_center: 8.0,
         q: 4.0,
         y_top: -0.3,
+        foot: Default::default(),
+        fillet: 0.0,
     }
 }
 

@@ -401,6 +401,19 @@ pub struct Pillars {
     /// −0.30 µm for the defaults). Valid: the pillars must start below the cell (smallest
     /// initial gap > 0). Use [`Pillars::resolved_y_top`] for the value in effect.
     pub y_top: Option<f64>,
+    /// How a pillar meets the floor: `Rounded`, the whole superellipse (superellipsoid) of
+    /// MODEL.md, whose rounded lower half leaves an undercut under the pillar's lower
+    /// edges; or `Straight`, its upper half continued straight down to the floor (a column
+    /// with rounded top edges, no undercut). Default `Rounded` (MODEL.md §5); the 3-D
+    /// pillar scenes use `Straight` (MODEL.md §10: the cell that reaches the floor beside
+    /// a pillar's corner flows into the undercut).
+    pub foot: crate::physics::PillarFoot,
+    /// Width k of the fillet where the floor meets a pillar (µm): 0 takes the deeper of
+    /// floor and pillar, a kink in the concave corner at the pillar's foot; k > 0 their
+    /// smooth maximum where the two depths are within k of each other (the normal turns
+    /// continuously round the corner; the surface moves out by at most k/4 there).
+    /// Default 0 (MODEL.md §5). Valid: 0 ≤ k ≤ min(h, s)/2.
+    pub fillet: f64,
 }
 
 impl Default for Pillars {
@@ -414,6 +427,8 @@ impl Default for Pillars {
             gap: 0.5,
             lattice: crate::physics::Lattice::FourPillars,
             y_top: None,
+            foot: crate::physics::PillarFoot::Rounded,
+            fillet: 0.0,
         }
     }
 }
@@ -433,6 +448,8 @@ impl Pillars {
             first_center: self.first_center,
             q: self.q,
             y_top,
+            foot: self.foot,
+            fillet: self.fillet,
         }
     }
 
@@ -512,12 +529,26 @@ enum SubstrateRepr {
         lattice: crate::physics::Lattice,
         #[serde(default)]
         y_top: Option<f64>,
+        #[serde(default, skip_serializing_if = "is_rounded")]
+        foot: crate::physics::PillarFoot,
+        #[serde(default, skip_serializing_if = "is_zero")]
+        fillet: f64,
     },
 }
 
 /// The default lattice is not written out (a 2-D case prints as before).
 fn is_four_pillars(l: &crate::physics::Lattice) -> bool {
     *l == crate::physics::Lattice::FourPillars
+}
+
+/// Nor the default foot.
+fn is_rounded(f: &crate::physics::PillarFoot) -> bool {
+    *f == crate::physics::PillarFoot::Rounded
+}
+
+/// Nor the default fillet.
+fn is_zero(k: &f64) -> bool {
+    *k == 0.0
 }
 
 impl From<SubstrateRepr> for Substrate {
@@ -533,6 +564,8 @@ impl From<SubstrateRepr> for Substrate {
                 gap,
                 lattice,
                 y_top,
+                foot,
+                fillet,
             } => Substrate::Pillars(Pillars {
                 width,
                 spacing,
@@ -542,6 +575,8 @@ impl From<SubstrateRepr> for Substrate {
                 gap,
                 lattice,
                 y_top,
+                foot,
+                fillet,
             }),
         }
     }
@@ -560,6 +595,8 @@ impl From<Substrate> for SubstrateRepr {
                 gap,
                 lattice,
                 y_top,
+                foot,
+                fillet,
             }) => SubstrateRepr::Pillars {
                 width,
                 spacing,
@@ -569,6 +606,8 @@ impl From<Substrate> for SubstrateRepr {
                 gap,
                 lattice,
                 y_top,
+                foot,
+                fillet,
             },
         }
     }

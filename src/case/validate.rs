@@ -398,6 +398,14 @@ impl Checker<'_> {
                 self.positive("substrate.height", p.height);
                 self.range("substrate.q", p.q, p.q >= 2.0, "q >= 2");
                 self.positive("substrate.gap", p.gap);
+                let most = 0.5 * p.height.min(p.spacing);
+                self.range_given(
+                    "substrate.fillet",
+                    &["substrate.height", "substrate.spacing"],
+                    p.fillet,
+                    p.fillet.is_finite() && p.fillet >= 0.0 && p.fillet <= most,
+                    format!("0 <= fillet <= min(height, spacing)/2 = {}", num(most)),
+                );
                 let period = p.period();
                 // Mirror symmetry about x = 0: pillar axes at first_center + k·period must
                 // map onto each other under x → −x.

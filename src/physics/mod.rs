@@ -60,7 +60,7 @@ pub use smooth::{heaviside, smooth_step, smooth_step_d};
 pub use solid3::{
     MaterialPoint3, admissible3, material_point3, material_point3_dual, piola_total3,
 };
-pub use substrate::{Lattice, Pillars, Substrate, Substrate3};
+pub use substrate::{Lattice, PillarFoot, Pillars, Substrate, Substrate3};
 
 use nalgebra::RealField;
 use num_dual::DualNum;

@@ -46,6 +46,22 @@ use super::{PhysicsError, Real, abs, check, cst, powf, powi, re, sqrt};
 use nalgebra::{Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
+/// How a pillar meets the floor.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PillarFoot {
+    /// The whole superellipse (superellipsoid in 3-D) of MODEL.md §5 (§10): its rounded
+    /// lower half meets the floor at one point (in 3-D at one point per side), leaving an
+    /// undercut under the pillar's lower edges, up to 1.3 µm high under the corners of
+    /// the default 3-D pillars.
+    #[default]
+    Rounded,
+    /// The upper half of the superellipse (superellipsoid) continued straight down to the
+    /// floor: a column with rounded top edges, its sides vertical where `ỹ < 0`, meeting
+    /// the floor in a right-angled concave corner (no undercut). The level set is the same
+    /// with `ỹ` replaced by `max(ỹ, 0)` (C³ across `ỹ = 0` for q = 4).
+    Straight,
+}
+
 /// Micropillar geometry. Lengths in µm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Pillars {
@@ -62,6 +78,51 @@ pub struct Pillars {
     /// Height of the pillar tops `y_top` [µm] (MODEL.md: placed by [`Pillars::y_top_for_gap`],
     /// ≈ −0.3 for the default cell).
     pub y_top: f64,
+    /// How the pillar meets the floor (default [`PillarFoot::Rounded`], MODEL.md).
+    #[serde(default)]
+    pub foot: PillarFoot,
+    /// Width `k` [µm] of the fillet where the floor meets a pillar: 0 (default, MODEL.md)
+    /// takes the deeper of the two surfaces, a kink in the concave corner; `k > 0` the
+    /// smooth maximum of the two depths where they are within `k` of each other
+    /// ([`floor_and_pillar`]).
+    #[serde(default)]
+    pub fillet: f64,
+}
+
+/// The union of the floor and a pillar: the deeper of the two (`d = max(d_f, d_p)` with
+/// that one's normal), or, with a fillet `k > 0` where the depths are within `k` of each
+/// other, their quadratic smooth maximum `max(d_f, d_p) + (k − |d_f − d_p|)²/(4k)` with the
+/// normal `λ n_f + (1 − λ) n_p` normalised, `λ = 1/2 + (d_f − d_p)/(2k)` (the weight of
+/// the floor in the gradient of that maximum): depth and normal then turn continuously
+/// round the concave corner between a pillar's foot and the floor, which the surface
+/// leaves by at most `k/4` on the corner's bisector.
+#[inline(always)]
+pub fn floor_and_pillar<T: Real, const D: usize>(
+    d_f: T,
+    n_f: nalgebra::SVector<T, D>,
+    d_p: T,
+    n_p: nalgebra::SVector<T, D>,
+    k: f64,
+) -> (T, nalgebra::SVector<T, D>) {
+    let diff = d_f - d_p;
+    let hard = if re(d_f) > re(d_p) {
+        (d_f, n_f)
+    } else {
+        (d_p, n_p)
+    };
+    if k <= 0.0 || re(diff).abs() >= k {
+        return hard;
+    }
+    let h = (-abs(diff) + k) / k;
+    let d = hard.0 + h * h * (0.25 * k);
+    let lambda = diff / (2.0 * k) + 0.5;
+    let n = n_f * lambda + n_p * (-lambda + 1.0);
+    let norm = n.norm();
+    if re(norm) < 1e-9 {
+        // Opposite normals (inside the undercut of a rounded foot): no direction between.
+        return (d, hard.1);
+    }
+    (d, n / norm)
 }
 
 /// The substrate: a flat half-plane or a periodic row of pillars on a floor.
@@ -138,6 +199,14 @@ impl Pillars {
             "pillars.y_top",
             self.y_top,
             "must be finite",
+        )?;
+        check(
+            self.fillet.is_finite()
+                && self.fillet >= 0.0
+                && self.fillet <= 0.5 * self.height.min(self.spacing),
+            "pillars.fillet",
+            self.fillet,
+            "must be >= 0 and at most half the height and half the spacing",
         )
     }
 
@@ -161,7 +230,7 @@ impl Pillars {
         let a = 0.5 * self.width;
         let b = 0.5 * self.height;
         let xt = x.x - self.nearest_axis(re(x.x));
-        let yt = x.y - (self.y_top - b);
+        let yt = self.above_mid_height(x.y - (self.y_top - b));
         let (pu, gu) = abs_pow(xt / a, self.q);
         let (pv, gv) = abs_pow(yt / b, self.q);
         let rho = pu + pv;
@@ -180,6 +249,16 @@ impl Pillars {
         let g = sqrt(gx * gx + gy * gy);
         let d = (-r + 1.0) * rho / (r * g);
         (d, Vector2::new(gx / g, gy / g))
+    }
+
+    /// The height `ỹ` above the pillar's mid-height as the level set sees it: `ỹ` itself
+    /// for a rounded foot, `max(ỹ, 0)` for a straight one ([`PillarFoot`]).
+    #[inline(always)]
+    fn above_mid_height<T: Real>(&self, yt: T) -> T {
+        match self.foot {
+            PillarFoot::Straight if re(yt) < 0.0 => cst(0.0),
+            _ => yt,
+        }
     }
 
     /// Height `y` of the substrate surface (pillar top or floor) at abscissa `x` [µm]:
@@ -316,11 +395,7 @@ impl Substrate {
             Substrate::Pillars(p) => {
                 let d_floor = -x.y + (p.y_top - p.height);
                 let (d_p, n_p) = p.eval_pillar(x);
-                if re(d_floor) > re(d_p) {
-                    (d_floor, up)
-                } else {
-                    (d_p, n_p)
-                }
+                floor_and_pillar(d_floor, up, d_p, n_p, p.fillet)
             }
         }
     }
@@ -329,7 +404,8 @@ impl Substrate {
     ///
     /// Flat: the two end points. Pillars: the floor, and at each pillar axis the full
     /// superellipse traced from its bottom point clockwise (left side, top, right side)
-    /// with `n` points (at least 8); pillars overlapping the interval are drawn whole.
+    /// with `n` points (at least 8), its lower half straight down for a straight foot
+    /// ([`PillarFoot::Straight`]); pillars overlapping the interval are drawn whole.
     pub fn outline(&self, x_min: f64, x_max: f64, n: usize) -> Vec<[f64; 2]> {
         match self {
             Substrate::Flat { y_s } => vec![[x_min, *y_s], [x_max, *y_s]],
@@ -349,8 +425,12 @@ impl Substrate {
                         let t = 1.5 * std::f64::consts::PI
                             - 2.0 * std::f64::consts::PI * j as f64 / n as f64;
                         let (s, c) = t.sin_cos();
-                        let u = c.signum() * c.abs().powf(2.0 / p.q);
+                        let mut u = c.signum() * c.abs().powf(2.0 / p.q);
                         let v = s.signum() * s.abs().powf(2.0 / p.q);
+                        if p.foot == PillarFoot::Straight && v < 0.0 && c != 0.0 {
+                            // The lower half is the column's vertical side.
+                            u = c.signum();
+                        }
                         pts.push([axis + a * u, yc + b * v]);
                     }
                 }
@@ -420,7 +500,7 @@ impl Pillars {
         let a = 0.5 * self.width;
         let b = 0.5 * self.height;
         let xt = x.x - self.nearest_axis(re(x.x));
-        let yt = x.y - (self.y_top - b);
+        let yt = self.above_mid_height(x.y - (self.y_top - b));
         let zt = x.z - self.nearest_axis_z(re(x.z), lattice);
         let (pu, gu) = abs_pow(xt / a, self.q);
         let (pv, gv) = abs_pow(yt / b, self.q);
@@ -581,11 +661,7 @@ impl Substrate3 {
             Substrate::Pillars(p) => {
                 let d_floor = -x.y + (p.y_top - p.height);
                 let (d_p, n_p) = p.eval_pillar3(x, self.lattice);
-                if re(d_floor) > re(d_p) {
-                    (d_floor, up)
-                } else {
-                    (d_p, n_p)
-                }
+                floor_and_pillar(d_floor, up, d_p, n_p, p.fillet)
             }
         }
     }
@@ -730,12 +806,23 @@ mod tests {
                 ..crate::physics::reference::pillars()
             }),
             Substrate::Pillars(Pillars {
+                foot: PillarFoot::Straight,
+                ..crate::physics::reference::pillars()
+            }),
+            Substrate::Pillars(Pillars {
+                foot: PillarFoot::Straight,
+                fillet: 0.5,
+                ..crate::physics::reference::pillars()
+            }),
+            Substrate::Pillars(Pillars {
                 q: 4.5,
                 ..crate::physics::reference::pillars()
             }),
         ];
         // points near the top, the rounded corners, and the sides (away from the
-        // non-smooth pillar/floor switch and the mid-gap line)
+        // non-smooth pillar/floor switch and the mid-gap line); the last three in the
+        // concave corner at a straight foot (x = 4, floor y = −8.3), inside the 0.5 µm
+        // fillet's reach (|d_floor − d_pillar| < 0.5) for the filleted substrate
         let pts = [
             (8.0, -0.25),
             (8.3, 0.4),
@@ -746,6 +833,9 @@ mod tests {
             (12.5, -4.6),
             (-4.8, -0.5),
             (7.0, -2.0),
+            (3.85, -8.2),
+            (3.7, -7.95),
+            (3.95, -8.25),
         ];
         for s in &subs {
             for &(x, y) in &pts {
@@ -861,7 +951,116 @@ mod tests3 {
             q: 4.5,
             ..pillars()
         }));
+        v.extend(both(Pillars {
+            foot: PillarFoot::Straight,
+            ..pillars()
+        }));
+        v.extend(both(Pillars {
+            foot: PillarFoot::Straight,
+            fillet: 0.5,
+            ..pillars()
+        }));
         v
+    }
+
+    #[test]
+    fn a_fillet_turns_the_normal_continuously_round_the_foot() {
+        // Along a quarter circle of radius 0.6 µm about the concave corner between the
+        // middle of a side face (x̃ = −w/2) and the floor, from the side to the floor: with
+        // the 0.5 µm fillet the normal turns from sideways to up in small steps; without it
+        // it flips at once on the bisector.
+        let p = Pillars {
+            foot: PillarFoot::Straight,
+            ..pillars()
+        };
+        let floor = p.y_top - p.height;
+        for lattice in [Lattice::FourPillars, Lattice::Gap] {
+            let az = p.nearest_axis_z(0.0, lattice);
+            let largest_turn = |fillet: f64| {
+                let s = Substrate3 {
+                    plane: Substrate::Pillars(Pillars { fillet, ..p }),
+                    lattice,
+                };
+                let n = 400;
+                let normals: Vec<Vector3<f64>> = (0..=n)
+                    .map(|i| {
+                        let t = 0.5 * std::f64::consts::PI * i as f64 / n as f64;
+                        let x = Vector3::new(4.0 - 0.6 * t.sin(), floor + 0.6 * t.cos(), az);
+                        s.eval(&x).1
+                    })
+                    .collect();
+                assert!((normals[0] - Vector3::new(-1.0, 0.0, 0.0)).norm() < 1e-12);
+                assert!((normals[n] - Vector3::new(0.0, 1.0, 0.0)).norm() < 1e-12);
+                normals
+                    .windows(2)
+                    .map(|w| (w[1] - w[0]).norm())
+                    .fold(0.0, f64::max)
+            };
+            let sharp = largest_turn(0.0);
+            let filleted = largest_turn(0.5);
+            assert!(sharp > 1.4, "{sharp}");
+            assert!(filleted < 0.02, "{filleted}");
+            // The fillet lies within k/4 of the sharp corner: on the bisector, the surface
+            // (d = 0) moves out by (k − 0)²/(4k) = k/4 in depth.
+            let s = Substrate3 {
+                plane: Substrate::Pillars(Pillars { fillet: 0.5, ..p }),
+                lattice,
+            };
+            let corner = Vector3::new(4.0 - 0.01, floor + 0.01, az);
+            let (d, _) = s.eval(&corner);
+            assert!((d - (-0.01 + 0.125)).abs() < 1e-12, "{d}");
+        }
+    }
+
+    #[test]
+    fn a_straight_foot_closes_the_undercut_and_keeps_the_upper_half() {
+        let rounded = pillars();
+        let straight = Pillars {
+            foot: PillarFoot::Straight,
+            ..rounded
+        };
+        let floor = rounded.y_top - rounded.height;
+        for lattice in [Lattice::FourPillars, Lattice::Gap] {
+            let [r, st] = [rounded, straight].map(|p| Substrate3 {
+                plane: Substrate::Pillars(p),
+                lattice,
+            });
+            let az = rounded.nearest_axis_z(0.0, lattice);
+            // Under a lower corner, 0.3 µm above the floor, inside the footprint
+            // (|u|^4 + |w|^4 = 0.82): outside the rounded pillar (in its undercut, where the
+            // floor is the nearer surface), inside the straight one, pushed out sideways.
+            let x = Vector3::new(8.0 - 3.2, floor + 0.3, az - 3.2);
+            let (dr, nr) = r.eval(&x);
+            assert!((dr + 0.3).abs() < 1e-12, "rounded: {dr}");
+            assert_eq!(nr, Vector3::new(0.0, 1.0, 0.0));
+            let (ds, ns) = st.eval(&x);
+            assert!(ds > 0.2, "straight: {ds}");
+            assert_eq!(ns.y, 0.0);
+            assert!(ns.x < 0.0 && ns.z < 0.0, "{ns:?}");
+            // Beside the middle of a side face, below mid-height: the exact distance to
+            // the face for the straight foot.
+            let x = Vector3::new(8.0 - 3.9, floor + 1.0, az);
+            let (ds, ns) = st.eval(&x);
+            assert!((ds - 0.1).abs() < 1e-12, "{ds}");
+            assert!((ns - Vector3::new(-1.0, 0.0, 0.0)).norm() < 1e-12);
+            // At and above mid-height the two are the same surface, bit for bit.
+            let mut rng = crate::physics::material::tests::Rng::new(5);
+            for _ in 0..500 {
+                let x = Vector3::new(
+                    rng.uniform(-20.0, 20.0),
+                    rng.uniform(rounded.y_top - 0.5 * rounded.height, 2.0),
+                    rng.uniform(-20.0, 20.0),
+                );
+                assert_eq!(r.eval(&x), st.eval(&x), "{x:?}");
+            }
+        }
+        // In 2-D the same: under the rounded lower edge, inside the straight column only.
+        let x = Vector2::new(8.0 - 3.9, floor + 0.2);
+        let dr = Substrate::Pillars(rounded).eval(&x).0;
+        let (ds, ns) = Substrate::Pillars(straight).eval(&x);
+        assert!((dr + 0.2).abs() < 1e-12, "{dr}");
+        assert!((ds - 0.1).abs() < 1e-12, "{ds}");
+        assert!((ns - Vector2::new(-1.0, 0.0)).norm() < 1e-12);
     }
 
     /// A point on the superellipsoid of the pillar with axes (`ax`, `az`), elevation `t`
@@ -1050,6 +1249,11 @@ mod tests3 {
             (-1.0, -2.0, -6.0),
             (1.0, -0.6, -7.5),
             (-3.5, -2.5, -7.0),
+            // in the concave corner at a straight foot (floor y = −8.3), within the reach
+            // of the 0.5 µm fillet
+            (-3.85, -8.2, 0.0),
+            (-4.3, -7.95, 0.3),
+            (3.95, -8.25, -0.2),
         ];
         for s in substrates() {
             let az = pillars().nearest_axis_z(0.3, s.lattice);
