@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Memory check of the cell model under valgrind memcheck: short runs through IDA with every
 # C library behind the FFI (SuiteSparse's KLU on METIS's ordering, and UMFPACK refined and, on
-# the condensed system, unrefined), covering
+# the condensed system, on METIS's ordering unrefined), covering
 # the fall, the landing and the inertia switch (cases/fast/flat-gravity.ron to t = 10.5 s).
 # With --all, also faer's LU, KLU on its own ordering, the condensed faer LU and a run on
 # micropillars with adhesion and both active regions (cases/fast/push-pull-short.ron to
