@@ -498,19 +498,28 @@ fn pillar_tops_are_placed_over_the_lattice_in_3d() {
     );
 }
 
+/// Runs the `cellsim` binary from the crate's directory.
+fn cellsim(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_cellsim"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap()
+}
+
+/// The last row of a run's `timeseries.csv` text, by column name.
+fn last_row(csv: &str) -> std::collections::HashMap<&str, f64> {
+    let header = csv.lines().next().unwrap().split(',');
+    let values = csv.lines().last().unwrap().split(',');
+    header.zip(values.map(|v| v.parse().unwrap())).collect()
+}
+
 #[test]
 fn the_cli_meshes_checks_and_runs_a_3d_case() {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-3d");
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("cell-3d.ron");
     std::fs::write(&file, case3_text("Pillars(lattice: Gap)")).unwrap();
-    let cellsim = |args: &[&str]| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_cellsim"))
-            .args(args)
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .output()
-            .unwrap()
-    };
     let f = file.to_str().unwrap();
     let mesh = cellsim(&["mesh", f]);
     let text = String::from_utf8_lossy(&mesh.stdout);
@@ -563,15 +572,9 @@ fn the_cli_meshes_checks_and_runs_a_3d_case() {
             "penetration_depth"
         ]
     );
-    let last: Vec<f64> = csv
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
-        .collect();
-    assert_eq!(last[0], 110.0);
-    let col = |name: &str| last[header.iter().position(|c| *c == name).unwrap()];
+    let last = last_row(&csv);
+    assert_eq!(last["t"], 110.0);
+    let col = |name: &str| last[name];
     // On the flat substrate the contact patch is a disc: its radius along the meridian
     // and the radius of a disc of its area agree (measured 1.891 and 1.895 µm).
     let (r, r_eq) = (col("contact_radius"), col("contact_radius_equiv"));
@@ -799,34 +802,23 @@ fn a_fast_3d_pillar_case_lands_on_the_four_pillar_tops() {
     // area on the tops carries the weight.
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("pillars-3d");
     let _ = std::fs::remove_dir_all(&dir);
-    let run = std::process::Command::new(env!("CARGO_BIN_EXE_cellsim"))
-        .args([
-            "run",
-            "cases/fast/push-pull-3d-coarse.ron",
-            "--set",
-            "phases.t_end=100.0",
-            "--out",
-            dir.to_str().unwrap(),
-            "--quiet",
-        ])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
+    let run = cellsim(&[
+        "run",
+        "cases/fast/push-pull-3d-coarse.ron",
+        "--set",
+        "phases.t_end=100.0",
+        "--out",
+        dir.to_str().unwrap(),
+        "--quiet",
+    ]);
     assert!(
         run.status.success(),
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
     let csv = std::fs::read_to_string(dir.join("timeseries.csv")).unwrap();
-    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-    let last: Vec<f64> = csv
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
-        .collect();
-    let col = |name: &str| last[header.iter().position(|c| *c == name).unwrap()];
+    let last = last_row(&csv);
+    let col = |name: &str| last[name];
     assert_eq!(col("t"), 100.0);
     assert_eq!(col("contact_radius"), 0.0, "contact in the gap at z = 0");
     let (area, down) = (col("contact_area"), col("uy_centre"));

@@ -50,9 +50,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum PillarFoot {
     /// The whole superellipse (superellipsoid in 3-D) of MODEL.md §5 (§10): its rounded
-    /// lower half meets the floor at one point (in 3-D at one point per side), leaving an
-    /// undercut under the pillar's lower edges, up to 1.3 µm high under the corners of
-    /// the default 3-D pillars.
+    /// lower half touches the floor at one point, under its axis, leaving an undercut that
+    /// opens from there to h/2 under the pillar's edges (1.3 µm high where the default
+    /// 3-D push-pull cell jammed, under a corner 0.8 w/2 from the axis in x and z).
     #[default]
     Rounded,
     /// The upper half of the superellipse (superellipsoid) continued straight down to the
@@ -104,15 +104,15 @@ pub fn floor_and_pillar<T: Real, const D: usize>(
     n_p: nalgebra::SVector<T, D>,
     k: f64,
 ) -> (T, nalgebra::SVector<T, D>) {
-    let diff = d_f - d_p;
     let hard = if re(d_f) > re(d_p) {
         (d_f, n_f)
     } else {
         (d_p, n_p)
     };
-    if k <= 0.0 || re(diff).abs() >= k {
+    if k <= 0.0 || (re(d_f) - re(d_p)).abs() >= k {
         return hard;
     }
+    let diff = d_f - d_p;
     let h = (-abs(diff) + k) / k;
     let d = hard.0 + h * h * (0.25 * k);
     let lambda = diff / (2.0 * k) + 0.5;

@@ -807,6 +807,22 @@ impl From<crate::output::OutputError> for OutputStop {
 /// run).
 pub const SUMMARY_INTERVAL: Duration = Duration::from_millis(500);
 
+/// The observables of `model` at (`t`, `y`), refused when they or `y` are not finite: not
+/// expected (the residual reports non-finite values as inadmissible, and the integrators
+/// cut the step), but a run must never write NaN.
+fn observe_finite(
+    model: &Cell,
+    t: f64,
+    y: &[f64],
+) -> Result<(Observables, Option<crate::record::Observables3>), OutputStop> {
+    let (obs, obs3) = model.observe(t, y);
+    if !obs.is_finite() || obs3.is_some_and(|o| !o.is_finite()) || y.iter().any(|v| !v.is_finite())
+    {
+        return Err(OutputStop::NonFinite(t));
+    }
+    Ok((obs, obs3))
+}
+
 /// The files of a run, written as it goes: `mesh.json` first, a `timeseries.csv` row (and
 /// with `--vtu`/`--gif` a snapshot) per output time, `state_<phase>.json` at phase ends,
 /// and `summary.json` at most every [`SUMMARY_INTERVAL`] of wall time (and at each state file) and at the end.
@@ -932,15 +948,7 @@ impl RunWriter {
     /// Writes everything due at output time `t`: the CSV row, a snapshot, and at a phase
     /// end the state file. Nothing is written for a non-finite state.
     fn output(&mut self, model: &Cell, t: f64, y: &[f64], yp: &[f64]) -> Result<(), OutputStop> {
-        let (obs, obs3) = model.observe(t, y);
-        if !obs.is_finite()
-            || obs3.is_some_and(|o| !o.is_finite())
-            || y.iter().any(|v| !v.is_finite())
-        {
-            // Not expected (the residual reports non-finite values as inadmissible, and
-            // the integrators cut the step), but a run must never write NaN.
-            return Err(OutputStop::NonFinite(t));
-        }
+        let (obs, obs3) = observe_finite(model, t, y)?;
         let mut row = obs.csv_row();
         if let Some(o3) = &obs3 {
             for v in o3.values() {
@@ -1029,13 +1037,7 @@ impl RunWriter {
         if !self.phase_states {
             return Ok(());
         }
-        let (obs, obs3) = model.observe(t, y);
-        if !obs.is_finite()
-            || obs3.is_some_and(|o| !o.is_finite())
-            || y.iter().any(|v| !v.is_finite())
-        {
-            return Err(OutputStop::NonFinite(t));
-        }
+        let (obs, obs3) = observe_finite(model, t, y)?;
         self.write_state(model, STOPPED, t, y, yp, obs, obs3)
     }
 

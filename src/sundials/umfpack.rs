@@ -13,21 +13,21 @@ use crate::dae::linsolve::{LinearSolver, LinearSolverError};
 const UMFPACK_CONTROL: usize = 20;
 const UMFPACK_INFO: usize = 90;
 // Control entries.
+const UMFPACK_STRATEGY: usize = 5;
 const UMFPACK_ORDERING: usize = 10;
 /// Control entry: most iterative refinement steps of a solve.
 const UMFPACK_IRSTEP: usize = 7;
 // Info entries.
+const UMFPACK_STRATEGY_USED: usize = 18;
+const UMFPACK_FLOPS: usize = 42;
 const UMFPACK_LNZ: usize = 43;
 const UMFPACK_UNZ: usize = 44;
-// Orderings.
+// Strategies and orderings.
+const UMFPACK_STRATEGY_UNSYMMETRIC: f64 = 1.0;
+const UMFPACK_STRATEGY_SYMMETRIC: f64 = 3.0;
 const UMFPACK_ORDERING_AMD: f64 = 1.0;
 const UMFPACK_ORDERING_METIS: f64 = 3.0;
 // Status.
-const UMFPACK_STRATEGY: usize = 5;
-const UMFPACK_STRATEGY_USED: usize = 18;
-const UMFPACK_FLOPS: usize = 42;
-const UMFPACK_STRATEGY_UNSYMMETRIC: f64 = 1.0;
-const UMFPACK_STRATEGY_SYMMETRIC: f64 = 3.0;
 const UMFPACK_OK: c_int = 0;
 const UMFPACK_WARNING_SINGULAR_MATRIX: c_int = 1;
 const UMFPACK_A: c_int = 0;
@@ -136,8 +136,8 @@ impl UmfpackLu {
     }
 
     /// The same solver with UMFPACK's strategy fixed instead of chosen from the pattern:
-    /// `true` the symmetric one (AMD on A + Aᵀ, diagonal pivots preferred), `false` the
-    /// unsymmetric one (COLAMD on A).
+    /// `true` the symmetric one (the ordering, AMD or METIS, of A + Aᵀ; diagonal pivots
+    /// preferred), `false` the unsymmetric one (a column ordering of A).
     pub fn with_symmetric_strategy(mut self, symmetric: bool) -> Self {
         self.control[UMFPACK_STRATEGY] = if symmetric {
             UMFPACK_STRATEGY_SYMMETRIC
