@@ -52,18 +52,55 @@ impl LinearSolverFactory for Lu {
     }
 }
 
+/// The example's options (see the module's doc).
+#[derive(clap::Parser)]
+struct Args {
+    /// The case file.
+    #[arg(long, default_value = "cases/flat.ron")]
+    case: String,
+    /// Quasi-static: inertia off with this medium drag [pN·s/µm⁴].
+    #[arg(long)]
+    drag: Option<f64>,
+    /// Element size at the cell's bottom [µm] (default: the case's).
+    #[arg(long)]
+    h_bottom: Option<f64>,
+    /// Element size in the nucleus [µm] (default: the case's).
+    #[arg(long)]
+    h_nucleus: Option<f64>,
+    /// Refinement factor (default: the case's).
+    #[arg(long)]
+    refine: Option<f64>,
+    /// Integrate to this time [s]; without it the example only meshes.
+    #[arg(long)]
+    t_end: Option<f64>,
+    /// Pillar lattice: four or gap.
+    #[arg(long, default_value = "four")]
+    lattice: String,
+    /// Assemble in parallel.
+    #[arg(long)]
+    threads: bool,
+    /// Time the LUs on the Jacobian at rest instead of integrating.
+    #[arg(long)]
+    bench_lu: bool,
+    /// The LU(s): one name, or a comma-separated list with --bench-lu.
+    #[arg(long)]
+    lu: Option<String>,
+    /// IDA's relative tolerance.
+    #[arg(long, default_value_t = 1e-4)]
+    rtol: f64,
+    /// IDA's absolute tolerance on displacements [µm].
+    #[arg(long, default_value_t = 1e-6)]
+    atol: f64,
+    /// Output times.
+    #[arg(long, default_value_t = 20)]
+    outputs: usize,
+}
+
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let get = |name: &str| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
-    let num = |name: &str, default: f64| get(name).map_or(default, |v| v.parse().expect(name));
-    let case_file = get("--case").unwrap_or_else(|| "cases/flat.ron".into());
+    let args = <Args as clap::Parser>::parse();
+    let case_file = args.case.clone();
     let mut case = Case::load(&case_file).expect("case");
-    let drag = get("--drag").map(|v| v.parse::<f64>().expect("--drag"));
+    let drag = args.drag;
     if let Some(d) = drag {
         case.inertia.mode = cellsim::case::InertiaMode::Off;
         case.inertia.drag = d;
@@ -75,9 +112,9 @@ fn main() {
         r_n: g.r_n,
         r_cp: g.r_cp,
         r_c: g.r_c,
-        h_bottom: num("--h-bottom", case.mesh.h_bottom),
-        h_nucleus: num("--h-nucleus", case.mesh.h_nucleus),
-        refine: num("--refine", case.mesh.refine),
+        h_bottom: args.h_bottom.unwrap_or(case.mesh.h_bottom),
+        h_nucleus: args.h_nucleus.unwrap_or(case.mesh.h_nucleus),
+        refine: args.refine.unwrap_or(case.mesh.refine),
     };
     let t0 = Instant::now();
     let mesh = Mesh3::generate(&mp).expect("mesh");
@@ -86,18 +123,18 @@ fn main() {
         t0.elapsed().as_secs_f64(),
         mesh.quality()
     );
-    let Some(t_end) = get("--t-end").map(|v| v.parse::<f64>().expect("--t-end")) else {
+    let Some(t_end) = args.t_end else {
         return;
     };
     let inertia = drag.is_none() && scene::starts_with_inertia(&case);
     let plane = scene::model_params(&case, &case_file, inertia).expect("params");
-    let lattice = match get("--lattice").as_deref() {
-        Some("gap") => Lattice::Gap,
+    let lattice = match args.lattice.as_str() {
+        "gap" => Lattice::Gap,
         _ => Lattice::FourPillars,
     };
     let t1 = Instant::now();
     let mut m = Cell3::new(Params3 { plane, lattice }, mesh).expect("model");
-    m.set_parallel(args.iter().any(|a| a == "--threads"));
+    m.set_parallel(args.threads);
     println!(
         "model: {} unknowns ({} u, {} μ_as), {} elements, set-up {:.2} s",
         m.size(),
@@ -106,19 +143,19 @@ fn main() {
         m.n_elements(),
         t1.elapsed().as_secs_f64()
     );
-    if args.iter().any(|a| a == "--bench-lu") {
-        bench_lu(&mut m, get("--lu").as_deref());
+    if args.bench_lu {
+        bench_lu(&mut m, args.lu.as_deref());
         return;
     }
-    let rtol = num("--rtol", 1e-4);
-    let atol = Atol::Vector(m.atol_vector(num("--atol", 1e-6)));
+    let rtol = args.rtol;
+    let atol = Atol::Vector(m.atol_vector(args.atol));
     let mut ida = Ida::new(
         m,
         IdaOptions {
             rtol,
             atol,
             linear_solver: {
-                let name: &'static str = match get("--lu").as_deref() {
+                let name: &'static str = match args.lu.as_deref() {
                     Some("klu") => "klu",
                     Some("klu-metis") => "klu-metis",
                     Some("umfpack") => "umfpack",
@@ -134,7 +171,7 @@ fn main() {
         },
     )
     .expect("IDA");
-    let n_out = num("--outputs", 20.0) as usize;
+    let n_out = args.outputs;
     println!(
         "t\tsteps\tjac\twall\tuy_top\tcontact_radius\tcontact_radius_ref\tcontact_area\tforce_y/weight"
     );

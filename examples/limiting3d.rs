@@ -16,16 +16,29 @@ use cellsim::physics::Lattice;
 use cellsim::scene;
 use cellsim::sundials::{Ida, IdaOptions};
 
+/// The example's options (see the module's doc).
+#[derive(clap::Parser)]
+struct Args {
+    /// The case file.
+    #[arg(long, default_value = "cases/fast/flat-3d-coarse.ron")]
+    case: String,
+    /// The μ_as absolute tolerance is the case's times this factor.
+    #[arg(long, default_value_t = 1.0)]
+    mu_atol: f64,
+    /// First output time [s].
+    #[arg(long, default_value_t = 100.0)]
+    from: f64,
+    /// Last output time [s].
+    #[arg(long, default_value_t = 250.0)]
+    to: f64,
+    /// Output interval [s].
+    #[arg(long, default_value_t = 1.0)]
+    every: f64,
+}
+
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let get = |name: &str| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
-    let num = |name: &str, d: f64| get(name).map_or(d, |v| v.parse().expect(name));
-    let file = get("--case").unwrap_or_else(|| "cases/fast/flat-3d-coarse.ron".into());
+    let args = <Args as clap::Parser>::parse();
+    let file = args.case;
     let case = Case::load(&file).expect("case");
     let mesh = Mesh3::generate(&scene::mesh3_params(&case)).expect("mesh");
     let plane = scene::model_params(&case, &file, false).expect("params");
@@ -56,7 +69,7 @@ fn main() {
         height[i] = m.mesh.nodes[node][1] - bottom;
     }
     let mut atol = m.atol_vector(case.solver.atol);
-    let f = num("--mu-atol", 1.0);
+    let f = args.mu_atol;
     for &node in &m.dofs.mu_nodes {
         atol[m.dofs.mu[node]] *= f;
     }
@@ -72,11 +85,7 @@ fn main() {
         },
     )
     .expect("ida");
-    let (from, to, every) = (
-        num("--from", 100.0),
-        num("--to", 250.0),
-        num("--every", 1.0),
-    );
+    let (from, to, every) = (args.from, args.to, args.every);
     ida.advance_to(from, &mut |_, _| true).expect("to --from");
     let groups = ["u_x", "u_y", "u_z", "mu"];
     let band = 2.0; // µm above the bottom: the contact and adhesion region

@@ -31,7 +31,13 @@ impl SnapshotOptions {
 }
 
 /// One of the per-output-time files: a VTU series or a GIF, of either model.
-pub trait FrameSink<S> {
+pub trait FrameSink<S>: Sized {
+    /// The mesh the snapshots `S` live on.
+    type Mesh;
+    /// Starts the file of the run `name` in `out`; `outputs` is the number of output
+    /// times expected (to space a GIF's frames).
+    fn open(out: &Path, name: &str, mesh: &Self::Mesh, outputs: usize)
+    -> Result<Self, OutputError>;
     /// Adds the output time `s`.
     fn add(&mut self, s: &S) -> Result<(), OutputError>;
     /// Closes the file; returns it (the `.pvd` of a VTU series, the `.gif`).
@@ -39,6 +45,10 @@ pub trait FrameSink<S> {
 }
 
 impl FrameSink<Snapshot> for VtuSeries {
+    type Mesh = MeshFile;
+    fn open(out: &Path, name: &str, mesh: &MeshFile, _outputs: usize) -> Result<Self, OutputError> {
+        Self::new(out, name, mesh)
+    }
     fn add(&mut self, s: &Snapshot) -> Result<(), OutputError> {
         self.write(s).map(|_| ())
     }
@@ -48,6 +58,15 @@ impl FrameSink<Snapshot> for VtuSeries {
 }
 
 impl FrameSink<Snapshot3> for VtuSeries3 {
+    type Mesh = Mesh3File;
+    fn open(
+        out: &Path,
+        name: &str,
+        mesh: &Mesh3File,
+        _outputs: usize,
+    ) -> Result<Self, OutputError> {
+        Self::new(out, name, mesh)
+    }
     fn add(&mut self, s: &Snapshot3) -> Result<(), OutputError> {
         self.write(s).map(|_| ())
     }
@@ -57,6 +76,10 @@ impl FrameSink<Snapshot3> for VtuSeries3 {
 }
 
 impl FrameSink<Snapshot> for Movie {
+    type Mesh = MeshFile;
+    fn open(out: &Path, name: &str, mesh: &MeshFile, outputs: usize) -> Result<Self, OutputError> {
+        Self::new(&gif_path(out, name), name, mesh, outputs)
+    }
     fn add(&mut self, s: &Snapshot) -> Result<(), OutputError> {
         self.frame(s)
     }
@@ -66,6 +89,10 @@ impl FrameSink<Snapshot> for Movie {
 }
 
 impl FrameSink<Snapshot3> for Movie3 {
+    type Mesh = Mesh3File;
+    fn open(out: &Path, name: &str, mesh: &Mesh3File, outputs: usize) -> Result<Self, OutputError> {
+        Self::new(&gif_path(out, name), name, mesh, outputs)
+    }
     fn add(&mut self, s: &Snapshot3) -> Result<(), OutputError> {
         self.frame(s)
     }
@@ -88,44 +115,27 @@ pub type SnapshotWriter = SnapshotWriterOf<Snapshot, VtuSeries, Movie>;
 /// ([`super::vtu3`], [`super::movie3`]).
 pub type SnapshotWriter3 = SnapshotWriterOf<Snapshot3, VtuSeries3, Movie3>;
 
-impl SnapshotWriter {
+/// The GIF of the run `name` in `out`.
+fn gif_path(out: &Path, name: &str) -> PathBuf {
+    out.join(format!("{name}.gif"))
+}
+
+impl<S, V: FrameSink<S>, M: FrameSink<S, Mesh = V::Mesh>> SnapshotWriterOf<S, V, M> {
     /// A writer into `out` for the run `name` on `mesh`; `outputs` is the number of
     /// output times expected (to space the GIF's frames).
     pub fn new(
         out: &Path,
         name: &str,
-        mesh: &MeshFile,
+        mesh: &V::Mesh,
         opts: SnapshotOptions,
         outputs: usize,
     ) -> Result<Self, OutputError> {
-        let gif = out.join(format!("{name}.gif"));
         Ok(Self::of(
             opts.vtu
-                .then(|| VtuSeries::new(out, name, mesh))
+                .then(|| V::open(out, name, mesh, outputs))
                 .transpose()?,
             opts.gif
-                .then(|| Movie::new(&gif, name, mesh, outputs))
-                .transpose()?,
-        ))
-    }
-}
-
-impl SnapshotWriter3 {
-    /// As [`SnapshotWriter::new`] for the 3-D mesh.
-    pub fn new(
-        out: &Path,
-        name: &str,
-        mesh: &Mesh3File,
-        opts: SnapshotOptions,
-        outputs: usize,
-    ) -> Result<Self, OutputError> {
-        let gif = out.join(format!("{name}.gif"));
-        Ok(Self::of(
-            opts.vtu
-                .then(|| VtuSeries3::new(out, name, mesh))
-                .transpose()?,
-            opts.gif
-                .then(|| Movie3::new(&gif, name, mesh, outputs))
+                .then(|| M::open(out, name, mesh, outputs))
                 .transpose()?,
         ))
     }
