@@ -268,8 +268,8 @@ fn section_areas_are_the_disks(plane: Section, tol: [f64; 3]) {
     // The active outlines: PAC between the nucleus and the outer ellipse (semi-axes 7.5
     // and 7 µm), above θ = −18°; the bottom region's below θ = −35° (both ±ε_a).
     let at = |p: &[f64; 2]| (p[0], p[1] - c[1]);
-    assert!(!full.pac.is_empty() && !full.bottom.is_empty());
-    for p in full.pac.iter().flatten() {
+    assert!(!full.cell.pac.is_empty() && !full.cell.bottom.is_empty());
+    for p in full.cell.pac.iter().flatten() {
         let (h, y) = at(p);
         let r = (h * h + y * y).sqrt();
         assert!(r > r_n - 0.05, "PAC point {p:?} inside the nucleus");
@@ -279,7 +279,7 @@ fn section_areas_are_the_disks(plane: Section, tol: [f64; 3]) {
         );
         assert!(y > -r * (18f64 + 3.0).to_radians().sin(), "PAC point {p:?}");
     }
-    for p in full.bottom.iter().flatten() {
+    for p in full.cell.bottom.iter().flatten() {
         let (h, y) = at(p);
         let r = (h * h + y * y).sqrt();
         assert!(r > r_n - 0.05 && r < r_c + 0.05, "bottom point {p:?}");
@@ -289,8 +289,8 @@ fn section_areas_are_the_disks(plane: Section, tol: [f64; 3]) {
         );
     }
     // The markers p_t, c, p_b on the axis.
-    assert_eq!(full.markers.len(), 3);
-    for (m, y) in full.markers.iter().zip([c[1] + r_n, c[1], c[1] - r_n]) {
+    assert_eq!(full.cell.markers.len(), 3);
+    for (m, y) in full.cell.markers.iter().zip([c[1] + r_n, c[1], c[1] - r_n]) {
         assert!(m[0].abs() < 1e-9 && (m[1] - y).abs() < 1e-9, "{m:?}");
     }
 }

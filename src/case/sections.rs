@@ -541,12 +541,12 @@ fn is_four_pillars(l: &crate::physics::Lattice) -> bool {
     *l == crate::physics::Lattice::FourPillars
 }
 
-/// Nor the default foot.
+/// The default foot is not written out either.
 fn is_rounded(f: &crate::physics::PillarFoot) -> bool {
     *f == crate::physics::PillarFoot::Rounded
 }
 
-/// Nor the default fillet.
+/// Nor is the default fillet (0).
 fn is_zero(k: &f64) -> bool {
     *k == 0.0
 }

@@ -1558,22 +1558,13 @@ pub(crate) struct PlaneDrawing<'a> {
     pub substrate_label: String,
     /// Whether the substrate carries a fibronectin layer (with adhesion).
     pub layer: bool,
-    /// Filled pieces and their domains.
-    pub fills: &'a [(Domain, Vec<Pt>)],
+    /// The cell: its filled pieces (the elements in 2-D, a section's cut polygons in 3-D),
+    /// outline, interfaces, active regions and markers.
+    pub shape: &'a CellShape,
     /// The elements' outlines, drawn in darker shades when the options ask for the mesh,
     /// if the pieces are not the elements (a section's cut polygons); `None` if they are
     /// (2-D): their own outlines, darker, are the mesh then.
     pub mesh_lines: Option<&'a [(Domain, Vec<Pt>)]>,
-    /// The cell's outline (polylines).
-    pub outer: &'a [Vec<Pt>],
-    /// The nucleus and membrane interfaces (polylines).
-    pub interfaces: &'a [Vec<Pt>],
-    /// Outline of the PAC region (segments).
-    pub pac: &'a [[Pt; 2]],
-    /// Outline of the bottom region (segments).
-    pub bottom: &'a [[Pt; 2]],
-    /// Positions of the nucleus top p_t, the centre c and the nucleus bottom p_b.
-    pub markers: &'a [Pt],
 }
 
 /// Draws `cell` into `area` over `view`, with equal aspect: the view is widened along one
@@ -1669,7 +1660,8 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
         let color = domain_color(d);
         let edge = darker(color, 0.82);
         let polys: Vec<&Vec<Pt>> = cell
-            .fills
+            .shape
+            .elements
             .iter()
             .filter(|(dd, _)| *dd == d)
             .map(|(_, p)| p)
@@ -1714,11 +1706,11 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
                 .map_err(e)?
         };
     }
-    paths!(cell.interfaces, RGBColor(40, 40, 40).stroke_width(2));
-    paths!(cell.outer, BLACK.stroke_width(2));
+    paths!(cell.shape.interfaces, RGBColor(40, 40, 40).stroke_width(2));
+    paths!(cell.shape.outer, BLACK.stroke_width(2));
     for (segs, color, name) in [
-        (cell.pac, PAC, "active: PAC (push)"),
-        (cell.bottom, BOTTOM, "active: bottom (pull)"),
+        (&cell.shape.pac, PAC, "active: PAC (push)"),
+        (&cell.shape.bottom, BOTTOM, "active: bottom (pull)"),
     ] {
         if segs.is_empty() {
             continue;
@@ -1734,7 +1726,8 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
     *backdrop = Some(back);
     chart
         .draw_series(
-            cell.markers
+            cell.shape
+                .markers
                 .iter()
                 .map(|p| Circle::new((p[0], p[1]), 4, BLACK.filled())),
         )
@@ -1783,13 +1776,8 @@ pub fn draw_shape<DB: DrawingBackend>(
         x_label: "x (µm)",
         substrate_label: "substrate".to_string(),
         layer: mesh.layer_thickness.is_some(),
-        fills: &shape.elements,
+        shape: &shape,
         mesh_lines: None,
-        outer: &shape.outer,
-        interfaces: &shape.interfaces,
-        pac: &shape.pac,
-        bottom: &shape.bottom,
-        markers: &shape.markers,
     };
     draw_in_plane(
         area,

@@ -60,7 +60,9 @@ use super::figures::{
     FONT, GravityMark, MEMBRANE, PlaneBackdrop, PlaneDrawing, SHAPE_SIZE, SUBSTRATE, ShapeScale,
     ShapeStyleOptions, check_displacements, draw_in_plane,
 };
-use super::geometry::{ACTIVE_LEVEL, Bounds, Pt, Rect, contour, element_polygon, intervals};
+use super::geometry::{
+    ACTIVE_LEVEL, Bounds, CellShape, Pt, Rect, contour, element_polygon, intervals,
+};
 use super::vtu3::check_snapshot3;
 use crate::fem::{Domain, p2, tet};
 use crate::physics::{ActiveStrain, Substrate, Substrate3, smooth_step};
@@ -227,22 +229,13 @@ impl Region {
 pub struct SectionShape {
     /// The plane.
     pub plane: Section,
-    /// Filled pieces and their domains: the faces in the plane z = 0 (curved sides traced),
-    /// the cut polygons of the sub-tetrahedra in the plane x = z.
-    pub fills: Vec<(Domain, Vec<Pt>)>,
+    /// The cell in the plane: its filled pieces (`elements`: the faces in the plane z = 0,
+    /// curved sides traced; the cut polygons of the sub-tetrahedra in the plane x = z),
+    /// outline, interfaces, active-region outlines and the markers p_t, c, p_b.
+    pub cell: CellShape,
     /// The elements' outlines in the plane (closed polylines for z = 0, segments for x = z),
     /// with the element's domain.
     pub mesh_lines: Vec<(Domain, Vec<Pt>)>,
-    /// The cell's outline (polylines).
-    pub outer: Vec<Vec<Pt>>,
-    /// The nucleus and membrane interfaces (polylines).
-    pub interfaces: Vec<Vec<Pt>>,
-    /// Outline of the PAC region (segments).
-    pub pac: Vec<[Pt; 2]>,
-    /// Outline of the bottom region (segments).
-    pub bottom: Vec<[Pt; 2]>,
-    /// Deformed positions of the nucleus top p_t, the centre c and the nucleus bottom p_b.
-    pub markers: Vec<Pt>,
 }
 
 /// The four faces of every tetrahedron by their sorted vertex triples: (element, local face).
@@ -665,36 +658,38 @@ impl SectionShape {
         let plain = |l: &Vec<SPt>| l.iter().map(|s| s.p).collect::<Vec<Pt>>();
         SectionShape {
             plane,
-            outer: col.outer.iter().map(plain).collect(),
-            interfaces: col.interfaces.iter().map(|(_, l)| plain(l)).collect(),
-            fills: col.fills,
+            cell: CellShape {
+                elements: col.fills,
+                outer: col.outer.iter().map(plain).collect(),
+                interfaces: col.interfaces.iter().map(|(_, l)| plain(l)).collect(),
+                pac,
+                bottom,
+                markers: markers(mesh, &x, plane),
+            },
             mesh_lines: col.mesh_lines,
-            pac,
-            bottom,
-            markers: markers(mesh, &x, plane),
         }
     }
 
     /// The whole section: this half and its mirror image about the cell's axis.
     pub fn mirrored(&self) -> Self {
         let m = |p: &Pt| [-p[0], p[1]];
-        let line = |l: &Vec<Pt>| l.iter().map(m).collect::<Vec<Pt>>();
-        let seg = |s: &[Pt; 2]| [m(&s[0]), m(&s[1])];
-        let mut out = self.clone();
-        out.fills
-            .extend(self.fills.iter().map(|(d, p)| (*d, line(p))));
-        out.mesh_lines
-            .extend(self.mesh_lines.iter().map(|(d, p)| (*d, line(p))));
-        out.outer.extend(self.outer.iter().map(line));
-        out.interfaces.extend(self.interfaces.iter().map(line));
-        out.pac.extend(self.pac.iter().map(seg));
-        out.bottom.extend(self.bottom.iter().map(seg));
-        out
+        let mut mesh_lines = self.mesh_lines.clone();
+        mesh_lines.extend(
+            self.mesh_lines
+                .iter()
+                .map(|(d, l)| (*d, l.iter().map(m).collect())),
+        );
+        SectionShape {
+            plane: self.plane,
+            cell: self.cell.mirrored(),
+            mesh_lines,
+        }
     }
 
     /// The area of the filled pieces of domain `d` [µm²].
     pub fn area(&self, d: Domain) -> f64 {
-        self.fills
+        self.cell
+            .elements
             .iter()
             .filter(|(dd, _)| *dd == d)
             .map(|(_, p)| polygon_area(p))
@@ -703,13 +698,7 @@ impl SectionShape {
 
     /// Bounding box of the filled pieces.
     pub fn bounds(&self) -> Bounds {
-        let mut b = Bounds::empty();
-        for (_, poly) in &self.fills {
-            for p in poly {
-                b.include(*p);
-            }
-        }
-        b
+        self.cell.bounds()
     }
 }
 
@@ -877,13 +866,8 @@ pub fn draw_section<DB: DrawingBackend>(
         x_label: plane.axis_label(),
         substrate_label: format!("substrate (section {})", plane.name()),
         layer: mesh.layer_thickness.is_some(),
-        fills: &shape.fills,
+        shape: &shape.cell,
         mesh_lines: Some(&shape.mesh_lines),
-        outer: &shape.outer,
-        interfaces: &shape.interfaces,
-        pac: &shape.pac,
-        bottom: &shape.bottom,
-        markers: &shape.markers,
     };
     draw_in_plane(
         area,

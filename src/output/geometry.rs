@@ -109,7 +109,8 @@ impl ActiveRegion {
     }
 }
 
-/// The deformed half cell, ready to draw.
+/// The deformed half cell, ready to draw; in 3-D, a section of it
+/// ([`super::figures3::SectionShape`]).
 #[derive(Debug, Clone, Default)]
 pub struct CellShape {
     /// Each element's domain and deformed boundary polygon.
