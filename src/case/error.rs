@@ -36,11 +36,12 @@ pub enum CaseError {
         message: String,
     },
     /// A `--set PATH=VALUE` override does not apply or gives a value of the wrong type.
-    #[error("--set {arg}: {}{message}", field_prefix(field))]
+    #[error("{arg}: {}{message}", field_prefix(field))]
     Override {
         /// The file the override was applied to.
         file: String,
-        /// The override as given, `PATH=VALUE`.
+        /// The override as the message names it ([`super::Override::label`]):
+        /// `--set PATH=VALUE`, or the sweep file entry it comes from.
         arg: String,
         /// Dotted path of the field concerned, when it can be told.
         field: Option<String>,
@@ -66,8 +67,9 @@ pub struct Problem {
     /// Position of the field's name in the file; `None` if the file does not write the
     /// field (the value is a default).
     pub position: Option<Position>,
-    /// The `--set PATH=VALUE` argument that wrote the field, if an override did (then
-    /// `position` is `None`).
+    /// The override that wrote the field's value, as the message names it
+    /// (`--set PATH=VALUE`, or a sweep file's axis), if an override did (then `position`
+    /// is `None`).
     pub set: Option<String>,
 }
 
@@ -75,7 +77,7 @@ impl Problem {
     /// Formats the problem as one line prefixed by the file and position.
     pub fn render(&self, file: &str) -> String {
         match (&self.set, self.position) {
-            (Some(arg), _) => format!("--set {arg}: {}", self.violation.describe(false)),
+            (Some(arg), _) => format!("{arg}: {}", self.violation.describe(false)),
             (None, Some(p)) => format!("{file}:{p}: {}", self.violation.describe(false)),
             (None, None) => format!("{file}: {}", self.violation.describe(true)),
         }

@@ -475,6 +475,15 @@ impl FieldMap {
             .map(|r| r.start)
     }
 
+    /// Where the text writes the field at dotted `path`: from the start of its name to
+    /// the end of its value.
+    pub fn span(&self, path: &str) -> Option<(Position, Position)> {
+        self.records
+            .iter()
+            .find(|r| r.path == path)
+            .map(|r| (r.start, r.end))
+    }
+
     /// Does the text write the field at dotted `path`?
     pub fn contains(&self, path: &str) -> bool {
         self.locate(path).is_some()

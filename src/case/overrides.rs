@@ -24,7 +24,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use super::locate::{Position, Tok, Token, tokens};
+use super::locate::{FieldMap, Position, Tok, Token, tokens};
 use super::{Case, CaseError};
 
 /// One `--set PATH=VALUE`: a dotted path into the case and a RON value.
@@ -35,6 +35,10 @@ pub struct Override {
     pub path: String,
     /// The value in RON syntax, e.g. `6.0`.
     pub value: String,
+    /// Where the override comes from, as an error message names it: `None` for the
+    /// command line (`--set PATH=VALUE`), else e.g. "sweep axis `substrate.spacing` =
+    /// 10.0" ([`Override::from_source`]). Not serialized.
+    pub origin: Option<String>,
 }
 
 impl Override {
@@ -83,7 +87,23 @@ impl Override {
         Ok(Override {
             path: path.to_string(),
             value: value.to_string(),
+            origin: None,
         })
+    }
+
+    /// The same override, named in error messages by `origin` (a sweep file's axis, its
+    /// `set` or `derive` entry) instead of `--set PATH=VALUE`.
+    pub fn from_source(mut self, origin: impl Into<String>) -> Self {
+        self.origin = Some(origin.into());
+        self
+    }
+
+    /// How an error message names the override: its origin, or `--set PATH=VALUE`.
+    pub fn label(&self) -> String {
+        match &self.origin {
+            Some(o) => o.clone(),
+            None => format!("--set {self}"),
+        }
     }
 
     /// The path's components.
@@ -573,6 +593,25 @@ impl Edited {
         );
     }
 
+    /// The last override that wrote text between positions `from` and `to` of the edited
+    /// text (a field's name and value), if any did.
+    pub fn set_within(&self, from: Position, to: Position) -> Option<usize> {
+        let lines = LineIndex::new(&self.text);
+        let (a, b) = (lines.byte(&self.text, from), lines.byte(&self.text, to));
+        let mut off = 0;
+        let mut last = None;
+        for piece in &self.pieces {
+            let end = off + piece.len;
+            if let Origin::Set(k) = piece.origin {
+                if off < b && end > a {
+                    last = last.max(Some(k));
+                }
+            }
+            off = end;
+        }
+        last
+    }
+
     /// Where position `p` of the edited text came from. A position just after an
     /// override's text is the override's: parsers report a value that fell short there.
     pub fn source(&self, p: Position) -> Source {
@@ -653,7 +692,7 @@ impl Case {
                 Case::from_str(text, file_label)?;
                 return Err(CaseError::Override {
                     file: file_label.to_string(),
-                    arg: overrides[k].to_string(),
+                    arg: overrides[k].label(),
                     field: Some(overrides[k].path.clone()),
                     message: message.unwrap_or_else(|| "cannot apply to this file".into()),
                 });
@@ -681,29 +720,34 @@ fn relocate(e: CaseError, edited: &Edited, overrides: &[Override]) -> CaseError 
             },
             Source::Set(k) => CaseError::Override {
                 file,
-                arg: overrides[k].to_string(),
+                arg: overrides[k].label(),
                 field,
                 message,
             },
         },
-        CaseError::Invalid { file, problems } => CaseError::Invalid {
-            file,
-            problems: problems
+        CaseError::Invalid { file, problems } => {
+            // A problem is the override's when an override wrote any of the field's name
+            // or value (a value replaced in place keeps the file's name before it).
+            let fields = FieldMap::scan(&edited.text);
+            let problems = problems
                 .into_iter()
                 .map(|mut p| {
-                    if let Some(pos) = p.position {
-                        match edited.source(pos) {
-                            Source::File(q) => p.position = Some(q),
-                            Source::Set(k) => {
-                                p.position = None;
-                                p.set = Some(overrides[k].to_string());
-                            }
+                    let by_set = fields
+                        .span(&p.violation.field)
+                        .and_then(|(a, b)| edited.set_within(a, b));
+                    match (by_set, p.position.map(|pos| edited.source(pos))) {
+                        (Some(k), _) | (None, Some(Source::Set(k))) => {
+                            p.position = None;
+                            p.set = Some(overrides[k].label());
                         }
+                        (None, Some(Source::File(q))) => p.position = Some(q),
+                        (None, None) => {}
                     }
                     p
                 })
-                .collect(),
-        },
+                .collect();
+            CaseError::Invalid { file, problems }
+        }
         other => other,
     }
 }

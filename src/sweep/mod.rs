@@ -415,7 +415,11 @@ impl Plan {
         let set: Vec<Override> = spec
             .set
             .iter()
-            .map(|s| Override::parse(s).map_err(|m| bad(format!("set: {m}"))))
+            .map(|s| {
+                Override::parse(s)
+                    .map(|o| o.from_source(format!("sweep set `{s}`")))
+                    .map_err(|m| bad(format!("set: {m}")))
+            })
             .collect::<Result<_, _>>()?;
         let design = Design::from_spec(&spec.design).map_err(|m| bad(format!("design: {m}")))?;
         for d in &spec.derive {
@@ -450,14 +454,15 @@ impl Plan {
                 let Some(v) = v else { continue };
                 if let Some(set) = axis.variant_set(v) {
                     for o in set {
-                        ovs.push(Override::parse(o).map_err(|m| {
-                            bad(format!("design: axis `{}`: variant `{v}`: {m}", axis.path))
-                        })?);
+                        let origin = format!("sweep axis `{}`, variant `{v}`: `{o}`", axis.path);
+                        ovs.push(Override::parse(o).map(|o| o.from_source(origin)).map_err(
+                            |m| bad(format!("design: axis `{}`: variant `{v}`: {m}", axis.path)),
+                        )?);
                     }
                 } else {
                     let o = Override::new(&axis.path, v)
                         .map_err(|m| bad(format!("design: axis `{}`: value {m}", axis.path)))?;
-                    ovs.push(o);
+                    ovs.push(o.from_source(format!("sweep axis `{}` = {v}", axis.path)));
                 }
             }
             for d in &spec.derive {
@@ -478,9 +483,12 @@ impl Plan {
                         d.path, d.expr, dp.id
                     ))
                 })?;
+                let value = design::fmt_number(v);
+                let origin = format!("sweep derive `{}` = `{}` = {value}", d.path, d.expr);
                 ovs.push(
-                    Override::new(&d.path, &design::fmt_number(v))
-                        .map_err(|m| bad(format!("derive: {m}")))?,
+                    Override::new(&d.path, &value)
+                        .map_err(|m| bad(format!("derive: {m}")))?
+                        .from_source(origin),
                 );
             }
             let case = match Case::from_str_with_overrides(&base_text, &base_label, &ovs) {
