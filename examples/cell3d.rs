@@ -8,6 +8,7 @@
 //!     [--drag D]   # quasi-static: inertia off with medium drag D [pN·s/µm⁴]
 //!     [--lattice four|gap] [--threads]
 //!     [--bench-lu [--lu faer,umfpack,...]]   # time the LUs on the Jacobian at rest
+//!     [--lu-memory]   # the 3-D runs' UMFPACK on it: its memory estimate, fill and peak
 //! ```
 //!
 //! Without `--t-end` it only meshes. With inertia (the case's `OffAfter`) the run keeps
@@ -73,6 +74,9 @@ struct Args {
     /// Integrate to this time [s]; without it the example only meshes.
     #[arg(long)]
     t_end: Option<f64>,
+    /// Measure the 3-D runs' UMFPACK on the Jacobian at rest: memory estimate, fill, peak.
+    #[arg(long)]
+    lu_memory: bool,
     /// Pillar lattice: four or gap.
     #[arg(long, default_value = "four")]
     lattice: String,
@@ -147,6 +151,10 @@ fn main() {
         bench_lu(&mut m, args.lu.as_deref());
         return;
     }
+    if args.lu_memory {
+        lu_memory(&mut m);
+        return;
+    }
     let rtol = args.rtol;
     let atol = Atol::Vector(m.atol_vector(args.atol));
     let mut ida = Ida::new(
@@ -198,6 +206,55 @@ fn main() {
             m.contact_force_total(y).y / m.weight()
         );
     }
+}
+
+/// The 3-D runs' LU (UMFPACK, nested dissection, symmetric strategy) on the model's
+/// iteration matrix at rest: UMFPACK's memory estimate after the analysis, then one
+/// factorization's fill, time and peak memory, and the process's peak resident set.
+fn lu_memory(m: &mut Cell3) {
+    let n = m.size();
+    let (y, yp) = (vec![0.0; n], vec![0.0; n]);
+    let pattern = m.pattern().clone();
+    let mut vals = vec![0.0; pattern.compute_nnz()];
+    m.jacobian(50.0, &y, &yp, 0.1, &mut vals).expect("jacobian");
+    let mut lu = UmfpackLu::new(UmfpackOrdering::Metis)
+        .with_symmetric_strategy(true)
+        .without_refinement();
+    let t = Instant::now();
+    lu.analyse(&pattern).expect("analyse");
+    let gb = |b: Option<f64>| b.unwrap_or(f64::NAN) / 1e9;
+    println!(
+        "n = {n}, nnz(J) = {}, analyse {:.2} s, UMFPACK peak memory estimate {:.3} GB",
+        vals.len(),
+        t.elapsed().as_secs_f64(),
+        gb(lu.peak_memory_estimate())
+    );
+    let t = Instant::now();
+    match lu.factorize(&vals) {
+        Ok(()) => println!(
+            "factorize {:.2} s, nnz(L+U) = {:?}, UMFPACK peak memory {:.3} GB, process peak RSS {:.3} GB",
+            t.elapsed().as_secs_f64(),
+            lu.factor_nnz(),
+            gb(lu.peak_memory()),
+            peak_rss_gb()
+        ),
+        Err(e) => println!(
+            "factorize failed: {e}; process peak RSS {:.3} GB",
+            peak_rss_gb()
+        ),
+    }
+}
+
+/// The process's peak resident set size [GB] (VmHWM in /proc/self/status).
+fn peak_rss_gb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("VmHWM:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+        })
+        .map_or(f64::NAN, |kb| kb * 1024.0 / 1e9)
 }
 
 /// Times each LU on the model's iteration matrix at the rest state (cj = 0.1): analysis,

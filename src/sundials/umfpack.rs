@@ -4,7 +4,7 @@
 //! nested dissection), pivots preferred on the diagonal (threshold 0.001), frontal
 //! matrices factorized with the BLAS.
 
-use std::os::raw::{c_int, c_void};
+use std::os::raw::{c_long, c_void};
 use std::ptr;
 
 use crate::dae::Pattern;
@@ -18,7 +18,10 @@ const UMFPACK_ORDERING: usize = 10;
 /// Control entry: most iterative refinement steps of a solve.
 const UMFPACK_IRSTEP: usize = 7;
 // Info entries.
+const UMFPACK_SIZE_OF_UNIT: usize = 3;
 const UMFPACK_STRATEGY_USED: usize = 18;
+const UMFPACK_PEAK_MEMORY_ESTIMATE: usize = 21;
+const UMFPACK_PEAK_MEMORY: usize = 41;
 const UMFPACK_FLOPS: usize = 42;
 const UMFPACK_LNZ: usize = 43;
 const UMFPACK_UNZ: usize = 44;
@@ -28,48 +31,51 @@ const UMFPACK_STRATEGY_SYMMETRIC: f64 = 3.0;
 const UMFPACK_ORDERING_AMD: f64 = 1.0;
 const UMFPACK_ORDERING_METIS: f64 = 3.0;
 // Status.
-const UMFPACK_OK: c_int = 0;
-const UMFPACK_WARNING_SINGULAR_MATRIX: c_int = 1;
-const UMFPACK_A: c_int = 0;
+const UMFPACK_OK: c_long = 0;
+const UMFPACK_WARNING_SINGULAR_MATRIX: c_long = 1;
+const UMFPACK_A: c_long = 0;
 
+// The `dl` routines: 64-bit indices (SuiteSparse_long, `long` on 64-bit Linux). The `di`
+// ones index the factors' memory with 32-bit ints and fail with "out of memory" past
+// 2^31 units (16 GB) however much the machine has.
 #[link(name = "umfpack")]
 unsafe extern "C" {
-    fn umfpack_di_defaults(control: *mut f64);
-    fn umfpack_di_symbolic(
-        n_row: c_int,
-        n_col: c_int,
-        ap: *const c_int,
-        ai: *const c_int,
+    fn umfpack_dl_defaults(control: *mut f64);
+    fn umfpack_dl_symbolic(
+        n_row: c_long,
+        n_col: c_long,
+        ap: *const c_long,
+        ai: *const c_long,
         ax: *const f64,
         symbolic: *mut *mut c_void,
         control: *const f64,
         info: *mut f64,
-    ) -> c_int;
-    fn umfpack_di_numeric(
-        ap: *const c_int,
-        ai: *const c_int,
+    ) -> c_long;
+    fn umfpack_dl_numeric(
+        ap: *const c_long,
+        ai: *const c_long,
         ax: *const f64,
         symbolic: *mut c_void,
         numeric: *mut *mut c_void,
         control: *const f64,
         info: *mut f64,
-    ) -> c_int;
+    ) -> c_long;
     #[allow(clippy::too_many_arguments)]
-    fn umfpack_di_wsolve(
-        sys: c_int,
-        ap: *const c_int,
-        ai: *const c_int,
+    fn umfpack_dl_wsolve(
+        sys: c_long,
+        ap: *const c_long,
+        ai: *const c_long,
         ax: *const f64,
         x: *mut f64,
         b: *const f64,
         numeric: *mut c_void,
         control: *const f64,
         info: *mut f64,
-        wi: *mut c_int,
+        wi: *mut c_long,
         w: *mut f64,
-    ) -> c_int;
-    fn umfpack_di_free_symbolic(symbolic: *mut *mut c_void);
-    fn umfpack_di_free_numeric(numeric: *mut *mut c_void);
+    ) -> c_long;
+    fn umfpack_dl_free_symbolic(symbolic: *mut *mut c_void);
+    fn umfpack_dl_free_numeric(numeric: *mut *mut c_void);
 }
 
 /// UMFPACK's fill-reducing ordering.
@@ -81,17 +87,17 @@ pub enum UmfpackOrdering {
     Metis,
 }
 
-/// UMFPACK behind the [`LinearSolver`] trait (32-bit indices).
+/// UMFPACK behind the [`LinearSolver`] trait (64-bit indices).
 pub struct UmfpackLu {
     ordering: UmfpackOrdering,
     control: [f64; UMFPACK_CONTROL],
     info: [f64; UMFPACK_INFO],
-    ap: Vec<c_int>,
-    ai: Vec<c_int>,
+    ap: Vec<c_long>,
+    ai: Vec<c_long>,
     ax: Vec<f64>,
     symbolic: *mut c_void,
     numeric: *mut c_void,
-    wi: Vec<c_int>,
+    wi: Vec<c_long>,
     w: Vec<f64>,
     x: Vec<f64>,
 }
@@ -101,7 +107,7 @@ impl UmfpackLu {
     pub fn new(ordering: UmfpackOrdering) -> Self {
         let mut control = [0.0; UMFPACK_CONTROL];
         // SAFETY: writes UMFPACK_CONTROL entries.
-        unsafe { umfpack_di_defaults(control.as_mut_ptr()) };
+        unsafe { umfpack_dl_defaults(control.as_mut_ptr()) };
         control[UMFPACK_ORDERING] = match ordering {
             UmfpackOrdering::Amd => UMFPACK_ORDERING_AMD,
             UmfpackOrdering::Metis => UMFPACK_ORDERING_METIS,
@@ -158,6 +164,20 @@ impl UmfpackLu {
         (!self.numeric.is_null()).then(|| self.info[UMFPACK_FLOPS])
     }
 
+    /// UMFPACK's upper bound on the memory [bytes] of the symbolic and numeric
+    /// factorizations together, from the last analysis (before any factorization).
+    pub fn peak_memory_estimate(&self) -> Option<f64> {
+        (!self.symbolic.is_null())
+            .then(|| self.info[UMFPACK_PEAK_MEMORY_ESTIMATE] * self.info[UMFPACK_SIZE_OF_UNIT])
+    }
+
+    /// The memory [bytes] the last numeric factorization used at its peak (with the
+    /// symbolic analysis'), as UMFPACK counts it.
+    pub fn peak_memory(&self) -> Option<f64> {
+        (!self.numeric.is_null())
+            .then(|| self.info[UMFPACK_PEAK_MEMORY] * self.info[UMFPACK_SIZE_OF_UNIT])
+    }
+
     /// nnz(L) + nnz(U) (both with their diagonal) of the last factorization.
     pub fn factor_nnz(&self) -> Option<usize> {
         (!self.numeric.is_null())
@@ -169,10 +189,10 @@ impl UmfpackLu {
         // the free functions null it.
         unsafe {
             if !self.numeric.is_null() {
-                umfpack_di_free_numeric(&mut self.numeric);
+                umfpack_dl_free_numeric(&mut self.numeric);
             }
             if !self.symbolic.is_null() {
-                umfpack_di_free_symbolic(&mut self.symbolic);
+                umfpack_dl_free_symbolic(&mut self.symbolic);
             }
         }
         self.numeric = ptr::null_mut();
@@ -197,7 +217,7 @@ impl LinearSolver for UmfpackLu {
                 "UMFPACK: matrix not square".into(),
             ));
         }
-        let int = |v: usize| c_int::try_from(v).map_err(|_| too_big());
+        let int = |v: usize| c_long::try_from(v).map_err(|_| too_big());
         self.ap = pattern
             .col_ptr()
             .iter()
@@ -216,7 +236,7 @@ impl LinearSolver for UmfpackLu {
         // METIS ordering runs inside (through CHOLMOD), on METIS's global state: exclusive.
         let n_c = int(n)?;
         let status = super::metis::exclusive(|| unsafe {
-            umfpack_di_symbolic(
+            umfpack_dl_symbolic(
                 n_c,
                 n_c,
                 self.ap.as_ptr(),
@@ -251,9 +271,9 @@ impl LinearSolver for UmfpackLu {
         // SAFETY: the previous Numeric (if any) is freed; the arrays are those analysed.
         let status = unsafe {
             if !self.numeric.is_null() {
-                umfpack_di_free_numeric(&mut self.numeric);
+                umfpack_dl_free_numeric(&mut self.numeric);
             }
-            umfpack_di_numeric(
+            umfpack_dl_numeric(
                 self.ap.as_ptr(),
                 self.ai.as_ptr(),
                 self.ax.as_ptr(),
@@ -267,7 +287,7 @@ impl LinearSolver for UmfpackLu {
             UMFPACK_OK => Ok(()),
             UMFPACK_WARNING_SINGULAR_MATRIX => {
                 // SAFETY: the (singular) factors are freed: no solve with them.
-                unsafe { umfpack_di_free_numeric(&mut self.numeric) };
+                unsafe { umfpack_dl_free_numeric(&mut self.numeric) };
                 self.numeric = ptr::null_mut();
                 Err(LinearSolverError::Singular {
                     solver: "umfpack",
@@ -300,7 +320,7 @@ impl LinearSolver for UmfpackLu {
         }
         // SAFETY: x, b of length n, Wi n and W 5n as wsolve requires; Numeric valid.
         let status = unsafe {
-            umfpack_di_wsolve(
+            umfpack_dl_wsolve(
                 UMFPACK_A,
                 self.ap.as_ptr(),
                 self.ai.as_ptr(),
