@@ -139,3 +139,81 @@ impl From<LinearSolverKind> for SharedFactory {
         std::sync::Arc::new(kind)
     }
 }
+
+/// The memory a run is allowed: `CELLSIM_MEMORY_GB` if set, else 90 % of the smaller of
+/// the machine's memory (`MemTotal` of /proc/meminfo) and the process's control group
+/// limit (a Slurm job's `--mem`, cgroup v2's memory.max); `None` where neither can be read.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MemoryLimit {
+    /// Bytes.
+    pub bytes: f64,
+    /// Where the limit comes from, for messages.
+    pub source: String,
+}
+
+/// The environment variable that sets [`MemoryLimit`] [GB, 1e9 bytes].
+pub const MEMORY_ENV: &str = "CELLSIM_MEMORY_GB";
+
+impl MemoryLimit {
+    /// The limit of this process (see the type's documentation); an unreadable
+    /// `CELLSIM_MEMORY_GB` is an error naming it.
+    pub fn of_this_process() -> Result<Option<Self>, String> {
+        if let Ok(v) = std::env::var(MEMORY_ENV) {
+            return match v.trim().parse::<f64>() {
+                Ok(gb) if gb.is_finite() && gb > 0.0 => Ok(Some(MemoryLimit {
+                    bytes: gb * 1e9,
+                    source: format!("{MEMORY_ENV} = {}", v.trim()),
+                })),
+                _ => Err(format!(
+                    "{MEMORY_ENV} = {v:?} is not a positive number of GB (1e9 bytes)"
+                )),
+            };
+        }
+        let machine = std::fs::read_to_string("/proc/meminfo").ok().and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("MemTotal:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+                .map(|kb| kb * 1024.0)
+        });
+        let group = std::fs::read_to_string("/sys/fs/cgroup/memory.max")
+            .ok()
+            .and_then(|s| s.trim().parse::<f64>().ok());
+        let (bytes, what) = match (machine, group) {
+            (Some(m), Some(g)) if g < m => (g, "its control group's memory.max"),
+            (Some(m), _) => (m, "this machine's memory"),
+            (None, Some(g)) => (g, "its control group's memory.max"),
+            (None, None) => return Ok(None),
+        };
+        Ok(Some(MemoryLimit {
+            bytes: 0.9 * bytes,
+            source: format!(
+                "90 % of {what}, {:.1} GB; {MEMORY_ENV} sets another limit",
+                bytes / 1e9
+            ),
+        }))
+    }
+}
+
+/// Peak memory [bytes] of a run of the cell on a mesh of `elements` elements in `dim`
+/// dimensions (2: six-node triangles, plane strain or axisymmetric; 3: ten-node
+/// tetrahedra) with the scenes' LUs (faer-condensed in 2-D, umfpack-condensed in 3-D):
+/// the model, its Jacobian and the LU's factors, with inertia and the μ_as unknowns.
+///
+/// Fitted to the peak resident set of runs on this project's kind of machine
+/// (2026-12-02): in 2-D `cellsim run cases/pillars-push-pull.ron --set phases.t_end=0.5
+/// --set solver.defer_adhesion=false --set mesh.refine=R` at R = 4 and 8 (9 099 and
+/// 36 263 triangles: 0.53 and 2.41 GB, growing as elements^1.1); in 3-D the 3-D runs' LU
+/// on the Jacobian at rest (`cargo run --release --example cell3d -- --case
+/// cases/3d/pillars-push-pull.ron --t-end 1 --drag 1e-6 --lu-memory` at refine 1, 1.5, 2:
+/// 9 660, 26 927 and 57 626 tetrahedra, 1.38, 4.57 and 12.1 GB, growing as
+/// tetrahedra^1.25, the nested-dissection fill), times 1.2 for the velocities and the
+/// condensation while inertia is on (a run at refine 1.5 peaked at 5.41 GB). The
+/// estimate is within 10 % of those runs and 30 % above a mesh graded more steeply
+/// (h_bottom 0.02 µm: 51 374 tetrahedra, 9.7 GB for the LU alone).
+pub fn estimated_run_memory(dim: usize, elements: f64) -> f64 {
+    if dim == 3 {
+        16_200.0 * elements.powf(1.25)
+    } else {
+        23_300.0 * elements.powf(1.1)
+    }
+}

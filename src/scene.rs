@@ -2,10 +2,11 @@
 //! physical parameters in solver units. Only what the scene needs is switched on (μ_as
 //! unknowns with adhesion, active terms with active fibres, inertia per the case).
 
-use crate::case::terms::{MESH_GENERATOR, active, adhesion, contact, phases, viscosity};
-pub use crate::case::terms::{layer_checks, mesh_params, substrate};
+use crate::case::terms::{
+    MEMORY_ESTIMATE, MESH_GENERATOR, active, adhesion, contact, phases, viscosity,
+};
+pub use crate::case::terms::{layer_checks, mesh_params, mesh3_params, substrate};
 use crate::case::{self, Case, InertiaMode};
-use crate::fem::Mesh3Params;
 use crate::model::ModelParams;
 use crate::model3d::Params3;
 use crate::physics::{KinematicModel, Lattice, Yeoh};
@@ -41,7 +42,8 @@ pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParam
         message,
     };
     for check in layer_checks(case) {
-        if check.layer == MESH_GENERATOR {
+        // The mesh's own checks run when it is generated.
+        if check.layer == MESH_GENERATOR || check.layer == MEMORY_ESTIMATE {
             continue;
         }
         check.run().map_err(|r| {
@@ -85,12 +87,6 @@ pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParam
 /// Whether the case is the 3-D quarter cell (`geometry.model: ThreeD`).
 pub fn is_3d(case: &Case) -> bool {
     case.geometry.model == KinematicModel::ThreeD
-}
-
-/// The 3-D mesh parameters of a case: the 2-D ones (radii, sizes, refinement) about the
-/// centre (0, c_y, 0).
-pub fn mesh3_params(case: &Case) -> Mesh3Params {
-    Mesh3Params::from_section(&mesh_params(case), 0.0)
 }
 
 /// The parameters of the 3-D model of a case ([`model_params`] and the pillar lattice).

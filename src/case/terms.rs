@@ -5,7 +5,7 @@
 //! (The model's full parameters are built one layer up, by [`crate::scene`].)
 
 use super::{self as case, Case};
-use crate::fem::{MeshError, MeshParams};
+use crate::fem::{Mesh3Params, MeshError, MeshParams};
 use crate::physics::{self, ActiveStrain, Flip, Phases, Substrate, Viscosity, Yeoh};
 
 /// Mesh parameters of a case.
@@ -19,6 +19,65 @@ pub fn mesh_params(case: &Case) -> MeshParams {
         h_nucleus: case.mesh.h_nucleus,
         refine: case.mesh.refine,
         min_angle_deg: crate::fem::mesh::MIN_ANGLE_DEG,
+    }
+}
+
+/// The 3-D mesh parameters of a case: the 2-D ones (radii, sizes, refinement) about the
+/// centre (0, c_y, 0).
+pub fn mesh3_params(case: &Case) -> Mesh3Params {
+    Mesh3Params::from_section(&mesh_params(case), 0.0)
+}
+
+/// The mesh a case's model is built on: the half-plane mesh of six-node triangles (plane
+/// strain, axisymmetric) or the 3-D quarter cell's ten-node tetrahedra. A run generates
+/// it from these very parameters, and validating a case runs their generator's checks.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MeshSpec {
+    /// The half-plane models' mesh.
+    Plane(MeshParams),
+    /// The 3-D quarter cell's mesh.
+    Quarter(Mesh3Params),
+}
+
+impl MeshSpec {
+    /// The mesh of `case`'s model.
+    pub fn of(case: &Case) -> Self {
+        match case.geometry.model {
+            crate::physics::KinematicModel::ThreeD => MeshSpec::Quarter(mesh3_params(case)),
+            _ => MeshSpec::Plane(mesh_params(case)),
+        }
+    }
+
+    /// The generator's own checks of the parameters (with its element-count limit).
+    pub fn validate(&self) -> Result<(), MeshError> {
+        match self {
+            MeshSpec::Plane(p) => p.validate(),
+            MeshSpec::Quarter(p) => p.validate(),
+        }
+    }
+
+    /// Elements expected before meshing (for parameters that pass [`Self::validate`]).
+    pub fn expected_elements(&self) -> f64 {
+        match self {
+            MeshSpec::Plane(p) => p.expected_elements(),
+            MeshSpec::Quarter(p) => p.estimated_tets(),
+        }
+    }
+
+    /// 2 or 3.
+    pub fn dimension(&self) -> usize {
+        match self {
+            MeshSpec::Plane(_) => 2,
+            MeshSpec::Quarter(_) => 3,
+        }
+    }
+
+    /// What its elements are called in messages.
+    fn elements_name(&self) -> &'static str {
+        match self {
+            MeshSpec::Plane(_) => "triangles",
+            MeshSpec::Quarter(_) => "tetrahedra",
+        }
     }
 }
 
@@ -135,9 +194,10 @@ impl std::fmt::Debug for LayerCheck<'_> {
     }
 }
 
-/// The layer name of the mesh check of [`layer_checks`]; the other layers are physics.
 /// The name of the mesh generator's layer in [`LayerCheck::layer`].
 pub const MESH_GENERATOR: &str = "mesh generator";
+/// The name of the memory estimate's layer in [`LayerCheck::layer`].
+pub const MEMORY_ESTIMATE: &str = "memory estimate";
 
 fn layer_check<'c>(
     layer: &'static str,
@@ -171,17 +231,23 @@ fn physics_refusal(
     }
 }
 
+/// The case fields the mesh is made from.
+const MESH_READS: [&str; 4] = ["geometry", "mesh.h_bottom", "mesh.h_nucleus", "mesh.refine"];
+
 /// Every check the lower layers make of a case's parameters before a run integrates:
-/// [`MeshParams::validate`] (which includes the element-count estimate), the material law
-/// [`Yeoh::from_engineering`] of each domain, and the validators of the phases, the
-/// substrate, the active strain, contact, adhesion and viscosity.
+/// the mesh generator's of the model's mesh ([`MeshSpec::validate`], with its
+/// element-count limit), the run's memory against the limit ([`memory_refusal`]), the
+/// material law [`Yeoh::from_engineering`] of each domain, and the validators of the
+/// phases, the substrate, the active strain, contact, adhesion and viscosity. `cellsim
+/// check` and every command that runs a case load it through these.
 pub fn layer_checks(case: &Case) -> Vec<LayerCheck<'_>> {
     let mut checks = Vec::new();
-    checks.push(layer_check(
-        MESH_GENERATOR,
-        &["geometry", "mesh.h_bottom", "mesh.h_nucleus", "mesh.refine"],
-        move || mesh_refusal(case),
-    ));
+    checks.push(layer_check(MESH_GENERATOR, &MESH_READS, move || {
+        mesh_refusal(case)
+    }));
+    checks.push(layer_check(MEMORY_ESTIMATE, &MESH_READS, move || {
+        memory_refusal(case)
+    }));
     let m = &case.materials;
     for (domain, mat) in [
         ("nucleus", &m.nucleus),
@@ -324,11 +390,66 @@ pub fn layer_checks(case: &Case) -> Vec<LayerCheck<'_>> {
     checks
 }
 
-/// [`MeshParams::validate`] of a case, its error traced back to the case fields.
+/// The mesh fields that refine the mesh, the one that refines most (relative to its
+/// default) first: they share the blame for too many elements.
+fn refining_fields(case: &Case) -> Vec<(String, String)> {
+    let m = &case.mesh;
+    let d = case::Mesh::default();
+    let mut fields = vec![
+        (m.refine / d.refine, field("mesh.refine", m.refine)),
+        (d.h_bottom / m.h_bottom, field("mesh.h_bottom", m.h_bottom)),
+        (
+            d.h_nucleus / m.h_nucleus,
+            field("mesh.h_nucleus", m.h_nucleus),
+        ),
+    ];
+    fields.sort_by(|a, b| b.0.total_cmp(&a.0));
+    fields.into_iter().filter_map(|(_, f)| f).collect()
+}
+
+/// A run's estimated peak memory ([`crate::lu::estimated_run_memory`], from the elements
+/// estimated before meshing) against the memory it may use
+/// ([`crate::lu::MemoryLimit`]): a mesh the machine cannot factor is refused before
+/// meshing, with the estimate. Passes a mesh the generator refuses (its own check says
+/// why) and where no limit can be read.
+pub fn memory_refusal(case: &Case) -> Result<(), Refusal> {
+    let spec = MeshSpec::of(case);
+    if spec.validate().is_err() {
+        return Ok(());
+    }
+    let limit = crate::lu::MemoryLimit::of_this_process().map_err(|message| Refusal {
+        fields: refining_fields(case),
+        message,
+    })?;
+    let Some(limit) = limit else {
+        return Ok(());
+    };
+    let elements = spec.expected_elements();
+    let need = crate::lu::estimated_run_memory(spec.dimension(), elements);
+    if need <= limit.bytes {
+        return Ok(());
+    }
+    Err(Refusal {
+        fields: refining_fields(case),
+        message: format!(
+            "mesh too large for the memory: about {elements:.0} {} estimated, a run would \
+             need about {:.1} GB (the sparse LU's factors and the model), more than the \
+             {:.1} GB allowed ({}); coarsen the mesh (a smaller mesh.refine, a larger \
+             mesh.h_bottom or mesh.h_nucleus)",
+            spec.elements_name(),
+            need / 1e9,
+            limit.bytes / 1e9,
+            limit.source
+        ),
+    })
+}
+
+/// The mesh generator's checks of a case's mesh ([`MeshSpec::validate`]), its error
+/// traced back to the case fields.
 fn mesh_refusal(case: &Case) -> Result<(), Refusal> {
     let g = &case.geometry;
     let m = &case.mesh;
-    let e = match mesh_params(case).validate() {
+    let e = match MeshSpec::of(case).validate() {
         Ok(()) => return Ok(()),
         Err(e) => e,
     };
@@ -337,7 +458,9 @@ fn mesh_refusal(case: &Case) -> Result<(), Refusal> {
             field: name, value, ..
         } => {
             let f = match *name {
-                "center[0]" | "center[1]" | "center" => field("geometry.centre_y", g.centre_y),
+                "center[0]" | "center[1]" | "center[2]" | "center" => {
+                    field("geometry.centre_y", g.centre_y)
+                }
                 "r_n" => field("geometry.r_n", g.r_n),
                 "r_cp" => field("geometry.r_cp", g.r_cp),
                 "r_c" => field("geometry.r_c", g.r_c),
@@ -348,21 +471,8 @@ fn mesh_refusal(case: &Case) -> Result<(), Refusal> {
             };
             vec![f.unwrap_or_else(|| ("mesh".to_string(), case::num(*value)))]
         }
-        // Too many elements: the sizes and the refinement share the blame, the one that
-        // refines most (relative to its default) first.
-        _ => {
-            let d = case::Mesh::default();
-            let mut fields = vec![
-                (m.refine / d.refine, field("mesh.refine", m.refine)),
-                (d.h_bottom / m.h_bottom, field("mesh.h_bottom", m.h_bottom)),
-                (
-                    d.h_nucleus / m.h_nucleus,
-                    field("mesh.h_nucleus", m.h_nucleus),
-                ),
-            ];
-            fields.sort_by(|a, b| b.0.total_cmp(&a.0));
-            fields.into_iter().filter_map(|(_, f)| f).collect()
-        }
+        // Too many elements: the sizes and the refinement share the blame.
+        _ => refining_fields(case),
     };
     Err(Refusal {
         fields,
