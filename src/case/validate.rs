@@ -607,10 +607,15 @@ impl Checker<'_> {
         self.range(
             "solver.rtol",
             s.rtol,
-            s.rtol > 0.0 && s.rtol < 1.0,
-            "0 < rtol < 1",
+            s.rtol > 0.0 && s.rtol <= super::MAX_RTOL,
+            format!("0 < rtol <= {}", super::MAX_RTOL),
         );
-        self.positive("solver.atol", s.atol);
+        self.range(
+            "solver.atol",
+            s.atol,
+            s.atol > 0.0 && s.atol <= super::MAX_ATOL,
+            format!("0 < atol <= {} µm", super::MAX_ATOL),
+        );
         self.positive("solver.bdf2_dt", s.bdf2_dt);
         self.int_range("solver.max_order", s.max_order.into(), 1, Some(5));
         self.int_range("solver.max_steps", s.max_steps, 1, None);

@@ -154,6 +154,18 @@ impl<const D: usize> DofMapOf<D> {
         self.u[i].map(|d| if d == NONE { 0.0 } else { y[d] })
     }
 
+    /// The node that moved furthest in `y` and the length of its displacement.
+    pub fn largest_displacement(&self, y: &[f64]) -> (usize, f64) {
+        (0..self.u.len())
+            .map(|i| {
+                (
+                    i,
+                    self.node_u(y, i).iter().map(|c| c * c).sum::<f64>().sqrt(),
+                )
+            })
+            .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a })
+    }
+
     /// The rows of the momentum balance of node `i`: the v rows with inertia, else the u rows.
     pub fn momentum_rows(&self, i: usize) -> [usize; D] {
         if self.inertia { self.v[i] } else { self.u[i] }

@@ -149,6 +149,9 @@ pub enum FailureKind {
     StepLimit,
     /// The step size collapsed (the stall rule of [`StepGuard`]).
     Stalled,
+    /// The state left the scene: a node moved further than the cell's diameter plus its
+    /// height above the substrate's lowest point (nothing written at that time).
+    Unphysical,
     /// An output could not be written.
     Output,
 }

@@ -34,6 +34,14 @@ impl Cell {
         }
     }
 
+    /// The node that moved furthest in `y` and the length of its displacement [µm].
+    pub(crate) fn largest_displacement(&self, y: &[f64]) -> (usize, f64) {
+        match self {
+            Cell::Plane(m) => m.dofs.largest_displacement(y),
+            Cell::Quarter(m) => m.dofs.largest_displacement(y),
+        }
+    }
+
     /// Number of unknowns.
     pub(crate) fn n(&self) -> usize {
         match self {

@@ -767,6 +767,8 @@ enum Frames {
 enum OutputStop {
     /// The state or its observables are not finite (nothing written): the run stops.
     NonFinite(f64),
+    /// The state left the scene (nothing written): the run stops with this reason.
+    Unphysical(String),
     /// The state at an output time could not be formed (the reason): the run stops.
     State(f64, String),
     /// A file could not be written: the run fails with this error.
@@ -781,6 +783,7 @@ impl OutputStop {
                 FailureKind::Integration,
                 format!("non-finite state or output at t = {t} s (not written)"),
             )),
+            OutputStop::Unphysical(why) => Ok((FailureKind::Unphysical, why)),
             OutputStop::State(t, why) => Ok((
                 FailureKind::Integration,
                 format!("cannot form the state at t = {t} s: {why}"),
@@ -807,18 +810,48 @@ impl From<crate::output::OutputError> for OutputStop {
 /// run).
 pub const SUMMARY_INTERVAL: Duration = Duration::from_millis(500);
 
-/// The observables of `model` at (`t`, `y`), refused when they or `y` are not finite: not
-/// expected (the residual reports non-finite values as inadmissible, and the integrators
-/// cut the step), but a run must never write NaN.
-fn observe_finite(
+/// How far any point of the cell can move in a scene [µm]: the cell's diameter plus the
+/// height of its lowest point above the substrate's lowest point (the floor between the
+/// pillars). A state past it has left the scene: a displacement no force of the model
+/// can cause, seen only where the integrator's tolerances let the error test pass
+/// nonsense (`--rtol 0.5` once sent the cell 13 cm up with exit 0).
+pub fn scene_reach(case: &Case) -> f64 {
+    let g = &case.geometry;
+    let floor = match &case.substrate {
+        case::Substrate::Flat(f) => f.y_s,
+        case::Substrate::Pillars(p) => p.resolved_y_top(g) - p.height,
+    };
+    2.0 * g.r_c + (g.centre_y - g.r_c - floor).max(0.0)
+}
+
+/// Why the state `y` at `t` is not one a run may report: a node moved further than
+/// `reach` ([`scene_reach`]).
+fn unphysical(model: &Cell, t: f64, y: &[f64], reach: f64) -> Option<String> {
+    let (node, moved) = model.largest_displacement(y);
+    (moved > reach).then(|| {
+        format!(
+            "unphysical state at t = {t:.6e} s (not written): node {node} moved {moved:.4e} µm,              more than the cell's diameter plus its height above the substrate's lowest point              ({reach} µm); the tolerances (solver.rtol, solver.atol) let the error test pass a              state the model cannot reach"
+        )
+    })
+}
+
+/// The observables of `model` at (`t`, `y`), refused when they or `y` are not finite (not
+/// expected: the residual reports non-finite values as inadmissible, and the integrators
+/// cut the step, but a run must never write NaN) or when the state has left the scene
+/// (a node moved further than `reach`, [`scene_reach`]).
+fn observe_admissible(
     model: &Cell,
     t: f64,
     y: &[f64],
+    reach: f64,
 ) -> Result<(Observables, Option<crate::record::Observables3>), OutputStop> {
     let (obs, obs3) = model.observe(t, y);
     if !obs.is_finite() || obs3.is_some_and(|o| !o.is_finite()) || y.iter().any(|v| !v.is_finite())
     {
         return Err(OutputStop::NonFinite(t));
+    }
+    if let Some(why) = unphysical(model, t, y, reach) {
+        return Err(OutputStop::Unphysical(why));
     }
     Ok((obs, obs3))
 }
@@ -835,6 +868,8 @@ struct RunWriter {
     phase_states: bool,
     phases: [(f64, &'static str); 4],
     tolerance: f64,
+    /// How far a node may move before the state is unphysical ([`scene_reach`]).
+    reach: f64,
     summary: Summary,
     /// When the summary was last written.
     summary_written: Option<Instant>,
@@ -931,6 +966,7 @@ impl RunWriter {
                 (ph.t_a0, "active"),
             ],
             tolerance: 1e-9 * ph.t_end,
+            reach: scene_reach(case),
             summary,
             summary_written: None,
             states_in_summary: 0,
@@ -948,7 +984,7 @@ impl RunWriter {
     /// Writes everything due at output time `t`: the CSV row, a snapshot, and at a phase
     /// end the state file. Nothing is written for a non-finite state.
     fn output(&mut self, model: &Cell, t: f64, y: &[f64], yp: &[f64]) -> Result<(), OutputStop> {
-        let (obs, obs3) = observe_finite(model, t, y)?;
+        let (obs, obs3) = observe_admissible(model, t, y, self.reach)?;
         let mut row = obs.csv_row();
         if let Some(o3) = &obs3 {
             for v in o3.values() {
@@ -1037,7 +1073,7 @@ impl RunWriter {
         if !self.phase_states {
             return Ok(());
         }
-        let (obs, obs3) = observe_finite(model, t, y)?;
+        let (obs, obs3) = observe_admissible(model, t, y, self.reach)?;
         self.write_state(model, STOPPED, t, y, yp, obs, obs3)
     }
 
@@ -1307,5 +1343,41 @@ mod tests {
                 .reason(1.2)
                 .starts_with("interrupted by SIGTERM at t = 1.2")
         );
+    }
+}
+
+#[cfg(test)]
+mod admissible {
+    use super::*;
+
+    /// A state whose node moved further than the scene allows stops the run (kind
+    /// `unphysical`, nothing written); the state an inch short of it does not.
+    #[test]
+    fn a_state_past_the_scene_is_refused_as_unphysical() {
+        let case = Case::load("cases/fast/flat-gravity.ron").unwrap();
+        // The cell's diameter, 20 µm, plus its 0.5 µm above the substrate.
+        let reach = scene_reach(&case);
+        assert!((reach - 20.5).abs() < 1e-12, "{reach}");
+        let model = build_model(&case, "flat-gravity", true).unwrap();
+        let (_, mut y, _) = model.initial();
+        assert!(observe_admissible(&model, 0.0, &y, reach).is_ok());
+        // The first displacement unknown: 0.99 of the reach is a state, 1.01 is not.
+        y[0] = 0.99 * reach;
+        assert!(observe_admissible(&model, 1.0, &y, reach).is_ok());
+        y[0] = 1.01 * reach;
+        let Err(stop) = observe_admissible(&model, 1.0, &y, reach) else {
+            panic!("accepted a node 1.01 × the reach away");
+        };
+        let (kind, reason) = stop.into_stop().unwrap();
+        assert_eq!(kind, FailureKind::Unphysical);
+        assert!(
+            reason.starts_with("unphysical state at t = 1.000000e0 s"),
+            "{reason}"
+        );
+        assert!(reason.contains("moved 2.0705e1 µm"), "{reason}");
+        // On pillars the floor between them counts: 5 µm pillars below the tops.
+        let pillars = Case::load("cases/pillars-push-pull.ron").unwrap();
+        let floor_gap = scene_reach(&pillars) - 20.0;
+        assert!(floor_gap > 5.0, "{floor_gap}");
     }
 }
