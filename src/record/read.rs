@@ -509,3 +509,32 @@ impl RunData {
         self.states.iter().find(|s| s.phase == phase)
     }
 }
+
+#[cfg(test)]
+mod round_trip {
+    use super::*;
+
+    /// Every number a run writes to JSON reads back as the same double: sweep.csv copies
+    /// the final values from summary.json, and must hold the digits timeseries.csv holds.
+    /// Without serde_json's `float_roundtrip`, -0.48454310266656725 (a sweep's uy_top)
+    /// read back as its neighbour -0.4845431026665673.
+    #[test]
+    fn doubles_written_to_json_read_back_exactly() {
+        let dir = std::env::temp_dir().join(format!("cellsim-json-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("values.json");
+        let mut rng = oorandom::Rand64::new(7);
+        let mut values = vec![-0.484_543_102_666_567_25_f64, 1e-300, -5e-324, f64::MAX];
+        values.extend((0..20_000).map(|_| {
+            let mantissa = rng.rand_float() * 2.0 - 1.0;
+            mantissa * 10f64.powi(rng.rand_range(0..40) as i32 - 20)
+        }));
+        crate::record::write_json(&path, &values).unwrap();
+        let back: Vec<f64> = read_json(&path).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        for (a, b) in values.iter().zip(&back) {
+            assert_eq!(a.to_bits(), b.to_bits(), "{a} read back as {b}");
+        }
+        assert_eq!(back.len(), values.len());
+    }
+}
