@@ -178,25 +178,28 @@ fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), O
     let chars = |v: &[String]| v.iter().map(|s| s.chars().count()).max().unwrap_or(0) as u32;
     let cell_w = (9 * chars(xs) + 20).clamp(110, 260);
     let label_w = (9 * chars(ys) + 30).clamp(90, 300);
-    let w = (70 + label_w + cell_w * nx as u32).max(700) + 150;
+    let title = format!(
+        "{}: {}{}",
+        record.name,
+        quantity_label(q),
+        if rows.iter().any(|r| r.status == Status::Failed) {
+            " (crossed: failed, last value written)"
+        } else {
+            ""
+        }
+    );
+    // The title over the whole figure, which is widened to hold it.
+    let title_font = (FONT, 22).into_font();
+    let title_w = title_font.box_size(&title).map_or(0, |(w, _)| w);
+    let w = ((70 + label_w + cell_w * nx as u32).max(700) + COLORBAR_W).max(title_w + 40);
     let h = (180 + 90 * ny as u32).max(520);
     let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
     root.fill(&WHITE).map_err(|x| e(x.to_string()))?;
-    let (main, side) = root.split_horizontally(w - 150);
+    let root = root
+        .titled(&title, title_font)
+        .map_err(|x| e(x.to_string()))?;
+    let (main, side) = root.split_horizontally(w - COLORBAR_W);
     let mut chart = ChartBuilder::on(&main)
-        .caption(
-            format!(
-                "{}: {}{}",
-                record.name,
-                quantity_label(q),
-                if rows.iter().any(|r| r.status == Status::Failed) {
-                    " (crossed: failed, last value written)"
-                } else {
-                    ""
-                }
-            ),
-            (FONT, 22),
-        )
         .margin(16)
         .x_label_area_size(60)
         .y_label_area_size(label_w)
@@ -277,17 +280,26 @@ fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), O
             )))
             .map_err(|x| e(x.to_string()))?;
     }
-    colorbar(&side, lo, hi).map_err(&e)?;
+    colorbar(&side, lo, hi, &quantity_label(q)).map_err(&e)?;
     root.present().map_err(|x| e(x.to_string()))?;
     Ok(())
 }
 
-fn colorbar(area: &DrawingArea<BitMapBackend<'_>, Shift>, lo: f64, hi: f64) -> Result<(), String> {
+/// Width of a heat map's colour bar with its ticks and label [px].
+const COLORBAR_W: u32 = 190;
+
+/// The colour bar from `lo` to `hi`, its ticks and its `label` (the quantity and unit).
+fn colorbar(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    lo: f64,
+    hi: f64,
+    label: &str,
+) -> Result<(), String> {
     let mut chart = ChartBuilder::on(area)
-        .margin_top(60)
+        .margin_top(30)
         .margin_bottom(76)
         .margin_right(10)
-        .y_label_area_size(70)
+        .y_label_area_size(110)
         .build_cartesian_2d(0.0..1.0, lo..hi)
         .map_err(|x| x.to_string())?;
     chart
@@ -295,7 +307,12 @@ fn colorbar(area: &DrawingArea<BitMapBackend<'_>, Shift>, lo: f64, hi: f64) -> R
         .disable_mesh()
         .disable_x_axis()
         .y_labels(8)
-        .y_label_formatter(&|v| fmt_value(*v))
+        // A tick at zero computed as lo + k·step is a round-off away from it.
+        .y_label_formatter(&|v| {
+            fmt_value(if v.abs() < 1e-9 * (hi - lo) { 0.0 } else { *v })
+        })
+        .y_desc(label)
+        .axis_desc_style((FONT, 16))
         .label_style((FONT, 14))
         .draw()
         .map_err(|x| x.to_string())?;
