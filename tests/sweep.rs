@@ -100,10 +100,11 @@ fn a_tiny_sweep_writes_its_table_resumes_and_shards_collect_to_the_same_table() 
             "{r:?}"
         );
         if invalid {
+            // Named by the sweep file's axis that set it, not as a command-line override.
             assert_eq!(
                 r["reason"],
-                "--set materials.nucleus.nu=0.5: materials.nucleus.nu = 0.5 is out of range \
-                 (must satisfy -1 < nu < 0.5)"
+                "sweep axis `materials.nucleus.nu` = 0.5: materials.nucleus.nu = 0.5 is out \
+                 of range (must satisfy -1 < nu < 0.5)"
             );
             continue;
         }
@@ -116,6 +117,30 @@ fn a_tiny_sweep_writes_its_table_resumes_and_shards_collect_to_the_same_table() 
         let fall = -1.5 - y_s - 0.1;
         assert!((uy + fall).abs() < 0.02, "{r:?}");
     }
+    // sweep.csv holds each point's own numbers: the same text as the last row of its
+    // timeseries.csv, and the same doubles as its summary.json.
+    for r in rows.iter().filter(|r| r["status"] == "finished") {
+        let point = format!("{dir}/points/{}", r["id"]);
+        let series = std::fs::read_to_string(format!("{point}/timeseries.csv")).unwrap();
+        let head: Vec<&str> = series.lines().next().unwrap().split(',').collect();
+        let last: Vec<&str> = series.lines().last().unwrap().split(',').collect();
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(format!("{point}/summary.json")).unwrap(),
+        )
+        .unwrap();
+        let mut compared = 0;
+        for (column, value) in head.iter().zip(&last) {
+            let Some(in_sweep) = r.get(*column) else {
+                continue;
+            };
+            assert_eq!(in_sweep, value, "{}: {column}", r["id"]);
+            let in_summary = summary["final_values"][column].as_f64().unwrap();
+            assert_eq!(in_summary.to_string(), *value, "{}: {column}", r["id"]);
+            compared += 1;
+        }
+        assert!(compared >= 8, "{compared} columns compared");
+    }
+
     // The resolved case is what `cellsim check` prints with the same overrides.
     let check = cellsim(&[
         "check",
@@ -157,6 +182,7 @@ fn a_tiny_sweep_writes_its_table_resumes_and_shards_collect_to_the_same_table() 
     let res = cellsim(&["sweep", "plot", &dir, "--quantity", "uy_top"]);
     assert!(res.status.success(), "{}", text(&res).1);
     assert!(Path::new(&format!("{dir}/heatmap-uy_top.png")).exists());
+    heat_map_title_and_colour_bar_label_fit(&dir);
     let res = cellsim(&["sweep", "plot", &dir, "--quantity", "nope"]);
     assert_eq!(res.status.code(), Some(2));
     assert!(text(&res).1.contains("not a column of sweep.csv"));
@@ -191,6 +217,40 @@ fn a_tiny_sweep_writes_its_table_resumes_and_shards_collect_to_the_same_table() 
     assert_eq!(without_wall(&format!("{sharded}/sweep.csv")), direct);
 }
 
+/// The heat map of a sweep with a long name (the sweep in `dir`, renamed): its title is
+/// whole (white margins left and right of the ink in the title band: it was cut off at
+/// the left, "etry: penetration depth…"), and its colour bar carries a label (ink in the
+/// strip left of the tick labels, where it had none).
+fn heat_map_title_and_colour_bar_label_fit(dir: &str) {
+    let renamed = tmp("sweep-long-title");
+    std::fs::create_dir_all(&renamed).unwrap();
+    std::fs::copy(format!("{dir}/sweep.csv"), format!("{renamed}/sweep.csv")).unwrap();
+    let record = std::fs::read_to_string(format!("{dir}/sweep.json")).unwrap();
+    let record = record.replacen(
+        "\"name\": \"fast-flat\"",
+        "\"name\": \"pillar-geometry-with-a-much-longer-sweep-name\"",
+        1,
+    );
+    assert!(record.contains("much-longer"), "sweep.json names its sweep");
+    std::fs::write(format!("{renamed}/sweep.json"), record).unwrap();
+    let res = cellsim(&["sweep", "plot", &renamed]);
+    assert!(res.status.success(), "{}", text(&res).1);
+    let img = image::open(format!("{renamed}/heatmap-penetration_depth.png"))
+        .unwrap()
+        .to_rgb8();
+    let (w, h) = img.dimensions();
+    let ink = |x: u32, y: u32| img.get_pixel(x, y).0.iter().map(|&c| c as u32).sum::<u32>() < 300;
+    let title: Vec<u32> = (0..w).filter(|&x| (0..36).any(|y| ink(x, y))).collect();
+    let (first, last) = (title[0], *title.last().unwrap());
+    assert!(
+        first >= 10 && last + 10 < w,
+        "title ink from x = {first} to {last} of {w}"
+    );
+    assert!(last - first > 400, "a title of {} px", last - first);
+    let strip = (w - 190..w - 160).filter(|&x| (h / 3..2 * h / 3).any(|y| ink(x, y)));
+    assert!(strip.count() > 3, "no colour bar label");
+}
+
 /// A sweep file in the test's temporary directory over `cases/fast/flat-gravity.ron`.
 fn sweep_file(name: &str, body: &str) -> String {
     let dir = tmp(&format!("sweep-files-{name}"));
@@ -211,12 +271,12 @@ fn a_bad_override_or_sweep_file_stops_the_sweep_with_status_2() {
         (
             "typo",
             r#"    design: Grid([(path: "substrate.ys", values: [-2.0])]),"#,
-            "point g0: --set substrate.ys=-2.0: substrate.ys: unknown field `ys`; expected one of `y_s`",
+            "point g0: sweep axis `substrate.ys` = -2.0: substrate.ys: unknown field `ys`; expected one of `y_s`",
         ),
         (
             "wrong-type",
             r#"    design: Zip([(path: "output.n_times", values: [400.5])]),"#,
-            "--set output.n_times=400.5: output.n_times: expected an integer, found the decimal number `400.5`",
+            "sweep axis `output.n_times` = 400.5: output.n_times: expected an integer, found the decimal number `400.5`",
         ),
         (
             "bad-set",
