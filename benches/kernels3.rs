@@ -5,7 +5,7 @@
 //! - `piola_total` (2-D) and `piola_total3` in `f64`, the residual's stress;
 //! - `material_point` (2-D, one `DualSVec64<4>` pass), `material_point3` (closed form) and
 //!   `material_point3_dual` (one `DualSVec64<9>` pass), the tangent's;
-//! - `contact_force` (2-D) and `contact_force3` with `DualSVec64<3>` (x and J), on the
+//! - `contact_force` in 2-D and in 3-D with `DualSVec64<3>` (x and J), on the
 //!   default pillars, points in the contact band.
 //!
 //! Each benchmark runs the kernel over all `N` inputs; the machine is shared, so compare
@@ -18,8 +18,7 @@ use std::time::Duration;
 
 use cellsim::physics::{
     Contact, Lattice, Pillars, Substrate, Substrate3, Viscosity, Yeoh, contact_force,
-    contact_force3, material_point, material_point3, material_point3_dual, piola_total,
-    piola_total3,
+    material_point, material_point3, material_point3_dual, piola_total, piola_total3,
 };
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
@@ -217,7 +216,7 @@ fn contact(c: &mut Criterion) {
             let mut acc = 0.0;
             for x in &pts3 {
                 let xd = Vector3::from_fn(|k, _| D3::from_re(x[k]).derivative(k));
-                let f = contact_force3(&s3, &law, black_box(&xd), D3::from_re(1.1));
+                let f = contact_force(&s3, &law, black_box(&xd), D3::from_re(1.1));
                 acc += f.y.re;
             }
             acc
@@ -227,7 +226,7 @@ fn contact(c: &mut Criterion) {
         b.iter(|| {
             let mut acc = 0.0;
             for x in &pts3 {
-                acc += contact_force3(&s3, &law, black_box(x), 1.1).y;
+                acc += contact_force(&s3, &law, black_box(x), 1.1).y;
             }
             acc
         })

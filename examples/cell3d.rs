@@ -21,7 +21,7 @@ use cellsim::dae::linsolve::{ColumnOrdering, FaerLu, LinearSolver, LinearSolverE
 use cellsim::dae::{Atol, Dae, Integrator, LinearSolverFactory, SharedFactory};
 use cellsim::fem::{Mesh3, Mesh3Params};
 use cellsim::lu::LinearSolverKind;
-use cellsim::model3d::{Cell3, Params3};
+use cellsim::model::{Cell3, ModelParams};
 use cellsim::physics::Lattice;
 use cellsim::scene;
 use cellsim::sundials::{Ida, IdaOptions};
@@ -137,7 +137,12 @@ fn main() {
         _ => Lattice::FourPillars,
     };
     let t1 = Instant::now();
-    let mut m = Cell3::new(Params3 { plane, lattice }, mesh).expect("model");
+    let params = ModelParams {
+        kinematics: cellsim::physics::KinematicModel::ThreeD,
+        lattice,
+        ..plane
+    };
+    let mut m = Cell3::new(params, mesh).expect("model");
     m.set_parallel(args.threads);
     println!(
         "model: {} unknowns ({} u, {} μ_as), {} elements, set-up {:.2} s",

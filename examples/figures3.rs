@@ -1,7 +1,7 @@
 //! Draws every figure of the 3-D quarter cell ([`cellsim::output::figures3`]), a VTU file
 //! and a GIF into a directory, from states built here:
 //!
-//! - a synthetic smooth deformation of the default mesh (`Mesh3Params::reference()`,
+//! - a synthetic smooth deformation of the default mesh (`cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())`,
 //!   meshed by gmsh and cached): the cell fallen 0.5 µm, its bottom sagged into the gap
 //!   under its centre, flattened and bulging sideways, over MODEL.md's pillars on both
 //!   lattices (four pillars around the axis; the gap between two), with both active
@@ -20,8 +20,8 @@ use std::time::Instant;
 use cellsim::case::{self, Case};
 use cellsim::dae::{Atol, Integrator};
 use cellsim::fem::{Domain, Mesh3, Mesh3Params, TetRule, TetTabulation};
+use cellsim::model::Cell3;
 use cellsim::model::ModelParams;
-use cellsim::model3d::{Cell3, Params3};
 use cellsim::output::figures::ShapeStyleOptions;
 use cellsim::output::figures3::{
     Coloring, FIGURE_SIZE, Section, draw_section, gravity_at, section_figure, surface_figure,
@@ -317,7 +317,12 @@ fn integrate_flat_gravity() -> (Mesh3File, Snapshot3) {
     .expect("the quarter cell meshes");
     let lattice = Lattice::FourPillars;
     let mf = mesh_file(&mesh, &p, lattice);
-    let m = Cell3::new(Params3 { plane: p, lattice }, mesh).expect("the model builds");
+    let params = ModelParams {
+        kinematics: cellsim::physics::KinematicModel::ThreeD,
+        lattice,
+        ..p
+    };
+    let m = Cell3::new(params, mesh).expect("the model builds");
     let atol = m.atol_vector(1e-7);
     let t0 = Instant::now();
     let mut ida = Ida::new(
@@ -354,7 +359,10 @@ fn main() {
     );
     std::fs::create_dir_all(&out).expect("create the output directory");
     let t0 = Instant::now();
-    let mesh = Mesh3::generate(&Mesh3Params::reference()).expect("the default mesh");
+    let mesh = Mesh3::generate(&cellsim::case::terms::mesh3_params(
+        &cellsim::case::Case::reference(),
+    ))
+    .expect("the default mesh");
     eprintln!(
         "default mesh: {} tetrahedra, {} nodes ({:.1} s)",
         mesh.elements.len(),

@@ -11,7 +11,7 @@ use cellsim::case::Case;
 use cellsim::dae::{Atol, Dae, Integrator};
 use cellsim::fem::Mesh3;
 use cellsim::lu::LinearSolverKind;
-use cellsim::model3d::{Cell3, Params3};
+use cellsim::model::{Cell3, ModelParams};
 use cellsim::physics::Lattice;
 use cellsim::scene;
 use cellsim::sundials::{Ida, IdaOptions};
@@ -44,9 +44,10 @@ fn main() {
     let plane = scene::model_params(&case, &file, false).expect("params");
     let bottom = case.geometry.centre()[1] - case.geometry.r_c;
     let m = Cell3::new(
-        Params3 {
-            plane,
+        ModelParams {
+            kinematics: cellsim::physics::KinematicModel::ThreeD,
             lattice: Lattice::FourPillars,
+            ..plane
         },
         mesh,
     )

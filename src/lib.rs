@@ -14,7 +14,6 @@ pub mod dae;
 pub mod fem;
 pub mod lu;
 pub mod model;
-pub mod model3d;
 pub mod output;
 pub mod paper;
 pub mod physics;

@@ -8,7 +8,6 @@ use crate::case::terms::{
 pub use crate::case::terms::{layer_checks, mesh_params, mesh3_params, substrate};
 use crate::case::{self, Case, InertiaMode};
 use crate::model::ModelParams;
-use crate::model3d::Params3;
 use crate::physics::{KinematicModel, Lattice, Yeoh};
 
 /// A problem with a case that validation could not see (a material law rejecting its
@@ -73,6 +72,10 @@ pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParam
         gravity: case.gravity.g(),
         phases: phases(case),
         substrate: substrate(case),
+        lattice: match &case.substrate {
+            case::Substrate::Pillars(p) => p.lattice,
+            case::Substrate::Flat(_) => Lattice::FourPillars,
+        },
         contact: contact(case),
         adhesion: adhesion(case),
         active: active(case),
@@ -87,16 +90,4 @@ pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParam
 /// Whether the case is the 3-D quarter cell (`geometry.model: ThreeD`).
 pub fn is_3d(case: &Case) -> bool {
     case.geometry.model == KinematicModel::ThreeD
-}
-
-/// The parameters of the 3-D model of a case ([`model_params`] and the pillar lattice).
-pub fn params3(case: &Case, file: &str, inertia: bool) -> Result<Params3, SceneError> {
-    let lattice = match &case.substrate {
-        case::Substrate::Pillars(p) => p.lattice,
-        case::Substrate::Flat(_) => Lattice::FourPillars,
-    };
-    Ok(Params3 {
-        plane: model_params(case, file, inertia)?,
-        lattice,
-    })
 }

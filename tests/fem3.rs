@@ -37,7 +37,7 @@ fn generate(p: &Mesh3Params) -> Generated {
 fn params(refine: f64) -> Mesh3Params {
     Mesh3Params {
         refine,
-        ..Mesh3Params::reference()
+        ..cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())
     }
 }
 
@@ -282,7 +282,7 @@ fn default_mesh_is_complete_and_of_good_quality() {
 fn meshing_is_deterministic_and_cached() {
     let p = Mesh3Params {
         refine: 0.8,
-        ..Mesh3Params::reference()
+        ..cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())
     };
     let (ra, rb) = (scratch("det-a"), scratch("det-b"));
     let a = Mesh3::generate_with(&p, Path::new("gmsh"), &ra).expect("first");
@@ -356,7 +356,7 @@ fn other_cells_mesh_with_their_planes_points_and_volumes() {
             center: [0.0, 10.0, 0.0],
             h_bottom: 1.0,
             h_nucleus: 0.5,
-            ..Mesh3Params::reference()
+            ..cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())
         },
     ];
     for p in cases {
@@ -384,7 +384,7 @@ fn other_cells_mesh_with_their_planes_points_and_volumes() {
 fn gmsh_missing_and_bad_parameters_are_refused() {
     let root = scratch("missing");
     let e = Mesh3::generate_with(
-        &Mesh3Params::reference(),
+        &cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference()),
         Path::new("/nonexistent/gmsh"),
         &root,
     )
@@ -398,7 +398,7 @@ fn gmsh_missing_and_bad_parameters_are_refused() {
         Err(MeshError::InvalidParam { field, .. }) => field,
         other => panic!("expected InvalidParam, got {other:?}"),
     };
-    let d = Mesh3Params::reference();
+    let d = cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference());
     assert_eq!(
         field_of(Mesh3Params {
             r_cp: 5.0,

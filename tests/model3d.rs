@@ -6,9 +6,9 @@ use cellsim::case::{self, Case};
 use cellsim::dae::{Atol, Dae, Integrator};
 use cellsim::fem::tet::{TET_FACES, face_map};
 use cellsim::fem::{Domain, Mesh, Mesh3, Mesh3Params, MeshParams, TriangleRule};
+use cellsim::model::{Cell3, Constraints};
 use cellsim::model::{CellModel, ModelParams};
-use cellsim::model3d::{Cell3, Constraints, Params3};
-use cellsim::physics::{Lattice, Substrate, Viscosity, Yeoh, piola_total3};
+use cellsim::physics::{KinematicModel, Lattice, Substrate, Viscosity, Yeoh, piola_total3};
 use cellsim::scene;
 use cellsim::sundials::{Ida, IdaOptions};
 use nalgebra::{Matrix3, Vector3};
@@ -35,10 +35,12 @@ pub fn coarse3() -> Mesh3 {
     mesh3(0.6, 1.5)
 }
 
-fn params3(plane: ModelParams) -> Params3 {
-    Params3 {
-        plane,
+/// The parameters of a half-plane case made the 3-D cell's (over four pillars).
+fn params3(plane: ModelParams) -> ModelParams {
+    ModelParams {
+        kinematics: KinematicModel::ThreeD,
         lattice: Lattice::FourPillars,
+        ..plane
     }
 }
 
@@ -166,7 +168,14 @@ fn jacobian_of_the_quarter_cell_matches_finite_differences() {
             let c3 = [p.center[0], p.center[1], 0.0];
             pl.y_top = pl.y_top_for_gap3(0.5, lattice, c3, 10.0).expect("placed");
         }
-        let mut m = Cell3::new(Params3 { plane: p, lattice }, mesh.clone()).unwrap();
+        let mut m = Cell3::new(
+            ModelParams {
+                lattice,
+                ..params3(p)
+            },
+            mesh.clone(),
+        )
+        .unwrap();
         let (y, yp) = deformed_state(&m, 0.5, 7);
         let t = 45_000.0;
         let f = m.contact_force_total(&y);
@@ -240,7 +249,7 @@ fn patch_test_homogeneous_deformation_gives_exact_internal_forces() {
     let visc = params.viscosity;
     let mut m = Cell3::new(params3(params), coarse3()).unwrap();
     let f0 = Matrix3::new(1.08, 0.0, 0.0, -0.06, 0.93, 0.04, 0.0, 0.0, 1.05);
-    let c = m.params.center();
+    let c = Vector3::new(m.params.center[0], m.params.center[1], 0.0);
     let mut y = vec![0.0; m.size()];
     for (i, x) in m.mesh.nodes.iter().enumerate() {
         let d = (f0 - Matrix3::identity()) * (Vector3::from(*x) - c);
@@ -326,10 +335,10 @@ fn weight_and_volumes_of_the_quarter_cell() {
     );
     let vn = m.volume(Some(Domain::Nucleus));
     assert!((vn / ball(g.r_n) - 1.0).abs() < 1e-3, "nucleus {vn}");
-    let rho = m.params.plane.densities;
+    let rho = m.params.densities;
     let domains = [Domain::Nucleus, Domain::Cytoplasm, Domain::Membrane];
     let weight = m.weight();
-    let expected = m.params.plane.gravity
+    let expected = m.params.gravity
         * domains
             .iter()
             .zip(rho)
@@ -690,13 +699,13 @@ fn deferred_exposures_leave_the_same_cell_and_join_consistently() {
             .y_top_for_gap3(0.5, Lattice::Gap, [p.center[0], p.center[1], 0.0], 10.0)
             .expect("placed");
     }
-    let params = Params3 {
-        plane: p,
+    let params = ModelParams {
         lattice: Lattice::Gap,
+        ..params3(p)
     };
     let mesh = coarse3();
     let mut full = Cell3::new(params.clone(), mesh.clone()).unwrap();
-    let mut small = Cell3::deferring_adhesion(params, mesh, Constraints::Quarter).unwrap();
+    let mut small = Cell3::deferring_adhesion(params, mesh).unwrap();
     assert!(small.adhesion_deferred() && !full.adhesion_deferred());
     let n_mu = full.dofs.n_mu();
     assert!(n_mu > 0 && small.size() + n_mu == full.size());
@@ -708,7 +717,7 @@ fn deferred_exposures_leave_the_same_cell_and_join_consistently() {
     small.residual(t, &y[..m], &yp[..m], &mut r_small).unwrap();
     assert_eq!(&r_full[..m], &r_small[..]);
 
-    let t0 = small.params.plane.phases.t_g0;
+    let t0 = small.params.phases.t_g0;
     small.accepted_step(t0, &y[..m], &yp[..m]);
     let mut big = small.with_adhesion_unknowns(t0, &y[..m], &yp[..m]).unwrap();
     let (t, y2, yp2) = big.initial();

@@ -8,7 +8,7 @@ use std::sync::OnceLock;
 
 use cellsim::case::{self, Case};
 use cellsim::fem::tet;
-use cellsim::fem::{Domain, Mesh3, Mesh3Params, TetRule};
+use cellsim::fem::{Domain, Mesh3, TetRule};
 use cellsim::output::figures::ShapeStyleOptions;
 use cellsim::output::figures3::{
     self, Coloring, FIGURE_SIZE, Section, SectionShape, section_figure, surface_figure,
@@ -28,10 +28,15 @@ fn scratch(name: &str) -> PathBuf {
     d
 }
 
-/// The default quarter mesh (`Mesh3Params::reference()`), meshed once.
+/// The default quarter mesh (`cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())`), meshed once.
 fn mesh() -> &'static Mesh3 {
     static MESH: OnceLock<Mesh3> = OnceLock::new();
-    MESH.get_or_init(|| Mesh3::generate(&Mesh3Params::reference()).expect("the default mesh"))
+    MESH.get_or_init(|| {
+        Mesh3::generate(&cellsim::case::terms::mesh3_params(
+            &cellsim::case::Case::reference(),
+        ))
+        .expect("the default mesh")
+    })
 }
 
 /// The mesh file of the default mesh over MODEL.md's pillars on `lattice` (tops placed

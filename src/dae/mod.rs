@@ -91,6 +91,44 @@ pub trait Dae {
     }
 }
 
+/// A boxed DAE is the DAE it holds (a run's model behind a trait object).
+impl<T: Dae + ?Sized> Dae for Box<T> {
+    fn size(&self) -> usize {
+        (**self).size()
+    }
+    fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
+        (**self).residual(t, y, yp, r)
+    }
+    fn pattern(&self) -> &Pattern {
+        (**self).pattern()
+    }
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        cj: f64,
+        v: &mut [f64],
+    ) -> Result<(), DaeError> {
+        (**self).jacobian(t, y, yp, cj, v)
+    }
+    fn differential(&self) -> Vec<bool> {
+        (**self).differential()
+    }
+    fn initial(&self) -> (f64, Vec<f64>, Vec<f64>) {
+        (**self).initial()
+    }
+    fn accepted_step(&mut self, t: f64, y: &[f64], yp: &[f64]) {
+        (**self).accepted_step(t, y, yp)
+    }
+    fn breakpoints(&self) -> Vec<f64> {
+        (**self).breakpoints()
+    }
+    fn first_order_blocks(&self) -> Option<FirstOrderBlocks> {
+        (**self).first_order_blocks()
+    }
+}
+
 /// The kinematic structure of a second-order system written in first order: pairs
 /// (p, q) of unknowns where row p of F is the kinematic equation `ẏ_p − y_q = 0`, so that
 /// row p of `J = ∂F/∂y + cj ∂F/∂ẏ` has exactly two entries, `J_pp = cj` and

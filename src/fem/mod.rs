@@ -12,10 +12,13 @@
 //!   from a geometry written here and cached; the 2-D mesh extruded into a one-layer slab.
 //! - [`gmsh`]: reading and writing such meshes as gmsh 4.1 ASCII files (2-D: both; 3-D:
 //!   reading).
+//! - [`element`]: what a model needs of a mesh and of its element's tabulated shape
+//!   functions, for the triangles and the tetrahedra alike.
 //! - [`assembly`]: sparse patterns built once from (row, col) entries and the positions
 //!   of element blocks in them, for refilling assembled matrices.
 
 pub mod assembly;
+pub mod element;
 pub mod gmsh;
 pub mod mesh;
 pub mod mesh3;
@@ -23,6 +26,7 @@ pub mod p2;
 pub mod quadrature;
 pub mod tet;
 
+pub use element::{CellMesh, ElementGeometryError, ElementTabulation};
 pub use mesh::{Domain, Mesh, MeshError, MeshParams, MeshQuality, NamedPoints};
 pub use mesh3::{Mesh3, Mesh3Params, Mesh3Quality};
 pub use p2::{EdgeTabulation, ElementGeometry, GeometryOf, P2Error, P2Tabulation};
@@ -35,5 +39,9 @@ pub use tet::{TetError, TetGeometry, TetTabulation};
 pub(crate) mod reference {
     pub fn mesh_params() -> super::MeshParams {
         crate::case::terms::mesh_params(&crate::case::Case::reference())
+    }
+
+    pub fn mesh3_params() -> super::Mesh3Params {
+        crate::case::terms::mesh3_params(&crate::case::Case::reference())
     }
 }

@@ -14,16 +14,28 @@
 
 #![allow(non_snake_case)]
 
-use super::element::{Element, ElementState, NODES};
-use super::kernels::{ElementTangent, ElementVector, Formulation, check_admissible};
-use super::kinematics::{Axisymmetric, DIM, Vector, contract, deformation, rate};
+use nalgebra::Vector2;
+
+use super::element::{ElementOf, ElementState};
+use super::kernels::{Formulation, check_admissible};
+use super::kinematics::{Axisymmetric, NodalOf, contract, deformation, rate};
+use super::plan::TangentOf;
 use crate::dae::DaeError;
 use crate::physics::axisym::{HOOP, HOOP_ENTRIES};
 use crate::physics::{BlockDiag, Real, Viscosity, Yeoh, material_point_hoop, piola_total_hoop};
 
+/// Nodes of the six-node triangle.
+const NODES: usize = 6;
+/// Its dimension.
+const DIM: usize = 2;
+/// The half-plane element, its nodal vectors and tangents.
+type Element = ElementOf<DIM, NODES>;
+type ElementVector = NodalOf<DIM, NODES>;
+type ElementTangent = TangentOf<12, NODES>;
+
 /// `u_r/r` (or `u̇_r/r`) at standard point `q`: `Σₐ Nₐ/r · w_(a,r)`.
 #[inline]
-fn over_r(el: &Element, q: usize, w: &super::element::Nodal) -> f64 {
+fn over_r(el: &Element, q: usize, w: &ElementVector) -> f64 {
     let h = &el.hoop[q];
     let mut s = h[0] * w[0][0];
     for a in 1..NODES {
@@ -46,7 +58,7 @@ fn hoop_point(
     e: usize,
     el: &Element,
     q: usize,
-    st: &ElementState,
+    st: &ElementState<DIM, NODES>,
     t_a: f64,
 ) -> Result<HoopPoint, DaeError> {
     let g = &el.geo.grads[q];
@@ -67,14 +79,14 @@ fn hoop_point(
     })
 }
 
-impl Formulation for Axisymmetric {
+impl Formulation<DIM, NODES, 12> for Axisymmetric {
     /// `f_aᵢ += w (P_iJ ∂Nₐ/∂X_J + δ_ir P₃₃ Nₐ/r)`.
     fn solid_residual(
         e: usize,
         el: &Element,
         law: &Yeoh,
         visc: &Viscosity,
-        st: &ElementState,
+        st: &ElementState<DIM, NODES>,
         t_a: f64,
         fe: &mut ElementVector,
     ) -> Result<(), DaeError> {
@@ -101,7 +113,7 @@ impl Formulation for Axisymmetric {
         el: &Element,
         law: &Yeoh,
         visc: &Viscosity,
-        st: &ElementState,
+        st: &ElementState<DIM, NODES>,
         t_a: f64,
         tan: &mut ElementTangent,
     ) -> Result<(), DaeError> {
@@ -148,7 +160,7 @@ impl Formulation for Axisymmetric {
 
     /// `λ = x_r/X_r`: the current over the reference radius (`1 + u_r/r`).
     #[inline(always)]
-    fn hoop<T: Real>(x: &Vector<T>, x_ref: &[f64; DIM]) -> Option<T> {
+    fn hoop<T: Real>(x: &Vector2<T>, x_ref: &[f64; DIM]) -> Option<T> {
         Some(x[0] * (1.0 / x_ref[0]))
     }
 }

@@ -8,10 +8,7 @@
 //!
 //! Blocks make the iteration matrix `[cj·I, −I; K, cj·M + C]` visible, so the velocity can
 //! be condensed out of the linear solve. The numbering is written once for any dimension
-//! ([`DofMapOf`]); [`DofMap`] is the half-plane models'.
-
-use super::kinematics::DIM;
-use crate::fem::{Domain, Mesh};
+//! ([`DofMapOf`]).
 
 /// Marker for an eliminated (or absent) unknown (the assembly's marker).
 pub use crate::fem::assembly::NONE;
@@ -33,29 +30,6 @@ pub struct DofMapOf<const D: usize> {
     pub inertia: bool,
     /// Total number of unknowns.
     pub n: usize,
-}
-
-/// The numbering of the half-plane models (plane strain, axisymmetric).
-pub type DofMap = DofMapOf<DIM>;
-
-impl DofMap {
-    /// Numbers the unknowns of `mesh`: u (x eliminated on the symmetry line), then v if
-    /// `inertia`, then μ_as at the membrane nodes if `adhesion`.
-    pub fn new(mesh: &Mesh, inertia: bool, adhesion: bool) -> Self {
-        let nn = mesh.nodes.len();
-        let mut on_axis = vec![false; nn];
-        for &i in &mesh.symmetry_nodes {
-            on_axis[i] = true;
-        }
-        // Component 0 is normal to the symmetry line (eliminated on it).
-        Self::numbered(
-            nn,
-            |i, c| c == 0 && on_axis[i],
-            &mesh.nodes_of_domain(Domain::Membrane),
-            inertia,
-            adhesion,
-        )
-    }
 }
 
 impl<const D: usize> DofMapOf<D> {

@@ -1,90 +1,77 @@
 //! Reference-element set-up: everything about an element that does not change during a
 //! run, computed once from the mesh and the parameters — the geometry at the points of
 //! the standard and the band rules, the consistent mass, the active-strain tensors and
-//! the outward radial directions of the membrane.
+//! the outward radial directions of the membrane — for the six-node triangles and the
+//! ten-node tetrahedra alike.
 //!
 //! In the axisymmetric model every integral is per radian, `∫ f r dA`: the quadrature
 //! weights of both rules are multiplied by the reference radius r of their points here,
 //! once, so that the mass, gravity, drag, band forces and observables integrate with the
 //! weight r without further change, and the solid kernels find `Nₐ/r` (the hoop row of
-//! the strain) at the standard points in [`Element::hoop`]. The points of both rules are
+//! the strain) at the standard points in [`ElementOf::hoop`]. The points of both rules are
 //! interior to the element, so r > 0 there.
 
-use nalgebra::Vector2;
+use nalgebra::{SMatrix, SVector};
 
-use super::kinematics::{DIM, NodalOf, Tensor, Vector};
+use super::kinematics::NodalOf;
+use super::shape::Shape;
 use super::{ModelError, ModelParams};
-use crate::fem::p2::{ElementGeometry, P2Tabulation};
-use crate::fem::quadrature::TriangleRule;
-use crate::fem::{Domain, Mesh};
-use crate::physics::{ActiveStrain, KinematicModel};
+use crate::fem::{CellMesh, Domain, ElementTabulation, GeometryOf};
+use crate::physics::KinematicModel;
 
-/// Nodes of the element (six-node P2 triangle).
-pub const NODES: usize = 6;
-
-/// Displacement components of an element, node-major (`DIM · a + i`).
-pub const EDOF: usize = DIM * NODES;
-
-/// A vector per node of an element.
-pub type Nodal = NodalOf<DIM, NODES>;
+/// Degree of the standard (solid and mass) rule: the mass integrand Nₐ N_b is of degree 4
+/// on a straight element.
+pub const STANDARD_DEGREE: usize = 4;
 
 /// Per-element data computed once on the reference configuration.
-pub(crate) struct Element {
-    pub(crate) nodes: [usize; NODES],
+pub(crate) struct ElementOf<const D: usize, const N: usize> {
+    pub(crate) nodes: [usize; N],
     pub(crate) domain: Domain,
     /// Index of the solid law and density (nucleus, cytoplasm, membrane).
     pub(crate) solid: usize,
     /// Whether the element carries μ_as unknowns (membrane element with adhesion).
     pub(crate) with_mu: bool,
     /// Geometry at the points of the standard rule.
-    pub(crate) geo: ElementGeometry,
+    pub(crate) geo: GeometryOf<D, N>,
     /// `A_q` with `F_a = I − t_a A_q` at the standard points (empty: no active strain).
-    pub(crate) active: Vec<Tensor<f64>>,
+    pub(crate) active: Vec<SMatrix<f64, D, D>>,
     /// Consistent mass ∫ρ Nₐ N_b (scalar per node pair).
-    pub(crate) mass: [[f64; NODES]; NODES],
+    pub(crate) mass: [[f64; N]; N],
     /// ∫ Nₐ N_b (unit density, for the drag).
-    pub(crate) mass1: [[f64; NODES]; NODES],
+    pub(crate) mass1: [[f64; N]; N],
     /// Geometry at the band-rule points.
-    pub(crate) cgeo: ElementGeometry,
-    /// Outward radial reference direction at the band points (membrane elements).
-    pub(crate) radial: Vec<Vector<f64>>,
+    pub(crate) cgeo: GeometryOf<D, N>,
+    /// Outward radial reference direction (X − c)/|X − c| at the band points (membrane
+    /// elements).
+    pub(crate) radial: Vec<SVector<f64, D>>,
     /// Axisymmetric: `Nₐ/r` at the standard points (`∂λ_θ/∂u_(a,r)`, λ_θ = 1 + u_r/r);
-    /// empty in plane strain.
-    pub(crate) hoop: Vec<[f64; NODES]>,
+    /// empty otherwise.
+    pub(crate) hoop: Vec<[f64; N]>,
 }
 
 /// The reference elements of a mesh and the tabulation of the band rule they share.
-pub(crate) struct ReferenceElements {
-    pub(crate) elements: Vec<Element>,
-    /// P2 shape functions at the band-rule points.
-    pub(crate) ctab: P2Tabulation,
+pub(crate) struct ReferenceElements<T, const D: usize, const N: usize> {
+    pub(crate) elements: Vec<ElementOf<D, N>>,
+    /// Shape functions at the band-rule points.
+    pub(crate) ctab: T,
 }
 
-impl ReferenceElements {
-    /// Geometry, mass and active strain of every element of `mesh` under `params`:
-    /// the standard rule of degree 4 (solid and mass), the band rule of
+impl<T: ElementTabulation<D, N>, const D: usize, const N: usize> ReferenceElements<T, D, N> {
+    /// Geometry, mass and active strain of every element of `mesh` under `params`: the
+    /// standard rule of degree [`STANDARD_DEGREE`] (solid and mass), the band rule of
     /// `params.contact_degree` subdivided `params.contact_subdivisions` times.
     /// `adhesion_unknowns`: whether the membrane elements carry μ_as unknowns (adhesion
     /// modelled and not deferred).
-    pub(crate) fn new(
+    pub(crate) fn new<S: Shape<D, N, E, Tab = T>, const E: usize>(
         params: &ModelParams,
-        mesh: &Mesh,
+        mesh: &S::Mesh,
         adhesion_unknowns: bool,
     ) -> Result<Self, ModelError> {
-        let std_tab = P2Tabulation::new(&TriangleRule::degree(4));
-        let crule =
-            TriangleRule::degree(params.contact_degree).subdivided(params.contact_subdivisions);
-        let ctab = P2Tabulation::new(&crule);
-        let active = params
-            .active
-            .filter(|a| a.pac.is_some() || a.bottom.is_some());
-        let c = Vector2::new(params.center[0], params.center[1]);
-        let elements = mesh
-            .elements
-            .iter()
-            .enumerate()
-            .map(|(e, &nodes)| {
-                Element::reference(params, mesh, e, nodes, &std_tab, &ctab, active.as_ref(), &c)
+        let std_tab = T::on_rule(STANDARD_DEGREE, 0);
+        let ctab = T::on_rule(params.contact_degree, params.contact_subdivisions);
+        let elements = (0..mesh.elements().len())
+            .map(|e| {
+                ElementOf::reference::<S, E>(params, mesh, e, &std_tab, &ctab)
                     .map(|mut el| {
                         el.with_mu &= adhesion_unknowns;
                         el
@@ -96,23 +83,20 @@ impl ReferenceElements {
     }
 }
 
-impl Element {
-    /// Element `e` with `nodes` on the reference configuration.
-    #[allow(clippy::too_many_arguments)]
-    fn reference(
+impl<const D: usize, const N: usize> ElementOf<D, N> {
+    /// Element `e` of `mesh` on the reference configuration.
+    fn reference<S: Shape<D, N, E>, const E: usize>(
         params: &ModelParams,
-        mesh: &Mesh,
+        mesh: &S::Mesh,
         e: usize,
-        nodes: [usize; NODES],
-        std_tab: &P2Tabulation,
-        ctab: &P2Tabulation,
-        active: Option<&ActiveStrain>,
-        c: &Vector2<f64>,
-    ) -> Result<Self, crate::fem::P2Error> {
+        std_tab: &S::Tab,
+        ctab: &S::Tab,
+    ) -> Result<Self, crate::fem::ElementGeometryError> {
+        let nodes = mesh.elements()[e];
         let x = mesh.element_coords(e);
-        let domain = mesh.domains[e];
-        let mut geo = std_tab.geometry(&x)?;
-        let mut cgeo = ctab.geometry(&x)?;
+        let domain = mesh.domains()[e];
+        let mut geo = std_tab.element_geometry(&x)?;
+        let mut cgeo = ctab.element_geometry(&x)?;
         let mut hoop = Vec::new();
         if params.kinematics == KinematicModel::Axisymmetric {
             // Work per radian: dV = r dA. The rules' points are interior, so r > 0.
@@ -124,31 +108,32 @@ impl Element {
             hoop = geo
                 .x
                 .iter()
-                .zip(&std_tab.values)
+                .zip(std_tab.values())
                 .map(|(p, n)| n.map(|v| v / p[0]))
                 .collect();
         }
         let solid = ModelParams::domain_index(domain);
         let rho = params.densities[solid];
         // M₁_ab = ∫ Nₐ N_b on the standard rule; M = ρ M₁.
-        let mut mass1 = [[0.0; NODES]; NODES];
-        for q in 0..std_tab.len() {
-            let n = &std_tab.values[q];
-            for a in 0..NODES {
-                for b in 0..NODES {
+        let mut mass1 = [[0.0; N]; N];
+        for (q, n) in std_tab.values().iter().enumerate() {
+            for a in 0..N {
+                for b in 0..N {
                     mass1[a][b] += geo.jxw[q] * n[a] * n[b];
                 }
             }
         }
         let mass = mass1.map(|row| row.map(|m| m * rho));
-        let active_q: Vec<Tensor<f64>> = match active {
+        let c = S::center(params);
+        let active = match params
+            .active
+            .filter(|a| a.pac.is_some() || a.bottom.is_some())
+        {
             Some(act) => {
-                let a: Vec<Tensor<f64>> = geo
+                let a: Vec<SMatrix<f64, D, D>> = geo
                     .x
                     .iter()
-                    .map(|p| {
-                        Tensor::<f64>::identity() - act.fa(&Vector2::new(p[0], p[1]), domain, 1.0)
-                    })
+                    .map(|p| SMatrix::identity() - S::active_tensor(&act, p, &c, domain))
                     .collect();
                 if a.iter().all(|m| m.abs().max() == 0.0) {
                     Vec::new()
@@ -161,7 +146,7 @@ impl Element {
         let radial = if domain == Domain::Membrane {
             cgeo.x
                 .iter()
-                .map(|p| (Vector2::new(p[0], p[1]) - c).normalize())
+                .map(|p| (SVector::from(*p) - c).normalize())
                 .collect()
         } else {
             Vec::new()
@@ -172,7 +157,7 @@ impl Element {
             solid,
             with_mu: params.adhesion.is_some() && domain == Domain::Membrane,
             geo,
-            active: active_q,
+            active,
             mass,
             mass1,
             cgeo,
@@ -184,19 +169,19 @@ impl Element {
     /// The active-strain tensor `F_a = I − t_a A_q` at standard point `q` (`I` without
     /// active strain).
     #[inline]
-    pub(crate) fn active_fa(&self, q: usize, t_a: f64) -> Tensor<f64> {
+    pub(crate) fn active_fa(&self, q: usize, t_a: f64) -> SMatrix<f64, D, D> {
         if self.active.is_empty() {
-            Tensor::<f64>::identity()
+            SMatrix::identity()
         } else {
-            Tensor::<f64>::identity() - self.active[q] * t_a
+            SMatrix::identity() - self.active[q] * t_a
         }
     }
 }
 
 /// The nodal fields of an element gathered from (y, ẏ): displacements u, velocities v
 /// (v with inertia, u̇ without) and accelerations v̇ (inertia only; else zero).
-pub(crate) struct ElementState {
-    pub(crate) u: Nodal,
-    pub(crate) v: Nodal,
-    pub(crate) a: Nodal,
+pub(crate) struct ElementState<const D: usize, const N: usize> {
+    pub(crate) u: NodalOf<D, N>,
+    pub(crate) v: NodalOf<D, N>,
+    pub(crate) a: NodalOf<D, N>,
 }

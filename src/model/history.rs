@@ -20,29 +20,15 @@
 //! smooth drive). The values between the last two accepted steps (the output times, the
 //! inertia switch) are integrated the same way over the part of the step.
 
-use nalgebra::{Vector2, Vector3};
+use nalgebra::SVector;
 
-use super::kinematics::DIM;
-use crate::physics::{Adhesion, Substrate, Substrate3, layer, layer3};
+use crate::physics::{Adhesion, Surface, layer};
 
-/// A substrate whose fibronectin layer indicator can be evaluated at a position in `D`
-/// dimensions: the drive of the exposure is `μ_as0` times it.
-pub trait LayerField<const D: usize>: Copy + std::fmt::Debug {
-    /// `g_l(x)` ([`layer`], [`layer3`]) at the position `x` [µm].
-    fn layer_at(&self, ad: &Adhesion, x: [f64; D]) -> f64;
-}
+/// A substrate the exposure's drive can be evaluated over: `μ_as0` times its fibronectin
+/// layer indicator ([`layer`]) at a position in `D` dimensions.
+pub trait LayerField<const D: usize>: Surface<D> + Copy + std::fmt::Debug {}
 
-impl LayerField<2> for Substrate {
-    fn layer_at(&self, ad: &Adhesion, x: [f64; 2]) -> f64 {
-        layer(self, ad, &Vector2::from(x))
-    }
-}
-
-impl LayerField<3> for Substrate3 {
-    fn layer_at(&self, ad: &Adhesion, x: [f64; 3]) -> f64 {
-        layer3(self, ad, &Vector3::from(x))
-    }
-}
+impl<S: Surface<D> + Copy + std::fmt::Debug, const D: usize> LayerField<D> for S {}
 
 /// Positions and velocities of the membrane nodes at one time.
 #[derive(Debug, Clone)]
@@ -87,9 +73,6 @@ pub struct AdhesionHistoryOf<const D: usize, S: LayerField<D>> {
     prev: Option<(Sample<D>, Vec<f64>)>,
 }
 
-/// The history of the half-plane models.
-pub type AdhesionHistory = AdhesionHistoryOf<DIM, Substrate>;
-
 impl<const D: usize, S: LayerField<D>> AdhesionHistoryOf<D, S> {
     /// Starts at time `t` with exposure `exposure` and the nodes at `x` moving with `xdot`.
     pub fn new(
@@ -127,7 +110,7 @@ impl<const D: usize, S: LayerField<D>> AdhesionHistoryOf<D, S> {
 
     /// The drive `a = μ_as0 H_ε(d(x) + e_f)` at position `x`.
     fn drive(&self, x: [f64; D]) -> f64 {
-        self.adhesion.mu_as0 * self.substrate.layer_at(&self.adhesion, x)
+        self.adhesion.mu_as0 * layer(&self.substrate, &self.adhesion, &SVector::from(x))
     }
 
     /// The exposure at time `t` in [s0.t, s1.t] from `mu0` at `s0.t`.

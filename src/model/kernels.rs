@@ -1,5 +1,6 @@
 //! Element kernels: each term of the momentum balance gives, on one element, its residual
-//! contribution and its tangent from one computation of the quadrature-point kinematics.
+//! contribution and its tangent from one computation of the quadrature-point kinematics,
+//! written once for the triangles and the tetrahedra (`D`, `N`, `E = D·N` as parameters).
 //!
 //! With the element force `f_e = ∫ Pᵀ∇N + M v̇ + c_d M₁ v − ∫ N b` (node-major,
 //! `f_e[a][i]`), the tangents are split by what they multiply in `J = ∂F/∂y + cj ∂F/∂ẏ`:
@@ -9,12 +10,14 @@
 //!   is the velocity unknown with inertia and u̇ without,
 //! - `B = ∂f_e/∂μ_as` (adhesion, membrane elements).
 //!
-//! Kernels add into an [`ElementVector`] / [`ElementTangent`] in a fixed order (solid,
-//! mass, band), the order in which the sums are formed. Per quadrature point:
+//! Kernels add into an element vector / [`TangentOf`] in a fixed order (solid, mass,
+//! band), the order in which the sums are formed. Per quadrature point:
 //!
-//! - [`solid_residual`] / [`solid_tangent`]: `f_aᵢ += w P_iJ ∂Nₐ/∂X_J`,
-//!   `K_(ai)(bk) += w ∂Nₐ/∂X_J ∂P_iJ/∂F_kL ∂N_b/∂X_L`, and `C` the same with `∂P/∂Ḟ`, at
-//!   the [`SolidPoint`] (F, Ḟ, F_a);
+//! - [`Formulation::solid_residual`] / [`Formulation::solid_tangent`]: `f_aᵢ += w P_iJ
+//!   ∂Nₐ/∂X_J`, `K_(ai)(bk) += w ∂Nₐ/∂X_J ∂P_iJ/∂F_kL ∂N_b/∂X_L`, and `C` the same with
+//!   `∂P/∂Ḟ`, at (F, Ḟ, F_a) — the kinematic model's part: [`PlaneStrain`] and [`ThreeD`]
+//!   here ([`solid_residual`], [`solid_tangent`] over their [`SolidLaw`]), the
+//!   axisymmetric hoop row in [`super::axisym`];
 //! - [`mass_residual`] / [`mass_tangent`]: gravity `−g s_g t_g Σ_b M_ab e_y`, inertia
 //!   `M v̇` and drag `c_d M₁ v`;
 //! - [`band_residual`] / [`band_tangent`]: the body forces of the thin bands near the
@@ -24,39 +27,27 @@
 //! - [`mu_rate_residual`] / [`mu_rate_tangent`]: the nodal adhesion rows
 //!   `Ȧ − μ_as0 H_ε(d(x) + e_f)` of the exposure A (μ_as = Φ(A), [`super::history`]).
 //!
-//! What the kinematic model changes is a [`Formulation`]: the solid kernels and `F₃₃` at
-//! the band points. Plane strain's are below ([`PlaneStrain`]: `F₃₃ = 1`, stresses and
-//! tangents of the in-plane block only); the axisymmetric ones are in
-//! [`super::axisym`]. The r weight of the axisymmetric integrals is in the elements'
-//! quadrature weights ([`super::element`]), so the mass kernels serve both.
-//!
-//! The element loops are instantiated once per kinematic model, so the helpers they share
-//! (these kernels, the loads, the substrate's depth, the scatter) have two callers each,
-//! and the compiler stopped inlining several of them into plane strain's loop: 3 % more
-//! instructions on `cases/fast/push-pull-short.ron` (callgrind), for the same arithmetic.
-//! The hot ones are marked `#[inline(always)]` for that reason.
+//! The r weight of the axisymmetric integrals is in the elements' quadrature weights
+//! ([`super::element`]), so the mass and band kernels serve it too. The element loops are
+//! instantiated once per kinematic model; the hot helpers are `#[inline(always)]` so that
+//! each instance inlines them (3 % more instructions on `cases/fast/push-pull-short.ron`
+//! when they were not, callgrind).
 
-use nalgebra::{Const, SVector};
-use num_dual::DualSVec64;
+use nalgebra::{Matrix2, Matrix3, SMatrix, SVector};
 
 use super::ModelParams;
-use super::element::{EDOF, Element, ElementState, NODES, Nodal};
+use super::element::{ElementOf, ElementState};
 use super::kinematics::{
-    DIM, Kin, Kinematics, PlaneStrain, Tensor, Vector, contract, current_position, deformation,
-    rate,
+    NodalOf, PlaneStrain, ThreeD, contract, current_position, deformation, det, rate,
 };
+use super::plan::TangentOf;
+use super::shape::{Seeded, Shape};
 use crate::dae::DaeError;
-use crate::fem::p2::P2Tabulation;
+use crate::fem::ElementTabulation;
 use crate::physics::{
-    Real, Viscosity, Yeoh, adhesion_force, adhesion_hoop_factor, adhesion_rate, contact_force,
-    material_point, piola_total,
+    Real, Surface, Viscosity, Yeoh, adhesion_force, adhesion_hoop_factor, adhesion_rate,
+    contact_force, material_point, material_point3, piola_total, piola_total3,
 };
-
-/// Element force vector, node-major: `f[a][i]`.
-pub(crate) type ElementVector = Nodal;
-
-/// The element tangents `K`, `C` and `B` of the six-node triangle.
-pub(crate) type ElementTangent = super::plan::TangentOf<EDOF, NODES>;
 
 /// The time-dependent switches of MODEL.md §5 at one time.
 #[derive(Debug, Clone, Copy)]
@@ -87,80 +78,174 @@ impl Switches {
 /// What a kinematic model changes in the element kernels (MODEL.md §3, §10): the solid's
 /// internal force and tangents at the standard points, and `F₃₃` at the band points. The
 /// element loops are generic over it, so the choice is made once per loop and each model
-/// runs its own code ([`PlaneStrain`] keeps `F₃₃ = 1` fixed, with no work for it).
-pub(crate) trait Formulation {
-    /// The solid's internal force of element `e` ([`solid_residual`] in plane strain).
+/// runs its own code.
+pub(crate) trait Formulation<const D: usize, const N: usize, const E: usize> {
+    /// The solid's internal force of element `e`.
     fn solid_residual(
         e: usize,
-        el: &Element,
+        el: &ElementOf<D, N>,
         law: &Yeoh,
         visc: &Viscosity,
-        st: &ElementState,
+        st: &ElementState<D, N>,
         t_a: f64,
-        fe: &mut ElementVector,
+        fe: &mut NodalOf<D, N>,
     ) -> Result<(), DaeError>;
 
-    /// The solid's tangents `K`, `C` of element `e` ([`solid_tangent`] in plane strain).
+    /// The solid's tangents `K`, `C` of element `e`.
     fn solid_tangent(
         e: usize,
-        el: &Element,
+        el: &ElementOf<D, N>,
         law: &Yeoh,
         visc: &Viscosity,
-        st: &ElementState,
+        st: &ElementState<D, N>,
         t_a: f64,
-        tan: &mut ElementTangent,
+        tan: &mut TangentOf<E, N>,
     ) -> Result<(), DaeError>;
 
     /// `F₃₃` at a band point with current position `x` and reference position `x_ref`:
-    /// `None` where it is 1 (plane strain).
-    fn hoop<T: Real>(x: &Vector<T>, x_ref: &[f64; DIM]) -> Option<T>;
+    /// `None` where there is none beyond `F` (plane strain: 1; 3-D).
+    fn hoop<T: Real>(x: &SVector<T, D>, x_ref: &[f64; D]) -> Option<T>;
 }
 
-impl Formulation for PlaneStrain {
-    #[inline(always)]
-    fn solid_residual(
-        e: usize,
-        el: &Element,
+/// The solid law of a kinematic model whose `F` is the element's `D × D` gradient: the
+/// total first Piola–Kirchhoff stress and its tangents at a point.
+pub(crate) trait SolidLaw<const D: usize> {
+    /// The stress with its tangents.
+    type Point: PointTangents;
+    /// `P(F, Ḟ, F_a)` (Yeoh with active strain, plus Kelvin–Voigt viscosity).
+    fn piola(
         law: &Yeoh,
         visc: &Viscosity,
-        st: &ElementState,
-        t_a: f64,
-        fe: &mut ElementVector,
-    ) -> Result<(), DaeError> {
-        solid_residual(e, el, law, visc, st, t_a, fe)
-    }
-
-    #[inline(always)]
-    fn solid_tangent(
-        e: usize,
-        el: &Element,
+        f: &SMatrix<f64, D, D>,
+        fdot: &SMatrix<f64, D, D>,
+        fa: &SMatrix<f64, D, D>,
+    ) -> SMatrix<f64, D, D>;
+    /// `P` and `∂P/∂F`, `∂P/∂Ḟ`.
+    fn point(
         law: &Yeoh,
         visc: &Viscosity,
-        st: &ElementState,
-        t_a: f64,
-        tan: &mut ElementTangent,
-    ) -> Result<(), DaeError> {
-        solid_tangent(e, el, law, visc, st, t_a, tan)
-    }
+        f: &SMatrix<f64, D, D>,
+        fdot: &SMatrix<f64, D, D>,
+        fa: &SMatrix<f64, D, D>,
+    ) -> Self::Point;
+}
 
+/// The tangents of a material point, flattened `D i + J` for `P_iJ` (rows) and `D k + L`
+/// for `F_kL` (columns).
+pub(crate) trait PointTangents {
+    /// `∂P_row/∂F_col`.
+    fn dp_df(&self, row: usize, col: usize) -> f64;
+    /// `∂P_row/∂Ḟ_col`.
+    fn dp_dfdot(&self, row: usize, col: usize) -> f64;
+}
+
+impl<const D: usize, const DD: usize> PointTangents for crate::physics::MaterialPointOf<D, DD> {
     #[inline(always)]
-    fn hoop<T: Real>(_x: &Vector<T>, _x_ref: &[f64; DIM]) -> Option<T> {
-        None
+    fn dp_df(&self, row: usize, col: usize) -> f64 {
+        self.dP_dF[(row, col)]
+    }
+    #[inline(always)]
+    fn dp_dfdot(&self, row: usize, col: usize) -> f64 {
+        self.dP_dFdot[(row, col)]
     }
 }
 
-/// Kinematics at a point of the standard rule: `F` (checked admissible), `Ḟ`, `F_a`.
-#[allow(non_snake_case)]
-pub(crate) struct SolidPoint {
-    pub(crate) F: Tensor<f64>,
-    pub(crate) Fdot: Tensor<f64>,
-    pub(crate) Fa: Tensor<f64>,
+impl SolidLaw<2> for PlaneStrain {
+    type Point = crate::physics::MaterialPoint;
+    #[inline(always)]
+    fn piola(
+        law: &Yeoh,
+        visc: &Viscosity,
+        f: &Matrix2<f64>,
+        fdot: &Matrix2<f64>,
+        fa: &Matrix2<f64>,
+    ) -> Matrix2<f64> {
+        piola_total(law, visc, f, fdot, fa)
+    }
+    #[inline(always)]
+    fn point(
+        law: &Yeoh,
+        visc: &Viscosity,
+        f: &Matrix2<f64>,
+        fdot: &Matrix2<f64>,
+        fa: &Matrix2<f64>,
+    ) -> Self::Point {
+        material_point(law, visc, f, fdot, fa)
+    }
 }
+
+impl SolidLaw<3> for ThreeD {
+    type Point = crate::physics::MaterialPoint3;
+    #[inline(always)]
+    fn piola(
+        law: &Yeoh,
+        visc: &Viscosity,
+        f: &Matrix3<f64>,
+        fdot: &Matrix3<f64>,
+        fa: &Matrix3<f64>,
+    ) -> Matrix3<f64> {
+        piola_total3(law, visc, f, fdot, fa)
+    }
+    #[inline(always)]
+    fn point(
+        law: &Yeoh,
+        visc: &Viscosity,
+        f: &Matrix3<f64>,
+        fdot: &Matrix3<f64>,
+        fa: &Matrix3<f64>,
+    ) -> Self::Point {
+        material_point3(law, visc, f, fdot, fa)
+    }
+}
+
+macro_rules! solid_formulation {
+    ($kin:ty, $d:literal, $n:literal, $e:literal) => {
+        impl Formulation<$d, $n, $e> for $kin {
+            #[inline(always)]
+            fn solid_residual(
+                e: usize,
+                el: &ElementOf<$d, $n>,
+                law: &Yeoh,
+                visc: &Viscosity,
+                st: &ElementState<$d, $n>,
+                t_a: f64,
+                fe: &mut NodalOf<$d, $n>,
+            ) -> Result<(), DaeError> {
+                solid_residual::<Self, $d, $n>(e, el, law, visc, st, t_a, fe)
+            }
+
+            #[inline(always)]
+            fn solid_tangent(
+                e: usize,
+                el: &ElementOf<$d, $n>,
+                law: &Yeoh,
+                visc: &Viscosity,
+                st: &ElementState<$d, $n>,
+                t_a: f64,
+                tan: &mut TangentOf<$e, $n>,
+            ) -> Result<(), DaeError> {
+                solid_tangent::<Self, $d, $n, $e>(e, el, law, visc, st, t_a, tan)
+            }
+
+            #[inline(always)]
+            fn hoop<T: Real>(_x: &SVector<T, $d>, _x_ref: &[f64; $d]) -> Option<T> {
+                None
+            }
+        }
+    };
+}
+
+solid_formulation!(PlaneStrain, 2, 6, 12);
+solid_formulation!(ThreeD, 3, 10, 30);
 
 /// `F` of element `e` at point `q` is admissible: `J = det F > 0` and finite.
 #[inline(always)]
-pub(crate) fn check_admissible(e: usize, q: usize, f: &Tensor<f64>) -> Result<(), DaeError> {
-    let j = Kin::det::<f64>(f);
+pub(crate) fn check_admissible<const D: usize>(
+    e: usize,
+    q: usize,
+    f: &SMatrix<f64, D, D>,
+) -> Result<(), DaeError> {
+    let j = det(f);
     if j > 0.0 && j.is_finite() {
         Ok(())
     } else {
@@ -170,48 +255,42 @@ pub(crate) fn check_admissible(e: usize, q: usize, f: &Tensor<f64>) -> Result<()
     }
 }
 
-impl SolidPoint {
-    /// At standard point `q` of element `e` in state `st`, active ramp `t_a`.
-    #[allow(non_snake_case)]
-    #[inline]
-    pub(crate) fn at(
-        e: usize,
-        el: &Element,
-        q: usize,
-        st: &ElementState,
-        t_a: f64,
-    ) -> Result<Self, DaeError> {
-        let g = &el.geo.grads[q];
-        let F = deformation(&st.u, g);
-        check_admissible(e, q, &F)?;
-        Ok(Self {
-            F,
-            Fdot: rate(&st.v, g),
-            Fa: el.active_fa(q, t_a),
-        })
-    }
+/// `F` (checked admissible), `Ḟ` and `F_a` at standard point `q` of element `e`.
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn solid_point<const D: usize, const N: usize>(
+    e: usize,
+    el: &ElementOf<D, N>,
+    q: usize,
+    st: &ElementState<D, N>,
+    t_a: f64,
+) -> Result<(SMatrix<f64, D, D>, SMatrix<f64, D, D>, SMatrix<f64, D, D>), DaeError> {
+    let g = &el.geo.grads[q];
+    let f = deformation(&st.u, g);
+    check_admissible(e, q, &f)?;
+    Ok((f, rate(&st.v, g), el.active_fa(q, t_a)))
 }
 
 /// The solid's internal force `f_aᵢ += Σ_q w_q P_iJ ∂Nₐ/∂X_J`, with `P` the total first
-/// Piola–Kirchhoff stress (Yeoh with active strain, plus Kelvin–Voigt viscosity).
+/// Piola–Kirchhoff stress of `L` (Yeoh with active strain, plus Kelvin–Voigt viscosity).
 #[inline(always)]
-pub(crate) fn solid_residual(
+pub(crate) fn solid_residual<L: SolidLaw<D>, const D: usize, const N: usize>(
     e: usize,
-    el: &Element,
+    el: &ElementOf<D, N>,
     law: &Yeoh,
     visc: &Viscosity,
-    st: &ElementState,
+    st: &ElementState<D, N>,
     t_a: f64,
-    fe: &mut ElementVector,
+    fe: &mut NodalOf<D, N>,
 ) -> Result<(), DaeError> {
     for q in 0..el.geo.jxw.len() {
         let g = &el.geo.grads[q];
-        let pt = SolidPoint::at(e, el, q, st, t_a)?;
-        let p = piola_total(law, visc, &pt.F, &pt.Fdot, &pt.Fa);
+        let (f, fdot, fa) = solid_point(e, el, q, st, t_a)?;
+        let p = L::piola(law, visc, &f, &fdot, &fa);
         let w = el.geo.jxw[q];
-        for a in 0..NODES {
-            for i in 0..DIM {
-                fe[a][i] += w * contract::<DIM>(|l| p[(i, l)] * g[a][l]);
+        for a in 0..N {
+            for i in 0..D {
+                fe[a][i] += w * contract::<D>(|l| p[(i, l)] * g[a][l]);
             }
         }
     }
@@ -220,37 +299,40 @@ pub(crate) fn solid_residual(
 
 /// The solid's tangents `K_(ai)(bk) += w Σ_JL ∂Nₐ/∂X_J A_(iJ)(kL) ∂N_b/∂X_L` with
 /// `A = ∂P/∂F`, and `C` the same with `∂P/∂Ḟ`.
-#[allow(non_snake_case)]
 #[inline(always)]
-pub(crate) fn solid_tangent(
+pub(crate) fn solid_tangent<L: SolidLaw<D>, const D: usize, const N: usize, const E: usize>(
     e: usize,
-    el: &Element,
+    el: &ElementOf<D, N>,
     law: &Yeoh,
     visc: &Viscosity,
-    st: &ElementState,
+    st: &ElementState<D, N>,
     t_a: f64,
-    tan: &mut ElementTangent,
+    tan: &mut TangentOf<E, N>,
 ) -> Result<(), DaeError> {
     for q in 0..el.geo.jxw.len() {
         let g = &el.geo.grads[q];
-        let pt = SolidPoint::at(e, el, q, st, t_a)?;
-        let mp = material_point(law, visc, &pt.F, &pt.Fdot, &pt.Fa);
+        let (f, fdot, fa) = solid_point(e, el, q, st, t_a)?;
+        let mp = L::point(law, visc, &f, &fdot, &fa);
         let w = el.geo.jxw[q];
-        for a in 0..NODES {
-            for i in 0..DIM {
-                // ak_(kL) = w Σ_J ∂Nₐ/∂X_J A_(iJ)(kL), the same for C.
-                let mut ak = [0.0; DIM * DIM];
-                let mut ck = [0.0; DIM * DIM];
-                for (col, (akc, ckc)) in ak.iter_mut().zip(ck.iter_mut()).enumerate() {
-                    *akc = w * contract::<DIM>(|j| mp.dP_dF[(DIM * i + j, col)] * g[a][j]);
-                    *ckc = w * contract::<DIM>(|j| mp.dP_dFdot[(DIM * i + j, col)] * g[a][j]);
+        for a in 0..N {
+            for i in 0..D {
+                // ak_(kL) = w Σ_J ∂Nₐ/∂X_J A_(iJ)(kL), the same for C (D² of 9 used).
+                let mut ak = [0.0; 9];
+                let mut ck = [0.0; 9];
+                for (col, (akc, ckc)) in ak[..D * D]
+                    .iter_mut()
+                    .zip(ck[..D * D].iter_mut())
+                    .enumerate()
+                {
+                    *akc = w * contract::<D>(|j| mp.dp_df(D * i + j, col) * g[a][j]);
+                    *ckc = w * contract::<D>(|j| mp.dp_dfdot(D * i + j, col) * g[a][j]);
                 }
-                let rr = DIM * a + i;
-                for b in 0..NODES {
-                    for k in 0..DIM {
-                        let cc = DIM * b + k;
-                        tan.k[rr][cc] += contract::<DIM>(|l| ak[DIM * k + l] * g[b][l]);
-                        tan.c[rr][cc] += contract::<DIM>(|l| ck[DIM * k + l] * g[b][l]);
+                let rr = D * a + i;
+                for b in 0..N {
+                    for k in 0..D {
+                        let cc = D * b + k;
+                        tan.k[rr][cc] += contract::<D>(|l| ak[D * k + l] * g[b][l]);
+                        tan.c[rr][cc] += contract::<D>(|l| ck[D * k + l] * g[b][l]);
                     }
                 }
             }
@@ -263,19 +345,19 @@ pub(crate) fn solid_tangent(
 /// integrated, `g_now = g s_g t_g`), `f_aᵢ += Σ_b M_ab v̇_bᵢ` (inertia) and
 /// `+= c_d Σ_b M₁_ab v_bᵢ` (drag, `c_d > 0`).
 #[inline(always)]
-pub(crate) fn mass_residual(
-    el: &Element,
+pub(crate) fn mass_residual<const D: usize, const N: usize>(
+    el: &ElementOf<D, N>,
     g_now: f64,
     inertia: bool,
     drag: f64,
-    st: &ElementState,
-    fe: &mut ElementVector,
+    st: &ElementState<D, N>,
+    fe: &mut NodalOf<D, N>,
 ) {
-    for a in 0..NODES {
+    for a in 0..N {
         let ma: f64 = el.mass[a].iter().sum();
-        fe[a][DIM - 1] += ma * g_now;
-        for b in 0..NODES {
-            for i in 0..DIM {
+        fe[a][1] += ma * g_now;
+        for b in 0..N {
+            for i in 0..D {
                 if inertia {
                     fe[a][i] += el.mass[a][b] * st.a[b][i];
                 }
@@ -290,18 +372,18 @@ pub(crate) fn mass_residual(
 /// Inertia and drag tangents: `C_(ai)(bi) += cj M_ab + c_d M₁_ab` (with inertia, `M v̇`
 /// gives `cj M` in the v columns; without, the drag acts on u̇).
 #[inline(always)]
-pub(crate) fn mass_tangent(
-    el: &Element,
+pub(crate) fn mass_tangent<const D: usize, const N: usize, const E: usize>(
+    el: &ElementOf<D, N>,
     cj: f64,
     inertia: bool,
     drag: f64,
-    tan: &mut ElementTangent,
+    tan: &mut TangentOf<E, N>,
 ) {
-    for a in 0..NODES {
-        for b in 0..NODES {
+    for a in 0..N {
+        for b in 0..N {
             let m = if inertia { cj * el.mass[a][b] } else { 0.0 } + drag * el.mass1[a][b];
-            for i in 0..DIM {
-                tan.c[DIM * a + i][DIM * b + i] += m;
+            for i in 0..D {
+                tan.c[D * a + i][D * b + i] += m;
             }
         }
     }
@@ -309,59 +391,64 @@ pub(crate) fn mass_tangent(
 
 /// Kinematics at a point of the band rule: `F`, the current position `x` and, where
 /// adhesion acts, the interpolated `μ_as = Σₐ Nₐ μₐ`.
-#[allow(non_snake_case)]
-pub(crate) struct BandPoint {
-    pub(crate) F: Tensor<f64>,
-    pub(crate) x: Vector<f64>,
+pub(crate) struct BandPoint<const D: usize> {
+    pub(crate) f: SMatrix<f64, D, D>,
+    pub(crate) x: SVector<f64, D>,
     pub(crate) mu: Option<f64>,
 }
 
-impl BandPoint {
-    /// At band point `q` of `el` in state `st`; `mue`: nodal μ_as where adhesion acts.
-    #[allow(non_snake_case)]
+impl<const D: usize> BandPoint<D> {
+    /// At band point `q` of `el` in state `st`; `nv`: the shape functions there; `mue`:
+    /// nodal μ_as where adhesion acts.
     #[inline]
-    pub(crate) fn at(
-        el: &Element,
-        ctab: &P2Tabulation,
+    pub(crate) fn at<const N: usize>(
+        el: &ElementOf<D, N>,
+        nv: &[f64; N],
         q: usize,
-        st: &ElementState,
-        mue: Option<&[f64; NODES]>,
+        st: &ElementState<D, N>,
+        mue: Option<&[f64; N]>,
     ) -> Self {
-        let nv = &ctab.values[q];
-        let F = deformation(&st.u, &el.cgeo.grads[q]);
+        let f = deformation(&st.u, &el.cgeo.grads[q]);
         let x = current_position(&el.cgeo.x[q], nv, &st.u);
-        let mu = mue.map(|m| (0..NODES).map(|a| nv[a] * m[a]).sum::<f64>());
-        Self { F, x, mu }
+        let mu = mue.map(|m| (0..N).map(|a| nv[a] * m[a]).sum::<f64>());
+        Self { f, x, mu }
     }
 }
 
 /// Body force of the bands at a point: contact `b_ct(x, J)` plus, with `mu` (membrane
 /// elements while adhesion acts), adhesion `b_as(x, F, μ_as)` along the outward radial
-/// reference direction `radial`, ramped by `t_as`. `J` is `det F₂`; with a hoop stretch
+/// reference direction `radial`, ramped by `t_as`. `J` is `det F`; with a hoop stretch
 /// `hoop = F₃₃` (axisymmetric) the contact takes `J = F₃₃ det F₂` and the adhesion its
 /// factor [`adhesion_hoop_factor`].
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn band_force<T: Real>(
+pub(crate) fn band_force<
+    S: Shape<D, N, E>,
+    T: Real,
+    const D: usize,
+    const N: usize,
+    const E: usize,
+>(
     p: &ModelParams,
-    x: &Vector<T>,
-    F: &Tensor<T>,
-    J: T,
+    sub: &S::Substrate,
+    x: &SVector<T, D>,
+    f: &SMatrix<T, D, D>,
+    j: T,
     hoop: Option<T>,
-    radial: Option<&Vector<f64>>,
+    radial: Option<&SVector<f64, D>>,
     mu: Option<T>,
     t_as: f64,
-) -> Vector<T> {
-    let J = match hoop {
-        Some(l) => J * l,
-        None => J,
+) -> SVector<T, D> {
+    let j = match hoop {
+        Some(l) => j * l,
+        None => j,
     };
-    let mut b = contact_force(&p.substrate, &p.contact, x, J);
+    let mut b = contact_force(sub, &p.contact, x, j);
     if let (Some(ad), Some(mu), Some(n)) = (&p.adhesion, mu, radial) {
-        let f = adhesion_force(&p.substrate, ad, x, F, n, mu, t_as);
+        let fa = adhesion_force(sub, ad, x, f, n, mu, t_as);
         b += match hoop {
-            Some(l) => f * adhesion_hoop_factor(ad, l),
-            None => f,
+            Some(l) => fa * adhesion_hoop_factor(ad, l),
+            None => fa,
         };
     }
     b
@@ -369,39 +456,86 @@ pub(crate) fn band_force<T: Real>(
 
 /// Whether adhesion acts on `el` at `t_as`.
 #[inline]
-pub(crate) fn adhesion_acts(p: &ModelParams, el: &Element, t_as: f64) -> bool {
+pub(crate) fn adhesion_acts<const D: usize, const N: usize>(
+    p: &ModelParams,
+    el: &ElementOf<D, N>,
+    t_as: f64,
+) -> bool {
     el.with_mu && t_as > 0.0 && p.adhesion.is_some()
+}
+
+/// Whether the band force is exactly zero at the current position `x`, with its
+/// derivatives: below the contact band (`d ≤ −ε_ct`, where `H_ε` and its derivatives
+/// vanish) and, where adhesion acts (`adhesion`), below the fibronectin layer too
+/// (`d + e_f ≤ −ε`). The band rule's points there are skipped (a thick element reaching
+/// into the band has most of its points far above it).
+#[inline]
+fn band_is_zero<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize>(
+    p: &ModelParams,
+    sub: &S::Substrate,
+    x: &SVector<f64, D>,
+    adhesion: bool,
+) -> bool {
+    let (d, _) = sub.eval(x);
+    let below_contact = d <= -p.contact.eps;
+    match (&p.adhesion, adhesion) {
+        (Some(ad), true) => below_contact && d + ad.e_f <= -ad.eps,
+        _ => below_contact,
+    }
 }
 
 /// The band forces `f_aᵢ −= Σ_q w_q Nₐ bᵢ` ([`band_force`]); `mue`: the nodal μ_as when
 /// adhesion acts on the element.
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn band_residual<K: Formulation>(
+pub(crate) fn band_residual<
+    S: Shape<D, N, E>,
+    K: Formulation<D, N, E>,
+    const D: usize,
+    const N: usize,
+    const E: usize,
+>(
     e: usize,
-    el: &Element,
-    ctab: &P2Tabulation,
+    el: &ElementOf<D, N>,
+    ctab: &S::Tab,
     p: &ModelParams,
-    st: &ElementState,
-    mue: Option<&[f64; NODES]>,
+    sub: &S::Substrate,
+    st: &ElementState<D, N>,
+    mue: Option<&[f64; N]>,
     t_as: f64,
-    fe: &mut ElementVector,
+    fe: &mut NodalOf<D, N>,
 ) -> Result<(), DaeError> {
+    let values = ctab.values();
     for q in 0..el.cgeo.jxw.len() {
-        let nv = &ctab.values[q];
-        let pt = BandPoint::at(el, ctab, q, st, mue);
-        let J = Kin::det::<f64>(&pt.F);
+        let nv = &values[q];
+        // Every band point is checked admissible, also where the band is zero: they are
+        // more points of the element than the standard rule's.
+        let pt = BandPoint::at(el, nv, q, st, mue);
+        let j = det(&pt.f);
         let hoop = K::hoop(&pt.x, &el.cgeo.x[q]);
-        let J3 = hoop.map_or(J, |l| J * l);
-        if !(J > 0.0 && J3 > 0.0) {
+        let j3 = hoop.map_or(j, |l| j * l);
+        if !(j > 0.0 && j3 > 0.0) {
             return Err(DaeError::Inadmissible(format!(
-                "element {e}, contact point {q}: det F = {J3:.3e}"
+                "element {e}, contact point {q}: det F = {j3:.3e}"
             )));
         }
-        let b = band_force(p, &pt.x, &pt.F, J, hoop, el.radial.get(q), pt.mu, t_as);
+        if band_is_zero::<S, D, N, E>(p, sub, &pt.x, mue.is_some()) {
+            continue;
+        }
+        let b = band_force::<S, f64, D, N, E>(
+            p,
+            sub,
+            &pt.x,
+            &pt.f,
+            j,
+            hoop,
+            el.radial.get(q),
+            pt.mu,
+            t_as,
+        );
         let w = el.cgeo.jxw[q];
-        for a in 0..NODES {
-            for i in 0..DIM {
+        for a in 0..N {
+            for i in 0..D {
                 fe[a][i] -= w * nv[a] * b[i];
             }
         }
@@ -409,63 +543,77 @@ pub(crate) fn band_residual<K: Formulation>(
     Ok(())
 }
 
-/// Number of dual directions of the band tangent: x (DIM), F (DIM²), μ_as (1).
-const NB: usize = DIM + DIM * DIM + 1;
-/// Dual direction of `F_kL`.
-const fn f_dir(k: usize, l: usize) -> usize {
-    DIM + DIM * k + l
-}
-/// Dual direction of μ_as.
-const MU_DIR: usize = DIM + DIM * DIM;
-type DualB = DualSVec64<NB>;
-
-/// The band tangents: with `∂b/∂(x, F, μ_as)` by dual numbers at each point,
+/// The band tangents: with `∂b/∂(x, F, μ_as)` by dual numbers at each point (directions:
+/// x_k → k, F_kL → D + D k + L, μ_as → D + D²),
 /// `K_(ai)(bk) −= w Nₐ (∂bᵢ/∂x_k N_b + Σ_L ∂bᵢ/∂F_kL ∂N_b/∂X_L)` and
 /// `B_(ai)b −= w Nₐ ∂bᵢ/∂μ_as N_b` (membrane elements with adhesion).
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn band_tangent<K: Formulation>(
-    el: &Element,
-    ctab: &P2Tabulation,
+pub(crate) fn band_tangent<
+    S: Shape<D, N, E>,
+    K: Formulation<D, N, E>,
+    const D: usize,
+    const N: usize,
+    const E: usize,
+>(
+    el: &ElementOf<D, N>,
+    ctab: &S::Tab,
     p: &ModelParams,
-    st: &ElementState,
-    mue: Option<&[f64; NODES]>,
+    sub: &S::Substrate,
+    st: &ElementState<D, N>,
+    mue: Option<&[f64; N]>,
     t_as: f64,
-    tan: &mut ElementTangent,
+    tan: &mut TangentOf<E, N>,
 ) {
     let with_mu = el.with_mu;
+    let values = ctab.values();
+    let f_dir = |k: usize, l: usize| D + D * k + l;
+    let mu_dir = D + D * D;
     for q in 0..el.cgeo.jxw.len() {
         let g = &el.cgeo.grads[q];
-        let nv = &ctab.values[q];
-        let pt = BandPoint::at(el, ctab, q, st, mue);
-        let xd: SVector<DualB, DIM> =
-            SVector::from_fn(|k, _| DualB::from_re(pt.x[k]).derivative(k));
-        let Fd: Tensor<DualB> =
-            Tensor::<DualB>::from_fn(|k, l| DualB::from_re(pt.F[(k, l)]).derivative(f_dir(k, l)));
-        let J = Kin::det::<DualB>(&Fd);
-        let mud = pt.mu.map(|mu| DualB::from_re(mu).derivative(MU_DIR));
+        let nv = &values[q];
+        let x = current_position(&el.cgeo.x[q], nv, &st.u);
+        if band_is_zero::<S, D, N, E>(p, sub, &x, mue.is_some()) {
+            continue;
+        }
+        let pt = BandPoint::at(el, nv, q, st, mue);
+        let xd: SVector<S::BandDual, D> = SVector::from_fn(|k, _| S::BandDual::seeded(pt.x[k], k));
+        let fd: SMatrix<S::BandDual, D, D> =
+            SMatrix::from_fn(|k, l| S::BandDual::seeded(pt.f[(k, l)], f_dir(k, l)));
+        let j = det(&fd);
+        let mud = pt.mu.map(|mu| S::BandDual::seeded(mu, mu_dir));
         // F₃₃ = x_r/X_r (axisymmetric) is a function of x: no dual direction of its own.
         let hoop = K::hoop(&xd, &el.cgeo.x[q]);
-        let b = band_force(p, &xd, &Fd, J, hoop, el.radial.get(q), mud, t_as);
+        let b = band_force::<S, S::BandDual, D, N, E>(
+            p,
+            sub,
+            &xd,
+            &fd,
+            j,
+            hoop,
+            el.radial.get(q),
+            mud,
+            t_as,
+        );
         let w = el.cgeo.jxw[q];
-        for i in 0..DIM {
-            let db = b[i].eps.unwrap_generic(Const::<NB>, Const::<1>);
-            for a in 0..NODES {
+        for i in 0..D {
+            let db = b[i].gradient();
+            for a in 0..N {
                 let wa = w * nv[a];
                 if wa == 0.0 {
                     continue;
                 }
-                for bb in 0..NODES {
-                    for k in 0..DIM {
+                for bb in 0..N {
+                    for k in 0..D {
                         // ∂bᵢ/∂u_(bb,k) = ∂bᵢ/∂x_k N_bb + Σ_L ∂bᵢ/∂F_kL ∂N_bb/∂X_L
                         let mut d = db[k] * nv[bb];
-                        for l in 0..DIM {
+                        for l in 0..D {
                             d += db[f_dir(k, l)] * g[bb][l];
                         }
-                        tan.k[DIM * a + i][DIM * bb + k] -= wa * d;
+                        tan.k[D * a + i][D * bb + k] -= wa * d;
                     }
                     if with_mu {
-                        tan.b[DIM * a + i][bb] -= wa * db[MU_DIR] * nv[bb];
+                        tan.b[D * a + i][bb] -= wa * db[mu_dir] * nv[bb];
                     }
                 }
             }
@@ -475,22 +623,35 @@ pub(crate) fn band_tangent<K: Formulation>(
 
 /// The adhesion row of a membrane node: `Ȧ − a(x)` with the drive `a = r(x, μ_as = 0)`
 /// at its current position `x` (the rate of μ_as before the cap).
-pub(crate) fn mu_rate_residual(p: &ModelParams, x: &Vector<f64>, a_dot: f64) -> f64 {
+pub(crate) fn mu_rate_residual<
+    S: Shape<D, N, E>,
+    const D: usize,
+    const N: usize,
+    const E: usize,
+>(
+    p: &ModelParams,
+    sub: &S::Substrate,
+    x: &SVector<f64, D>,
+    a_dot: f64,
+) -> f64 {
     match &p.adhesion {
-        Some(ad) => a_dot - adhesion_rate(&p.substrate, ad, x, 0.0),
+        Some(ad) => a_dot - adhesion_rate(sub, ad, x, 0.0),
         None => 0.0,
     }
 }
 
-/// `∂a/∂x` (DIM values) of the drive at a node, by dual numbers, and `∂a/∂A = 0`; the
-/// row's entries are `cj` and `−∂a/∂x_k`.
-pub(crate) fn mu_rate_tangent(p: &ModelParams, x: &Vector<f64>) -> [f64; DIM + 1] {
-    type DualR = DualSVec64<{ DIM + 1 }>;
+/// `∂a/∂x` of the drive at a node, by dual numbers, and `∂a/∂A` (0: the drive does not
+/// depend on the exposure); the row's entries are `cj − ∂a/∂A` and `−∂a/∂x_k`.
+pub(crate) fn mu_rate_tangent<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize>(
+    p: &ModelParams,
+    sub: &S::Substrate,
+    x: &SVector<f64, D>,
+) -> ([f64; D], f64) {
     let Some(ad) = &p.adhesion else {
-        return [0.0; DIM + 1];
+        return ([0.0; D], 0.0);
     };
-    let xd: SVector<DualR, DIM> = SVector::from_fn(|k, _| DualR::from_re(x[k]).derivative(k));
-    let rate = adhesion_rate(&p.substrate, ad, &xd, DualR::from_re(0.0));
-    let d = rate.eps.unwrap_generic(Const::<{ DIM + 1 }>, Const::<1>);
-    std::array::from_fn(|k| d[k])
+    let xd: SVector<S::RateDual, D> = SVector::from_fn(|k, _| S::RateDual::seeded(x[k], k));
+    let rate = adhesion_rate(sub, ad, &xd, S::RateDual::constant(0.0));
+    let d = rate.gradient();
+    (std::array::from_fn(|k| d[k]), d[D])
 }

@@ -1,69 +1,32 @@
 //! Quadrature-point kinematics of the displacement element: the deformation gradient
 //! `F = I + Σₐ uₐ ⊗ ∇Nₐ`, its rate `Ḟ = Σₐ vₐ ⊗ ∇Nₐ`, the current position
-//! `x = X + Σₐ Nₐ uₐ` and `J = det F`.
+//! `x = X + Σₐ Nₐ uₐ` and `J = det F`, written once for any spatial dimension `D` and node
+//! count `N` (const generics).
 //!
-//! The sums are written once for any spatial dimension `D` and node count `N` (const
-//! generics); [`Kinematics`] describes the arrays of the in-plane model ([`Kin`]:
-//! [`PlaneStrain`]'s 2 × 2 `F₂`). Two kinematic models complete `F₂` to three dimensions:
-//! [`PlaneStrain`] (`F₃₃ = 1`) and [`Axisymmetric`] (`F₃₃ = λ_θ = 1 + u_r/r`, the same
-//! in-plane arrays in the meridian half-plane). What each changes in the element kernels
-//! is `super::kernels::Formulation`; the case chooses one
-//! ([`crate::physics::KinematicModel`]) and the model dispatches on it once per element
-//! loop.
+//! Three kinematic models make `F` a 3-D deformation ([`crate::physics::KinematicModel`]):
+//! [`PlaneStrain`] (`F = F₂ ⊕ 1` on the half-plane's triangles), [`Axisymmetric`]
+//! (`F = F₂ ⊕ λ_θ`, `λ_θ = 1 + u_r/r`, the same triangles read as the meridian of a ball)
+//! and [`ThreeD`] (the 3 × 3 `F` of the quarter cell's tetrahedra). What each changes in
+//! the element kernels is its `super::kernels::Formulation`.
 
-use nalgebra::{Matrix2, SMatrix, SVector, Vector2};
+use nalgebra::{SMatrix, SVector};
 
 use crate::physics::Real;
 
-/// A kinematic model: the spatial dimension of positions and displacements, the tensor
-/// type the material laws take for `F` and `Ḟ`, and `J = det F`.
-pub trait Kinematics {
-    /// Spatial dimension of positions and displacements.
-    const DIM: usize;
-    /// The deformation-gradient type the laws take, over a scalar `T` (`f64` or a dual
-    /// number for tangents).
-    type Tensor<T: Real>;
-    /// A position or force over a scalar `T`.
-    type Vector<T: Real>;
-    /// `J = det F` (the volume ratio).
-    fn det<T: Real>(f: &Self::Tensor<T>) -> T;
-}
-
-/// Plane strain: displacements in the (x, y) plane, `F₃₃ = 1`, so `F` is the in-plane
-/// 2 × 2 block and `J = F₁₁F₂₂ − F₁₂F₂₁`.
+/// Plane strain: displacements in the (x, y) plane, `F₃₃ = 1`.
 #[derive(Debug, Clone, Copy)]
 pub struct PlaneStrain;
 
-impl Kinematics for PlaneStrain {
-    const DIM: usize = 2;
-    type Tensor<T: Real> = Matrix2<T>;
-    type Vector<T: Real> = Vector2<T>;
-
-    #[inline(always)]
-    fn det<T: Real>(f: &Matrix2<T>) -> T {
-        f[(0, 0)] * f[(1, 1)] - f[(0, 1)] * f[(1, 0)]
-    }
-}
-
 /// Axisymmetric about the vertical axis r = 0 (MODEL.md §10): the half-plane is the
-/// meridian (r, y), displacements (u_r, u_y), `F = F₂ ⊕ λ_θ` with `F₂` as in plane strain
-/// and the hoop stretch `λ_θ = 1 + u_r/r`, `J = λ_θ det F₂`; every integral is weighted
-/// by r (work per radian). u_r = 0 on the axis is the plane-strain symmetry condition.
+/// meridian (r, y), displacements (u_r, u_y), `F = F₂ ⊕ λ_θ` with the hoop stretch
+/// `λ_θ = 1 + u_r/r`, `J = λ_θ det F₂`; every integral is weighted by r (work per
+/// radian). u_r = 0 on the axis is the plane-strain symmetry condition.
 #[derive(Debug, Clone, Copy)]
 pub struct Axisymmetric;
 
-/// The in-plane arrays of the cell model (`F₂`, positions, forces), shared by both
-/// kinematic models.
-pub type Kin = PlaneStrain;
-
-/// Spatial dimension of the cell model.
-pub const DIM: usize = <Kin as Kinematics>::DIM;
-
-/// `F`, `Ḟ`, `F_a` of the cell model over `T`.
-pub type Tensor<T> = <Kin as Kinematics>::Tensor<T>;
-
-/// Positions and forces of the cell model over `T`.
-pub type Vector<T> = <Kin as Kinematics>::Vector<T>;
+/// Three dimensions: the quarter cell's 3 × 3 `F` (MODEL.md §10).
+#[derive(Debug, Clone, Copy)]
+pub struct ThreeD;
 
 /// A vector per node: `[[f64; D]; N]`.
 pub type NodalOf<const D: usize, const N: usize> = [[f64; D]; N];
@@ -129,4 +92,19 @@ pub fn contract<const D: usize>(f: impl Fn(usize) -> f64) -> f64 {
         s += f(l);
     }
     s
+}
+
+/// `det F` of a 2 × 2 or 3 × 3 `F`, by cofactors along the first row (the products and
+/// sums nalgebra forms, so that values and dual derivatives are those of
+/// `SMatrix::determinant`).
+#[inline(always)]
+pub fn det<T: Real, const D: usize>(f: &SMatrix<T, D, D>) -> T {
+    if D == 2 {
+        f[(0, 0)] * f[(1, 1)] - f[(1, 0)] * f[(0, 1)]
+    } else {
+        let minor_12_23 = f[(1, 1)] * f[(2, 2)] - f[(2, 1)] * f[(1, 2)];
+        let minor_11_23 = f[(1, 0)] * f[(2, 2)] - f[(2, 0)] * f[(1, 2)];
+        let minor_11_22 = f[(1, 0)] * f[(2, 1)] - f[(2, 0)] * f[(1, 1)];
+        f[(0, 0)] * minor_12_23 - f[(0, 1)] * minor_11_23 + f[(0, 2)] * minor_11_22
+    }
 }

@@ -1,13 +1,19 @@
-//! The cell as one DAE (MODEL.md §8): P2 finite elements of the half cell with a
+//! The cell as one DAE (MODEL.md §8, §10): P2 finite elements of the cell with a
 //! compressible Yeoh solid, active strain and Kelvin–Voigt viscosity, gravity, penalty
-//! contact, the adhesive spreading force and the μ_as field.
+//! contact, the adhesive spreading force and the μ_as field — one model for the half cell
+//! (six-node triangles, plane strain or axisymmetric: [`CellModel`]) and the 3-D quarter
+//! cell (ten-node tetrahedra: [`Cell3`]), generic over the [`Shape`] (dimension, element,
+//! mesh, substrate) and, inside the element loops, the kinematic model's
+//! [`kernels::Formulation`].
 //!
-//! Unknowns y = (u, v, μ_as) with inertia, (u, μ_as) without ([`dofs::DofMap`]). Residual:
+//! Unknowns y = (u, v, μ_as) with inertia, (u, μ_as) without ([`dofs::DofMapOf`]).
+//! Residual:
 //! - kinematics (inertia only): `u̇ − v = 0`;
 //! - momentum: `M v̇ + f_int(u, v) + c_d M₁ v − f_ext(t, u, μ_as) = 0` (consistent mass M,
 //!   unit-density mass M₁ for the medium drag), or without inertia
 //!   `f_int(u, u̇) + c_d M₁ u̇ − f_ext = 0`;
-//! - adhesion (membrane nodes): `μ̇_as − r(x, μ_as) = 0`, collocated at the nodes.
+//! - adhesion (membrane nodes): `Ȧ − a(x) = 0` for the exposure A (μ_as = Φ(A),
+//!   [`history`]), collocated at the nodes.
 //!
 //! The iteration matrix `J = ∂F/∂y + cj ∂F/∂ẏ` is exact: material tangents from the
 //! physics module, contact and adhesion derivatives by forward-mode dual numbers at each
@@ -15,18 +21,20 @@
 //! once per element (refilling, never rebuilding).
 //!
 //! Layout: `element` sets up the reference elements (geometry, mass, active strain);
-//! [`kinematics`] gives the quadrature-point kinematics (F, Ḟ, x, J) for any dimension;
-//! `kernels` gives each term's residual contribution and tangent per element (solid,
-//! mass, contact/adhesion band, μ_as rate) for plane strain, and `axisym` the solid
-//! kernels of the axisymmetric model (MODEL.md §10; [`ModelParams::kinematics`], chosen
-//! once per element loop); `plan` is the assembly plan (pattern and positions, built
-//! once) that scatters them.
+//! [`kinematics`] gives the quadrature-point kinematics (F, Ḟ, x, J); `kernels` gives
+//! each term's residual contribution and tangent per element (solid, mass, contact and
+//! adhesion band, μ_as rate), `axisym` the axisymmetric solid kernels; `plan` is the
+//! assembly plan (pattern and positions, built once) that scatters them; [`shape`] what
+//! the dimension changes; `switch` the changes of system during a run (inertia off, the
+//! μ_as unknowns added, a case branched); [`observe`] what a scene reports, and
+//! `quarter` what only the 3-D cell reports.
 //!
 //! Contact and adhesion act as body forces in thin bands near the substrate. They are
 //! integrated with a separate high-degree (optionally subdivided) rule, and only on the
 //! elements that can reach the band in the current configuration: an element is skipped
 //! when every node lies further from the substrate than the band's reach plus the
-//! element's current diameter (the integrand is then exactly zero everywhere in it).
+//! element's current diameter (the integrand is then exactly zero everywhere in it), and
+//! inside an element the points below the band.
 
 mod axisym;
 pub mod dofs;
@@ -36,30 +44,37 @@ pub(crate) mod kernels;
 pub mod kinematics;
 pub mod observe;
 pub(crate) mod plan;
+mod quarter;
+pub mod shape;
 mod switch;
 
+use nalgebra::SVector;
+
 use crate::dae::{Dae, DaeError, FirstOrderBlocks, Pattern};
-use crate::fem::p2::{P2Error, P2Tabulation};
-use crate::fem::{Domain, Mesh};
+use crate::fem::{CellMesh, Domain, ElementGeometryError};
 use crate::physics::{
-    ActiveStrain, Adhesion, Contact, KinematicModel, Phases, Substrate, Viscosity, Yeoh,
+    ActiveStrain, Adhesion, Contact, KinematicModel, Lattice, Phases, Substrate, Surface,
+    Viscosity, Yeoh,
 };
-use dofs::{DofMap, NONE};
-use element::{Element, ElementState, NODES, Nodal, ReferenceElements};
-use history::AdhesionHistory;
-use kernels::{ElementTangent, ElementVector, Formulation, Switches};
+use dofs::{DofMapOf, NONE};
+pub use element::STANDARD_DEGREE;
+use element::{ElementOf, ElementState, ReferenceElements};
+use history::AdhesionHistoryOf;
+use kernels::{Formulation, Switches};
+use kinematics::NodalOf;
 pub(crate) use kinematics::deformation;
-use kinematics::{Axisymmetric, DIM, PlaneStrain, Vector};
-use plan::AssemblyPlan;
+use plan::{PlanOf, TangentOf};
+pub use shape::{Constraints, HalfPlane, Quarter, Shape};
 pub use switch::Restart;
 
 /// Physical parameters of a scene in solver units (µm, s, pN).
 #[derive(Debug, Clone)]
 pub struct ModelParams {
-    /// Plane strain (the paper's 2-D half cell, per unit thickness) or axisymmetric (the
-    /// (x, y) half-plane is the meridian (r, y) of a 3-D cell, every integral per radian).
+    /// Plane strain (the paper's 2-D half cell, per unit thickness), axisymmetric (the
+    /// (x, y) half-plane is the meridian (r, y) of a 3-D cell, every integral per radian)
+    /// or 3-D (the quarter cell, [`Cell3`]).
     pub kinematics: KinematicModel,
-    /// Cell centre c [µm].
+    /// Cell centre c [µm] in the plane z = 0 (the 3-D cell's is (c_x, c_y, 0)).
     pub center: [f64; 2],
     /// Solid law of the nucleus, cytoplasm and membrane.
     pub solids: [Yeoh; 3],
@@ -71,8 +86,10 @@ pub struct ModelParams {
     pub gravity: f64,
     /// Phase switches and the optional gravity flip.
     pub phases: Phases,
-    /// The substrate.
+    /// The substrate (in 3-D its section z = 0, the pillars on [`Self::lattice`]).
     pub substrate: Substrate,
+    /// 3-D: where the pillar axes lie in z (unused by the half-plane models).
+    pub lattice: Lattice,
     /// Penalty contact.
     pub contact: Contact,
     /// Adhesion (absent: no μ_as unknowns).
@@ -85,7 +102,7 @@ pub struct ModelParams {
     pub drag: f64,
     /// Polynomial degree of the contact/adhesion quadrature rule.
     pub contact_degree: usize,
-    /// Subdivision levels of that rule (4^levels sub-triangles).
+    /// Subdivision levels of that rule (4^levels sub-triangles, 8^levels sub-tetrahedra).
     pub contact_subdivisions: u32,
     /// Extra breakpoints (e.g. the scene's end time).
     pub extra_breakpoints: Vec<f64>,
@@ -101,22 +118,25 @@ impl ModelParams {
     }
 }
 
-/// What a half-plane model says when asked to be the 3-D one.
-const THREE_D: &str = "the half-plane model cannot be the 3-D one (model3d::Cell3 is)";
-
 /// Why a model cannot be built.
 #[derive(Debug, Clone, thiserror::Error)]
 pub enum ModelError {
-    /// The parameters ask for the 3-D model, which is [`crate::model3d::Cell3`].
-    #[error("{THREE_D}")]
-    ThreeD,
+    /// The kinematic model does not go with the mesh (the 3-D model on the half-plane
+    /// mesh, a half-plane model on the 3-D mesh).
+    #[error("the {model:?} model cannot be built on the {elements} mesh")]
+    Kinematics {
+        /// The parameters' kinematic model.
+        model: KinematicModel,
+        /// The mesh's elements.
+        elements: &'static str,
+    },
     /// An element's reference geometry is invalid (inverted or degenerate).
     #[error("element {element}: {source}")]
     Geometry {
         /// Index of the element in the mesh.
         element: usize,
         /// What is wrong with it.
-        source: P2Error,
+        source: ElementGeometryError,
     },
     /// A system rebuilt during a run could not be made consistent with the old state.
     #[error("{what} at t = {t}: {source}")]
@@ -130,50 +150,70 @@ pub enum ModelError {
     },
 }
 
-/// The cell model as a [`Dae`].
-pub struct CellModel {
+/// The cell model as a [`Dae`], on the shape `S` (dimension `D`, `N` nodes and `E = D·N`
+/// unknowns per element).
+pub struct CellOf<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> {
     /// Parameters.
     pub params: ModelParams,
+    /// The substrate (from the parameters).
+    pub substrate: S::Substrate,
     /// The mesh.
-    pub mesh: Mesh,
+    pub mesh: S::Mesh,
     /// Unknown numbering.
-    pub dofs: DofMap,
-    elements: Vec<Element>,
-    ctab: P2Tabulation,
-    plan: AssemblyPlan,
+    pub dofs: DofMapOf<D>,
+    /// The symmetry conditions.
+    pub constraints: Constraints,
+    elements: Vec<ElementOf<D, N>>,
+    ctab: S::Tab,
+    plan: PlanOf<D, N, E>,
     /// Initial state (t₀, y₀, ẏ₀) when not the rest state at t = 0 (restarts).
     initial_state: Option<(f64, Vec<f64>, Vec<f64>)>,
-    /// μ_as integrated beside the system while adhesion is modelled but cannot act yet
-    /// (before T_g0): its unknowns are then left out ([`history`]).
-    history: Option<AdhesionHistory>,
+    /// The exposure integrated beside the system while adhesion is modelled but cannot
+    /// act yet (before T_g0): its unknowns are then left out ([`history`]).
+    history: Option<AdhesionHistoryOf<D, S::Substrate>>,
     /// Whether the element loops run on rayon's threads ([`Self::set_parallel`]).
     parallel: bool,
-    scratch: Scratch,
+    scratch: Scratch<D, N, E>,
 }
+
+/// The half-plane models (plane strain, axisymmetric) on six-node triangles.
+pub type CellModel = CellOf<HalfPlane, 2, 6, 12>;
+
+/// The 3-D quarter cell on ten-node tetrahedra.
+pub type Cell3 = CellOf<Quarter, 3, 10, 30>;
 
 /// Elements per block of the element loops: each block's element vectors or tangents
 /// are computed (in parallel, or not) into a buffer, then scattered in element order.
 pub(crate) const BLOCK: usize = 64;
 
 /// The per-block buffers of the element loops, kept between calls.
-#[derive(Default)]
-struct Scratch {
-    vectors: Vec<(ElementVector, Result<(), DaeError>)>,
-    tangents: Vec<(Box<ElementTangent>, Result<(), DaeError>)>,
-    /// Φ(A), dΦ/dA per μ_as unknown ([`CellModel::fill_caps`]).
+struct Scratch<const D: usize, const N: usize, const E: usize> {
+    vectors: Vec<(NodalOf<D, N>, Result<(), DaeError>)>,
+    tangents: Vec<(Box<TangentOf<E, N>>, Result<(), DaeError>)>,
+    /// Φ(A), dΦ/dA per μ_as unknown ([`CellOf::fill_caps`]).
     caps: Vec<(f64, f64)>,
 }
 
-impl Scratch {
-    fn take_vectors(&mut self) -> Vec<(ElementVector, Result<(), DaeError>)> {
+impl<const D: usize, const N: usize, const E: usize> Default for Scratch<D, N, E> {
+    fn default() -> Self {
+        Self {
+            vectors: Vec::new(),
+            tangents: Vec::new(),
+            caps: Vec::new(),
+        }
+    }
+}
+
+impl<const D: usize, const N: usize, const E: usize> Scratch<D, N, E> {
+    fn take_vectors(&mut self) -> Vec<(NodalOf<D, N>, Result<(), DaeError>)> {
         let mut b = std::mem::take(&mut self.vectors);
-        b.resize_with(BLOCK, || ([[0.0; DIM]; NODES], Ok(())));
+        b.resize_with(BLOCK, || ([[0.0; D]; N], Ok(())));
         b
     }
 
-    fn take_tangents(&mut self) -> Vec<(Box<ElementTangent>, Result<(), DaeError>)> {
+    fn take_tangents(&mut self) -> Vec<(Box<TangentOf<E, N>>, Result<(), DaeError>)> {
         let mut b = std::mem::take(&mut self.tangents);
-        b.resize_with(BLOCK, || (Box::new(ElementTangent::zeros()), Ok(())));
+        b.resize_with(BLOCK, || (Box::new(TangentOf::zeros()), Ok(())));
         b
     }
 }
@@ -210,55 +250,75 @@ pub(crate) fn in_blocks<T: Send>(
     Ok(())
 }
 
-impl CellModel {
-    /// Builds the model on `mesh`: unknown numbering, the reference elements (geometry,
-    /// mass, active strain) and the assembly plan (the pattern of the iteration matrix and
-    /// the positions to refill it).
-    pub fn new(params: ModelParams, mesh: Mesh) -> Result<Self, ModelError> {
+impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S, D, N, E> {
+    /// Builds the model on `mesh` (the quarter cell's symmetry for 3-D): unknown
+    /// numbering, the reference elements (geometry, mass, active strain) and the assembly
+    /// plan (the pattern of the iteration matrix and the positions to refill it).
+    pub fn new(params: ModelParams, mesh: S::Mesh) -> Result<Self, ModelError> {
+        Self::with_constraints(params, mesh, Constraints::Quarter)
+    }
+
+    /// As [`Self::new`] with the symmetry conditions `constraints` (the 3-D slab check).
+    pub fn with_constraints(
+        params: ModelParams,
+        mesh: S::Mesh,
+        constraints: Constraints,
+    ) -> Result<Self, ModelError> {
         let adhesion = params.adhesion.is_some();
-        Self::build(params, mesh, adhesion)
+        Self::build(params, mesh, constraints, adhesion)
     }
 
     /// As [`Self::new`], but with adhesion modelled its μ_as unknowns are left out until
-    /// adhesion can act (T_g0): μ_as is integrated beside the system along the accepted
-    /// steps ([`history`]), and [`Self::with_adhesion_unknowns`] adds the unknowns.
-    /// Starting at T_g0 or later, the unknowns are there from the start.
-    pub fn deferring_adhesion(params: ModelParams, mesh: Mesh) -> Result<Self, ModelError> {
+    /// adhesion can act (T_g0): the exposure is integrated beside the system along the
+    /// accepted steps ([`history`]), and [`Self::with_adhesion_unknowns`] adds the
+    /// unknowns. Starting at T_g0 or later, the unknowns are there from the start.
+    pub fn deferring_adhesion(params: ModelParams, mesh: S::Mesh) -> Result<Self, ModelError> {
         let Some(ad) = params.adhesion else {
             return Self::new(params, mesh);
         };
         if params.phases.t_g0 <= 0.0 {
             return Self::new(params, mesh);
         }
-        let mut m = Self::build(params, mesh, false)?;
+        let mut m = Self::build(params, mesh, Constraints::Quarter, false)?;
         let nodes = m.membrane_nodes();
-        let x = nodes.iter().map(|&i| m.mesh.nodes[i]).collect();
-        let xdot = vec![[0.0; DIM]; nodes.len()];
+        let x = nodes.iter().map(|&i| m.mesh.nodes()[i]).collect();
+        let xdot = vec![[0.0; D]; nodes.len()];
         let mu = vec![0.0; nodes.len()];
-        m.history = Some(AdhesionHistory::new(
-            ad,
-            m.params.substrate,
-            0.0,
-            mu,
-            x,
-            xdot,
-        ));
+        m.history = Some(AdhesionHistoryOf::new(ad, m.substrate, 0.0, mu, x, xdot));
         Ok(m)
     }
 
-    fn build(params: ModelParams, mesh: Mesh, adhesion_unknowns: bool) -> Result<Self, ModelError> {
-        if params.kinematics == KinematicModel::ThreeD {
-            return Err(ModelError::ThreeD);
+    /// The model on `mesh`, with the μ_as unknowns when `adhesion_unknowns`.
+    fn build(
+        params: ModelParams,
+        mesh: S::Mesh,
+        constraints: Constraints,
+        adhesion_unknowns: bool,
+    ) -> Result<Self, ModelError> {
+        if (params.kinematics == KinematicModel::ThreeD) != (D == 3) {
+            return Err(ModelError::Kinematics {
+                model: params.kinematics,
+                elements: S::ELEMENTS,
+            });
         }
-        let dofs = DofMap::new(&mesh, params.inertia, adhesion_unknowns);
+        let eliminated = S::eliminated(&mesh, constraints);
+        let dofs = DofMapOf::<D>::numbered(
+            mesh.nodes().len(),
+            |i, c| eliminated[i][c],
+            &mesh.nodes_of_domain(Domain::Membrane),
+            params.inertia,
+            adhesion_unknowns,
+        );
         let ReferenceElements { elements, ctab } =
-            ReferenceElements::new(&params, &mesh, adhesion_unknowns)?;
+            ReferenceElements::new::<S, E>(&params, &mesh, adhesion_unknowns)?;
         let plan_elements: Vec<_> = elements.iter().map(|el| (el.nodes, el.with_mu)).collect();
-        let plan = AssemblyPlan::new(&dofs, &plan_elements);
+        let plan = PlanOf::new(&dofs, &plan_elements);
         Ok(Self {
+            substrate: S::substrate(&params),
             params,
             mesh,
             dofs,
+            constraints,
             elements,
             ctab,
             plan,
@@ -271,10 +331,11 @@ impl CellModel {
 
     /// Runs the element loops (residual and Jacobian) on rayon's thread pool. The results
     /// are the same bits either way: each element's contribution is computed on its own
-    /// and the contributions are added in element order. Off in runs: on 2 cores it made
-    /// the flat gravity phase 1.17× slower at refine 1 and 2 and push-pull 1.22× (paired
-    /// runs against `RAYON_NUM_THREADS=1`, medians of 3–7, quiet machine, 2026-12-02;
-    /// perf put a fifth of the samples in the pool's `sched_yield` and futex calls).
+    /// and the contributions are added in element order. Off in the 2-D runs: on 2 cores
+    /// it made the flat gravity phase 1.17× slower at refine 1 and 2 and push-pull 1.22×
+    /// (paired runs against `RAYON_NUM_THREADS=1`, medians of 3–7, quiet machine,
+    /// 2026-12-02; perf put a fifth of the samples in the pool's `sched_yield` and futex
+    /// calls).
     pub fn set_parallel(&mut self, parallel: bool) {
         self.parallel = parallel;
     }
@@ -282,6 +343,11 @@ impl CellModel {
     /// Whether the element loops run in parallel.
     pub fn parallel(&self) -> bool {
         self.parallel
+    }
+
+    /// Number of elements.
+    pub fn n_elements(&self) -> usize {
+        self.elements.len()
     }
 
     /// The nodes of the membrane elements, in the order of the μ_as unknowns.
@@ -305,7 +371,7 @@ impl CellModel {
     /// adhesion): the unknowns, or while deferred the history's values (`t` within the
     /// integrator's last step).
     pub fn nodal_mu_as(&self, t: f64, y: &[f64]) -> Result<Vec<Option<f64>>, String> {
-        let n = self.mesh.nodes.len();
+        let n = self.mesh.nodes().len();
         let Some(ad) = &self.params.adhesion else {
             return Ok(vec![None; n]);
         };
@@ -326,13 +392,13 @@ impl CellModel {
     }
 
     /// Positions and velocities of the membrane nodes from (y, ẏ) (velocity u̇).
-    fn membrane_motion(&self, y: &[f64], yp: &[f64]) -> (Vec<[f64; DIM]>, Vec<[f64; DIM]>) {
+    fn membrane_motion(&self, y: &[f64], yp: &[f64]) -> (Vec<[f64; D]>, Vec<[f64; D]>) {
         let nodes = self.membrane_nodes();
         let x = nodes
             .iter()
             .map(|&i| {
                 let u = self.dofs.node_u(y, i);
-                std::array::from_fn(|k| self.mesh.nodes[i][k] + u[k])
+                std::array::from_fn(|k| self.mesh.nodes()[i][k] + u[k])
             })
             .collect();
         let xdot = nodes.iter().map(|&i| self.dofs.node_u(yp, i)).collect();
@@ -350,8 +416,8 @@ impl CellModel {
     }
 
     /// Per-component absolute tolerances: `atol` [µm] on displacements, `atol`/s on
-    /// velocities, `atol` · μ_as,max/µm on the adhesion coefficient (so each block is
-    /// measured against its own scale).
+    /// velocities, `atol` · μ_as,max/µm on the exposures (so each block is measured
+    /// against its own scale).
     pub fn atol_vector(&self, atol: f64) -> Vec<f64> {
         let (nu, nv, nm) = self.block_sizes();
         let mu_scale = self.params.adhesion.map(|a| a.mu_as_max).unwrap_or(1.0);
@@ -368,15 +434,15 @@ impl CellModel {
 
     /// Element displacements u, velocities v (v with inertia, u̇ without) and
     /// accelerations v̇ (inertia only) gathered from (y, ẏ).
-    fn gather(&self, el: &Element, y: &[f64], yp: &[f64]) -> ElementState {
+    fn gather(&self, el: &ElementOf<D, N>, y: &[f64], yp: &[f64]) -> ElementState<D, N> {
         let mut st = ElementState {
-            u: [[0.0; DIM]; NODES],
-            v: [[0.0; DIM]; NODES],
-            a: [[0.0; DIM]; NODES],
+            u: [[0.0; D]; N],
+            v: [[0.0; D]; N],
+            a: [[0.0; D]; N],
         };
-        for a in 0..NODES {
+        for a in 0..N {
             let i = el.nodes[a];
-            for k in 0..DIM {
+            for k in 0..D {
                 let du = self.dofs.u[i][k];
                 if du == NONE {
                     continue;
@@ -411,12 +477,13 @@ impl CellModel {
     /// The nodal μ_as = Φ(A) of `el` and dμ_as/dA when adhesion acts on it at `t_as`,
     /// from the values of [`Self::fill_caps`].
     #[inline]
+    #[allow(clippy::type_complexity)]
     fn gather_mu(
         &self,
-        el: &Element,
+        el: &ElementOf<D, N>,
         caps: &[(f64, f64)],
         t_as: f64,
-    ) -> Option<([f64; NODES], [f64; NODES])> {
+    ) -> Option<([f64; N], [f64; N])> {
         if !kernels::adhesion_acts(&self.params, el, t_as) {
             return None;
         }
@@ -425,42 +492,40 @@ impl CellModel {
         Some((c.map(|v| v.0), c.map(|v| v.1)))
     }
 
-    /// Current position of node `i`.
+    /// Current position of node `i` in state `y`.
     #[inline]
-    fn node_position(&self, y: &[f64], i: usize) -> Vector<f64> {
+    pub fn position(&self, y: &[f64], i: usize) -> SVector<f64, D> {
         let u = self.dofs.node_u(y, i);
-        let xn = self.mesh.nodes[i];
-        Vector::<f64>::from_fn(|k, _| xn[k] + u[k])
+        let xn = self.mesh.nodes()[i];
+        SVector::<f64, D>::from_fn(|k, _| xn[k] + u[k])
     }
 
     /// Whether an element can reach the contact or adhesion band in the configuration `ue`:
     /// some node lies within the band's reach plus 1.5 × the element's current diameter
     /// of the substrate (every point of the element is within one diameter of a node, and
     /// the depth d is 1-Lipschitz up to the first-order distance's corner factor).
-    fn in_reach(&self, el: &Element, ue: &Nodal) -> bool {
+    fn in_reach(&self, el: &ElementOf<D, N>, ue: &NodalOf<D, N>) -> bool {
         let p = &self.params;
         let band = match &p.adhesion {
             Some(ad) if el.domain == Domain::Membrane => (ad.e_f + ad.eps).max(p.contact.eps),
             _ => p.contact.eps,
         };
-        let xs: [Vector<f64>; NODES] = std::array::from_fn(|a| {
-            let xn = self.mesh.nodes[el.nodes[a]];
-            Vector::<f64>::from_fn(|k, _| xn[k] + ue[a][k])
+        let xs: [SVector<f64, D>; N] = std::array::from_fn(|a| {
+            let xn = self.mesh.nodes()[el.nodes[a]];
+            SVector::<f64, D>::from_fn(|k, _| xn[k] + ue[a][k])
         });
         let mut diam2: f64 = 0.0;
-        for a in 0..NODES {
-            for b in a + 1..NODES {
+        for a in 0..N {
+            for b in a + 1..N {
                 diam2 = diam2.max((xs[a] - xs[b]).norm_squared());
             }
         }
         let reach = band + 1.5 * diam2.sqrt();
-        xs.iter().any(|x| p.substrate.eval(x).0 > -reach)
+        xs.iter().any(|x| self.substrate.eval(x).0 > -reach)
     }
-}
 
-impl CellModel {
     /// The residual with the kernels of the kinematic model `K` ([`Dae::residual`]).
-    fn residual_of<K: Formulation>(
+    pub(crate) fn residual_of<K: Formulation<D, N, E>>(
         &mut self,
         t: f64,
         y: &[f64],
@@ -481,16 +546,26 @@ impl CellModel {
             }
         }
         let g_now = p.gravity * sw.s_g * sw.t_g;
-        let element = |e: usize, fe: &mut ElementVector| -> Result<(), DaeError> {
+        let element = |e: usize, fe: &mut NodalOf<D, N>| -> Result<(), DaeError> {
             let el = &self.elements[e];
             let st = self.gather(el, y, yp);
-            *fe = [[0.0f64; DIM]; NODES];
+            *fe = [[0.0f64; D]; N];
             let law = &p.solids[el.solid];
             K::solid_residual(e, el, law, &p.viscosity, &st, sw.t_a, fe)?;
             kernels::mass_residual(el, g_now, inertia, p.drag, &st, fe);
             if self.in_reach(el, &st.u) {
                 let mue = self.gather_mu(el, &caps, sw.t_as).map(|m| m.0);
-                kernels::band_residual::<K>(e, el, &self.ctab, p, &st, mue.as_ref(), sw.t_as, fe)?;
+                kernels::band_residual::<S, K, D, N, E>(
+                    e,
+                    el,
+                    &self.ctab,
+                    p,
+                    &self.substrate,
+                    &st,
+                    mue.as_ref(),
+                    sw.t_as,
+                    fe,
+                )?;
             }
             Ok(())
         };
@@ -507,8 +582,8 @@ impl CellModel {
         let mu_off = self.dofs.mu_offset();
         for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
             let row = mu_off + k;
-            let x = self.node_position(y, i);
-            r[row] = kernels::mu_rate_residual(p, &x, yp[row]);
+            let x = self.position(y, i);
+            r[row] = kernels::mu_rate_residual::<S, D, N, E>(p, &self.substrate, &x, yp[row]);
         }
         if r.iter().all(|v| v.is_finite()) {
             Ok(())
@@ -518,7 +593,7 @@ impl CellModel {
     }
 
     /// The iteration matrix with the kernels of the kinematic model `K` ([`Dae::jacobian`]).
-    fn jacobian_of<K: Formulation>(
+    pub(crate) fn jacobian_of<K: Formulation<D, N, E>>(
         &mut self,
         t: f64,
         y: &[f64],
@@ -534,7 +609,7 @@ impl CellModel {
         self.fill_caps(y, sw.t_as, &mut caps);
         let inertia = self.dofs.inertia;
         self.plan.add_kinematic(cj, v);
-        let element = |e: usize, tan: &mut Box<ElementTangent>| -> Result<(), DaeError> {
+        let element = |e: usize, tan: &mut Box<TangentOf<E, N>>| -> Result<(), DaeError> {
             let el = &self.elements[e];
             let st = self.gather(el, y, yp);
             tan.reset(el.with_mu);
@@ -543,10 +618,11 @@ impl CellModel {
             kernels::mass_tangent(el, cj, inertia, p.drag, tan);
             if self.in_reach(el, &st.u) {
                 let mue = self.gather_mu(el, &caps, sw.t_as);
-                kernels::band_tangent::<K>(
+                kernels::band_tangent::<S, K, D, N, E>(
                     el,
                     &self.ctab,
                     p,
+                    &self.substrate,
                     &st,
                     mue.map(|m| m.0).as_ref(),
                     sw.t_as,
@@ -575,13 +651,13 @@ impl CellModel {
         result?;
         if p.adhesion.is_some() {
             for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
-                let x = self.node_position(y, i);
-                let d = kernels::mu_rate_tangent(p, &x);
+                let x = self.position(y, i);
+                let (dx, da) = kernels::mu_rate_tangent::<S, D, N, E>(p, &self.substrate, &x);
                 let (own, on_u) = &self.plan.mu_rate[k];
-                v[*own] += cj - d[DIM];
-                for c in 0..DIM {
+                v[*own] += cj - da;
+                for c in 0..D {
                     if on_u[c] != NONE {
-                        v[on_u[c]] -= d[c];
+                        v[on_u[c]] -= dx[c];
                     }
                 }
             }
@@ -594,7 +670,7 @@ impl CellModel {
     }
 }
 
-impl Dae for CellModel {
+impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> Dae for CellOf<S, D, N, E> {
     fn size(&self) -> usize {
         self.dofs.n
     }
@@ -603,11 +679,7 @@ impl Dae for CellModel {
     /// scattered into the momentum rows, then the adhesion rows; the kernels of the case's
     /// kinematic model.
     fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
-        match self.params.kinematics {
-            KinematicModel::PlaneStrain => self.residual_of::<PlaneStrain>(t, y, yp, r),
-            KinematicModel::Axisymmetric => self.residual_of::<Axisymmetric>(t, y, yp, r),
-            KinematicModel::ThreeD => Err(DaeError::Fatal(THREE_D.into())),
-        }
+        S::residual(self, t, y, yp, r)
     }
 
     fn pattern(&self) -> &Pattern {
@@ -623,11 +695,7 @@ impl Dae for CellModel {
         cj: f64,
         v: &mut [f64],
     ) -> Result<(), DaeError> {
-        match self.params.kinematics {
-            KinematicModel::PlaneStrain => self.jacobian_of::<PlaneStrain>(t, y, yp, cj, v),
-            KinematicModel::Axisymmetric => self.jacobian_of::<Axisymmetric>(t, y, yp, cj, v),
-            KinematicModel::ThreeD => Err(DaeError::Fatal(THREE_D.into())),
-        }
+        S::jacobian(self, t, y, yp, cj, v)
     }
 
     fn differential(&self) -> Vec<bool> {

@@ -1,16 +1,18 @@
-//! What a scene reports (MODEL.md §7), computed from a state y alone.
+//! What a scene reports (MODEL.md §7), computed from a state y alone, for every model.
 //!
 //! In the axisymmetric model (MODEL.md §10) the integrals are per radian (the elements'
 //! quadrature weights carry r): the strain means are volume means (weight r dA) of the
 //! 3-D ‖E‖, hoop strain included, the weight and the contact force are per radian, and
 //! the contact radius is the length of the meridian contour in contact, as in 2-D.
 
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{SMatrix, SVector, Vector2};
 
 use super::dofs::NONE;
-use super::{CellModel, deformation};
-use crate::fem::Domain;
+use super::element::ElementOf;
+use super::kinematics::{NodalOf, det};
+use super::{CellOf, Shape, deformation};
 use crate::fem::p2::edge_shape;
+use crate::fem::{CellMesh, Domain, ElementTabulation};
 use crate::physics::{KinematicModel, contact_force};
 use crate::record::Observables;
 
@@ -30,19 +32,22 @@ pub struct StrainNorms {
 }
 
 /// `F₃₃` at standard point `q` of `el` with nodal displacements `ue`: the hoop stretch
-/// `1 + u_r/r` in the axisymmetric model (its [`super::Element::hoop`] table), 1 in plane
-/// strain.
-fn hoop_stretch(el: &super::Element, q: usize, ue: &[[f64; 2]; 6]) -> f64 {
+/// `1 + u_r/r` in the axisymmetric model (its hoop table), 1 otherwise.
+fn hoop_stretch<const D: usize, const N: usize>(
+    el: &ElementOf<D, N>,
+    q: usize,
+    ue: &NodalOf<D, N>,
+) -> f64 {
     match el.hoop.get(q) {
-        Some(h) => 1.0 + (0..6).map(|a| h[a] * ue[a][0]).sum::<f64>(),
+        Some(h) => 1.0 + (0..N).map(|a| h[a] * ue[a][0]).sum::<f64>(),
         None => 1.0,
     }
 }
 
-/// ‖E‖_F of `E = ½(C − I)` for `F = F₂ ⊕ f33`: the in-plane block and the hoop entry
-/// `½(f33² − 1)` (0 in plane strain).
-fn strain_norm(f: &Matrix2<f64>, f33: f64) -> f64 {
-    let e = (f.transpose() * f - Matrix2::identity()) * 0.5;
+/// ‖E‖_F of `E = ½(C − I)` for `F ⊕ f33`: the block of `F` and the hoop entry
+/// `½(f33² − 1)` (0 where `f33 = 1`).
+fn strain_norm<const D: usize>(f: &SMatrix<f64, D, D>, f33: f64) -> f64 {
+    let e = (f.transpose() * f - SMatrix::<f64, D, D>::identity()) * 0.5;
     let e33 = 0.5 * (f33 * f33 - 1.0);
     (e.norm_squared() + e33 * e33).sqrt()
 }
@@ -109,19 +114,13 @@ pub fn add_band_lengths(
     }
 }
 
-impl CellModel {
-    /// Current position of node `i` in state `y`.
-    pub fn position(&self, y: &[f64], i: usize) -> Vector2<f64> {
-        let u = self.dofs.node_u(y, i);
-        Vector2::new(self.mesh.nodes[i][0] + u[0], self.mesh.nodes[i][1] + u[1])
-    }
-
-    /// All observables at time `t` in state `y`.
+impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S, D, N, E> {
+    /// All observables at time `t` in state `y` (the contact radius: [`Shape::contact_lengths`]).
     pub fn observe(&self, t: f64, y: &[f64]) -> Observables {
-        let pts = self.mesh.points;
+        let pts = self.mesh.points();
         let uy = |i: usize| self.dofs.node_u(y, i)[1];
         let strain = self.mean_strain_norms(y);
-        let (contact, contact_ref) = self.contact_lengths(y);
+        let (contact, contact_ref) = S::contact_lengths(self, y);
         Observables {
             t,
             contact_radius: contact,
@@ -136,32 +135,15 @@ impl CellModel {
         }
     }
 
-    /// Deformed length of the outer boundary where the depth exceeds −ε_ct, i.e. within
-    /// ε_ct of the substrate (the first value of [`Self::contact_lengths`]).
+    /// Deformed length of the contour in contact (the first value of
+    /// [`Shape::contact_lengths`]).
     pub fn contact_length(&self, y: &[f64]) -> f64 {
-        self.contact_lengths(y).0
+        S::contact_lengths(self, y).0
     }
 
-    /// Length of the part of the outer boundary in contact, i.e. whose current position
-    /// lies within ε_ct of the substrate (depth > −ε_ct), measured along the deformed
-    /// contour and along the reference contour: `(deformed, reference)` [µm]. Each P2
-    /// boundary edge is sampled in [`EDGE_SAMPLES`] sub-segments of its parameter
-    /// ([`add_band_lengths`]).
-    pub fn contact_lengths(&self, y: &[f64]) -> (f64, f64) {
-        let eps = self.params.contact.eps;
-        let depth = |x: &Vector2<f64>| self.params.substrate.eval(x).0 + eps;
-        let mut total = [0.0; 2];
-        for edge in &self.mesh.outer_edges {
-            let reference = edge.map(|i| Vector2::from(self.mesh.nodes[i]));
-            let current = edge.map(|i| self.position(y, i));
-            add_band_lengths(&reference, &current, depth, &mut total);
-        }
-        (total[0], total[1])
-    }
-
-    /// Reference-area integrals of the Frobenius norm of E = ½(FᵀF − I) per domain (plane
-    /// strain: E₃₃ = 0), and the domains' reference areas; axisymmetric: with the hoop
-    /// strain E₃₃ = ½(λ_θ² − 1), weighted by r (volumes per radian).
+    /// Reference integrals of the Frobenius norm of E = ½(FᵀF − I) per domain (plane
+    /// strain: E₃₃ = 0; axisymmetric: with the hoop strain E₃₃ = ½(λ_θ² − 1), weighted by r,
+    /// volumes per radian; 3-D: the quarter's volumes), and the domains' reference sizes.
     pub fn mean_strain_norms(&self, y: &[f64]) -> StrainNorms {
         let mut s = StrainNorms {
             integral: [0.0; 3],
@@ -190,8 +172,8 @@ impl CellModel {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Per-element mean ‖E‖_F and mean det F (reference-area averages; axisymmetric:
-    /// volume averages, hoop stretch included), for output.
+    /// Per-element mean ‖E‖_F and mean det F (reference averages; axisymmetric: volume
+    /// averages, hoop stretch included), for output.
     pub fn element_strain_and_jacobian(&self, y: &[f64]) -> Vec<(f64, f64)> {
         self.elements
             .iter()
@@ -202,7 +184,7 @@ impl CellModel {
                     let f = deformation(&ue, &el.geo.grads[q]);
                     let f33 = hoop_stretch(el, q, &ue);
                     se += el.geo.jxw[q] * strain_norm(&f, f33);
-                    sj += el.geo.jxw[q] * f.determinant() * f33;
+                    sj += el.geo.jxw[q] * det(&f) * f33;
                     a += el.geo.jxw[q];
                 }
                 (se / a, sj / a)
@@ -210,42 +192,44 @@ impl CellModel {
             .collect()
     }
 
-    /// Total contact force on the half cell [pN/µm] (per unit thickness; axisymmetric:
-    /// [pN] per radian, the whole cell's is 2π times it), integrated with the contact rule
-    /// over every element.
-    pub fn contact_force_total(&self, y: &[f64]) -> Vector2<f64> {
+    /// Total contact force on the modelled part of the cell, integrated with the band rule
+    /// over the elements in the band's reach (the others add exact zeros, as in the
+    /// residual): half cell [pN/µm] per unit thickness; axisymmetric [pN] per radian (the
+    /// whole cell's is 2π times it); quarter cell [pN].
+    pub fn contact_force_total(&self, y: &[f64]) -> SVector<f64, D> {
         let axisymmetric = self.params.kinematics == KinematicModel::Axisymmetric;
         let p = &self.params;
-        let mut total = Vector2::zeros();
+        let values = self.ctab.values();
+        let mut total = SVector::<f64, D>::zeros();
         for el in &self.elements {
             let ue = self.element_displacements(el, y);
-            // An element out of the band's reach adds exact zeros (as in the residual).
             if !self.in_reach(el, &ue) {
                 continue;
             }
             for q in 0..el.cgeo.jxw.len() {
-                let nv = &self.ctab.values[q];
+                let nv = &values[q];
                 let f = deformation(&ue, &el.cgeo.grads[q]);
-                let mut x = Vector2::new(el.cgeo.x[q][0], el.cgeo.x[q][1]);
-                for a in 0..6 {
-                    x.x += nv[a] * ue[a][0];
-                    x.y += nv[a] * ue[a][1];
+                let mut x = SVector::<f64, D>::from(el.cgeo.x[q]);
+                for a in 0..N {
+                    for k in 0..D {
+                        x[k] += nv[a] * ue[a][k];
+                    }
                 }
                 // J = F₃₃ det F₂, F₃₃ = x_r/X_r axisymmetric.
                 let f33 = if axisymmetric {
-                    x.x / el.cgeo.x[q][0]
+                    x[0] / el.cgeo.x[q][0]
                 } else {
                     1.0
                 };
-                total += contact_force(&p.substrate, &p.contact, &x, f.determinant() * f33)
-                    * el.cgeo.jxw[q];
+                total +=
+                    contact_force(&self.substrate, &p.contact, &x, det(&f) * f33) * el.cgeo.jxw[q];
             }
         }
         total
     }
 
-    /// Weight of the half cell at full gravity [pN/µm]: g ∫ ρ dV (axisymmetric: [pN] per
-    /// radian, g ∫ ρ r dA; the whole cell's is 2π times it).
+    /// Weight of the modelled part of the cell at full gravity: g ∫ ρ dV (half cell
+    /// [pN/µm]; axisymmetric [pN] per radian, g ∫ ρ r dA; quarter cell [pN]).
     pub fn weight(&self) -> f64 {
         self.elements
             .iter()
@@ -254,10 +238,20 @@ impl CellModel {
             * self.params.gravity
     }
 
-    fn element_displacements(&self, el: &super::Element, y: &[f64]) -> [[f64; 2]; 6] {
-        let mut ue = [[0.0; 2]; 6];
-        for a in 0..6 {
-            for k in 0..2 {
+    /// Reference size of domain `d` (all domains: `None`): area of the half cell [µm²],
+    /// volume per radian (axisymmetric) or volume of the quarter cell [µm³].
+    pub fn volume(&self, d: Option<Domain>) -> f64 {
+        self.elements
+            .iter()
+            .filter(|el| d.is_none_or(|d| el.domain == d))
+            .map(|el| el.geo.jxw.iter().sum::<f64>())
+            .sum()
+    }
+
+    fn element_displacements(&self, el: &ElementOf<D, N>, y: &[f64]) -> NodalOf<D, N> {
+        let mut ue = [[0.0; D]; N];
+        for a in 0..N {
+            for k in 0..D {
                 let d = self.dofs.u[el.nodes[a]][k];
                 if d != NONE {
                     ue[a][k] = y[d];
@@ -265,6 +259,25 @@ impl CellModel {
             }
         }
         ue
+    }
+}
+
+impl super::CellModel {
+    /// Length of the part of the outer boundary in contact, i.e. whose current position
+    /// lies within ε_ct of the substrate (depth > −ε_ct), measured along the deformed
+    /// contour and along the reference contour: `(deformed, reference)` [µm]. Each P2
+    /// boundary edge is sampled in [`EDGE_SAMPLES`] sub-segments of its parameter
+    /// ([`add_band_lengths`]).
+    pub fn contact_lengths(&self, y: &[f64]) -> (f64, f64) {
+        let eps = self.params.contact.eps;
+        let depth = |x: &Vector2<f64>| self.params.substrate.eval(x).0 + eps;
+        let mut total = [0.0; 2];
+        for edge in &self.mesh.outer_edges {
+            let reference = edge.map(|i| Vector2::from(self.mesh.nodes[i]));
+            let current = edge.map(|i| self.position(y, i));
+            add_band_lengths(&reference, &current, depth, &mut total);
+        }
+        (total[0], total[1])
     }
 }
 

@@ -12,11 +12,9 @@
 //!
 //! Written once for any dimension `D`, nodes per element `N` and element unknowns
 //! `E = D·N` (the three as const parameters: stable Rust cannot compute `E` from the
-//! others in a type); [`AssemblyPlan`] is the six-node triangles' of the half-plane models.
+//! others in a type).
 
 use super::dofs::DofMapOf;
-use super::element::{EDOF, NODES};
-use super::kinematics::DIM;
 use crate::fem::assembly::{BlockPositions, NONE, Pattern, PatternBuilder, position_or_none};
 
 /// The element tangents `K`, `C` (rows and columns node-major, `D · a + i`, E = D·N of
@@ -81,9 +79,6 @@ pub(crate) struct PlanOf<const D: usize, const N: usize, const E: usize> {
     /// Adhesion rows: positions of (μ_k, μ_k) and of (μ_k, u) for its node's components.
     pub(crate) mu_rate: Vec<(usize, [usize; D])>,
 }
-
-/// The plan of the half-plane models' six-node triangles.
-pub(crate) type AssemblyPlan = PlanOf<DIM, NODES, EDOF>;
 
 /// An element's unknowns: momentum rows, u, v and μ_as columns.
 struct ElementDofs<const N: usize, const E: usize> {
@@ -254,7 +249,7 @@ mod tests {
             let m = CellModel::new(params, mesh.clone()).expect("model");
             let nnz = m.plan.pattern.compute_nnz();
             for (el, ep) in m.elements.iter().zip(&m.plan.elements) {
-                let d: ElementDofs<NODES, EDOF> = ElementDofs::new(&m.dofs, &el.nodes);
+                let d: ElementDofs<6, 12> = ElementDofs::new(&m.dofs, &el.nodes);
                 assert_eq!(ep.momentum_v.is_empty(), !inertia);
                 assert_eq!(ep.momentum_mu.is_empty(), !el.with_mu);
                 let blocks: [(&BlockPositions, &[usize]); 3] = [

@@ -1,7 +1,7 @@
 //! Changing the system during a run: the same cell rebuilt with fewer unknowns and
 //! restarted, consistently, from the state of the old one.
 
-use super::{CellModel, ModelError, ModelParams};
+use super::{CellOf, ModelError, ModelParams, Shape};
 use crate::dae::{Atol, LinearSolverFactory, consistent_init};
 
 /// How a restarted system is made consistent: the linear solver of its Newton solve
@@ -13,17 +13,17 @@ pub struct Restart<'a> {
     /// Relative tolerance.
     pub rtol: f64,
     /// Absolute tolerance on displacements [µm] (scaled per block by
-    /// [`CellModel::atol_vector`]).
+    /// [`CellOf::atol_vector`]).
     pub atol: f64,
 }
 
-impl CellModel {
+impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S, D, N, E> {
     /// Whether at time `t` the contact carries the cell's current weight (gravity ramped
     /// and signed as at `t`; false while there is no downward load).
     pub fn contact_carries_weight(&self, t: f64, y: &[f64]) -> bool {
         let ph = &self.params.phases;
         let load = self.weight() * ph.t_g(t) * ph.gravity_sign(t);
-        load > 0.0 && self.contact_force_total(y).y >= load
+        load > 0.0 && self.contact_force_total(y)[1] >= load
     }
 
     /// The same cell without inertia, on (u, μ_as), set to restart at time `t` from the
@@ -42,15 +42,16 @@ impl CellModel {
         y: &[f64],
         yp: &[f64],
         restart: &Restart,
-    ) -> Result<CellModel, ModelError> {
+    ) -> Result<Self, ModelError> {
         let (mut y2, mut yp2) = self.dofs.drop_inertia(y, yp);
         yp2[..self.dofs.n_u].iter_mut().for_each(|v| *v = 0.0);
         let mut params = self.params.clone();
         params.inertia = false;
         let deferred = self.history.is_some();
-        let mut m = CellModel::build(
+        let mut m = Self::build(
             params,
             self.mesh.clone(),
+            self.constraints,
             !deferred && self.params.adhesion.is_some(),
         )?;
         let atol = Atol::Vector(m.atol_vector(restart.atol));
@@ -93,7 +94,7 @@ impl CellModel {
         t: f64,
         y: &[f64],
         yp: &[f64],
-    ) -> Result<CellModel, ModelError> {
+    ) -> Result<Self, ModelError> {
         let refuse = |message: String| ModelError::Restart {
             what: "branching",
             t,
@@ -104,9 +105,10 @@ impl CellModel {
         }
         params.inertia = self.dofs.inertia;
         let deferred = self.history.is_some();
-        let mut m = CellModel::build(
+        let mut m = Self::build(
             params,
             self.mesh.clone(),
+            self.constraints,
             !deferred && self.params.adhesion.is_some(),
         )?;
         if m.dofs.n != self.dofs.n || y.len() != m.dofs.n || yp.len() != m.dofs.n {
@@ -133,7 +135,7 @@ impl CellModel {
         t: f64,
         y: &[f64],
         yp: &[f64],
-    ) -> Result<CellModel, ModelError> {
+    ) -> Result<Self, ModelError> {
         let restart_err = |e: String| ModelError::Restart {
             what: "adding the adhesion unknowns",
             t,
@@ -144,20 +146,16 @@ impl CellModel {
             .as_ref()
             .ok_or_else(|| restart_err("the adhesion unknowns are already there".into()))?;
         let exposure = h.at(t).map_err(restart_err)?;
-        let mut m = CellModel::new(self.params.clone(), self.mesh.clone())?;
+        let mut m =
+            Self::with_constraints(self.params.clone(), self.mesh.clone(), self.constraints)?;
         debug_assert_eq!(m.dofs.n, self.dofs.n + exposure.len());
         let mut y2 = y.to_vec();
         let mut yp2 = yp.to_vec();
         y2.extend_from_slice(&exposure);
         let ad = self.params.adhesion.as_ref().expect("deferred adhesion");
         for &i in &m.dofs.mu_nodes {
-            let x = m.node_position(y, i);
-            yp2.push(crate::physics::adhesion_rate(
-                &m.params.substrate,
-                ad,
-                &x,
-                0.0,
-            ));
+            let x = m.position(y, i);
+            yp2.push(crate::physics::adhesion_rate(&m.substrate, ad, &x, 0.0));
         }
         m.set_initial(t, y2, yp2);
         Ok(m)

@@ -2,21 +2,17 @@
 //! the rate of the adhesion coefficient. Forces in pN/µm³, positions in µm.
 //!
 //! Functions of the unknowns (`x`, `F`, `J`, `μ_as`) are generic over [`Real`] for exact
-//! tangents; gravity depends on time only and is `f64`.
-//!
-//! The 3-D model (MODEL.md §10) has its own twins ([`contact_force3`], [`layer3`],
-//! [`cofactor3`], [`adhesion_force3`], [`adhesion_rate3`]): the same formulas with 3-vectors,
-//! a 3 × 3 `F` and the [`Substrate3`]. They are written beside the 2-D functions rather
-//! than sharing one generic body, so the plane-strain and axisymmetric element loops keep
-//! exactly the code they were tuned with. Gravity is `−ρ₀ g s_g t_g e_y` in 3-D too: the
-//! 2-D [`gravity_force`]'s two entries with a zero z entry.
+//! tangents, and over the dimension `D` and its substrate ([`Surface`]: the 2-D section
+//! [`super::Substrate`], the 3-D [`super::Substrate3`]); the dimension enters only the
+//! cofactor and the determinant. Gravity depends on time only and is `f64`: `−ρ₀ g s_g t_g
+//! e_y` in every dimension.
 
 #![allow(non_snake_case)]
 
 use super::smooth::{heaviside, smooth_step};
-use super::substrate::{Substrate, Substrate3};
+use super::substrate::Surface;
 use super::{PhysicsError, Real, check, cst, sqrt};
-use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+use nalgebra::{SMatrix, SVector, Vector2};
 use serde::{Deserialize, Serialize};
 
 /// Penalty contact with the substrate.
@@ -135,9 +131,15 @@ impl Adhesion {
 }
 
 /// Contact force per unit reference volume [pN/µm³] at current position `x` with
-/// `J = det F`: `b_ct = J μ_ct H_ε(d(x)) n(x)`.
+/// `J = det F`: `b_ct = J μ_ct H_ε(d(x)) n(x)`, over the substrate `sub` in `D`
+/// dimensions.
 #[inline(always)]
-pub fn contact_force<T: Real>(sub: &Substrate, c: &Contact, x: &Vector2<T>, J: T) -> Vector2<T> {
+pub fn contact_force<T: Real, S: Surface<D>, const D: usize>(
+    sub: &S,
+    c: &Contact,
+    x: &SVector<T, D>,
+    J: T,
+) -> SVector<T, D> {
     let (d, n) = sub.eval(x);
     let h = heaviside(d, c.eps);
     n * (J * h * c.mu_ct)
@@ -148,7 +150,11 @@ pub fn contact_force<T: Real>(sub: &Substrate, c: &Contact, x: &Vector2<T>, J: T
 /// substrate (`exclude_substrate = Some(ε_s)`), `H_ε(d + e_f) − H_ε_s(d)`, 0 again inside
 /// the substrate.
 #[inline(always)]
-pub fn layer<T: Real>(sub: &Substrate, ad: &Adhesion, x: &Vector2<T>) -> T {
+pub fn layer<T: Real, S: Surface<D>, const D: usize>(
+    sub: &S,
+    ad: &Adhesion,
+    x: &SVector<T, D>,
+) -> T {
     let (d, _) = sub.eval(x);
     let h = heaviside(d + ad.e_f, ad.eps);
     match ad.exclude_substrate {
@@ -157,37 +163,57 @@ pub fn layer<T: Real>(sub: &Substrate, ad: &Adhesion, x: &Vector2<T>) -> T {
     }
 }
 
-/// Cofactor `cof(F) = J F⁻ᵀ`; in 2-D `[[F₁₁, −F₁₀], [−F₀₁, F₀₀]]`, polynomial in `F`.
-pub fn cofactor<T: Real>(F: &Matrix2<T>) -> Matrix2<T> {
-    Matrix2::new(F[(1, 1)], -F[(1, 0)], -F[(0, 1)], F[(0, 0)])
+/// Cofactor `cof(F) = J F⁻ᵀ`, polynomial in `F`: in 2-D `[[F₁₁, −F₁₀], [−F₀₁, F₀₀]]`, in
+/// 3-D `cof_ij = F_{i+1,j+1} F_{i+2,j+2} − F_{i+1,j+2} F_{i+2,j+1}` (indices mod 3).
+#[inline(always)]
+pub fn cofactor<T: Real, const D: usize>(F: &SMatrix<T, D, D>) -> SMatrix<T, D, D> {
+    SMatrix::from_fn(|i, j| {
+        if D == 2 {
+            let f = F[(1 - i, 1 - j)];
+            if i == j { f } else { -f }
+        } else {
+            let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
+            let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
+            F[(i1, j1)] * F[(i2, j2)] - F[(i1, j2)] * F[(i2, j1)]
+        }
+    })
 }
 
 /// Adhesive spreading force per unit reference volume [pN/µm³] (membrane only — the
 /// caller applies it there): `b_as = t_as μ_as g_l(x) a(F)`, with `g_l` the [`layer`]
-/// indicator, `N` the outward radial reference direction, `μ_as` [pN/µm³] the local
-/// adhesion coefficient, `t_as` the adhesion switch and `a(F)` by the readings of `ad`:
-/// `cof(F) N` (MODEL.md) or `cof(F) N/|cof(F) N|` ([`AdhesionDirection`]), times
-/// `J = det F` when `jacobian_factor`.
+/// indicator, `N` the outward radial reference direction `(p − c)/|p − c|`, `μ_as`
+/// [pN/µm³] the local adhesion coefficient, `t_as` the adhesion switch and `a(F)` by the
+/// readings of `ad`: `cof(F) N` (MODEL.md) or `cof(F) N/|cof(F) N|`
+/// ([`AdhesionDirection`]), times `J = det F` when `jacobian_factor`.
 #[inline(always)]
-pub fn adhesion_force<T: Real>(
-    sub: &Substrate,
+pub fn adhesion_force<T: Real, S: Surface<D>, const D: usize>(
+    sub: &S,
     ad: &Adhesion,
-    x: &Vector2<T>,
-    F: &Matrix2<T>,
-    N_ref: &Vector2<f64>,
+    x: &SVector<T, D>,
+    F: &SMatrix<T, D, D>,
+    N_ref: &SVector<f64, D>,
     mu_as: T,
     t_as: f64,
-) -> Vector2<T> {
+) -> SVector<T, D> {
     let h = layer(sub, ad, x);
-    let N: Vector2<T> = N_ref.map(cst::<T>);
-    let mut a = cofactor(F) * N;
+    let N: SVector<T, D> = N_ref.map(cst::<T>);
+    let cof = cofactor(F);
+    let mut a = cof * N;
     if ad.direction == AdhesionDirection::Unit {
         // |cof(F) N| = J |F⁻ᵀ N| > 0 for an admissible F.
-        let len = sqrt(a.x * a.x + a.y * a.y);
-        a /= len;
+        let mut len2 = a[0] * a[0];
+        for k in 1..D {
+            len2 += a[k] * a[k];
+        }
+        a /= sqrt(len2);
     }
     if ad.jacobian_factor {
-        a *= F.determinant();
+        a *= if D == 2 {
+            F[(0, 0)] * F[(1, 1)] - F[(1, 0)] * F[(0, 1)]
+        } else {
+            // det F = Σ_j F_0j cof_0j
+            F[(0, 0)] * cof[(0, 0)] + F[(0, 1)] * cof[(0, 1)] + F[(0, 2)] * cof[(0, 2)]
+        };
     }
     a * (h * mu_as * t_as)
 }
@@ -212,79 +238,13 @@ pub fn adhesion_hoop_factor<T: Real>(ad: &Adhesion, hoop: T) -> T {
 /// Rate of the adhesion coefficient [pN/(µm³·s)]:
 /// `μ̇_as = μ_as0 g_l(x) (1 − S(μ_as; 0.98 μ_as,max, μ_as,max))`, `g_l` the [`layer`]
 /// indicator (`H_ε(d(x) + e_f)` by default).
-pub fn adhesion_rate<T: Real>(sub: &Substrate, ad: &Adhesion, x: &Vector2<T>, mu_as: T) -> T {
-    let h = layer(sub, ad, x);
-    let cap = smooth_step(mu_as, 0.98 * ad.mu_as_max, ad.mu_as_max);
-    h * (-cap + 1.0) * ad.mu_as0
-}
-
-/// Contact force per unit reference volume [pN/µm³] in the 3-D model, at current position
-/// `x` with `J = det F`: `b_ct = J μ_ct H_ε(d(x)) n(x)`, as [`contact_force`].
-#[inline(always)]
-pub fn contact_force3<T: Real>(sub: &Substrate3, c: &Contact, x: &Vector3<T>, J: T) -> Vector3<T> {
-    let (d, n) = sub.eval(x);
-    let h = heaviside(d, c.eps);
-    n * (J * h * c.mu_ct)
-}
-
-/// Fibronectin-layer indicator in the 3-D model, as [`layer`]: `H_ε(d(x) + e_f)`, or
-/// `H_ε(d + e_f) − H_ε_s(d)` when the layer excludes the substrate.
-#[inline(always)]
-pub fn layer3<T: Real>(sub: &Substrate3, ad: &Adhesion, x: &Vector3<T>) -> T {
-    let (d, _) = sub.eval(x);
-    let h = heaviside(d + ad.e_f, ad.eps);
-    match ad.exclude_substrate {
-        None => h,
-        Some(eps_s) => h - heaviside(d, eps_s),
-    }
-}
-
-/// Cofactor `cof(F) = J F⁻ᵀ` of a 3 × 3 `F`, polynomial in `F`:
-/// `cof_ij = F_{i+1,j+1} F_{i+2,j+2} − F_{i+1,j+2} F_{i+2,j+1}` (indices mod 3).
-#[inline(always)]
-pub fn cofactor3<T: Real>(F: &Matrix3<T>) -> Matrix3<T> {
-    Matrix3::from_fn(|i, j| {
-        let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
-        let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
-        F[(i1, j1)] * F[(i2, j2)] - F[(i1, j2)] * F[(i2, j1)]
-    })
-}
-
-/// Adhesive spreading force per unit reference volume [pN/µm³] in the 3-D model
-/// (membrane only — the caller applies it there), as [`adhesion_force`]:
-/// `b_as = t_as μ_as g_l(x) a(F)`, `a(F) = cof(F) N` or its unit vector
-/// ([`AdhesionDirection`]), times `J = det F` when `jacobian_factor`; `N` the outward
-/// radial reference direction `(p − c)/|p − c|`.
-#[inline(always)]
-pub fn adhesion_force3<T: Real>(
-    sub: &Substrate3,
+pub fn adhesion_rate<T: Real, S: Surface<D>, const D: usize>(
+    sub: &S,
     ad: &Adhesion,
-    x: &Vector3<T>,
-    F: &Matrix3<T>,
-    N_ref: &Vector3<f64>,
+    x: &SVector<T, D>,
     mu_as: T,
-    t_as: f64,
-) -> Vector3<T> {
-    let h = layer3(sub, ad, x);
-    let N: Vector3<T> = N_ref.map(cst::<T>);
-    let cof = cofactor3(F);
-    let mut a = cof * N;
-    if ad.direction == AdhesionDirection::Unit {
-        // |cof(F) N| = J |F⁻ᵀ N| > 0 for an admissible F.
-        let len = sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
-        a /= len;
-    }
-    if ad.jacobian_factor {
-        // det F = Σ_j F_0j cof_0j
-        a *= F[(0, 0)] * cof[(0, 0)] + F[(0, 1)] * cof[(0, 1)] + F[(0, 2)] * cof[(0, 2)];
-    }
-    a * (h * mu_as * t_as)
-}
-
-/// Rate of the adhesion coefficient [pN/(µm³·s)] in the 3-D model, as [`adhesion_rate`]:
-/// `μ̇_as = μ_as0 g_l(x) (1 − S(μ_as; 0.98 μ_as,max, μ_as,max))`.
-pub fn adhesion_rate3<T: Real>(sub: &Substrate3, ad: &Adhesion, x: &Vector3<T>, mu_as: T) -> T {
-    let h = layer3(sub, ad, x);
+) -> T {
+    let h = layer(sub, ad, x);
     let cap = smooth_step(mu_as, 0.98 * ad.mu_as_max, ad.mu_as_max);
     h * (-cap + 1.0) * ad.mu_as0
 }
@@ -299,6 +259,8 @@ pub fn gravity_force(rho: f64, g: f64, t_g: f64, sign: f64) -> Vector2<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::{Substrate, Substrate3};
+    use nalgebra::{Matrix2, Matrix3, Vector3};
     use num_dual::DualSVec64;
 
     fn substrates() -> [Substrate; 2] {
@@ -717,23 +679,23 @@ mod tests {
                     let (X2, X3) = (Vector2::new(x, y), Vector3::new(x, y, z0));
                     let J = rng.uniform(0.7, 1.3);
                     let f2 = contact_force(&s2, &c, &X2, J);
-                    let f3 = contact_force3(&s3, &c, &X3, J);
+                    let f3 = contact_force(&s3, &c, &X3, J);
                     assert_eq!(f3, Vector3::new(f2.x, f2.y, 0.0), "{s3:?} ({x}, {y})");
-                    assert_eq!(layer3(&s3, &ad, &X3), layer(&s2, &ad, &X2));
+                    assert_eq!(layer(&s3, &ad, &X3), layer(&s2, &ad, &X2));
                     let F2 = crate::physics::material::tests::Rng::deformation(&mut rng, 0.4);
                     let phi = rng.uniform(-3.0, 3.0);
                     let N2 = Vector2::new(phi.cos(), phi.sin());
                     let N3 = Vector3::new(N2.x, N2.y, 0.0);
                     let mu = rng.uniform(0.0, 1400.0);
                     let a2 = adhesion_force(&s2, &ad, &X2, &F2, &N2, mu, 0.7);
-                    let a3 = adhesion_force3(&s3, &ad, &X3, &embed(&F2), &N3, mu, 0.7);
+                    let a3 = adhesion_force(&s3, &ad, &X3, &embed(&F2), &N3, mu, 0.7);
                     let scale = mu * (1.0 + F2.norm()).powi(2);
                     assert!(
                         (a3 - Vector3::new(a2.x, a2.y, 0.0)).norm() <= 1e-14 * scale,
                         "{ad:?} {s3:?}: {a3} vs {a2}"
                     );
                     assert_eq!(
-                        adhesion_rate3(&s3, &ad, &X3, mu),
+                        adhesion_rate(&s3, &ad, &X3, mu),
                         adhesion_rate(&s2, &ad, &X2, mu)
                     );
                 }
@@ -751,11 +713,11 @@ mod tests {
                 continue;
             }
             let exact = F.try_inverse().unwrap().transpose() * J;
-            assert!((cofactor3(&F) - exact).norm() < 1e-14 * (1.0 + exact.norm()));
+            assert!((cofactor(&F) - exact).norm() < 1e-14 * (1.0 + exact.norm()));
         }
         // its plane-strain block is the 2-D cofactor
         let F2 = Matrix2::new(1.2, 0.1, -0.3, 0.8);
-        let c3 = cofactor3(&embed(&F2));
+        let c3 = cofactor(&embed(&F2));
         assert_eq!(c3.fixed_view::<2, 2>(0, 0), cofactor(&F2));
         assert_eq!(c3[(2, 2)], F2.determinant());
     }
@@ -771,13 +733,13 @@ mod tests {
         };
         let mid = p.y_top - 4.0;
         // inside the z side face of the pillar at (8, 8), deep in the band: μ_ct e_z
-        let f = contact_force3(&s, &c, &Vector3::new(8.0, mid, 11.7), 1.0);
+        let f = contact_force(&s, &c, &Vector3::new(8.0, mid, 11.7), 1.0);
         assert!(
             (f - Vector3::new(0.0, 0.0, c.mu_ct)).norm() < 1e-9,
             "f = {f}"
         );
         // and nothing 0.2 µm outside it
-        let f = contact_force3(&s, &c, &Vector3::new(8.0, mid, 12.2), 1.0);
+        let f = contact_force(&s, &c, &Vector3::new(8.0, mid, 12.2), 1.0);
         assert_eq!(f, Vector3::zeros());
     }
 
@@ -832,14 +794,14 @@ mod tests {
                     let dual = |i: usize| D::from_re(v[i]).derivative(i);
                     let xd = Vector3::new(dual(0), dual(1), dual(2));
                     let Fd = Matrix3::from_fn(|i, j| dual(3 + 3 * i + j));
-                    let f = adhesion_force3(s, &ad, &xd, &Fd, &N, dual(12), 0.7);
-                    let r = adhesion_rate3(s, &ad, &xd, dual(12));
+                    let f = adhesion_force(s, &ad, &xd, &Fd, &N, dual(12), 0.7);
+                    let r = adhesion_rate(s, &ad, &xd, dual(12));
                     let eval = |w: &[f64; 13]| {
                         let X = Vector3::new(w[0], w[1], w[2]);
                         let F = Matrix3::from_fn(|i, j| w[3 + 3 * i + j]);
                         (
-                            adhesion_force3(s, &ad, &X, &F, &N, w[12], 0.7),
-                            adhesion_rate3(s, &ad, &X, w[12]),
+                            adhesion_force(s, &ad, &X, &F, &N, w[12], 0.7),
+                            adhesion_rate(s, &ad, &X, w[12]),
                         )
                     };
                     for k in 0..13 {
@@ -870,14 +832,14 @@ mod tests {
                     D4::from_re(y).derivative(1),
                     D4::from_re(z).derivative(2),
                 );
-                let f = contact_force3(s, &c, &xd, D4::from_re(J).derivative(3));
+                let f = contact_force(s, &c, &xd, D4::from_re(J).derivative(3));
                 let base = [x, y, z, J];
                 for k in 0..4 {
                     let (mut pp, mut mm) = (base, base);
                     pp[k] += 1e-7;
                     mm[k] -= 1e-7;
-                    let fp = contact_force3(s, &c, &Vector3::new(pp[0], pp[1], pp[2]), pp[3]);
-                    let fm = contact_force3(s, &c, &Vector3::new(mm[0], mm[1], mm[2]), mm[3]);
+                    let fp = contact_force(s, &c, &Vector3::new(pp[0], pp[1], pp[2]), pp[3]);
+                    let fm = contact_force(s, &c, &Vector3::new(mm[0], mm[1], mm[2]), mm[3]);
                     let fd = (fp - fm) / 2e-7;
                     let scale = c.mu_ct / c.eps;
                     for cpt in 0..3 {

@@ -37,6 +37,8 @@
 
 pub mod active;
 pub mod axisym;
+#[cfg(test)]
+mod checks;
 pub mod loads;
 pub mod material;
 pub mod phases;
@@ -50,17 +52,19 @@ pub use axisym::{
     piola_total_hoop,
 };
 pub use loads::{
-    Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_force3, adhesion_hoop_factor,
-    adhesion_rate, adhesion_rate3, cofactor, cofactor3, contact_force, contact_force3,
-    gravity_force, layer, layer3,
+    Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_hoop_factor, adhesion_rate,
+    cofactor, contact_force, gravity_force, layer,
 };
-pub use material::{MaterialPoint, Viscosity, Yeoh, admissible, material_point, piola_total};
+pub use material::{
+    Invariants, IsotropicSolid, MaterialPoint, MaterialPointOf, StressScalars, TangentScalars,
+    Viscosity, Yeoh, admissible, material_point, piola_total,
+};
 pub use phases::{Flip, Phases};
 pub use smooth::{heaviside, smooth_step, smooth_step_d};
 pub use solid3::{
     MaterialPoint3, admissible3, material_point3, material_point3_dual, piola_total3,
 };
-pub use substrate::{Lattice, PillarFoot, Pillars, Substrate, Substrate3};
+pub use substrate::{Lattice, PillarFoot, Pillars, Substrate, Substrate3, Surface};
 
 use nalgebra::RealField;
 use num_dual::DualNum;

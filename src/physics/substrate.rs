@@ -441,6 +441,28 @@ impl Substrate {
     }
 }
 
+/// A substrate in `D` dimensions: its signed penetration depth `d(x)` (> 0 inside) and
+/// outward unit normal `n(x)` at a current position, generic over [`Real`] for exact
+/// tangents. The 2-D section ([`Substrate`]) and the 3-D substrate ([`Substrate3`]).
+pub trait Surface<const D: usize> {
+    /// `(d(x), n(x))`.
+    fn eval<T: Real>(&self, x: &nalgebra::SVector<T, D>) -> (T, nalgebra::SVector<T, D>);
+}
+
+impl Surface<2> for Substrate {
+    #[inline(always)]
+    fn eval<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
+        Substrate::eval(self, x)
+    }
+}
+
+impl Surface<3> for Substrate3 {
+    #[inline(always)]
+    fn eval<T: Real>(&self, x: &Vector3<T>) -> (T, Vector3<T>) {
+        Substrate3::eval(self, x)
+    }
+}
+
 /// The horizontal layout of the pillars in 3-D (MODEL.md §10): a square lattice of period
 /// `P = w + s` in x and in z, the x axes at `first_center + kP` as in 2-D. With
 /// `first_center = P/2` (the default) both layouts keep the quarter symmetry of the cell,

@@ -1,242 +1,160 @@
-//! The model a run integrates: a half-plane cell ([`CellModel`]: plane strain or
-//! axisymmetric) or the 3-D quarter cell ([`Cell3`]). The driver, its inertia switch and
-//! its outputs see this one type; each call goes to the model the case asked for.
+//! The model a run integrates, whatever its shape: the half cell ([`CellModel`]: plane
+//! strain or axisymmetric) or the 3-D quarter cell ([`Cell3`]), both the one generic
+//! [`CellOf`]. The driver, its changes of system and its outputs see it through
+//! [`RunModel`]; only the output writers, which record each shape's mesh in its own files,
+//! look at which it is ([`RunModel::view`]).
 
-use crate::case::Case;
-use crate::dae::{Dae, DaeError, FirstOrderBlocks, Pattern};
-use crate::model::{CellModel, Restart};
-use crate::model3d::Cell3;
+use crate::dae::Dae;
+use crate::model::{Cell3, CellModel, CellOf, ModelError, ModelParams, Restart, Shape};
 use crate::record::{Observables, Observables3};
-use crate::scene;
 
-/// A run's model.
-pub(crate) enum Cell {
+/// Which model a run integrates, for the writers of its mesh and states.
+pub(crate) enum ModelView<'a> {
     /// The half-plane models.
-    Plane(Box<CellModel>),
+    Plane(&'a CellModel),
     /// The 3-D quarter cell.
-    Quarter(Box<Cell3>),
+    Quarter(&'a Cell3),
 }
 
-impl Cell {
+/// What the driver asks of the model it integrates, besides the DAE itself.
+pub(crate) trait RunModel: Dae + Send {
     /// Per-component absolute tolerances.
-    pub(crate) fn atol_vector(&self, atol: f64) -> Vec<f64> {
-        match self {
-            Cell::Plane(m) => m.atol_vector(atol),
-            Cell::Quarter(m) => m.atol_vector(atol),
-        }
-    }
-
+    fn atol_vector(&self, atol: f64) -> Vec<f64>;
     /// Whether the system has the velocity unknowns (inertia).
-    pub(crate) fn inertia(&self) -> bool {
-        match self {
-            Cell::Plane(m) => m.dofs.inertia,
-            Cell::Quarter(m) => m.dofs.inertia,
-        }
-    }
-
-    /// The node that moved furthest in `y` and the length of its displacement [µm].
-    pub(crate) fn largest_displacement(&self, y: &[f64]) -> (usize, f64) {
-        match self {
-            Cell::Plane(m) => m.dofs.largest_displacement(y),
-            Cell::Quarter(m) => m.dofs.largest_displacement(y),
-        }
-    }
-
-    /// Number of unknowns.
-    pub(crate) fn n(&self) -> usize {
-        match self {
-            Cell::Plane(m) => m.dofs.n,
-            Cell::Quarter(m) => m.dofs.n,
-        }
-    }
-
+    fn inertia(&self) -> bool;
     /// Unknowns by block (u, v, μ_as), the μ_as integrated beside a deferring system
     /// counted.
-    pub(crate) fn unknowns(&self) -> (usize, usize, usize) {
-        match self {
-            Cell::Plane(m) => {
-                let (nu, nv, _) = m.block_sizes();
-                (nu, nv, m.n_mu_as())
-            }
-            Cell::Quarter(m) => {
-                let nv = if m.dofs.inertia { m.dofs.n_u } else { 0 };
-                (m.dofs.n_u, nv, m.n_mu_as())
-            }
-        }
-    }
-
+    fn unknowns(&self) -> (usize, usize, usize);
     /// Elements and nodes of the mesh.
-    pub(crate) fn mesh_size(&self) -> (usize, usize) {
-        match self {
-            Cell::Plane(m) => (m.mesh.elements.len(), m.mesh.nodes.len()),
-            Cell::Quarter(m) => (m.mesh.elements.len(), m.mesh.nodes.len()),
-        }
-    }
-
+    fn mesh_size(&self) -> (usize, usize);
     /// Whether the μ_as unknowns are left out until T_g0.
-    pub(crate) fn adhesion_deferred(&self) -> bool {
-        match self {
-            Cell::Plane(m) => m.adhesion_deferred(),
-            Cell::Quarter(m) => m.adhesion_deferred(),
-        }
-    }
-
-    /// The system with its μ_as unknowns added at `t` (see
-    /// [`CellModel::with_adhesion_unknowns`]).
-    pub(crate) fn with_adhesion_unknowns(
-        &self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-    ) -> Result<Cell, String> {
-        match self {
-            Cell::Plane(m) => m
-                .with_adhesion_unknowns(t, y, yp)
-                .map(|m| Cell::Plane(Box::new(m)))
-                .map_err(|e| e.to_string()),
-            Cell::Quarter(m) => m
-                .with_adhesion_unknowns(t, y, yp)
-                .map(|m| Cell::Quarter(Box::new(m)))
-                .map_err(|e| e.to_string()),
-        }
-    }
-
+    fn adhesion_deferred(&self) -> bool;
+    /// The system with its μ_as unknowns added at `t`.
+    fn with_adhesion_unknowns(&self, t: f64, y: &[f64], yp: &[f64]) -> Result<Cell, ModelError>;
     /// Whether the contact carries the cell's current weight at `t`.
-    pub(crate) fn contact_carries_weight(&self, t: f64, y: &[f64]) -> bool {
-        match self {
-            Cell::Plane(m) => m.contact_carries_weight(t, y),
-            Cell::Quarter(m) => m.contact_carries_weight(t, y),
-        }
-    }
-
+    fn contact_carries_weight(&self, t: f64, y: &[f64]) -> bool;
     /// The same cell without inertia, at rest in equilibrium at `t`.
-    pub(crate) fn without_inertia_at_rest(
+    fn without_inertia_at_rest(
         &self,
         t: f64,
         y: &[f64],
         yp: &[f64],
         restart: &Restart,
-    ) -> Result<Cell, String> {
-        match self {
-            Cell::Plane(m) => m
-                .without_inertia_at_rest(t, y, yp, restart)
-                .map(|m| Cell::Plane(Box::new(m)))
-                .map_err(|e| e.to_string()),
-            Cell::Quarter(m) => m
-                .without_inertia_at_rest(t, y, yp, restart)
-                .map(|m| Cell::Quarter(Box::new(m)))
-                .map_err(|e| e.to_string()),
-        }
-    }
-
-    /// The same system with the parameters of `case` (which agrees with this one's up
-    /// to `t`), restarting at `t` from (`y`, `yp`).
-    pub(crate) fn branched(
+    ) -> Result<Cell, ModelError>;
+    /// The same system with the parameters `params` of a case that agrees with this one's
+    /// up to `t`, restarting at `t` from (`y`, `yp`).
+    fn branched(
         &self,
-        case: &Case,
-        file: &str,
+        params: ModelParams,
         t: f64,
         y: &[f64],
         yp: &[f64],
-    ) -> Result<Cell, String> {
-        let inertia = self.inertia();
-        match self {
-            Cell::Plane(m) => scene::model_params(case, file, inertia)
-                .map_err(|e| e.to_string())
-                .and_then(|p| m.branched(p, t, y, yp).map_err(|e| e.to_string()))
-                .map(|m| Cell::Plane(Box::new(m))),
-            Cell::Quarter(m) => scene::params3(case, file, inertia)
-                .map_err(|e| e.to_string())
-                .and_then(|p| m.branched(p, t, y, yp).map_err(|e| e.to_string()))
-                .map(|m| Cell::Quarter(Box::new(m))),
-        }
-    }
-
+    ) -> Result<Cell, ModelError>;
     /// The time the integration starts from.
-    pub(crate) fn initial_time(&self) -> f64 {
-        match self {
-            Cell::Plane(m) => m.initial_time(),
-            Cell::Quarter(m) => m.initial_time(),
-        }
-    }
-
+    fn initial_time(&self) -> f64;
     /// The scene's observables at `t`, and the 3-D ones for the 3-D model.
-    pub(crate) fn observe(&self, t: f64, y: &[f64]) -> (Observables, Option<Observables3>) {
-        match self {
-            Cell::Plane(m) => (m.observe(t, y), None),
-            Cell::Quarter(m) => (m.observe(t, y), Some(m.observe3(y))),
-        }
+    fn observe(&self, t: f64, y: &[f64]) -> (Observables, Option<Observables3>);
+    /// The node that moved furthest in `y` and the length of its displacement [µm].
+    fn largest_displacement(&self, y: &[f64]) -> (usize, f64);
+    /// Which model this is, for the output writers.
+    fn view(&self) -> ModelView<'_>;
+}
+
+/// A run's model.
+pub(crate) type Cell = Box<dyn RunModel>;
+
+/// How each shape shows itself to the output writers.
+pub(crate) trait Viewed {
+    /// The view of this model.
+    fn view_of(&self) -> ModelView<'_>;
+}
+
+impl Viewed for CellModel {
+    fn view_of(&self) -> ModelView<'_> {
+        ModelView::Plane(self)
     }
 }
 
-impl Dae for Cell {
-    fn size(&self) -> usize {
-        match self {
-            Cell::Plane(m) => m.size(),
-            Cell::Quarter(m) => m.size(),
-        }
+impl Viewed for Cell3 {
+    fn view_of(&self) -> ModelView<'_> {
+        ModelView::Quarter(self)
+    }
+}
+
+impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> RunModel
+    for CellOf<S, D, N, E>
+where
+    Self: Viewed + Send,
+{
+    fn atol_vector(&self, atol: f64) -> Vec<f64> {
+        CellOf::atol_vector(self, atol)
     }
 
-    fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
-        match self {
-            Cell::Plane(m) => m.residual(t, y, yp, r),
-            Cell::Quarter(m) => m.residual(t, y, yp, r),
-        }
+    fn inertia(&self) -> bool {
+        self.dofs.inertia
     }
 
-    fn pattern(&self) -> &Pattern {
-        match self {
-            Cell::Plane(m) => m.pattern(),
-            Cell::Quarter(m) => m.pattern(),
-        }
+    fn unknowns(&self) -> (usize, usize, usize) {
+        let (nu, nv, _) = self.block_sizes();
+        (nu, nv, self.n_mu_as())
     }
 
-    fn jacobian(
-        &mut self,
+    fn mesh_size(&self) -> (usize, usize) {
+        use crate::fem::CellMesh;
+        (self.mesh.elements().len(), self.mesh.nodes().len())
+    }
+
+    fn adhesion_deferred(&self) -> bool {
+        CellOf::adhesion_deferred(self)
+    }
+
+    fn with_adhesion_unknowns(&self, t: f64, y: &[f64], yp: &[f64]) -> Result<Cell, ModelError> {
+        Ok(Box::new(CellOf::with_adhesion_unknowns(self, t, y, yp)?))
+    }
+
+    fn contact_carries_weight(&self, t: f64, y: &[f64]) -> bool {
+        CellOf::contact_carries_weight(self, t, y)
+    }
+
+    fn without_inertia_at_rest(
+        &self,
         t: f64,
         y: &[f64],
         yp: &[f64],
-        cj: f64,
-        v: &mut [f64],
-    ) -> Result<(), DaeError> {
-        match self {
-            Cell::Plane(m) => m.jacobian(t, y, yp, cj, v),
-            Cell::Quarter(m) => m.jacobian(t, y, yp, cj, v),
-        }
+        restart: &Restart,
+    ) -> Result<Cell, ModelError> {
+        Ok(Box::new(CellOf::without_inertia_at_rest(
+            self, t, y, yp, restart,
+        )?))
     }
 
-    fn differential(&self) -> Vec<bool> {
-        match self {
-            Cell::Plane(m) => m.differential(),
-            Cell::Quarter(m) => m.differential(),
-        }
+    fn branched(
+        &self,
+        params: ModelParams,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<Cell, ModelError> {
+        Ok(Box::new(CellOf::branched(self, params, t, y, yp)?))
     }
 
-    fn initial(&self) -> (f64, Vec<f64>, Vec<f64>) {
-        match self {
-            Cell::Plane(m) => m.initial(),
-            Cell::Quarter(m) => m.initial(),
-        }
+    fn initial_time(&self) -> f64 {
+        CellOf::initial_time(self)
     }
 
-    fn first_order_blocks(&self) -> Option<FirstOrderBlocks> {
-        match self {
-            Cell::Plane(m) => m.first_order_blocks(),
-            Cell::Quarter(m) => m.first_order_blocks(),
-        }
+    fn observe(&self, t: f64, y: &[f64]) -> (Observables, Option<Observables3>) {
+        let obs3 = match self.view_of() {
+            ModelView::Quarter(m) => Some(m.observe3(y)),
+            ModelView::Plane(_) => None,
+        };
+        (CellOf::observe(self, t, y), obs3)
     }
 
-    fn accepted_step(&mut self, t: f64, y: &[f64], yp: &[f64]) {
-        match self {
-            Cell::Plane(m) => m.accepted_step(t, y, yp),
-            Cell::Quarter(m) => m.accepted_step(t, y, yp),
-        }
+    fn largest_displacement(&self, y: &[f64]) -> (usize, f64) {
+        self.dofs.largest_displacement(y)
     }
 
-    fn breakpoints(&self) -> Vec<f64> {
-        match self {
-            Cell::Plane(m) => m.breakpoints(),
-            Cell::Quarter(m) => m.breakpoints(),
-        }
+    fn view(&self) -> ModelView<'_> {
+        self.view_of()
     }
 }

@@ -18,8 +18,9 @@ use crate::case::{self, Case, InertiaMode};
 use crate::dae::bdf2::{Bdf2, Bdf2Options};
 use crate::dae::{Atol, Dae, Integrator, IntegratorError, Stats};
 use crate::fem::{Mesh, MeshError};
-use crate::model::{CellModel, Restart};
-use crate::model3d::Cell3;
+use crate::model::{
+    CellModel, CellOf, HalfPlane, ModelError, ModelParams, Quarter, Restart, Shape,
+};
 use crate::output::{SnapshotOptions, SnapshotWriter, SnapshotWriter3};
 use crate::record::Observables;
 use crate::record::read::STOPPED;
@@ -33,7 +34,7 @@ use crate::sundials::{Ida, IdaOptions};
 
 mod cell;
 mod shared;
-use cell::Cell;
+use cell::{Cell, ModelView, RunModel};
 pub use shared::{Member, run_all, shared_until};
 
 /// How a run reports progress.
@@ -527,42 +528,39 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
 /// The mesh and the cell model of a case, with the system it starts with (`defer_adhesion`:
 /// the μ_as unknowns join it at T_g0, [`CellModel::deferring_adhesion`]).
 fn build_model(case: &Case, file: &str, defer_adhesion: bool) -> Result<Cell, RunError> {
-    let model_err = |message: String| RunError::Model {
-        file: file.into(),
-        message,
-    };
-    let inertia = scene::starts_with_inertia(case);
-    if scene::is_3d(case) {
-        let mesh = crate::fem::Mesh3::generate(&scene::mesh3_params(case)).map_err(|source| {
-            RunError::Mesh {
-                file: file.into(),
-                source,
-            }
-        })?;
-        let params = scene::params3(case, file, inertia)?;
-        let quarter = crate::model3d::Constraints::Quarter;
-        let model = if defer_adhesion {
-            Cell3::deferring_adhesion(params, mesh, quarter)
-        } else {
-            Cell3::with_constraints(params, mesh, quarter)
-        };
-        return model
-            .map(|m| Cell::Quarter(Box::new(m)))
-            .map_err(|e| model_err(e.to_string()));
-    }
-    let mesh = Mesh::generate(&scene::mesh_params(case)).map_err(|source| RunError::Mesh {
+    let mesh_err = |source| RunError::Mesh {
         file: file.into(),
         source,
-    })?;
-    let params = scene::model_params(case, file, inertia)?;
-    let model = if defer_adhesion {
-        CellModel::deferring_adhesion(params, mesh)
-    } else {
-        CellModel::new(params, mesh)
     };
-    model
-        .map(|m| Cell::Plane(Box::new(m)))
-        .map_err(|e| model_err(e.to_string()))
+    let params = scene::model_params(case, file, scene::starts_with_inertia(case))?;
+    let built: Result<Cell, _> = if scene::is_3d(case) {
+        let mesh = crate::fem::Mesh3::generate(&scene::mesh3_params(case)).map_err(mesh_err)?;
+        new_model::<Quarter, 3, 10, 30>(params, mesh, defer_adhesion)
+    } else {
+        let mesh = Mesh::generate(&scene::mesh_params(case)).map_err(mesh_err)?;
+        new_model::<HalfPlane, 2, 6, 12>(params, mesh, defer_adhesion)
+    };
+    built.map_err(|e| RunError::Model {
+        file: file.into(),
+        message: e.to_string(),
+    })
+}
+
+/// The model of shape `S` on `mesh`, deferring its μ_as unknowns or not.
+fn new_model<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize>(
+    params: ModelParams,
+    mesh: S::Mesh,
+    defer_adhesion: bool,
+) -> Result<Cell, ModelError>
+where
+    CellOf<S, D, N, E>: RunModel,
+{
+    let m = if defer_adhesion {
+        CellOf::<S, D, N, E>::deferring_adhesion(params, mesh)?
+    } else {
+        CellOf::<S, D, N, E>::new(params, mesh)?
+    };
+    Ok(Box::new(m))
 }
 
 /// How an advance to an output time ended.
@@ -685,7 +683,8 @@ impl Driver {
         let m2 = self
             .solver
             .model()
-            .with_adhesion_unknowns(t, integ.y(), integ.yp())?;
+            .with_adhesion_unknowns(t, integ.y(), integ.yp())
+            .map_err(|e| e.to_string())?;
         // The solution goes on smoothly: start from a tenth of the last step rather than
         // IDA's estimate (which started 4000× below it and took a dozen steps to regain it).
         let mut settings = self.settings.clone();
@@ -885,8 +884,8 @@ impl RunWriter {
         let ph = &case.phases;
         let phase_times = [ph.t_g0, ph.t_as0, ph.t_a0, ph.t_end];
         let n_outputs = output_times(case).len() + 1;
-        let (frames, header) = match model {
-            Cell::Plane(m) => {
+        let (frames, header) = match model.view() {
+            ModelView::Plane(m) => {
                 let (mesh, params) = (&m.mesh, &m.params);
                 let mesh_file = MeshFile {
                     nodes: mesh.nodes.clone(),
@@ -907,7 +906,7 @@ impl RunWriter {
                     SnapshotWriter::new(&out, &case.name, &mesh_file, opts.snapshots, n_outputs)?;
                 (Frames::Plane(frames), Observables::CSV_HEADER.to_string())
             }
-            Cell::Quarter(m) => {
+            ModelView::Quarter(m) => {
                 let mesh_file = m.mesh_file(phase_times);
                 write_json(&out.join("mesh3.json"), &mesh_file)?;
                 let frames =
@@ -997,14 +996,14 @@ impl RunWriter {
             .map_err(io_err(&self.csv_path))?;
         self.summary.outputs += 1;
         self.summary.final_values = Some(obs);
-        match (model, &mut self.frames) {
-            (Cell::Plane(m), Frames::Plane(frames)) if frames.is_active() => {
+        match (model.view(), &mut self.frames) {
+            (ModelView::Plane(m), Frames::Plane(frames)) if frames.is_active() => {
                 let mu_as = m
                     .nodal_mu_as(t, y)
                     .map_err(|why| OutputStop::State(t, why))?;
                 frames.write(&snapshot(m, t, y, yp, mu_as))?;
             }
-            (Cell::Quarter(m), Frames::Quarter(frames)) if frames.is_active() => {
+            (ModelView::Quarter(m), Frames::Quarter(frames)) if frames.is_active() => {
                 let snap = m
                     .snapshot(t, y, yp)
                     .map_err(|why| OutputStop::State(t, why))?;
@@ -1033,14 +1032,14 @@ impl RunWriter {
     ) -> Result<(), OutputStop> {
         let name = format!("state_{phase}.json");
         let path = self.out.join(&name);
-        match (model, obs3) {
-            (Cell::Plane(m), _) => {
+        match (model.view(), obs3) {
+            (ModelView::Plane(m), _) => {
                 let mu_as = m
                     .nodal_mu_as(t, y)
                     .map_err(|why| OutputStop::State(t, why))?;
                 write_json(&path, &state_file(m, phase, t, y, mu_as, obs))?;
             }
-            (Cell::Quarter(m), Some(observables3)) => {
+            (ModelView::Quarter(m), Some(observables3)) => {
                 let state = crate::record::StateFile3 {
                     phase: phase.to_string(),
                     state: m
@@ -1051,7 +1050,7 @@ impl RunWriter {
                 };
                 write_json(&path, &state)?;
             }
-            (Cell::Quarter(_), None) => {
+            (ModelView::Quarter(_), None) => {
                 return Err(OutputStop::State(t, "no 3-D observables".into()));
             }
         }

@@ -360,7 +360,7 @@ impl Context<'_, '_> {
             let started =
                 build_model(m.case, m.file, m.opts.settings.defer_adhesion).and_then(|model| {
                     let mut files = RunWriter::create(m.case, m.file, &m.opts, &model)?;
-                    let y0 = vec![0.0; model.n()];
+                    let y0 = vec![0.0; model.size()];
                     if let Err(stop) = files.output(&model, 0.0, &y0, &y0) {
                         let (_, message) = stop.into_stop()?;
                         return Err(RunError::Model {
@@ -578,7 +578,9 @@ impl Context<'_, '_> {
         let (model, y, yp) = driver.state();
         let t = driver.solver.integ_ref().t();
         let lead = &self.members[sub[0].k];
-        let built = model.branched(lead.case, lead.file, t, y, yp);
+        let built = crate::scene::model_params(lead.case, lead.file, model.inertia())
+            .map_err(|e| e.to_string())
+            .and_then(|params| model.branched(params, t, y, yp).map_err(|e| e.to_string()));
         match built {
             Ok(model) => self.push(Task {
                 members: sub,

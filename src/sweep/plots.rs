@@ -308,9 +308,7 @@ fn colorbar(
         .disable_x_axis()
         .y_labels(8)
         // A tick at zero computed as lo + k·step is a round-off away from it.
-        .y_label_formatter(&|v| {
-            fmt_value(if v.abs() < 1e-9 * (hi - lo) { 0.0 } else { *v })
-        })
+        .y_label_formatter(&|v| fmt_value(if v.abs() < 1e-9 * (hi - lo) { 0.0 } else { *v }))
         .y_desc(label)
         .axis_desc_style((FONT, 16))
         .label_style((FONT, 14))

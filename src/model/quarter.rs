@@ -1,0 +1,137 @@
+//! What only the 3-D quarter cell reports (MODEL.md §7, §10): the contact radius along the
+//! meridian in the plane z = 0 (the 2-D scene's measure), the contact area in both frames
+//! (whole cell, four quarters) and its equivalent radius, the penetration depth, and its
+//! records for the output files.
+
+use nalgebra::{Vector2, Vector3};
+
+use super::Cell3;
+use super::observe::add_band_lengths;
+use crate::fem::TriangleRule;
+use crate::fem::tet::face_map;
+use crate::physics::Substrate;
+use crate::record::{Mesh3File, Observables3, Snapshot3};
+
+/// Sub-triangle levels of the rule sampling each P2 surface face for the contact area.
+const FACE_LEVELS: u32 = 3;
+
+impl Cell3 {
+    /// The 3-D quantities in state `y`.
+    pub fn observe3(&self, y: &[f64]) -> Observables3 {
+        let (a, a_ref) = self.contact_areas(y);
+        let penetration_depth = match self.params.substrate {
+            Substrate::Pillars(p) => {
+                let pb = self.mesh.points.nucleus_bottom;
+                let y_pb = self.mesh.nodes[pb][1] + self.dofs.node_u(y, pb)[1];
+                (p.y_top - y_pb).max(0.0)
+            }
+            Substrate::Flat { .. } => 0.0,
+        };
+        Observables3 {
+            contact_area: a,
+            contact_area_ref: a_ref,
+            contact_radius_equiv: (a / std::f64::consts::PI).sqrt(),
+            penetration_depth,
+        }
+    }
+
+    /// Length of the meridian (the outer boundary in the plane z = c_z) in contact, i.e.
+    /// whose current position lies within ε_ct of the substrate, along the deformed and
+    /// the reference curve: `(deformed, reference)` [µm], as the half-plane models'
+    /// contact radius. The points of that plane stay in it (u_z = 0 there).
+    pub fn meridian_contact_lengths(&self, y: &[f64]) -> (f64, f64) {
+        let eps = self.params.contact.eps;
+        let cz = 0.0;
+        let depth = |x: &Vector2<f64>| self.substrate.eval(&Vector3::new(x.x, x.y, cz)).0 + eps;
+        let mut total = [0.0; 2];
+        for edge in self.meridian_edges() {
+            let reference =
+                edge.map(|i| Vector2::new(self.mesh.nodes[i][0], self.mesh.nodes[i][1]));
+            let current = edge.map(|i| {
+                let x = self.position(y, i);
+                Vector2::new(x.x, x.y)
+            });
+            add_band_lengths(&reference, &current, depth, &mut total);
+        }
+        (total[0], total[1])
+    }
+
+    /// The P2 edges (vertex, mid, vertex) of the outer faces that lie in the plane
+    /// z = c_z.
+    pub fn meridian_edges(&self) -> Vec<[usize; 3]> {
+        let cz = 0.0;
+        let on = |i: usize| self.mesh.nodes[i][2] == cz;
+        let mut edges = Vec::new();
+        for f in &self.mesh.outer_faces {
+            // Face node order: vertices 0, 1, 2, then mids (0,1), (1,2), (2,0).
+            for (a, m, b) in [(0, 3, 1), (1, 4, 2), (2, 5, 0)] {
+                if on(f[a]) && on(f[b]) && on(f[m]) {
+                    edges.push([f[a], f[m], f[b]]);
+                }
+            }
+        }
+        edges
+    }
+
+    /// Area of the cell surface in contact (current depth > −ε_ct), deformed and on the
+    /// reference sphere, whole cell (4 × the quarter) [µm²]: each P2 face sampled by a
+    /// degree-2 rule on 4^[`FACE_LEVELS`] sub-triangles, a point counting with its area
+    /// element where its current position is within the band.
+    pub fn contact_areas(&self, y: &[f64]) -> (f64, f64) {
+        let eps = self.params.contact.eps;
+        let rule = TriangleRule::degree(2).subdivided(FACE_LEVELS);
+        let (mut a, mut a_ref) = (0.0, 0.0);
+        for f in &self.mesh.outer_faces {
+            let reference: [[f64; 3]; 6] = f.map(|i| self.mesh.nodes[i]);
+            let current: [[f64; 3]; 6] = f.map(|i| {
+                let x = self.position(y, i);
+                [x.x, x.y, x.z]
+            });
+            for (xi, w) in rule.points.iter().zip(&rule.weights) {
+                let (x, n) = face_map(&current, *xi);
+                if self.substrate.eval(&Vector3::from(x)).0 + eps <= 0.0 {
+                    continue;
+                }
+                let (_, n_ref) = face_map(&reference, *xi);
+                a += w * Vector3::from(n).norm();
+                a_ref += w * Vector3::from(n_ref).norm();
+            }
+        }
+        (4.0 * a, 4.0 * a_ref)
+    }
+
+    /// The state at time `t` as the output writers take it (`t` within the integrator's
+    /// last step while the exposures are deferred).
+    pub fn snapshot(&self, t: f64, y: &[f64], yp: &[f64]) -> Result<Snapshot3, String> {
+        let per_el = self.element_strain_and_jacobian(y);
+        Ok(Snapshot3 {
+            t,
+            u: (0..self.mesh.nodes.len())
+                .map(|i| self.dofs.node_u(y, i))
+                .collect(),
+            v: (0..self.mesh.nodes.len())
+                .map(|i| self.dofs.node_velocity(y, yp, i))
+                .collect(),
+            mu_as: self.nodal_mu_as(t, y)?,
+            element_strain: per_el.iter().map(|p| p.0).collect(),
+            element_jacobian: per_el.iter().map(|p| p.1).collect(),
+        })
+    }
+
+    /// What `mesh3.json` records of this model, with the scene's phase end times.
+    pub fn mesh_file(&self, phase_times: [f64; 4]) -> Mesh3File {
+        let p = &self.params;
+        Mesh3File {
+            nodes: self.mesh.nodes.clone(),
+            elements: self.mesh.elements.clone(),
+            domains: self.mesh.domains.clone(),
+            outer_faces: self.mesh.outer_faces.clone(),
+            substrate: self.substrate,
+            active: p.active,
+            contact_eps: p.contact.eps,
+            layer_thickness: p.adhesion.map(|a| a.e_f),
+            center: [p.center[0], p.center[1], 0.0],
+            phase_times,
+        }
+    }
+}

@@ -1,0 +1,271 @@
+//! The two element worlds of the cell model: what changes with the dimension `D` and the
+//! element of `N` nodes (`E = D·N` unknowns), everything else being written once.
+//!
+//! - [`HalfPlane`]: six-node triangles on the half cell's [`Mesh`], the substrate's
+//!   section [`Substrate`]; the plane-strain and the axisymmetric models
+//!   ([`crate::physics::KinematicModel`], chosen once per element loop).
+//! - [`Quarter`]: ten-node tetrahedra on the quarter cell's [`Mesh3`], the substrate on its
+//!   pillar lattice [`Substrate3`]; the symmetry planes x = c_x and z = c_z.
+//!
+//! A shape names its mesh, substrate and tabulation types and the dual numbers of its
+//! tangents (`D + D² + 1` directions for the band forces, `D + 1` for the adhesion rows),
+//! places the active strain and the symmetry, and sends the element loops to the
+//! formulation of the case's kinematic model. The physics itself is written once for
+//! every dimension ([`crate::physics`]).
+
+use nalgebra::{Const, SMatrix, SVector, Vector2, Vector3};
+use num_dual::DualSVec64;
+
+use super::history::LayerField;
+use super::{CellOf, ModelParams};
+use crate::dae::DaeError;
+use crate::fem::{CellMesh, Domain, ElementTabulation, Mesh, Mesh3, P2Tabulation, TetTabulation};
+use crate::physics::{ActiveStrain, KinematicModel, Real, Substrate, Substrate3};
+
+/// Largest number of dual directions a tangent uses (3-D band forces: 3 + 9 + 1).
+pub const MAX_DIRECTIONS: usize = 13;
+
+/// A dual number seeded along one direction, whose gradient can be read back.
+pub trait Seeded: Real + Send + Sync {
+    /// `re` with derivative 1 along `direction`.
+    fn seeded(re: f64, direction: usize) -> Self;
+    /// `re` with no derivative.
+    fn constant(re: f64) -> Self;
+    /// The derivatives along every direction (0 beyond the type's own).
+    fn gradient(&self) -> [f64; MAX_DIRECTIONS];
+}
+
+impl<const M: usize> Seeded for DualSVec64<M> {
+    #[inline(always)]
+    fn seeded(re: f64, direction: usize) -> Self {
+        Self::from_re(re).derivative(direction)
+    }
+
+    #[inline(always)]
+    fn constant(re: f64) -> Self {
+        Self::from_re(re)
+    }
+
+    #[inline(always)]
+    fn gradient(&self) -> [f64; MAX_DIRECTIONS] {
+        let g = self.eps.unwrap_generic(Const::<M>, Const::<1>);
+        std::array::from_fn(|k| if k < M { g[k] } else { 0.0 })
+    }
+}
+
+/// Which displacement components the symmetry eliminates in the 3-D quarter cell.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Constraints {
+    /// The quarter cell: u_x = 0 on the mesh's plane x = c_x, u_z = 0 on z = c_z (in the
+    /// half-plane models: u_x = 0 on the symmetry line).
+    #[default]
+    Quarter,
+    /// The slab check: u_x = 0 on x = c_x and u_z = 0 on every node (plane strain on a
+    /// one-layer 3-D mesh).
+    Slab,
+}
+
+/// What the cell model takes from its dimension and element (module documentation).
+pub trait Shape<const D: usize, const N: usize, const E: usize>:
+    Sized + Send + Sync + 'static
+{
+    /// The mesh.
+    type Mesh: CellMesh<D, N>;
+    /// The substrate, evaluated at positions in `D` dimensions.
+    type Substrate: LayerField<D> + Send + Sync + PartialEq;
+    /// The element's shape functions on a quadrature rule.
+    type Tab: ElementTabulation<D, N>;
+    /// Dual numbers of the band tangent: x (D), F (D²), μ_as (1).
+    #[doc(hidden)]
+    type BandDual: Seeded;
+    /// Dual numbers of the adhesion row's tangent: x (D), μ_as (1).
+    #[doc(hidden)]
+    type RateDual: Seeded;
+    /// What its elements are called in messages.
+    const ELEMENTS: &'static str;
+
+    /// The substrate of `p`.
+    fn substrate(p: &ModelParams) -> Self::Substrate;
+    /// The cell centre.
+    fn center(p: &ModelParams) -> SVector<f64, D>;
+    /// The active strain `F_a` at `t_a = 1` at reference point `x` of `domain`, about the
+    /// centre `c`.
+    fn active_tensor(
+        act: &ActiveStrain,
+        x: &[f64; D],
+        c: &SVector<f64, D>,
+        domain: Domain,
+    ) -> SMatrix<f64, D, D>;
+    /// Whether component `c` of node `i` is eliminated by the symmetry, per node.
+    fn eliminated(mesh: &Self::Mesh, constraints: Constraints) -> Vec<[bool; D]>;
+    /// The contact radius in state `y`: the length of the contour in contact in the plane
+    /// z = 0, `(deformed, reference)` [µm].
+    fn contact_lengths(cell: &CellOf<Self, D, N, E>, y: &[f64]) -> (f64, f64);
+    /// The residual with the formulation of the case's kinematic model.
+    fn residual(
+        cell: &mut CellOf<Self, D, N, E>,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        r: &mut [f64],
+    ) -> Result<(), DaeError>;
+    /// The iteration matrix with the formulation of the case's kinematic model.
+    fn jacobian(
+        cell: &mut CellOf<Self, D, N, E>,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        cj: f64,
+        v: &mut [f64],
+    ) -> Result<(), DaeError>;
+}
+
+/// The half cell's six-node triangles (plane strain and axisymmetric).
+#[derive(Debug, Clone, Copy)]
+pub struct HalfPlane;
+
+/// The quarter cell's ten-node tetrahedra (3-D).
+#[derive(Debug, Clone, Copy)]
+pub struct Quarter;
+
+/// What a half-plane model says when asked to be the 3-D one.
+pub(crate) const THREE_D: &str =
+    "the half-plane mesh cannot carry the 3-D model (a Cell3 on a Mesh3 does)";
+
+impl Shape<2, 6, 12> for HalfPlane {
+    type Mesh = Mesh;
+    type Substrate = Substrate;
+    type Tab = P2Tabulation;
+    type BandDual = DualSVec64<7>;
+    type RateDual = DualSVec64<3>;
+    const ELEMENTS: &'static str = "triangles";
+
+    fn substrate(p: &ModelParams) -> Substrate {
+        p.substrate
+    }
+
+    fn center(p: &ModelParams) -> Vector2<f64> {
+        Vector2::new(p.center[0], p.center[1])
+    }
+
+    fn active_tensor(
+        act: &ActiveStrain,
+        x: &[f64; 2],
+        _c: &Vector2<f64>,
+        domain: Domain,
+    ) -> SMatrix<f64, 2, 2> {
+        act.fa(&Vector2::new(x[0], x[1]), domain, 1.0)
+    }
+
+    /// u_x = 0 on the symmetry line.
+    fn eliminated(mesh: &Mesh, _: Constraints) -> Vec<[bool; 2]> {
+        let mut out = vec![[false; 2]; mesh.nodes.len()];
+        for &i in &mesh.symmetry_nodes {
+            out[i][0] = true;
+        }
+        out
+    }
+
+    fn contact_lengths(cell: &CellOf<Self, 2, 6, 12>, y: &[f64]) -> (f64, f64) {
+        cell.contact_lengths(y)
+    }
+
+    fn residual(
+        cell: &mut CellOf<Self, 2, 6, 12>,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        r: &mut [f64],
+    ) -> Result<(), DaeError> {
+        use super::kinematics::{Axisymmetric, PlaneStrain};
+        match cell.params.kinematics {
+            KinematicModel::PlaneStrain => cell.residual_of::<PlaneStrain>(t, y, yp, r),
+            KinematicModel::Axisymmetric => cell.residual_of::<Axisymmetric>(t, y, yp, r),
+            KinematicModel::ThreeD => Err(DaeError::Fatal(THREE_D.into())),
+        }
+    }
+
+    fn jacobian(
+        cell: &mut CellOf<Self, 2, 6, 12>,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        cj: f64,
+        v: &mut [f64],
+    ) -> Result<(), DaeError> {
+        use super::kinematics::{Axisymmetric, PlaneStrain};
+        match cell.params.kinematics {
+            KinematicModel::PlaneStrain => cell.jacobian_of::<PlaneStrain>(t, y, yp, cj, v),
+            KinematicModel::Axisymmetric => cell.jacobian_of::<Axisymmetric>(t, y, yp, cj, v),
+            KinematicModel::ThreeD => Err(DaeError::Fatal(THREE_D.into())),
+        }
+    }
+}
+
+impl Shape<3, 10, 30> for Quarter {
+    type Mesh = Mesh3;
+    type Substrate = Substrate3;
+    type Tab = TetTabulation;
+    type BandDual = DualSVec64<13>;
+    type RateDual = DualSVec64<4>;
+    const ELEMENTS: &'static str = "tetrahedra";
+
+    fn substrate(p: &ModelParams) -> Substrate3 {
+        Substrate3 {
+            plane: p.substrate,
+            lattice: p.lattice,
+        }
+    }
+
+    /// (c_x, c_y, 0).
+    fn center(p: &ModelParams) -> Vector3<f64> {
+        Vector3::new(p.center[0], p.center[1], 0.0)
+    }
+
+    fn active_tensor(
+        act: &ActiveStrain,
+        x: &[f64; 3],
+        c: &Vector3<f64>,
+        domain: Domain,
+    ) -> SMatrix<f64, 3, 3> {
+        act.fa3(&Vector3::new(x[0], x[1], x[2]), c.z, domain, 1.0)
+    }
+
+    /// u_x = 0 on the plane x = c_x; u_z = 0 on z = c_z, or everywhere for the slab.
+    fn eliminated(mesh: &Mesh3, constraints: Constraints) -> Vec<[bool; 3]> {
+        let slab = constraints == Constraints::Slab;
+        let mut out = vec![[false, false, slab]; mesh.nodes.len()];
+        for &i in &mesh.symmetry_x {
+            out[i][0] = true;
+        }
+        for &i in &mesh.symmetry_z {
+            out[i][2] = true;
+        }
+        out
+    }
+
+    fn contact_lengths(cell: &CellOf<Self, 3, 10, 30>, y: &[f64]) -> (f64, f64) {
+        cell.meridian_contact_lengths(y)
+    }
+
+    fn residual(
+        cell: &mut CellOf<Self, 3, 10, 30>,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        r: &mut [f64],
+    ) -> Result<(), DaeError> {
+        cell.residual_of::<super::kinematics::ThreeD>(t, y, yp, r)
+    }
+
+    fn jacobian(
+        cell: &mut CellOf<Self, 3, 10, 30>,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+        cj: f64,
+        v: &mut [f64],
+    ) -> Result<(), DaeError> {
+        cell.jacobian_of::<super::kinematics::ThreeD>(t, y, yp, cj, v)
+    }
+}
