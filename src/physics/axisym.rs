@@ -21,8 +21,9 @@ use nalgebra::{Matrix2, SMatrix};
 use num_dual::DualSVec64;
 use serde::{Deserialize, Serialize};
 
+use super::material::{Invariants, IsotropicSolid, StressScalars};
 use super::material::{Sym, ViscousKinematics, elastic_right_cauchy_green};
-use super::{Real, Viscosity, Yeoh, cbrt, ln};
+use super::{Real, Viscosity, Yeoh};
 
 /// How the in-plane deformation of the half-plane model is completed to three dimensions
 /// (the case's `geometry.model`).
@@ -81,15 +82,11 @@ impl Yeoh {
     fn strain_energy_hoop_sym<T: Real>(&self, Ce: Sym<T>, c: T) -> T {
         let tr = Ce.tr();
         let d2 = Ce.det();
-        let I1 = tr + c;
-        let I2 = d2 + c * tr;
-        let I3 = c * d2;
-        let I3_13 = cbrt(I3);
-        let X = I1 - I3_13 * 3.0;
-        let lnJ = ln(I3) * 0.5;
-        X * (X * (X * self.alpha3 + self.alpha2) + self.alpha1)
-            + (I2 - I3_13 * I3_13 * 3.0) * self.beta
-            + lnJ * lnJ * (0.5 * self.lambda_y)
+        self.energy_density(Invariants {
+            i1: tr + c,
+            i2: d2 + c * tr,
+            i3: c * d2,
+        })
     }
 
     /// Energy per unit reference volume `Ψ(F) = J_a W(C_e)` [Pa] for `F = F₂ ⊕ λ`,
@@ -110,17 +107,9 @@ impl Yeoh {
 
     fn pk2_elastic_hoop_sym<T: Real>(&self, Ce: Sym<T>, c: T) -> (Sym<T>, T) {
         let d2 = Ce.det();
-        let I1 = Ce.tr() + c;
-        let I3 = c * d2;
-        let I3_13 = cbrt(I3);
-        let X = I1 - I3_13 * 3.0;
-        let A = X * (X * (self.alpha3 * 3.0) + self.alpha2 * 2.0) + self.alpha1;
-        let lnJ = ln(I3) * 0.5;
-        let a = (A + I1 * self.beta) * 2.0;
-        let k = lnJ * self.lambda_y - A * I3_13 * 2.0 - I3_13 * I3_13 * (4.0 * self.beta);
+        let StressScalars { a, k, c: cc } = self.stress_scalars(Ce.tr() + c, c * d2);
         // In-plane: a I + (k/det C₂) adj(C₂) − 2β C₂, adj(C) = (yy, −xy, xx).
         let b = k / d2;
-        let cc = -2.0 * self.beta;
         let plane = Sym {
             xx: a + b * Ce.yy + Ce.xx * cc,
             xy: (-b + cc) * Ce.xy,
@@ -277,51 +266,12 @@ pub fn material_point_hoop(
 mod tests {
     use super::*;
     use crate::physics::material::tests::{Rng, active, cytoplasm};
-    use crate::physics::{piola_total, reference};
-    use nalgebra::SVector;
-
-    type V5 = SVector<f64, HOOP_ENTRIES>;
-
-    fn flat5(P: &BlockDiag<f64>) -> V5 {
-        V5::from([
-            P.plane[(0, 0)],
-            P.plane[(0, 1)],
-            P.plane[(1, 0)],
-            P.plane[(1, 1)],
-            P.hoop,
-        ])
-    }
-
-    /// `F` with entry `col` (the flattening of [`MaterialPointHoop`]) moved by `h`.
-    fn moved(F: &BlockDiag<f64>, col: usize, h: f64) -> BlockDiag<f64> {
-        let mut G = *F;
-        if col == HOOP {
-            G.hoop += h;
-        } else {
-            G.plane[(col / 2, col % 2)] += h;
-        }
-        G
-    }
-
-    /// Central differences of `f` with respect to each of the five entries of `F`.
-    fn central_differences<const R: usize>(
-        F: &BlockDiag<f64>,
-        h: f64,
-        f: impl Fn(&BlockDiag<f64>) -> SVector<f64, R>,
-    ) -> SMatrix<f64, R, HOOP_ENTRIES> {
-        let columns: [SVector<f64, R>; HOOP_ENTRIES] =
-            std::array::from_fn(|col| (f(&moved(F, col, h)) - f(&moved(F, col, -h))) / (2.0 * h));
-        SMatrix::from_columns(&columns)
-    }
+    use crate::physics::piola_total;
 
     /// A random admissible `F₂ ⊕ λ`: `F₂` as the plane-strain tests draw it, λ ∈ [0.6, 1.6).
     fn deformation(rng: &mut Rng, s: f64) -> BlockDiag<f64> {
         let plane = rng.deformation(s);
         BlockDiag::new(plane, rng.uniform(0.6, 1.6))
-    }
-
-    fn rel5(a: &V5, b: &V5) -> f64 {
-        (a - b).norm() / b.norm()
     }
 
     #[test]
@@ -348,83 +298,6 @@ mod tests {
             let e2 = mat.energy(&F, &Fa);
             let e3 = mat.energy_hoop(&BlockDiag::new(F, 1.0), &Fa);
             assert!((e2 - e3).abs() < 1e-13 * e2.abs().max(1.0));
-        }
-    }
-
-    #[test]
-    fn stress_with_hoop_stretch_is_the_derivative_of_the_energy() {
-        // Central differences of Ψ(F₂, λ) against P₂ and P₃₃ (the hoop row). Step as in the
-        // plane-strain test.
-        let mut rng = Rng::new(29);
-        let h = 1e-5;
-        for mat in [
-            cytoplasm(),
-            Yeoh::from_engineering(500.0, 0.3, 1.5, 0.2).unwrap(),
-        ] {
-            for case in 0..20 {
-                let F = deformation(&mut rng, 0.5);
-                let Fa = rng.active_strain(case % 2 == 1);
-                let P = flat5(&mat.piola_solid_hoop(&F, &Fa));
-                let g =
-                    central_differences(&F, h, |F| nalgebra::Vector1::new(mat.energy_hoop(F, &Fa)));
-                let Pfd = g.transpose();
-                let e = rel5(&Pfd, &P);
-                assert!(
-                    e < 1e-8,
-                    "case {case}: rel. error {e:e}\nP = {P}\nPfd = {Pfd}"
-                );
-                // The hoop entry on its own (it is small beside the block in some cases).
-                let e33 = (Pfd[HOOP] - P[HOOP]).abs() / P.norm();
-                assert!(e33 < 1e-8, "case {case}: hoop entry {e33:e}");
-            }
-        }
-    }
-
-    #[test]
-    fn tangents_with_hoop_stretch_equal_finite_differences_of_the_stress() {
-        let mut rng = Rng::new(31);
-        let h = 1e-6;
-        for visc in [
-            reference::viscosity(),
-            Viscosity {
-                lambda_f: 3.0,
-                mu_f: 2.0,
-            },
-        ] {
-            let mat = cytoplasm();
-            for case in 0..20 {
-                let F = deformation(&mut rng, 0.5);
-                let Fdot = BlockDiag::new(
-                    Matrix2::from_fn(|_, _| rng.uniform(-1.0, 1.0)),
-                    rng.uniform(-1.0, 1.0),
-                );
-                let Fa = rng.active_strain(case % 2 == 1);
-                let mp = material_point_hoop(&mat, &visc, &F, &Fdot, &Fa);
-                let P = piola_total_hoop(&mat, &visc, &F, &Fdot, &Fa);
-                assert!(rel5(&flat5(&mp.P), &flat5(&P)) < 1e-14);
-                let fd_F = central_differences(&F, h, |F| {
-                    flat5(&piola_total_hoop(&mat, &visc, F, &Fdot, &Fa))
-                });
-                // Linear in Ḟ: a large step.
-                let fd_Fdot = central_differences(&Fdot, 1e-2, |G| {
-                    flat5(&piola_total_hoop(&mat, &visc, &F, G, &Fa))
-                });
-                let eF = (fd_F - mp.dP_dF).norm() / mp.dP_dF.norm();
-                let eV = (fd_Fdot - mp.dP_dFdot).norm() / mp.dP_dFdot.norm();
-                assert!(eF < 1e-7, "dP/dF case {case}: {eF:e}");
-                assert!(eV < 1e-9, "dP/dFdot case {case}: {eV:e}");
-                // The 33 row and column on their own, against the size of the tangent.
-                let scale = mp.dP_dF.norm();
-                let e_row = (fd_F.row(HOOP) - mp.dP_dF.row(HOOP)).norm() / scale;
-                let e_col = (fd_F.column(HOOP) - mp.dP_dF.column(HOOP)).norm() / scale;
-                assert!(
-                    e_row < 1e-7 && e_col < 1e-7,
-                    "case {case}: {e_row:e}, {e_col:e}"
-                );
-                let sv = mp.dP_dFdot.norm();
-                let ev_33 = (fd_Fdot.column(HOOP) - mp.dP_dFdot.column(HOOP)).norm() / sv;
-                assert!(ev_33 < 1e-9, "case {case}: dP/dλ̇ {ev_33:e}");
-            }
         }
     }
 

@@ -12,7 +12,7 @@
 
 #![allow(non_snake_case)]
 
-use super::{PhysicsError, Real, cbrt, check, ln};
+use super::{PhysicsError, Real, cbrt, check, cst, ln};
 use nalgebra::{Matrix2, Matrix4};
 use num_dual::DualSVec64;
 use serde::{Deserialize, Serialize};
@@ -35,6 +35,118 @@ pub struct Yeoh {
     pub beta: f64,
     /// Volumetric coefficient `λ_Y = λ_e + (2/3)μ_e` (the bulk modulus) [Pa].
     pub lambda_y: f64,
+}
+
+/// The invariants of a symmetric 3 × 3 right Cauchy–Green tensor `C` (of `C_e` for the
+/// solid): `I₁ = tr C`, `I₂ = ½((tr C)² − tr C²)`, `I₃ = det C`, however the kinematics
+/// stores `C` (2 × 2 plus `C₃₃ = 1`, plus a hoop entry, or 3 × 3).
+#[derive(Debug, Clone, Copy)]
+pub struct Invariants<T> {
+    /// `I₁`.
+    pub i1: T,
+    /// `I₂`.
+    pub i2: T,
+    /// `I₃`.
+    pub i3: T,
+}
+
+/// The second Piola–Kirchhoff stress of an isotropic law in the form
+/// `S = 2∂W/∂C = a I + k C⁻¹ + c C`.
+#[derive(Debug, Clone, Copy)]
+pub struct StressScalars<T> {
+    /// Coefficient of `I`.
+    pub a: T,
+    /// Coefficient of `C⁻¹`.
+    pub k: T,
+    /// Coefficient of `C`.
+    pub c: T,
+}
+
+/// What [`IsotropicSolid::tangent_scalars`] gives the closed-form tangent of the 3-D
+/// kinematics (module notes of [`super::solid3`]): with `s = I₃^{1/3} = J^{2/3}`,
+/// `∂S/∂C = (2A′ + 2β) M⊗M − 2A′s (M⊗C⁻¹ + C⁻¹⊗M) + κ C⁻¹⊗C⁻¹ − k C⁻¹⊙C⁻¹ + c M⊙M`.
+#[derive(Debug, Clone, Copy)]
+pub struct TangentScalars {
+    /// `s = J^{2/3}`.
+    pub s: f64,
+    /// The stress's `a`, `k`, `c` ([`StressScalars`]).
+    pub a: f64,
+    /// `k`.
+    pub k: f64,
+    /// `c`.
+    pub c: f64,
+    /// `A′ + β`, a quarter of the `M⊗M` coefficient.
+    pub ap_beta: f64,
+    /// `−4A′s`, the `M⊗C⁻¹` coefficient times 2.
+    pub m4_ap_s: f64,
+    /// `κ`, half the `C⁻¹⊗C⁻¹` coefficient.
+    pub kappa: f64,
+}
+
+/// An isotropic solid law `W(I₁, I₂, I₃)` per unit intermediate volume, written once in
+/// terms of the invariants of `C_e` and evaluated by every kinematics (plane strain
+/// [`super::material`], the hoop stretch [`super::axisym`], 3-D [`super::solid3`]), which
+/// form the invariants from their own storage of `C_e` and the tensors from these
+/// scalars.
+pub trait IsotropicSolid {
+    /// `W` [Pa].
+    fn energy_density<T: Real>(&self, inv: Invariants<T>) -> T;
+    /// `S_e = 2∂W/∂C_e = a I + k C_e⁻¹ + c C_e`, from `I₁` and `I₃` (the law's `∂W/∂I₂`
+    /// is constant, so `I₂` does not enter).
+    fn stress_scalars<T: Real>(&self, i1: T, i3: T) -> StressScalars<T>;
+    /// The scalars of the closed-form tangent from `I₁` and `J_e` (`I₃ = J_e²`).
+    fn tangent_scalars(&self, i1: f64, je: f64) -> TangentScalars;
+}
+
+impl IsotropicSolid for Yeoh {
+    /// `W = α₁X + α₂X² + α₃X³ + β(I₂ − 3I₃^{2/3}) + (λ_Y/2)(ln J_e)²`, `X = I₁ − 3I₃^{1/3}`.
+    #[inline(always)]
+    fn energy_density<T: Real>(&self, inv: Invariants<T>) -> T {
+        let Invariants { i1, i2, i3 } = inv;
+        let I3_13 = cbrt(i3);
+        let X = i1 - I3_13 * 3.0;
+        let lnJ = ln(i3) * 0.5;
+        X * (X * (X * self.alpha3 + self.alpha2) + self.alpha1)
+            + (i2 - I3_13 * I3_13 * 3.0) * self.beta
+            + lnJ * lnJ * (0.5 * self.lambda_y)
+    }
+
+    /// `a = 2(A + βI₁)`, `k = λ_Y ln J_e − 2A I₃^{1/3} − 4β I₃^{2/3}`, `c = −2β`, with
+    /// `A = ∂W/∂X = α₁ + 2α₂X + 3α₃X²`.
+    #[inline(always)]
+    fn stress_scalars<T: Real>(&self, i1: T, i3: T) -> StressScalars<T> {
+        let I3_13 = cbrt(i3);
+        let X = i1 - I3_13 * 3.0;
+        let A = X * (X * (self.alpha3 * 3.0) + self.alpha2 * 2.0) + self.alpha1;
+        let lnJ = ln(i3) * 0.5;
+        StressScalars {
+            a: (A + i1 * self.beta) * 2.0,
+            k: lnJ * self.lambda_y - A * I3_13 * 2.0 - I3_13 * I3_13 * (4.0 * self.beta),
+            c: cst(-2.0 * self.beta),
+        }
+    }
+
+    /// `A′ = ∂A/∂X = 2α₂ + 6α₃X` and `κ = λ_Y/2 + 2A′s² − (2/3)As − (8/3)βs²`.
+    #[inline(always)]
+    fn tangent_scalars(&self, i1: f64, je: f64) -> TangentScalars {
+        let s = (je * je).cbrt();
+        let ln_j = je.ln();
+        let X = i1 - 3.0 * s;
+        let A = self.alpha1 + X * (2.0 * self.alpha2 + 3.0 * self.alpha3 * X);
+        let Ap = 2.0 * self.alpha2 + 6.0 * self.alpha3 * X;
+        let beta = self.beta;
+        TangentScalars {
+            s,
+            a: 2.0 * (A + beta * i1),
+            k: self.lambda_y * ln_j - 2.0 * A * s - 4.0 * beta * s * s,
+            c: -2.0 * beta,
+            ap_beta: Ap + beta,
+            m4_ap_s: -4.0 * Ap * s,
+            kappa: 0.5 * self.lambda_y + 2.0 * Ap * s * s
+                - (2.0 / 3.0) * A * s
+                - (8.0 / 3.0) * beta * s * s,
+        }
+    }
 }
 
 impl Yeoh {
@@ -94,14 +206,11 @@ impl Yeoh {
     fn strain_energy_sym<T: Real>(&self, Ce: Sym<T>) -> T {
         let tr = Ce.tr();
         let I3 = Ce.det();
-        let I1 = tr + 1.0;
-        let I2 = I3 + tr;
-        let I3_13 = cbrt(I3);
-        let X = I1 - I3_13 * 3.0;
-        let lnJ = ln(I3) * 0.5;
-        X * (X * (X * self.alpha3 + self.alpha2) + self.alpha1)
-            + (I2 - I3_13 * I3_13 * 3.0) * self.beta
-            + lnJ * lnJ * (0.5 * self.lambda_y)
+        self.energy_density(Invariants {
+            i1: tr + 1.0,
+            i2: I3 + tr,
+            i3: I3,
+        })
     }
 
     /// Energy per unit reference volume `Ψ(F) = J_a W(C_e)`, `C_e = F_a⁻ᵀ C F_a⁻¹`,
@@ -122,15 +231,9 @@ impl Yeoh {
 
     fn pk2_elastic_sym<T: Real>(&self, Ce: Sym<T>) -> Sym<T> {
         let I3 = Ce.det();
-        let I1 = Ce.tr() + 1.0;
-        let I3_13 = cbrt(I3);
-        let X = I1 - I3_13 * 3.0;
-        let A = X * (X * (self.alpha3 * 3.0) + self.alpha2 * 2.0) + self.alpha1;
-        let lnJ = ln(I3) * 0.5;
+        let StressScalars { a, k, c } = self.stress_scalars(Ce.tr() + 1.0, I3);
         // S = a I + b adj(C) + c C, with C⁻¹ = adj(C)/I₃, adj(C) = (yy, −xy, xx)
-        let a = (A + I1 * self.beta) * 2.0;
-        let b = (lnJ * self.lambda_y - A * I3_13 * 2.0 - I3_13 * I3_13 * (4.0 * self.beta)) / I3;
-        let c = -2.0 * self.beta;
+        let b = k / I3;
         Sym {
             xx: a + b * Ce.yy + Ce.xx * c,
             xy: (-b + c) * Ce.xy,
@@ -392,18 +495,22 @@ pub fn admissible(F: &Matrix2<f64>) -> bool {
     F.iter().all(|v| v.is_finite()) && F.determinant() > 0.0
 }
 
-/// Stress and exact tangents at one material point (MODEL.md §3), for assembly.
+/// Stress and exact tangents at one material point (MODEL.md §3) of a `D × D` gradient,
+/// for assembly (`DD = D²`).
 ///
-/// Flattening: row `2i + J` for `P_iJ`, column `2k + L` for `F_kL` (or `Ḟ_kL`).
+/// Flattening: row `D i + J` for `P_iJ`, column `D k + L` for `F_kL` (or `Ḟ_kL`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MaterialPoint {
+pub struct MaterialPointOf<const D: usize, const DD: usize> {
     /// Total first Piola–Kirchhoff stress `P` [Pa].
-    pub P: Matrix2<f64>,
+    pub P: nalgebra::SMatrix<f64, D, D>,
     /// `∂P_iJ/∂F_kL` [Pa].
-    pub dP_dF: Matrix4<f64>,
+    pub dP_dF: nalgebra::SMatrix<f64, DD, DD>,
     /// `∂P_iJ/∂Ḟ_kL` [Pa·s] (viscous part only).
-    pub dP_dFdot: Matrix4<f64>,
+    pub dP_dFdot: nalgebra::SMatrix<f64, DD, DD>,
 }
+
+/// The material point of plane strain (the in-plane 2 × 2 block).
+pub type MaterialPoint = MaterialPointOf<2, 4>;
 
 /// `P` and its exact tangents `∂P/∂F`, `∂P/∂Ḟ` at one material point.
 ///
@@ -464,7 +571,6 @@ pub fn material_point(
 #[cfg(test)]
 pub(super) mod tests {
     use super::*;
-    use nalgebra::{SMatrix, SVector, Vector1, Vector4};
 
     /// Seeded random inputs for the derivative tests.
     pub(crate) struct Rng(oorandom::Rand64);
@@ -500,27 +606,6 @@ pub(super) mod tests {
         }
     }
 
-    /// The entries of a 2×2 tensor, row-major (index 2k + l), the layout of the tangents.
-    fn flat(m: &Matrix2<f64>) -> Vector4<f64> {
-        Vector4::new(m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)])
-    }
-
-    /// Central differences of `f` with respect to each entry of `x`, step `h`: column
-    /// 2k + l holds ∂f/∂x_kl.
-    fn central_differences<const R: usize>(
-        x: &Matrix2<f64>,
-        h: f64,
-        f: impl Fn(&Matrix2<f64>) -> SVector<f64, R>,
-    ) -> SMatrix<f64, R, 4> {
-        let columns: [SVector<f64, R>; 4] = std::array::from_fn(|col| {
-            let (mut xp, mut xm) = (*x, *x);
-            xp[(col / 2, col % 2)] += h;
-            xm[(col / 2, col % 2)] -= h;
-            (f(&xp) - f(&xm)) / (2.0 * h)
-        });
-        SMatrix::from_columns(&columns)
-    }
-
     pub(in crate::physics) fn cytoplasm() -> Yeoh {
         Yeoh::from_engineering(100.0, 0.485, 0.1, 0.2).unwrap()
     }
@@ -554,65 +639,6 @@ pub(super) mod tests {
         assert!(Yeoh::from_engineering(f64::NAN, 0.3, 0.1, 0.2).is_err());
         assert!(Yeoh::from_engineering(100.0, 0.3, 0.1, 1.0).is_err());
         assert!(Yeoh::from_engineering(100.0, 0.3, 2.99, 0.0).is_ok());
-    }
-
-    #[test]
-    fn stress_is_the_derivative_of_the_energy() {
-        // Central differences of Ψ(F) = J_a W(C_e) against the closed-form P_s.
-        // Step h = 1e-5: truncation ~h²|Ψ'''| ≈ 1e-10·E, round-off ~1e-16·Ψ/h ≈ 1e-11·E.
-        let mut rng = Rng::new(7);
-        let h = 1e-5;
-        for mat in [
-            cytoplasm(),
-            Yeoh::from_engineering(500.0, 0.3, 1.5, 0.2).unwrap(),
-        ] {
-            for case in 0..20 {
-                let F = rng.deformation(0.5);
-                let Fa = rng.active_strain(case % 2 == 1);
-                let P = mat.piola_solid(&F, &Fa);
-                let g = central_differences(&F, h, |F| Vector1::new(mat.energy(F, &Fa)));
-                let Pfd = Matrix2::new(g[0], g[1], g[2], g[3]);
-                let e = rel(&Pfd, &P);
-                assert!(
-                    e < 1e-8,
-                    "case {case}: rel. error {e:e}\nP = {P}\nPfd = {Pfd}"
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn tangents_equal_finite_differences_of_the_stress() {
-        let mut rng = Rng::new(11);
-        let h = 1e-6;
-        // Two viscosities: the model's (λ_f ≫ μ_f) and one where the shear part matters.
-        for visc in [
-            crate::physics::reference::viscosity(),
-            Viscosity {
-                lambda_f: 3.0,
-                mu_f: 2.0,
-            },
-        ] {
-            let mat = cytoplasm();
-            for case in 0..20 {
-                let F = rng.deformation(0.5);
-                let Fdot = Matrix2::from_fn(|_, _| rng.uniform(-1.0, 1.0));
-                let Fa = rng.active_strain(case % 2 == 1);
-                let mp = material_point(&mat, &visc, &F, &Fdot, &Fa);
-                let P = piola_total(&mat, &visc, &F, &Fdot, &Fa);
-                assert!(rel(&mp.P, &P) < 1e-14);
-                let fd_F =
-                    central_differences(&F, h, |F| flat(&piola_total(&mat, &visc, F, &Fdot, &Fa)));
-                // P is linear in Ḟ: a large step has no truncation error and less round-off.
-                let fd_Fdot = central_differences(&Fdot, 1e-2, |G| {
-                    flat(&piola_total(&mat, &visc, &F, G, &Fa))
-                });
-                let eF = (fd_F - mp.dP_dF).norm() / mp.dP_dF.norm();
-                let eV = (fd_Fdot - mp.dP_dFdot).norm() / mp.dP_dFdot.norm();
-                assert!(eF < 1e-7, "dP/dF case {case}: {eF:e}");
-                assert!(eV < 1e-9, "dP/dFdot case {case}: {eV:e}");
-            }
-        }
     }
 
     #[test]

@@ -60,7 +60,8 @@
 use nalgebra::{Matrix3, SMatrix};
 use num_dual::DualSVec64;
 
-use super::{Real, Viscosity, Yeoh, cbrt, ln};
+use super::material::{Invariants, IsotropicSolid, StressScalars, TangentScalars};
+use super::{Real, Viscosity, Yeoh};
 
 /// Number of entries of a 3 × 3 tensor, the size of the flattened tangents.
 pub const ENTRIES3: usize = 9;
@@ -228,15 +229,11 @@ impl Yeoh {
     }
 
     fn strain_energy3_sym<T: Real>(&self, Ce: Sym3<T>) -> T {
-        let I1 = Ce.tr();
-        let I2 = Ce.minors();
-        let I3 = Ce.det_with(Ce.adj());
-        let I3_13 = cbrt(I3);
-        let X = I1 - I3_13 * 3.0;
-        let lnJ = ln(I3) * 0.5;
-        X * (X * (X * self.alpha3 + self.alpha2) + self.alpha1)
-            + (I2 - I3_13 * I3_13 * 3.0) * self.beta
-            + lnJ * lnJ * (0.5 * self.lambda_y)
+        self.energy_density(Invariants {
+            i1: Ce.tr(),
+            i2: Ce.minors(),
+            i3: Ce.det_with(Ce.adj()),
+        })
     }
 
     /// Energy per unit reference volume `Ψ(F) = J_a W(C_e)`, `C_e = F_a⁻ᵀ FᵀF F_a⁻¹`
@@ -251,14 +248,8 @@ impl Yeoh {
     fn pk2_elastic3_sym<T: Real>(&self, Ce: Sym3<T>) -> Sym3<T> {
         let adj = Ce.adj();
         let I3 = Ce.det_with(adj);
-        let I1 = Ce.tr();
-        let I3_13 = cbrt(I3);
-        let X = I1 - I3_13 * 3.0;
-        let A = X * (X * (self.alpha3 * 3.0) + self.alpha2 * 2.0) + self.alpha1;
-        let lnJ = ln(I3) * 0.5;
-        let a = (A + I1 * self.beta) * 2.0;
-        let b = (lnJ * self.lambda_y - A * I3_13 * 2.0 - I3_13 * I3_13 * (4.0 * self.beta)) / I3;
-        let c = -2.0 * self.beta;
+        let StressScalars { a, k, c } = self.stress_scalars(Ce.tr(), I3);
+        let b = k / I3;
         Sym3 {
             xx: a + b * adj.xx + Ce.xx * c,
             xy: b * adj.xy + Ce.xy * c,
@@ -334,18 +325,8 @@ pub fn admissible3(F: &Matrix3<f64>) -> bool {
     F.iter().all(|v| v.is_finite()) && F.determinant() > 0.0
 }
 
-/// Stress and exact tangents at one material point of the 3-D model, for assembly.
-///
-/// Flattening: row `3i + J` for `P_iJ`, column `3k + L` for `F_kL` (or `Ḟ_kL`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MaterialPoint3 {
-    /// Total first Piola–Kirchhoff stress `P` [Pa].
-    pub P: Matrix3<f64>,
-    /// `∂P_iJ/∂F_kL` [Pa].
-    pub dP_dF: SMatrix<f64, ENTRIES3, ENTRIES3>,
-    /// `∂P_iJ/∂Ḟ_kL` [Pa·s] (viscous part only).
-    pub dP_dFdot: SMatrix<f64, ENTRIES3, ENTRIES3>,
-}
+/// The material point of the 3-D model (the flattening `3i + J`, `3k + L`).
+pub type MaterialPoint3 = super::material::MaterialPointOf<3, ENTRIES3>;
 
 /// `P` and its exact tangents `∂P/∂F`, `∂P/∂Ḟ` at one material point of the 3-D model, in
 /// closed form (module notes): the solid's through `∂S_s/∂C` written with `M = F_a⁻¹F_a⁻ᵀ`
@@ -384,18 +365,15 @@ pub fn material_point3(
     let B = U * F.transpose(); // F M Fᵀ
     // Invariants of C_e: I₁ = C : M = F : FM, J_e = J/J_a, s = I₃^{1/3} = J_e^{2/3}.
     let I1 = F.dot(&U);
-    let Je = J / Ja;
-    let s = (Je * Je).cbrt();
-    let lnJ = Je.ln();
-    let X = I1 - 3.0 * s;
-    let A = yeoh.alpha1 + X * (2.0 * yeoh.alpha2 + 3.0 * yeoh.alpha3 * X);
-    let Ap = 2.0 * yeoh.alpha2 + 6.0 * yeoh.alpha3 * X;
-    let beta = yeoh.beta;
-    let a = 2.0 * (A + beta * I1);
-    let k = yeoh.lambda_y * lnJ - 2.0 * A * s - 4.0 * beta * s * s;
-    let c = -2.0 * beta;
-    let kappa =
-        0.5 * yeoh.lambda_y + 2.0 * Ap * s * s - (2.0 / 3.0) * A * s - (8.0 / 3.0) * beta * s * s;
+    let TangentScalars {
+        a,
+        k,
+        c,
+        ap_beta,
+        m4_ap_s,
+        kappa,
+        ..
+    } = yeoh.tangent_scalars(I1, J / Ja);
     // S_s = J_a(a M + k C⁻¹ + c MCM), MCM = UᵀU; P_s = F S_s = J_a(a U + k V + c B U).
     let S = (M * a + Ci * k + U.transpose() * U * c) * Ja;
     let Ps = (U * a + V * k + B * U * c) * Ja;
@@ -416,11 +394,7 @@ pub fn material_point3(
     //   δ_ik (S_LJ − k C⁻¹_JL),
     // with c, k, c₁, c₂, c₃ times J_a; and ∂P/∂Ḟ = Jλ_f V ⊗ V + Jμ_f V_iL V_kJ
     //   + δ_ik Jμ_f C⁻¹_LJ.
-    let (c1, c2, c3) = (
-        Ja * 4.0 * (Ap + beta),
-        Ja * (-4.0 * Ap * s),
-        Ja * 2.0 * kappa,
-    );
+    let (c1, c2, c3) = (Ja * 4.0 * ap_beta, Ja * m4_ap_s, Ja * 2.0 * kappa);
     let (kj, cj) = (Ja * k, Ja * c);
     let HLt = HL.transpose();
     let rows = |m: &Matrix3<f64>| -> [[f64; 3]; 3] {
@@ -536,22 +510,6 @@ pub(super) mod tests {
         V9::from_iterator((0..ENTRIES3).map(|c| m[(c / 3, c % 3)]))
     }
 
-    /// Central differences of `f` with respect to each entry of `x`, step `h`: column
-    /// 3k + l holds ∂f/∂x_kl.
-    pub(in crate::physics) fn central_differences9<const R: usize>(
-        x: &Matrix3<f64>,
-        h: f64,
-        f: impl Fn(&Matrix3<f64>) -> SVector<f64, R>,
-    ) -> SMatrix<f64, R, ENTRIES3> {
-        let columns: [SVector<f64, R>; ENTRIES3] = std::array::from_fn(|col| {
-            let (mut xp, mut xm) = (*x, *x);
-            xp[(col / 3, col % 3)] += h;
-            xm[(col / 3, col % 3)] -= h;
-            (f(&xp) - f(&xm)) / (2.0 * h)
-        });
-        SMatrix::from_columns(&columns)
-    }
-
     /// `A₂ ⊕ a₃₃`.
     pub(in crate::physics) fn embed(A: &Matrix2<f64>, a33: f64) -> Matrix3<f64> {
         Matrix3::new(
@@ -656,77 +614,6 @@ pub(super) mod tests {
             let w = m.strain_energy3(&C);
             assert!((w - W).abs() < 1e-12 * W.abs().max(1.0), "{w} vs {W}");
             assert_eq!(m.energy3(&F, &Matrix3::identity()), w);
-        }
-    }
-
-    #[test]
-    fn stress_is_the_derivative_of_the_energy3() {
-        // Central differences of Ψ(F) = J_a W(C_e) against P_s. Step 1e-6: near F = I the
-        // stress is small beside the moduli and the truncation error h²|Ψ'''| ~ h²λ_Y of
-        // h = 1e-5 reaches 2e-8 |P| (round-off stays below 5e-10 |P| at 1e-6).
-        let mut rng = Rng::new(43);
-        let h = 1e-6;
-        for mat in [
-            cytoplasm(),
-            Yeoh::from_engineering(500.0, 0.3, 1.5, 0.2).unwrap(),
-        ] {
-            for (case, (F, Fa)) in cases(&mut rng, 24).into_iter().enumerate() {
-                let P = mat.piola_solid3(&F, &Fa);
-                let g =
-                    central_differences9(&F, h, |F| nalgebra::Vector1::new(mat.energy3(F, &Fa)));
-                let Pfd = Matrix3::from_fn(|i, j| g[3 * i + j]);
-                let e = rel(&Pfd, &P);
-                assert!(
-                    e < 1e-8,
-                    "case {case}: rel. error {e:e}\nP = {P}\nPfd = {Pfd}"
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn tangents3_equal_finite_differences_of_the_stress() {
-        let mut rng = Rng::new(47);
-        let h = 1e-6;
-        for visc in [reference::viscosity(), shear_viscosity()] {
-            let mat = cytoplasm();
-            for (case, (F, Fa)) in cases(&mut rng, 24).into_iter().enumerate() {
-                let Fdot = Matrix3::from_fn(|_, _| rng.uniform(-1.0, 1.0));
-                let mp = material_point3(&mat, &visc, &F, &Fdot, &Fa);
-                let P = piola_total3(&mat, &visc, &F, &Fdot, &Fa);
-                // The same stress, summed in another order: round-off of the largest
-                // terms (the viscous one, λ_f tr(L), and the moduli).
-                let scale = P.norm() + visc.lambda_f * Fdot.norm() + mat.lambda_y;
-                assert!((mp.P - P).norm() < 1e-13 * scale, "case {case}");
-                let fd_F = central_differences9(&F, h, |F| {
-                    flat9(&piola_total3(&mat, &visc, F, &Fdot, &Fa))
-                });
-                // P is linear in Ḟ: a large step has no truncation error and less round-off.
-                let fd_Fdot = central_differences9(&Fdot, 1e-2, |G| {
-                    flat9(&piola_total3(&mat, &visc, &F, G, &Fa))
-                });
-                let eF = (fd_F - mp.dP_dF).norm() / mp.dP_dF.norm();
-                let eV = (fd_Fdot - mp.dP_dFdot).norm() / mp.dP_dFdot.norm();
-                assert!(eF < 1e-7, "dP/dF case {case}: {eF:e}");
-                assert!(eV < 1e-9, "dP/dFdot case {case}: {eV:e}");
-                // the solid's tangent alone (the viscous one dominates with λ_f = 1000)
-                let fd_s = central_differences9(&F, h, |F| flat9(&mat.piola_solid3(F, &Fa)));
-                let ms = material_point3(
-                    &mat,
-                    &Viscosity {
-                        lambda_f: 0.0,
-                        mu_f: 0.0,
-                    },
-                    &F,
-                    &Fdot,
-                    &Fa,
-                );
-                let es = (fd_s - ms.dP_dF).norm() / ms.dP_dF.norm();
-                assert!(es < 1e-7, "solid dP/dF case {case}: {es:e}");
-                // hyperelastic: the solid's tangent is symmetric (∂²Ψ/∂F∂F)
-                let asym = (ms.dP_dF - ms.dP_dF.transpose()).norm() / ms.dP_dF.norm();
-                assert!(asym < 1e-13, "case {case}: asymmetry {asym:e}");
-            }
         }
     }
 
