@@ -23,7 +23,9 @@ pub fn mesh_params(case: &Case) -> MeshParams {
 }
 
 /// The 3-D mesh parameters of a case: the 2-D ones (radii, sizes, refinement) about the
-/// centre (0, c_y, 0).
+/// centre (0, c_y, 0), so that the section z = 0 follows the 2-D grading law. For
+/// [`Case::reference`]: c = (0, 8.5, 0), r_n 5, r_cp 9.75, r_c 10 µm, h_bottom 0.3 µm,
+/// h_nucleus 1 µm, ≈ 10 000 tetrahedra and ≈ 44 000 displacement unknowns.
 pub fn mesh3_params(case: &Case) -> Mesh3Params {
     Mesh3Params::from_section(&mesh_params(case), 0.0)
 }

@@ -132,17 +132,6 @@ pub struct Mesh3Params {
 }
 
 impl Mesh3Params {
-    /// The paper's cell and the 2-D default sizes, from the case schema (the one place the
-    /// defaults live): c = (0, 8.5, 0), r_n 5, r_cp 9.75, r_c 10 µm, h_bottom 0.3 µm,
-    /// h_nucleus 1 µm, so that the section z = c_z follows the 2-D grading law. That is
-    /// ≈ 10 000 tetrahedra and ≈ 44 000 displacement unknowns at refine 1.
-    pub fn reference() -> Self {
-        Self::from_section(
-            &crate::case::terms::mesh_params(&crate::case::Case::reference()),
-            0.0,
-        )
-    }
-
     /// The quarter cell whose section z = `c_z` has the 2-D parameters `p` (centre
     /// (p.center, c_z), same radii and sizes; the 2-D angle limit is not used).
     pub fn from_section(p: &MeshParams, c_z: f64) -> Self {
@@ -1458,7 +1447,7 @@ mod tests {
     fn missing_gmsh_is_reported_with_the_package_name() {
         let root = scratch("missing");
         let e = Mesh3::generate_with(
-            &Mesh3Params::reference(),
+            &crate::fem::reference::mesh3_params(),
             Path::new("/nonexistent/bin/gmsh"),
             &root,
         )
