@@ -151,22 +151,28 @@ pub struct MemoryLimit {
     pub source: String,
 }
 
+/// A `CELLSIM_MEMORY_GB` that is not a positive number.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{MEMORY_ENV} = {value:?} is not a positive number of GB (1e9 bytes)")]
+pub struct BadMemoryLimit {
+    /// The variable's value.
+    pub value: String,
+}
+
 /// The environment variable that sets [`MemoryLimit`] [GB, 1e9 bytes].
 pub const MEMORY_ENV: &str = "CELLSIM_MEMORY_GB";
 
 impl MemoryLimit {
     /// The limit of this process (see the type's documentation); an unreadable
     /// `CELLSIM_MEMORY_GB` is an error naming it.
-    pub fn of_this_process() -> Result<Option<Self>, String> {
+    pub fn of_this_process() -> Result<Option<Self>, BadMemoryLimit> {
         if let Ok(v) = std::env::var(MEMORY_ENV) {
             return match v.trim().parse::<f64>() {
                 Ok(gb) if gb.is_finite() && gb > 0.0 => Ok(Some(MemoryLimit {
                     bytes: gb * 1e9,
                     source: format!("{MEMORY_ENV} = {}", v.trim()),
                 })),
-                _ => Err(format!(
-                    "{MEMORY_ENV} = {v:?} is not a positive number of GB (1e9 bytes)"
-                )),
+                _ => Err(BadMemoryLimit { value: v }),
             };
         }
         let machine = std::fs::read_to_string("/proc/meminfo").ok().and_then(|s| {

@@ -3,7 +3,7 @@
 
 use cellsim::dae::bdf2::{Bdf2, Bdf2Options};
 use cellsim::dae::problems::{Analytic, Heat2D, Robertson};
-use cellsim::dae::{Atol, Dae, DaeError, Integrator, Pattern, Stats};
+use cellsim::dae::{Atol, Dae, DaeError, Inadmissible, Integrator, Pattern, Stats};
 use cellsim::lu::LinearSolverKind;
 use cellsim::sundials::{CalcIc, Ida, IdaOptions};
 
@@ -225,9 +225,9 @@ impl<D: Dae> Dae for Wrapped<D> {
     fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
         if t >= self.fail_after && self.fail_count > 0 {
             self.fail_count -= 1;
-            return Err(DaeError::Inadmissible(format!(
+            return Err(DaeError::Inadmissible(Inadmissible::Other(format!(
                 "test: inadmissible at t = {t}"
-            )));
+            ))));
         }
         self.inner.residual(t, y, yp, r)
     }

@@ -5,6 +5,7 @@ mod axisym;
 mod cli;
 mod dae;
 mod deferred;
+mod fd;
 mod fem3;
 mod hard;
 mod linsolve;

@@ -6,7 +6,6 @@ use cellsim::fem::{Mesh, MeshParams};
 use cellsim::model::{CellModel, ModelParams};
 use cellsim::physics::Substrate;
 use cellsim::scene;
-use oorandom::Rand64;
 
 /// The reference case's mesh at refine 0.5.
 pub fn coarse_mesh() -> Mesh {
@@ -17,42 +16,12 @@ pub fn coarse_mesh() -> Mesh {
     .unwrap()
 }
 
-/// A deformed state where the cell bottom has sunk into the contact and adhesion bands:
-/// a rigid shift down by `sink` plus a smooth random field, random velocities and μ_as.
-pub fn deformed_state(m: &CellModel, sink: f64, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    let mut rng = Rand64::new(seed as u128);
-    let n = m.size();
-    let mut y = vec![0.0; n];
-    let mut yp = vec![0.0; n];
-    let (a, b, c) = (rng.rand_float(), rng.rand_float(), rng.rand_float());
-    for (i, x) in m.mesh.nodes.iter().enumerate() {
-        let du = [
-            0.05 * (0.3 * x[1] + a).sin() * x[0] / 10.0,
-            -sink + 0.04 * (0.25 * x[0] + b).cos() + 0.02 * (0.2 * x[1] + c).sin(),
-        ];
-        for k in 0..2 {
-            let d = m.dofs.u[i][k];
-            if d != usize::MAX {
-                y[d] = du[k];
-                yp[d] = 1e-3 * (rng.rand_float() - 0.5);
-                let v = m.dofs.v[i][k];
-                if v != usize::MAX {
-                    y[v] = 1e-2 * (rng.rand_float() - 0.5);
-                    yp[v] = 1e-1 * (rng.rand_float() - 0.5);
-                }
-            }
-        }
-    }
-    let off = m.dofs.mu_offset();
-    for k in 0..m.dofs.n_mu() {
-        y[off + k] = 1.4e3 * rng.rand_float();
-        yp[off + k] = rng.rand_float();
-    }
-    (y, yp)
-}
+pub use crate::fd::deformed_state;
 
-/// Compares the assembled J = ∂F/∂y + cj ∂F/∂ẏ with central differences of the residual,
-/// column by column, on `cols`; returns the worst relative column error.
+/// Finite-difference step on a μ_as exposure in the half-plane tests.
+const MU_STEP: f64 = 1e-2;
+
+/// [`crate::fd::jacobian_fd_error`] of a half-plane model with its μ_as step.
 pub fn jacobian_fd_error(
     m: &mut CellModel,
     t: f64,
@@ -61,64 +30,8 @@ pub fn jacobian_fd_error(
     cj: f64,
     cols: &[usize],
 ) -> f64 {
-    let n = m.size();
-    let nnz = m.pattern().compute_nnz();
-    let mut vals = vec![0.0; nnz];
-    m.jacobian(t, y, yp, cj, &mut vals).unwrap();
-    let pat = m.pattern().clone();
-    let mut worst: f64 = 0.0;
-    let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
-    for &j in cols {
-        // Richardson-extrapolated central differences (error O(h⁴)), so the steps can be
-        // large enough to keep round-off far below the tolerance: relative 1e-4 for u and
-        // v, 1e-2 absolute for μ_as (~1e3).
-        let h = if j >= m.dofs.mu_offset() {
-            1e-2
-        } else {
-            1e-4 * y[j].abs().max(0.1)
-        };
-        let mut central = |h: f64| -> Vec<f64> {
-            let (mut y1, mut yp1) = (y.to_vec(), yp.to_vec());
-            y1[j] += h;
-            yp1[j] += cj * h;
-            m.residual(t, &y1, &yp1, &mut rp).unwrap();
-            y1[j] -= 2.0 * h;
-            yp1[j] -= 2.0 * cj * h;
-            m.residual(t, &y1, &yp1, &mut rm).unwrap();
-            rp.iter()
-                .zip(&rm)
-                .map(|(a, b)| (a - b) / (2.0 * h))
-                .collect()
-        };
-        let (d1, d2) = (central(h), central(h / 2.0));
-        let fd: Vec<f64> = d1
-            .iter()
-            .zip(&d2)
-            .map(|(a, b)| (4.0 * b - a) / 3.0)
-            .collect();
-        let mut col = vec![0.0; n];
-        for k in pat.col_ptr()[j]..pat.col_ptr()[j + 1] {
-            col[pat.row_idx()[k]] = vals[k];
-        }
-        let norm = col.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let diff = col
-            .iter()
-            .zip(&fd)
-            .map(|(a, b)| (a - b).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        // A column may vanish (e.g. μ_as of a node out of the layer with cj = 0): then the
-        // finite differences must vanish too.
-        if norm == 0.0 {
-            assert!(
-                diff < 1e-9,
-                "column {j}: J is zero there, finite differences give {diff:.2e}"
-            );
-        } else {
-            worst = worst.max(diff / norm);
-        }
-    }
-    worst
+    let off = m.dofs.mu_offset();
+    crate::fd::jacobian_fd_error(m, off, MU_STEP, t, y, yp, cj, cols).0
 }
 
 /// Pillars, adhesion (μ_as unknowns) and both active regions: every block of J present.
@@ -145,25 +58,8 @@ pub fn check_jacobian(params: ModelParams, sink: f64, label: &str) {
         f.y > 1e-3,
         "{label}: no contact in the test state (force {f:?})"
     );
-    let n = m.size();
-    let mut rng = Rand64::new(3);
-    let mut cols: Vec<usize> = (0..150)
-        .map(|_| (rng.rand_float() * n as f64) as usize)
-        .collect();
-    // All unknowns of the lowest nodes (in contact) and some μ_as columns.
-    for (i, x) in m.mesh.nodes.iter().enumerate() {
-        if x[1] < -1.0 {
-            cols.extend(
-                m.dofs.u[i]
-                    .iter()
-                    .chain(m.dofs.v[i].iter())
-                    .filter(|&&d| d != usize::MAX),
-            );
-            if m.dofs.mu[i] != usize::MAX {
-                cols.push(m.dofs.mu[i]);
-            }
-        }
-    }
+    // 150 random columns, every unknown of the lowest nodes (in contact) and their μ_as.
+    let cols = crate::fd::contact_columns(&m, 150, None);
     for cj in [0.0, 37.0] {
         let err = jacobian_fd_error(&mut m, t, &y, &yp, cj, &cols);
         assert!(

@@ -12,7 +12,6 @@ use cellsim::physics::{KinematicModel, Lattice, Substrate, Viscosity, Yeoh, piol
 use cellsim::scene;
 use cellsim::sundials::{Ida, IdaOptions};
 use nalgebra::{Matrix3, Vector3};
-use oorandom::Rand64;
 
 /// The quarter cell's mesh at the given sizes (µm) for the reference cell.
 pub fn mesh3(h_bottom: f64, h_nucleus: f64) -> Mesh3 {
@@ -44,113 +43,13 @@ fn params3(plane: ModelParams) -> ModelParams {
     }
 }
 
-/// A deformed state with the cell bottom sunk into the contact and adhesion bands by
-/// `sink`, plus a smooth random field, random velocities and exposures.
-fn deformed_state(m: &Cell3, sink: f64, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    let mut rng = Rand64::new(seed as u128);
-    let n = m.size();
-    let (mut y, mut yp) = (vec![0.0; n], vec![0.0; n]);
-    let (a, b, c) = (rng.rand_float(), rng.rand_float(), rng.rand_float());
-    for (i, x) in m.mesh.nodes.iter().enumerate() {
-        let du = [
-            0.05 * (0.3 * x[1] + a).sin() * x[0] / 10.0,
-            -sink
-                + 0.04 * (0.25 * x[0] + b).cos()
-                + 0.02 * (0.2 * x[1] + c).sin()
-                + 0.03 * (0.3 * x[2] + a).cos(),
-            0.04 * (0.2 * x[1] + b).cos() * x[2] / 10.0,
-        ];
-        for k in 0..3 {
-            let d = m.dofs.u[i][k];
-            if d != usize::MAX {
-                y[d] = du[k];
-                yp[d] = 1e-3 * (rng.rand_float() - 0.5);
-                let v = m.dofs.v[i][k];
-                if v != usize::MAX {
-                    y[v] = 1e-2 * (rng.rand_float() - 0.5);
-                    yp[v] = 1e-1 * (rng.rand_float() - 0.5);
-                }
-            }
-        }
-    }
-    let off = m.dofs.mu_offset();
-    for k in 0..m.dofs.n_mu() {
-        y[off + k] = 1.4e3 * rng.rand_float();
-        yp[off + k] = rng.rand_float();
-    }
-    (y, yp)
-}
+use crate::fd::deformed_state;
 
 /// Finite-difference step on an exposure A (~1e3): the B block is small beside the
 /// membrane's internal forces, so round-off dominates small steps (worst column error
 /// 6.4e-5 at 1e-3, 7.6e-6 at 1e-2, below 1e-6 at 0.1 and 1: the Richardson-extrapolated
 /// truncation error is negligible at these steps).
 const MU_STEP: f64 = 1e-1;
-
-/// Worst relative column error of J = ∂F/∂y + cj ∂F/∂ẏ against Richardson-extrapolated
-/// central differences of the residual, on the columns `cols`.
-fn jacobian_fd_error(
-    m: &mut Cell3,
-    t: f64,
-    y: &[f64],
-    yp: &[f64],
-    cj: f64,
-    cols: &[usize],
-) -> (f64, usize) {
-    let n = m.size();
-    let nnz = m.pattern().compute_nnz();
-    let mut vals = vec![0.0; nnz];
-    m.jacobian(t, y, yp, cj, &mut vals).unwrap();
-    let pat = m.pattern().clone();
-    let mut worst: (f64, usize) = (0.0, usize::MAX);
-    let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
-    for &j in cols {
-        let h = if j >= m.dofs.mu_offset() {
-            MU_STEP
-        } else {
-            1e-4 * y[j].abs().max(0.1)
-        };
-        let mut central = |h: f64| -> Vec<f64> {
-            let (mut y1, mut yp1) = (y.to_vec(), yp.to_vec());
-            y1[j] += h;
-            yp1[j] += cj * h;
-            m.residual(t, &y1, &yp1, &mut rp).unwrap();
-            y1[j] -= 2.0 * h;
-            yp1[j] -= 2.0 * cj * h;
-            m.residual(t, &y1, &yp1, &mut rm).unwrap();
-            rp.iter()
-                .zip(&rm)
-                .map(|(a, b)| (a - b) / (2.0 * h))
-                .collect()
-        };
-        let (d1, d2) = (central(h), central(h / 2.0));
-        let fd: Vec<f64> = d1
-            .iter()
-            .zip(&d2)
-            .map(|(a, b)| (4.0 * b - a) / 3.0)
-            .collect();
-        let mut col = vec![0.0; n];
-        for k in pat.col_ptr()[j]..pat.col_ptr()[j + 1] {
-            col[pat.row_idx()[k]] = vals[k];
-        }
-        let norm = col.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let diff = col
-            .iter()
-            .zip(&fd)
-            .map(|(a, b)| (a - b).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        if norm == 0.0 {
-            assert!(
-                diff < 1e-9,
-                "column {j}: J is zero, finite differences {diff:.2e}"
-            );
-        } else if diff / norm > worst.0 {
-            worst = (diff / norm, j);
-        }
-    }
-    worst
-}
 
 #[test]
 fn jacobian_of_the_quarter_cell_matches_finite_differences() {
@@ -180,30 +79,13 @@ fn jacobian_of_the_quarter_cell_matches_finite_differences() {
         let t = 45_000.0;
         let f = m.contact_force_total(&y);
         assert!(f.y > 1e-3, "no contact in the test state (force {f:?})");
-        let n = m.size();
-        let mut rng = Rand64::new(3);
-        let mut cols: Vec<usize> = (0..60)
-            .map(|_| (rng.rand_float() * n as f64) as usize)
-            .collect();
-        // Every unknown of 40 of the lowest nodes (in contact), velocities and exposures
-        // included.
-        let low: Vec<usize> = (0..m.mesh.nodes.len())
-            .filter(|&i| m.mesh.nodes[i][1] < -1.0)
-            .collect();
-        for _ in 0..40 {
-            let i = low[(rng.rand_float() * low.len() as f64) as usize];
-            cols.extend(
-                m.dofs.u[i]
-                    .iter()
-                    .chain(m.dofs.v[i].iter())
-                    .filter(|&&d| d != usize::MAX),
-            );
-            if m.dofs.mu[i] != usize::MAX {
-                cols.push(m.dofs.mu[i]);
-            }
-        }
+        // 60 random columns and every unknown of 40 of the lowest nodes (in contact),
+        // velocities and exposures included.
+        let cols = crate::fd::contact_columns(&m, 60, Some(40));
         for cj in [0.0, 37.0] {
-            let (err, j) = jacobian_fd_error(&mut m, t, &y, &yp, cj, &cols);
+            let off = m.dofs.mu_offset();
+            let (err, j) =
+                crate::fd::jacobian_fd_error(&mut m, off, MU_STEP, t, &y, &yp, cj, &cols);
             let node = (0..m.mesh.nodes.len()).find(|&i| {
                 m.dofs.u[i].contains(&j) || m.dofs.v[i].contains(&j) || m.dofs.mu[i] == j
             });

@@ -43,23 +43,19 @@ pub struct Override {
 
 impl Override {
     /// An override of `path` by `value` (RON text), checked as [`Override::parse`] does.
-    pub fn new(path: &str, value: &str) -> Result<Self, String> {
+    pub fn new(path: &str, value: &str) -> Result<Self, OverrideError> {
         Override::parse(&format!("{path}={value}"))
     }
 
     /// Parses `PATH=VALUE`. The path must be dot-separated field names (identifiers) or
-    /// indices; the value must be exactly one RON value. The message says what is wrong.
-    pub fn parse(arg: &str) -> Result<Self, String> {
+    /// indices; the value must be exactly one RON value. The error says what is wrong.
+    pub fn parse(arg: &str) -> Result<Self, OverrideError> {
         let Some((path, value)) = arg.split_once('=') else {
-            return Err(format!(
-                "`{arg}` is not PATH=VALUE (e.g. substrate.spacing=6.0)"
-            ));
+            return Err(OverrideError::NotPathValue(arg.to_string()));
         };
         let (path, value) = (path.trim(), value.trim());
         if path.is_empty() {
-            return Err(format!(
-                "`{arg}`: the path before `=` is empty (e.g. substrate.spacing=6.0)"
-            ));
+            return Err(OverrideError::EmptyPath(arg.to_string()));
         }
         for comp in path.split('.') {
             let ident = comp
@@ -69,20 +65,23 @@ impl Override {
                 && comp.chars().all(|c| c.is_alphanumeric() || c == '_');
             let index = !comp.is_empty() && comp.chars().all(|c| c.is_ascii_digit());
             if !(ident || index) {
-                return Err(format!(
-                    "`{arg}`: `{comp}` in the path `{path}` is not a field name (a path is \
-                     field names joined by dots, e.g. materials.nucleus.e)"
-                ));
+                return Err(OverrideError::NotAFieldName {
+                    arg: arg.to_string(),
+                    component: comp.to_string(),
+                    path: path.to_string(),
+                });
             }
         }
         if value.is_empty() {
-            return Err(format!("`{arg}`: the value after `=` is empty"));
+            return Err(OverrideError::EmptyValue(arg.to_string()));
         }
         if let Err(e) = ron::value::RawValue::from_ron(value) {
-            return Err(format!(
-                "`{arg}`: the value `{value}` is not one RON value: {} (at character {})",
-                e.code, e.span.start.col
-            ));
+            return Err(OverrideError::NotOneValue {
+                arg: arg.to_string(),
+                value: value.to_string(),
+                reason: e.code.to_string(),
+                column: e.span.start.col,
+            });
         }
         Ok(Override {
             path: path.to_string(),
@@ -119,17 +118,56 @@ impl fmt::Display for Override {
 }
 
 impl FromStr for Override {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = OverrideError;
+    fn from_str(s: &str) -> Result<Self, OverrideError> {
         Override::parse(s)
     }
 }
 
 impl TryFrom<String> for Override {
-    type Error = String;
-    fn try_from(s: String) -> Result<Self, String> {
+    type Error = OverrideError;
+    fn try_from(s: String) -> Result<Self, OverrideError> {
         Override::parse(&s)
     }
+}
+
+/// Why a `PATH=VALUE` argument is not an override.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OverrideError {
+    /// No `=`.
+    #[error("`{0}` is not PATH=VALUE (e.g. substrate.spacing=6.0)")]
+    NotPathValue(String),
+    /// Nothing before the `=`.
+    #[error("`{0}`: the path before `=` is empty (e.g. substrate.spacing=6.0)")]
+    EmptyPath(String),
+    /// A component of the path is neither a field name nor an index.
+    #[error(
+        "`{arg}`: `{component}` in the path `{path}` is not a field name (a path is field \
+         names joined by dots, e.g. materials.nucleus.e)"
+    )]
+    NotAFieldName {
+        /// The argument.
+        arg: String,
+        /// The component.
+        component: String,
+        /// The path.
+        path: String,
+    },
+    /// Nothing after the `=`.
+    #[error("`{0}`: the value after `=` is empty")]
+    EmptyValue(String),
+    /// The value is not exactly one RON value.
+    #[error("`{arg}`: the value `{value}` is not one RON value: {reason} (at character {column})")]
+    NotOneValue {
+        /// The argument.
+        arg: String,
+        /// The value.
+        value: String,
+        /// ron's reason.
+        reason: String,
+        /// Where ron stopped in the value (1-based).
+        column: usize,
+    },
 }
 
 impl From<Override> for String {
@@ -998,7 +1036,7 @@ mod tests {
             ("name=\"open", "not one RON value"),
         ] {
             let e = Override::parse(arg).unwrap_err();
-            assert!(e.contains(needle), "{arg}: {e}");
+            assert!(e.to_string().contains(needle), "{arg}: {e}");
         }
         let o = Override::parse(" substrate.width = Some(6.0) ").unwrap();
         assert_eq!(o.to_string(), "substrate.width=Some(6.0)");

@@ -419,9 +419,9 @@ pub fn memory_refusal(case: &Case) -> Result<(), Refusal> {
     if spec.validate().is_err() {
         return Ok(());
     }
-    let limit = crate::lu::MemoryLimit::of_this_process().map_err(|message| Refusal {
+    let limit = crate::lu::MemoryLimit::of_this_process().map_err(|e| Refusal {
         fields: refining_fields(case),
-        message,
+        message: e.to_string(),
     })?;
     let Some(limit) = limit else {
         return Ok(());

@@ -259,9 +259,9 @@ impl<D: Dae> Bdf2<D> {
             .jacobian(t_new, &self.y_new, &yp_pred, cj, &mut self.values)
         {
             Ok(()) => {}
-            Err(DaeError::Inadmissible(m)) => {
+            Err(DaeError::Inadmissible(why)) => {
                 return Err(StepFailure::Newton(format!(
-                    "Jacobian: inadmissible state: {m}"
+                    "Jacobian: inadmissible state: {why}"
                 )));
             }
             Err(DaeError::Fatal(m)) => {
@@ -305,8 +305,8 @@ impl<D: Dae> Bdf2<D> {
             self.stats.residual_evals += 1;
             match self.dae.residual(t_new, &self.y_new, &yp_new, &mut self.r) {
                 Ok(()) => {}
-                Err(DaeError::Inadmissible(msg)) => {
-                    return Err(StepFailure::Newton(format!("inadmissible state: {msg}")));
+                Err(DaeError::Inadmissible(why)) => {
+                    return Err(StepFailure::Newton(format!("inadmissible state: {why}")));
                 }
                 Err(DaeError::Fatal(msg)) => {
                     return Err(StepFailure::Fatal(IntegratorError::Problem {

@@ -40,10 +40,77 @@ pub enum DaeError {
     /// The state cannot be evaluated (e.g. an element with det F ≤ 0). Recoverable: the
     /// integrator cuts its step.
     #[error("inadmissible state: {0}")]
-    Inadmissible(String),
+    Inadmissible(Inadmissible),
     /// Anything else: the integration stops.
     #[error("{0}")]
     Fatal(String),
+}
+
+/// Why a state cannot be evaluated, as fields a caller can classify (a sweep's failure
+/// map, the integrators' messages).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Inadmissible {
+    /// A finite element turned inside out, or flattened, at one of its points: `quantity`
+    /// (`det F`, or the hoop stretch `1 + u_r/r`) is `value ≤ 0` there.
+    #[error("element {element}, {point}: {quantity} = {value:.3e}")]
+    Element {
+        /// Time of the residual that met it [s] (NaN where not known).
+        t: f64,
+        /// Index of the element in the mesh.
+        element: usize,
+        /// The point of the element.
+        point: ElementPoint,
+        /// What is not positive.
+        quantity: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// Some entry of the residual or of the iteration matrix is not finite.
+    #[error("non-finite {0}")]
+    NonFinite(&'static str),
+    /// Any other reason (test problems).
+    #[error("{0}")]
+    Other(String),
+}
+
+impl Inadmissible {
+    /// The same reason, at time `t` when it concerns an element.
+    pub fn at(self, t_now: f64) -> Self {
+        match self {
+            Inadmissible::Element {
+                element,
+                point,
+                quantity,
+                value,
+                ..
+            } => Inadmissible::Element {
+                t: t_now,
+                element,
+                point,
+                quantity,
+                value,
+            },
+            other => other,
+        }
+    }
+}
+
+/// A point of a finite element where the state is evaluated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ElementPoint {
+    /// Point `q` of the standard (solid and mass) rule.
+    Quadrature(usize),
+    /// Point `q` of the contact and adhesion band's rule.
+    Contact(usize),
+}
+
+impl std::fmt::Display for ElementPoint {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ElementPoint::Quadrature(q) => write!(f, "quadrature point {q}"),
+            ElementPoint::Contact(q) => write!(f, "contact point {q}"),
+        }
+    }
 }
 
 /// A fully implicit DAE `F(t, y, ẏ) = 0`: the only thing integrators see.

@@ -20,7 +20,7 @@ use super::element::{ElementOf, ElementState};
 use super::kernels::{Formulation, check_admissible};
 use super::kinematics::{Axisymmetric, NodalOf, contract, deformation, rate};
 use super::plan::TangentOf;
-use crate::dae::DaeError;
+use crate::dae::{DaeError, ElementPoint, Inadmissible};
 use crate::physics::axisym::{HOOP, HOOP_ENTRIES};
 use crate::physics::{BlockDiag, Real, Viscosity, Yeoh, material_point_hoop, piola_total_hoop};
 
@@ -66,9 +66,13 @@ fn hoop_point(
     check_admissible(e, q, &F2)?;
     let lambda = 1.0 + over_r(el, q, &st.u);
     if !(lambda > 0.0 && lambda.is_finite()) {
-        return Err(DaeError::Inadmissible(format!(
-            "element {e}, quadrature point {q}: hoop stretch 1 + u_r/r = {lambda:.3e}"
-        )));
+        return Err(DaeError::Inadmissible(Inadmissible::Element {
+            t: f64::NAN,
+            element: e,
+            point: ElementPoint::Quadrature(q),
+            quantity: "hoop stretch 1 + u_r/r",
+            value: lambda,
+        }));
     }
     let F = BlockDiag::new(F2, lambda);
     let Fdot = BlockDiag::new(rate(&st.v, g), over_r(el, q, &st.v));

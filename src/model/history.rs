@@ -30,6 +30,18 @@ pub trait LayerField<const D: usize>: Surface<D> + Copy + std::fmt::Debug {}
 
 impl<S: Surface<D> + Copy + std::fmt::Debug, const D: usize> LayerField<D> for S {}
 
+/// A time the exposure history does not hold (it keeps the last accepted step only).
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("the adhesion history holds t in [{from}, {to}], not t = {t}")]
+pub struct OutsideHistory {
+    /// The time asked for [s].
+    pub t: f64,
+    /// The start of the last step [s].
+    pub from: f64,
+    /// Its end [s].
+    pub to: f64,
+}
+
 /// Positions and velocities of the membrane nodes at one time.
 #[derive(Debug, Clone)]
 struct Sample<const D: usize> {
@@ -144,7 +156,7 @@ impl<const D: usize, S: LayerField<D>> AdhesionHistoryOf<D, S> {
     }
 
     /// The exposure per node at time `t`, which lies within the last step (or at its end).
-    pub fn at(&self, t: f64) -> Result<Vec<f64>, String> {
+    pub fn at(&self, t: f64) -> Result<Vec<f64>, OutsideHistory> {
         let tol = 1e-12 * t.abs().max(1.0);
         if (t - self.last.t).abs() <= tol {
             return Ok(self.exposure.clone());
@@ -153,17 +165,22 @@ impl<const D: usize, S: LayerField<D>> AdhesionHistoryOf<D, S> {
             Some((s0, mu0)) if t >= s0.t - tol && t <= self.last.t => {
                 Ok(self.integrate(s0, mu0, &self.last, t.max(s0.t)))
             }
-            _ => Err(format!(
-                "the adhesion history holds t in [{}, {}], not t = {t}",
-                self.prev.as_ref().map_or(self.last.t, |p| p.0.t),
-                self.last.t
-            )),
+            _ => Err(OutsideHistory {
+                t,
+                from: self.prev.as_ref().map_or(self.last.t, |p| p.0.t),
+                to: self.last.t,
+            }),
         }
     }
 
     /// The history continued from time `t` (within the last step) on a restarted system
     /// whose nodes are at `x` moving with `xdot`.
-    pub fn restarted(&self, t: f64, x: Vec<[f64; D]>, xdot: Vec<[f64; D]>) -> Result<Self, String> {
+    pub fn restarted(
+        &self,
+        t: f64,
+        x: Vec<[f64; D]>,
+        xdot: Vec<[f64; D]>,
+    ) -> Result<Self, OutsideHistory> {
         let a = self.at(t)?;
         Ok(Self::new(self.adhesion, self.substrate, t, a, x, xdot))
     }

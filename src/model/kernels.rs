@@ -42,7 +42,7 @@ use super::kinematics::{
 };
 use super::plan::TangentOf;
 use super::shape::{Seeded, Shape};
-use crate::dae::DaeError;
+use crate::dae::{DaeError, ElementPoint, Inadmissible};
 use crate::fem::ElementTabulation;
 use crate::physics::{
     Real, Surface, Viscosity, Yeoh, adhesion_force, adhesion_hoop_factor, adhesion_rate,
@@ -249,9 +249,13 @@ pub(crate) fn check_admissible<const D: usize>(
     if j > 0.0 && j.is_finite() {
         Ok(())
     } else {
-        Err(DaeError::Inadmissible(format!(
-            "element {e}, quadrature point {q}: det F = {j:.3e}"
-        )))
+        Err(DaeError::Inadmissible(Inadmissible::Element {
+            t: f64::NAN,
+            element: e,
+            point: ElementPoint::Quadrature(q),
+            quantity: "det F",
+            value: j,
+        }))
     }
 }
 
@@ -508,18 +512,26 @@ pub(crate) fn band_residual<
     let values = ctab.values();
     for q in 0..el.cgeo.jxw.len() {
         let nv = &values[q];
-        // Every band point is checked admissible, also where the band is zero: they are
-        // more points of the element than the standard rule's.
+        if !S::CHECK_EVERY_BAND_POINT {
+            let x = current_position(&el.cgeo.x[q], nv, &st.u);
+            if band_is_zero::<S, D, N, E>(p, sub, &x, mue.is_some()) {
+                continue;
+            }
+        }
         let pt = BandPoint::at(el, nv, q, st, mue);
         let j = det(&pt.f);
         let hoop = K::hoop(&pt.x, &el.cgeo.x[q]);
         let j3 = hoop.map_or(j, |l| j * l);
         if !(j > 0.0 && j3 > 0.0) {
-            return Err(DaeError::Inadmissible(format!(
-                "element {e}, contact point {q}: det F = {j3:.3e}"
-            )));
+            return Err(DaeError::Inadmissible(Inadmissible::Element {
+                t: f64::NAN,
+                element: e,
+                point: ElementPoint::Contact(q),
+                quantity: "det F",
+                value: j3,
+            }));
         }
-        if band_is_zero::<S, D, N, E>(p, sub, &pt.x, mue.is_some()) {
+        if S::CHECK_EVERY_BAND_POINT && band_is_zero::<S, D, N, E>(p, sub, &pt.x, mue.is_some()) {
             continue;
         }
         let b = band_force::<S, f64, D, N, E>(

@@ -50,7 +50,7 @@ mod switch;
 
 use nalgebra::SVector;
 
-use crate::dae::{Dae, DaeError, FirstOrderBlocks, Pattern};
+use crate::dae::{Dae, DaeError, FirstOrderBlocks, Inadmissible, Pattern};
 use crate::fem::{CellMesh, Domain, ElementGeometryError};
 use crate::physics::{
     ActiveStrain, Adhesion, Contact, KinematicModel, Lattice, Phases, Substrate, Surface,
@@ -218,6 +218,14 @@ impl<const D: usize, const N: usize, const E: usize> Scratch<D, N, E> {
     }
 }
 
+/// `e` with the time `t` of the residual or Jacobian that met it.
+fn at_time(e: DaeError, t: f64) -> DaeError {
+    match e {
+        DaeError::Inadmissible(i) => DaeError::Inadmissible(i.at(t)),
+        other => other,
+    }
+}
+
 /// The element loop of a residual or a Jacobian over `ne` elements: for each block of
 /// [`BLOCK`] elements, `compute(e, out)` for every element of the block into `buf` (on
 /// rayon's threads when `parallel`), then `scatter(e, out)` in element order. Stops at the
@@ -370,7 +378,11 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
     /// μ_as per mesh node at time `t` with state `y` (`None` off the membrane or without
     /// adhesion): the unknowns, or while deferred the history's values (`t` within the
     /// integrator's last step).
-    pub fn nodal_mu_as(&self, t: f64, y: &[f64]) -> Result<Vec<Option<f64>>, String> {
+    pub fn nodal_mu_as(
+        &self,
+        t: f64,
+        y: &[f64],
+    ) -> Result<Vec<Option<f64>>, history::OutsideHistory> {
         let n = self.mesh.nodes().len();
         let Some(ad) = &self.params.adhesion else {
             return Ok(vec![None; n]);
@@ -578,7 +590,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         );
         self.scratch.vectors = buf;
         self.scratch.caps = caps;
-        result?;
+        result.map_err(|e| at_time(e, t))?;
         let mu_off = self.dofs.mu_offset();
         for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
             let row = mu_off + k;
@@ -588,7 +600,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         if r.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
-            Err(DaeError::Inadmissible("non-finite residual".into()))
+            Err(DaeError::Inadmissible(Inadmissible::NonFinite("residual")))
         }
     }
 
@@ -648,7 +660,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         );
         self.scratch.tangents = buf;
         self.scratch.caps = caps;
-        result?;
+        result.map_err(|e| at_time(e, t))?;
         if p.adhesion.is_some() {
             for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
                 let x = self.position(y, i);
@@ -665,7 +677,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         if v.iter().all(|x| x.is_finite()) {
             Ok(())
         } else {
-            Err(DaeError::Inadmissible("non-finite Jacobian".into()))
+            Err(DaeError::Inadmissible(Inadmissible::NonFinite("Jacobian")))
         }
     }
 }

@@ -102,7 +102,12 @@ impl Cell3 {
 
     /// The state at time `t` as the output writers take it (`t` within the integrator's
     /// last step while the exposures are deferred).
-    pub fn snapshot(&self, t: f64, y: &[f64], yp: &[f64]) -> Result<Snapshot3, String> {
+    pub fn snapshot(
+        &self,
+        t: f64,
+        y: &[f64],
+        yp: &[f64],
+    ) -> Result<Snapshot3, super::history::OutsideHistory> {
         let per_el = self.element_strain_and_jacobian(y);
         Ok(Snapshot3 {
             t,

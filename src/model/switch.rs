@@ -76,7 +76,10 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
             let restarted = h.restarted(t, x, xdot).map_err(|e| ModelError::Restart {
                 what: "switching inertia off",
                 t,
-                source: Box::new(crate::dae::IntegratorError::Problem { t, message: e }),
+                source: Box::new(crate::dae::IntegratorError::Problem {
+                    t,
+                    message: e.to_string(),
+                }),
             })?;
             m.history = Some(restarted);
         }
@@ -119,7 +122,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         }
         if let Some(h) = &self.history {
             let (x, xdot) = m.membrane_motion(y, yp);
-            m.history = Some(h.restarted(t, x, xdot).map_err(refuse)?);
+            m.history = Some(h.restarted(t, x, xdot).map_err(|e| refuse(e.to_string()))?);
         }
         m.set_initial(t, y.to_vec(), yp.to_vec());
         Ok(m)
@@ -145,7 +148,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
             .history
             .as_ref()
             .ok_or_else(|| restart_err("the adhesion unknowns are already there".into()))?;
-        let exposure = h.at(t).map_err(restart_err)?;
+        let exposure = h.at(t).map_err(|e| restart_err(e.to_string()))?;
         let mut m =
             Self::with_constraints(self.params.clone(), self.mesh.clone(), self.constraints)?;
         debug_assert_eq!(m.dofs.n, self.dofs.n + exposure.len());

@@ -129,20 +129,44 @@ impl Observables {
     }
 
     /// Parses one CSV row (without its newline); the message says what is wrong.
-    pub fn parse_csv_row(line: &str) -> Result<Self, String> {
-        let v: Vec<f64> = line
-            .split(',')
-            .map(|f| {
-                f.trim()
-                    .parse::<f64>()
-                    .map_err(|_| format!("`{f}` is not a number"))
-            })
-            .collect::<Result<_, _>>()?;
-        let v: [f64; N_COLUMNS] = v
-            .try_into()
-            .map_err(|v: Vec<f64>| format!("{} fields, expected {N_COLUMNS}", v.len()))?;
+    pub fn parse_csv_row(line: &str) -> Result<Self, RowError> {
+        let v = parse_fields(line)?;
+        let v: [f64; N_COLUMNS] = v.try_into().map_err(|v: Vec<f64>| RowError::Fields {
+            found: v.len(),
+            expected: N_COLUMNS,
+        })?;
         Ok(Self::from_values(v))
     }
+}
+
+/// Why a line of timeseries.csv is not a row.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RowError {
+    /// A field is not a number.
+    #[error("`{0}` is not a number")]
+    NotANumber(String),
+    /// The line has another number of fields.
+    #[error("{found} fields, expected {expected}")]
+    Fields {
+        /// Fields found.
+        found: usize,
+        /// Fields expected.
+        expected: usize,
+    },
+    /// Fewer fields than the 2-D columns before the 3-D ones.
+    #[error("fewer than {0} fields")]
+    TooFew(usize),
+}
+
+/// The comma-separated numbers of a CSV line.
+pub fn parse_fields(line: &str) -> Result<Vec<f64>, RowError> {
+    line.split(',')
+        .map(|f| {
+            f.trim()
+                .parse::<f64>()
+                .map_err(|_| RowError::NotANumber(f.to_string()))
+        })
+        .collect()
 }
 
 /// The row of `rows` (sorted by time) at time `t`, linearly interpolated, or `None` when
@@ -236,9 +260,9 @@ mod tests {
         assert_eq!(o.get("uy_nucleus_max"), Some(v[9]));
         assert_eq!(o.get("nope"), None);
         let err = Observables::parse_csv_row("1,2,3").unwrap_err();
-        assert_eq!(err, "3 fields, expected 10");
+        assert_eq!(err.to_string(), "3 fields, expected 10");
         let err = Observables::parse_csv_row("1,2,x,4,5,6,7").unwrap_err();
-        assert_eq!(err, "`x` is not a number");
+        assert_eq!(err.to_string(), "`x` is not a number");
     }
 
     #[test]

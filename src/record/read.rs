@@ -13,7 +13,9 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
-use super::observables::{COLUMNS, N_COLUMNS, OLD_CSV_HEADER, Observables, interpolate};
+use super::observables::{
+    COLUMNS, N_COLUMNS, OLD_CSV_HEADER, Observables, RowError, interpolate, parse_fields,
+};
 use super::{Mesh3File, MeshFile, Observables3, StateFile, StateFile3, Summary};
 
 /// Why a run directory's file could not be loaded.
@@ -342,24 +344,17 @@ pub fn parse_timeseries3(path: &Path, text: &str) -> Result<Rows3, ReadError> {
 }
 
 /// A 3-D row split after its 2-D columns.
-fn split_3d_row(line: &str) -> Result<(&str, &str), String> {
+fn split_3d_row(line: &str) -> Result<(&str, &str), RowError> {
     let at = line
         .match_indices(',')
         .nth(N_COLUMNS - 1)
         .map(|(i, _)| i)
-        .ok_or_else(|| format!("fewer than {} fields", N_COLUMNS + 4))?;
+        .ok_or(RowError::TooFew(N_COLUMNS + 4))?;
     Ok((&line[..at], &line[at + 1..]))
 }
 
-fn parse_3d_columns(text: &str) -> Result<Observables3, String> {
-    let v: Vec<f64> = text
-        .split(',')
-        .map(|f| {
-            f.trim()
-                .parse::<f64>()
-                .map_err(|_| format!("`{f}` is not a number"))
-        })
-        .collect::<Result<_, _>>()?;
+fn parse_3d_columns(text: &str) -> Result<Observables3, RowError> {
+    let v = parse_fields(text)?;
     match v[..] {
         [
             contact_area,
@@ -372,11 +367,10 @@ fn parse_3d_columns(text: &str) -> Result<Observables3, String> {
             contact_radius_equiv,
             penetration_depth,
         }),
-        _ => Err(format!(
-            "{} fields, expected {}",
-            N_COLUMNS + v.len(),
-            N_COLUMNS + 4
-        )),
+        _ => Err(RowError::Fields {
+            found: N_COLUMNS + v.len(),
+            expected: N_COLUMNS + 4,
+        }),
     }
 }
 

@@ -1000,13 +1000,13 @@ impl RunWriter {
             (ModelView::Plane(m), Frames::Plane(frames)) if frames.is_active() => {
                 let mu_as = m
                     .nodal_mu_as(t, y)
-                    .map_err(|why| OutputStop::State(t, why))?;
+                    .map_err(|why| OutputStop::State(t, why.to_string()))?;
                 frames.write(&snapshot(m, t, y, yp, mu_as))?;
             }
             (ModelView::Quarter(m), Frames::Quarter(frames)) if frames.is_active() => {
                 let snap = m
                     .snapshot(t, y, yp)
-                    .map_err(|why| OutputStop::State(t, why))?;
+                    .map_err(|why| OutputStop::State(t, why.to_string()))?;
                 frames.write(&snap)?;
             }
             _ => {}
@@ -1036,7 +1036,7 @@ impl RunWriter {
             (ModelView::Plane(m), _) => {
                 let mu_as = m
                     .nodal_mu_as(t, y)
-                    .map_err(|why| OutputStop::State(t, why))?;
+                    .map_err(|why| OutputStop::State(t, why.to_string()))?;
                 write_json(&path, &state_file(m, phase, t, y, mu_as, obs))?;
             }
             (ModelView::Quarter(m), Some(observables3)) => {
@@ -1044,7 +1044,7 @@ impl RunWriter {
                     phase: phase.to_string(),
                     state: m
                         .snapshot(t, y, yp)
-                        .map_err(|why| OutputStop::State(t, why))?,
+                        .map_err(|why| OutputStop::State(t, why.to_string()))?,
                     observables: obs,
                     observables3,
                 };

@@ -571,8 +571,8 @@ fn dae_code<D>(
 ) -> c_int {
     match r {
         Ok(Ok(())) => 0,
-        Ok(Err(DaeError::Inadmissible(m))) => {
-            user.callback_error = Some(format!("{what}: inadmissible state: {m}"));
+        Ok(Err(DaeError::Inadmissible(why))) => {
+            user.callback_error = Some(format!("{what}: inadmissible state: {why}"));
             1
         }
         Ok(Err(DaeError::Fatal(m))) => {
