@@ -243,13 +243,10 @@ const MESH_READS: [&str; 4] = ["geometry", "mesh.h_bottom", "mesh.h_nucleus", "m
 /// phases, the substrate, the active strain, contact, adhesion and viscosity. `cellsim
 /// check` and every command that runs a case load it through these.
 pub fn layer_checks(case: &Case) -> Vec<LayerCheck<'_>> {
-    let mut checks = Vec::new();
-    checks.push(layer_check(MESH_GENERATOR, &MESH_READS, move || {
-        mesh_refusal(case)
-    }));
-    checks.push(layer_check(MEMORY_ESTIMATE, &MESH_READS, move || {
-        memory_refusal(case)
-    }));
+    let mut checks = vec![
+        layer_check(MESH_GENERATOR, &MESH_READS, move || mesh_refusal(case)),
+        layer_check(MEMORY_ESTIMATE, &MESH_READS, move || memory_refusal(case)),
+    ];
     let m = &case.materials;
     for (domain, mat) in [
         ("nucleus", &m.nucleus),
@@ -265,131 +262,165 @@ pub fn layer_checks(case: &Case) -> Vec<LayerCheck<'_>> {
             "materials.beta_fraction",
         ];
         checks.push(layer_check("material law", &reads, move || {
-            Yeoh::from_engineering(mat.e, mat.nu, m.gamma, m.beta_fraction)
-                .map(drop)
-                .map_err(|e| {
-                    physics_refusal(e, &format!("materials.{domain}"), |name| match name {
-                        "E" => field(format!("materials.{domain}.e"), mat.e),
-                        "nu" => field(format!("materials.{domain}.nu"), mat.nu),
-                        "gamma" => field("materials.gamma", m.gamma),
-                        "beta_fraction" => field("materials.beta_fraction", m.beta_fraction),
-                        _ => None,
-                    })
-                })
+            material_refusal(m, domain, mat)
         }));
     }
-    checks.push(layer_check(
-        "phase switches",
-        &["phases", "gravity.flip_duration"],
-        move || {
-            let ph = &case.phases;
-            phases(case).validate().map_err(|e| {
-                physics_refusal(e, "phases", |name| match name {
-                    "t_g0" => field("phases.t_g0", ph.t_g0),
-                    "t_as0" => field("phases.t_as0", ph.t_as0),
-                    "t_a0" | "flip.start" => field("phases.t_a0", ph.t_a0),
-                    "flip.duration" => field("gravity.flip_duration", case.gravity.flip_duration),
-                    _ => None,
-                })
-            })
-        },
-    ));
-    checks.push(layer_check(
-        "substrate model",
-        &["substrate", "geometry"],
-        move || {
-            substrate(case).validate().map_err(|e| {
-                physics_refusal(e, "substrate", |name| match (&case.substrate, name) {
-                    (case::Substrate::Flat(f), "y_s") => field("substrate.y_s", f.y_s),
-                    (case::Substrate::Pillars(p), name) => match name {
-                        "pillars.width" => field("substrate.width", p.width),
-                        "pillars.spacing" => field("substrate.spacing", p.spacing),
-                        "pillars.height" => field("substrate.height", p.height),
-                        "pillars.q" => field("substrate.q", p.q),
-                        "pillars.first_center" => field("substrate.first_center", p.first_center),
-                        // Without an explicit y_top, the tops are placed from the gap.
-                        "pillars.y_top" => match p.y_top {
-                            Some(y) => field("substrate.y_top", y),
-                            None => field("substrate.gap", p.gap),
-                        },
-                        _ => None,
-                    },
-                    _ => None,
-                })
-            })
-        },
-    ));
-    checks.push(layer_check(
-        "active-strain model",
-        &["active", "geometry.centre_y"],
-        move || {
-            let Some(a) = active(case) else {
-                return Ok(());
-            };
-            a.validate().map_err(|e| {
-                let (pac, bottom) = (case.active.pac.as_ref(), case.active.bottom.as_ref());
-                physics_refusal(e, "active", |name| match name {
-                    "active.eps" => field("active.eps_a", case.active.eps_a),
-                    "active.center" => field("geometry.centre_y", case.geometry.centre_y),
-                    "pac.e" => pac.and_then(|p| field("active.pac.e", p.e)),
-                    "pac.theta_deg" => pac.and_then(|p| field("active.pac.theta_deg", p.theta_deg)),
-                    "pac.inner_axes" => pac.map(|p| {
-                        let v = case::axes(p.inner_semi_axes);
-                        ("active.pac.inner_semi_axes".to_string(), v)
-                    }),
-                    "pac.outer_axes" => pac.map(|p| {
-                        let v = case::axes(p.outer_semi_axes);
-                        ("active.pac.outer_semi_axes".to_string(), v)
-                    }),
-                    "bottom.e" => bottom.and_then(|b| field("active.bottom.e", b.e)),
-                    "bottom.theta_deg" => {
-                        bottom.and_then(|b| field("active.bottom.theta_deg", b.theta_deg))
-                    }
-                    _ => None,
-                })
-            })
-        },
-    ));
-    checks.push(layer_check("contact model", &["contact"], move || {
-        contact(case).validate().map_err(|e| {
-            physics_refusal(e, "contact", |name| match name {
-                "contact.mu_ct" => field("contact.mu_ct_n_m3", case.contact.mu_ct_n_m3),
-                "contact.eps" => field("contact.eps_ct", case.contact.eps_ct),
-                _ => None,
-            })
-        })
-    }));
-    checks.push(layer_check(
-        "adhesion model",
-        &["adhesion", "contact.eps_ct"],
-        move || {
-            let (Some(a), Some(written)) = (adhesion(case), case.adhesion.as_ref()) else {
-                return Ok(());
-            };
-            a.validate().map_err(|e| {
-                physics_refusal(e, "adhesion", |name| match name {
-                    "adhesion.e_f" => field("adhesion.e_f", written.e_f),
-                    "adhesion.eps" => field("adhesion.eps", written.eps),
-                    "adhesion.mu_as0" => field("adhesion.mu_as0_n_m3s", written.mu_as0_n_m3s),
-                    "adhesion.mu_as_max" => {
-                        field("adhesion.mu_as_max_n_m3", written.mu_as_max_n_m3)
-                    }
-                    "adhesion.exclude_substrate" => field("contact.eps_ct", case.contact.eps_ct),
-                    _ => None,
-                })
-            })
-        },
-    ));
-    checks.push(layer_check("viscosity model", &["viscosity"], move || {
-        viscosity(case).validate().map_err(|e| {
-            physics_refusal(e, "viscosity", |name| match name {
-                "lambda_f" => field("viscosity.lambda_f", case.viscosity.lambda_f),
-                "mu_f" => field("viscosity.mu_f", case.viscosity.mu_f),
-                _ => None,
-            })
-        })
-    }));
+    checks.extend([
+        layer_check(
+            "phase switches",
+            &["phases", "gravity.flip_duration"],
+            move || phases_refusal(case),
+        ),
+        layer_check("substrate model", &["substrate", "geometry"], move || {
+            substrate_refusal(case)
+        }),
+        layer_check(
+            "active-strain model",
+            &["active", "geometry.centre_y"],
+            move || active_refusal(case),
+        ),
+        layer_check("contact model", &["contact"], move || contact_refusal(case)),
+        layer_check(
+            "adhesion model",
+            &["adhesion", "contact.eps_ct"],
+            move || adhesion_refusal(case),
+        ),
+        layer_check("viscosity model", &["viscosity"], move || {
+            viscosity_refusal(case)
+        }),
+    ]);
     checks
+}
+
+/// The material law's check of the domain `domain`'s material `mat`
+/// ([`Yeoh::from_engineering`]), its error traced back to the case fields.
+fn material_refusal(
+    m: &case::Materials,
+    domain: &str,
+    mat: &case::Material,
+) -> Result<(), Refusal> {
+    Yeoh::from_engineering(mat.e, mat.nu, m.gamma, m.beta_fraction)
+        .map(drop)
+        .map_err(|e| {
+            physics_refusal(e, &format!("materials.{domain}"), |name| match name {
+                "E" => field(format!("materials.{domain}.e"), mat.e),
+                "nu" => field(format!("materials.{domain}.nu"), mat.nu),
+                "gamma" => field("materials.gamma", m.gamma),
+                "beta_fraction" => field("materials.beta_fraction", m.beta_fraction),
+                _ => None,
+            })
+        })
+}
+
+/// The phase switches' check ([`Phases::validate`]), its error traced back to the case
+/// fields.
+fn phases_refusal(case: &Case) -> Result<(), Refusal> {
+    let ph = &case.phases;
+    phases(case).validate().map_err(|e| {
+        physics_refusal(e, "phases", |name| match name {
+            "t_g0" => field("phases.t_g0", ph.t_g0),
+            "t_as0" => field("phases.t_as0", ph.t_as0),
+            "t_a0" | "flip.start" => field("phases.t_a0", ph.t_a0),
+            "flip.duration" => field("gravity.flip_duration", case.gravity.flip_duration),
+            _ => None,
+        })
+    })
+}
+
+/// The substrate model's check ([`Substrate::validate`]), its error traced back to the
+/// case fields.
+fn substrate_refusal(case: &Case) -> Result<(), Refusal> {
+    substrate(case).validate().map_err(|e| {
+        physics_refusal(e, "substrate", |name| match (&case.substrate, name) {
+            (case::Substrate::Flat(f), "y_s") => field("substrate.y_s", f.y_s),
+            (case::Substrate::Pillars(p), name) => match name {
+                "pillars.width" => field("substrate.width", p.width),
+                "pillars.spacing" => field("substrate.spacing", p.spacing),
+                "pillars.height" => field("substrate.height", p.height),
+                "pillars.q" => field("substrate.q", p.q),
+                "pillars.first_center" => field("substrate.first_center", p.first_center),
+                // Without an explicit y_top, the tops are placed from the gap.
+                "pillars.y_top" => match p.y_top {
+                    Some(y) => field("substrate.y_top", y),
+                    None => field("substrate.gap", p.gap),
+                },
+                _ => None,
+            },
+            _ => None,
+        })
+    })
+}
+
+/// The active-strain model's check ([`ActiveStrain::validate`]; none without active
+/// strain), its error traced back to the case fields.
+fn active_refusal(case: &Case) -> Result<(), Refusal> {
+    let Some(a) = active(case) else {
+        return Ok(());
+    };
+    a.validate().map_err(|e| {
+        let (pac, bottom) = (case.active.pac.as_ref(), case.active.bottom.as_ref());
+        physics_refusal(e, "active", |name| match name {
+            "active.eps" => field("active.eps_a", case.active.eps_a),
+            "active.center" => field("geometry.centre_y", case.geometry.centre_y),
+            "pac.e" => pac.and_then(|p| field("active.pac.e", p.e)),
+            "pac.theta_deg" => pac.and_then(|p| field("active.pac.theta_deg", p.theta_deg)),
+            "pac.inner_axes" => pac.map(|p| {
+                let v = case::axes(p.inner_semi_axes);
+                ("active.pac.inner_semi_axes".to_string(), v)
+            }),
+            "pac.outer_axes" => pac.map(|p| {
+                let v = case::axes(p.outer_semi_axes);
+                ("active.pac.outer_semi_axes".to_string(), v)
+            }),
+            "bottom.e" => bottom.and_then(|b| field("active.bottom.e", b.e)),
+            "bottom.theta_deg" => {
+                bottom.and_then(|b| field("active.bottom.theta_deg", b.theta_deg))
+            }
+            _ => None,
+        })
+    })
+}
+
+/// The contact model's check ([`physics::Contact::validate`]), its error traced back to
+/// the case fields.
+fn contact_refusal(case: &Case) -> Result<(), Refusal> {
+    contact(case).validate().map_err(|e| {
+        physics_refusal(e, "contact", |name| match name {
+            "contact.mu_ct" => field("contact.mu_ct_n_m3", case.contact.mu_ct_n_m3),
+            "contact.eps" => field("contact.eps_ct", case.contact.eps_ct),
+            _ => None,
+        })
+    })
+}
+
+/// The adhesion model's check ([`physics::Adhesion::validate`]; none without adhesion),
+/// its error traced back to the case fields.
+fn adhesion_refusal(case: &Case) -> Result<(), Refusal> {
+    let (Some(a), Some(written)) = (adhesion(case), case.adhesion.as_ref()) else {
+        return Ok(());
+    };
+    a.validate().map_err(|e| {
+        physics_refusal(e, "adhesion", |name| match name {
+            "adhesion.e_f" => field("adhesion.e_f", written.e_f),
+            "adhesion.eps" => field("adhesion.eps", written.eps),
+            "adhesion.mu_as0" => field("adhesion.mu_as0_n_m3s", written.mu_as0_n_m3s),
+            "adhesion.mu_as_max" => field("adhesion.mu_as_max_n_m3", written.mu_as_max_n_m3),
+            "adhesion.exclude_substrate" => field("contact.eps_ct", case.contact.eps_ct),
+            _ => None,
+        })
+    })
+}
+
+/// The viscosity model's check ([`Viscosity::validate`]), its error traced back to the
+/// case fields.
+fn viscosity_refusal(case: &Case) -> Result<(), Refusal> {
+    viscosity(case).validate().map_err(|e| {
+        physics_refusal(e, "viscosity", |name| match name {
+            "lambda_f" => field("viscosity.lambda_f", case.viscosity.lambda_f),
+            "mu_f" => field("viscosity.mu_f", case.viscosity.mu_f),
+            _ => None,
+        })
+    })
 }
 
 /// The mesh fields that refine the mesh, the one that refines most (relative to its

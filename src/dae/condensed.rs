@@ -139,6 +139,8 @@ impl CondensedLu {
         self.plan.as_ref().map(|p| p.condensed_nnz)
     }
 
+    /// Checks the layout and computes the plan and the condensed pattern (module
+    /// documentation); the error says why the pattern cannot be condensed.
     fn plan(pattern: &Pattern, blocks: &FirstOrderBlocks) -> Result<(Plan, Pattern), String> {
         let n = pattern.nrows();
         if pattern.ncols() != n {
@@ -148,150 +150,23 @@ impl CondensedLu {
                 pattern.ncols()
             ));
         }
-        let m = blocks.pairs.len();
-        // role[i]: NONE, or 2k for p_k, 2k + 1 for q_k.
-        let mut role = vec![NONE; n];
-        for (k, &[p, q]) in blocks.pairs.iter().enumerate() {
-            if p >= n || q >= n || p == q {
-                return Err(format!(
-                    "pair {k} = ({p}, {q}) is not two distinct unknowns of {n}"
-                ));
-            }
-            for (idx, r) in [(p, 2 * k), (q, 2 * k + 1)] {
-                if role[idx] != NONE {
-                    return Err(format!("unknown {idx} appears in two pairs"));
-                }
-                role[idx] = r;
-            }
-        }
-        let (p, q): (Vec<usize>, Vec<usize>) = blocks.pairs.iter().map(|&[p, q]| (p, q)).unzip();
-        let is_p = |i: usize| role[i] != NONE && role[i] % 2 == 0;
-        let is_q = |i: usize| role[i] != NONE && role[i] % 2 == 1;
-        let cp = pattern.col_ptr();
-        let ri = pattern.row_idx();
-        // Each kinematic row p_k has exactly the entries (p_k, p_k) and (p_k, q_k).
-        let mut seen = vec![0u8; m];
-        for j in 0..n {
-            for &i in &ri[cp[j]..cp[j + 1]] {
-                if is_p(i) {
-                    let k = role[i] / 2;
-                    if j != p[k] && j != q[k] {
-                        return Err(format!(
-                            "row {i} is declared kinematic (pair {k}) but has an entry in \
-                             column {j}, besides {} and {}",
-                            p[k], q[k]
-                        ));
-                    }
-                    seen[k] += 1;
-                }
-            }
-        }
-        if let Some(k) = seen.iter().position(|&s| s != 2) {
-            return Err(format!(
-                "kinematic row {} lacks its entry in column {} or {}",
-                p[k], p[k], q[k]
-            ));
-        }
-        let pos = |r: usize, c: usize| position(pattern, r, c).ok_or(());
-        let pos_pp: Vec<usize> = (0..m)
-            .map(|k| pos(p[k], p[k]))
-            .collect::<Result<_, _>>()
-            .map_err(|_| "kinematic diagonal missing".to_string())?;
-        let pos_pq: Vec<usize> = (0..m)
-            .map(|k| pos(p[k], q[k]))
-            .collect::<Result<_, _>>()
-            .map_err(|_| "kinematic velocity entry missing".to_string())?;
-
-        // Condensed numbering: columns are the unknowns that are not velocities, in order;
-        // the momentum row q_k takes the place of its position column p_k, every other
-        // kept row (not kinematic, not momentum) that of its own column.
-        let mut cidx = vec![NONE; n];
-        let mut col_of = Vec::with_capacity(n - m);
-        for j in 0..n {
-            if !is_q(j) {
-                cidx[j] = col_of.len();
-                col_of.push(j);
-            }
-        }
-        let nc = col_of.len();
-        let rr = |i: usize| -> usize {
-            if is_p(i) {
-                NONE
-            } else if is_q(i) {
-                cidx[p[role[i] / 2]]
-            } else {
-                cidx[i]
-            }
-        };
-        let mut row_of = vec![NONE; nc];
-        for i in 0..n {
-            let r = rr(i);
-            if r != NONE {
-                row_of[r] = i;
-            }
-        }
-
-        // Condensed pattern: column c gathers the kept rows of column col_of[c] and, for a
-        // position column p_k, of the velocity column q_k.
-        let mut col_ptr = Vec::with_capacity(nc + 1);
-        let mut row_idx = Vec::new();
-        col_ptr.push(0);
-        let mut rows: Vec<usize> = Vec::new();
-        for &j in &col_of {
-            rows.clear();
-            let push_col = |jj: usize, rows: &mut Vec<usize>| {
-                for &i in &ri[cp[jj]..cp[jj + 1]] {
-                    let r = rr(i);
-                    if r != NONE {
-                        rows.push(r);
-                    }
-                }
-            };
-            push_col(j, &mut rows);
-            if is_p(j) {
-                push_col(q[role[j] / 2], &mut rows);
-            }
-            rows.sort_unstable();
-            rows.dedup();
-            row_idx.extend_from_slice(&rows);
-            col_ptr.push(row_idx.len());
-        }
-        let condensed = Pattern::new_checked(nc, nc, col_ptr, None, row_idx);
-        let cpos = |r: usize, c: usize| {
-            position(&condensed, r, c).expect("condensed pattern holds every mapped entry")
-        };
-
-        let mut direct = Vec::new();
-        let mut velocity = Vec::new();
-        for j in 0..n {
-            for k in cp[j]..cp[j + 1] {
-                let r = rr(ri[k]);
-                if r == NONE {
-                    continue;
-                }
-                if is_q(j) {
-                    let pair = role[j] / 2;
-                    velocity.push(VelocityEntry {
-                        src: k,
-                        dst: cpos(r, cidx[p[pair]]),
-                        row: r,
-                        pair,
-                    });
-                } else {
-                    direct.push((k, cpos(r, cidx[j])));
-                }
-            }
-        }
+        let roles = Roles::new(blocks, n)?;
+        let (pos_pp, pos_pq) = roles.kinematic_positions(pattern)?;
+        let numbering = Numbering::new(&roles, n);
+        let condensed = numbering.pattern(&roles, pattern);
+        let (direct, velocity) = numbering.value_map(&roles, pattern, &condensed);
+        let m = roles.p.len();
+        let nc = numbering.col_of.len();
         let condensed_nnz = condensed.compute_nnz();
         let plan = Plan {
             n,
             nnz: pattern.compute_nnz(),
-            p,
-            q,
+            p: roles.p,
+            q: roles.q,
             pos_pp,
             pos_pq,
-            row_of,
-            col_of,
+            row_of: numbering.row_of,
+            col_of: numbering.col_of,
             vel_values: vec![0.0; velocity.len()],
             direct,
             velocity,
@@ -404,6 +279,213 @@ impl LinearSolver for CondensedLu {
 
     fn name(&self) -> &'static str {
         "faer-condensed"
+    }
+}
+
+/// The part each unknown plays in the (position, velocity) pairs.
+struct Roles {
+    /// NONE, or 2k for p_k, 2k + 1 for q_k.
+    role: Vec<usize>,
+    /// Position unknowns (kinematic rows) p_k and velocity unknowns q_k.
+    p: Vec<usize>,
+    q: Vec<usize>,
+}
+
+impl Roles {
+    /// The roles of `n` unknowns in the pairs `blocks`; refuses a pair that is not two
+    /// distinct unknowns and an unknown in two pairs.
+    fn new(blocks: &FirstOrderBlocks, n: usize) -> Result<Self, String> {
+        let mut role = vec![NONE; n];
+        for (k, &[p, q]) in blocks.pairs.iter().enumerate() {
+            if p >= n || q >= n || p == q {
+                return Err(format!(
+                    "pair {k} = ({p}, {q}) is not two distinct unknowns of {n}"
+                ));
+            }
+            for (idx, r) in [(p, 2 * k), (q, 2 * k + 1)] {
+                if role[idx] != NONE {
+                    return Err(format!("unknown {idx} appears in two pairs"));
+                }
+                role[idx] = r;
+            }
+        }
+        let (p, q): (Vec<usize>, Vec<usize>) = blocks.pairs.iter().map(|&[p, q]| (p, q)).unzip();
+        Ok(Self { role, p, q })
+    }
+
+    /// Whether unknown i is a position p_k (its row is kinematic).
+    fn is_p(&self, i: usize) -> bool {
+        self.role[i] != NONE && self.role[i] % 2 == 0
+    }
+
+    /// Whether unknown i is a velocity q_k (its row is a momentum row).
+    fn is_q(&self, i: usize) -> bool {
+        self.role[i] != NONE && self.role[i] % 2 == 1
+    }
+
+    /// The pair k of an unknown that belongs to one.
+    fn pair(&self, i: usize) -> usize {
+        self.role[i] / 2
+    }
+
+    /// Checks that each kinematic row p_k has exactly the entries (p_k, p_k) and
+    /// (p_k, q_k), and returns their positions in J's values: α_k's and γ_k's.
+    fn kinematic_positions(&self, pattern: &Pattern) -> Result<(Vec<usize>, Vec<usize>), String> {
+        let (p, q) = (&self.p, &self.q);
+        let m = p.len();
+        let cp = pattern.col_ptr();
+        let ri = pattern.row_idx();
+        let mut seen = vec![0u8; m];
+        for j in 0..pattern.ncols() {
+            for &i in &ri[cp[j]..cp[j + 1]] {
+                if self.is_p(i) {
+                    let k = self.pair(i);
+                    if j != p[k] && j != q[k] {
+                        return Err(format!(
+                            "row {i} is declared kinematic (pair {k}) but has an entry in \
+                             column {j}, besides {} and {}",
+                            p[k], q[k]
+                        ));
+                    }
+                    seen[k] += 1;
+                }
+            }
+        }
+        if let Some(k) = seen.iter().position(|&s| s != 2) {
+            return Err(format!(
+                "kinematic row {} lacks its entry in column {} or {}",
+                p[k], p[k], q[k]
+            ));
+        }
+        let pos = |r: usize, c: usize| position(pattern, r, c).ok_or(());
+        let pos_pp: Vec<usize> = (0..m)
+            .map(|k| pos(p[k], p[k]))
+            .collect::<Result<_, _>>()
+            .map_err(|_| "kinematic diagonal missing".to_string())?;
+        let pos_pq: Vec<usize> = (0..m)
+            .map(|k| pos(p[k], q[k]))
+            .collect::<Result<_, _>>()
+            .map_err(|_| "kinematic velocity entry missing".to_string())?;
+        Ok((pos_pp, pos_pq))
+    }
+}
+
+/// The condensed numbering: columns are the unknowns that are not velocities, in order;
+/// the momentum row q_k takes the place of its position column p_k, every other kept row
+/// (not kinematic, not momentum) that of its own column.
+struct Numbering {
+    /// Condensed column of each original column (NONE for a velocity).
+    cidx: Vec<usize>,
+    /// Condensed row of each original row (NONE for a kinematic row).
+    crow: Vec<usize>,
+    /// Original row of each condensed row, original column of each condensed column.
+    row_of: Vec<usize>,
+    col_of: Vec<usize>,
+}
+
+impl Numbering {
+    /// The condensed numbering of `n` unknowns with the pairs' `roles`.
+    fn new(roles: &Roles, n: usize) -> Self {
+        let mut cidx = vec![NONE; n];
+        let mut col_of = Vec::with_capacity(n - roles.p.len());
+        for j in 0..n {
+            if !roles.is_q(j) {
+                cidx[j] = col_of.len();
+                col_of.push(j);
+            }
+        }
+        let crow: Vec<usize> = (0..n)
+            .map(|i| {
+                if roles.is_p(i) {
+                    NONE
+                } else if roles.is_q(i) {
+                    cidx[roles.p[roles.pair(i)]]
+                } else {
+                    cidx[i]
+                }
+            })
+            .collect();
+        let mut row_of = vec![NONE; col_of.len()];
+        for (i, &r) in crow.iter().enumerate() {
+            if r != NONE {
+                row_of[r] = i;
+            }
+        }
+        Self {
+            cidx,
+            crow,
+            row_of,
+            col_of,
+        }
+    }
+
+    /// The condensed pattern: column c gathers the kept rows of column col_of[c] and, for
+    /// a position column p_k, of the velocity column q_k (S = J_(·,u) − (α/γ) J_(·,v)).
+    fn pattern(&self, roles: &Roles, pattern: &Pattern) -> Pattern {
+        let cp = pattern.col_ptr();
+        let ri = pattern.row_idx();
+        let nc = self.col_of.len();
+        let mut col_ptr = Vec::with_capacity(nc + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        let mut rows: Vec<usize> = Vec::new();
+        for &j in &self.col_of {
+            rows.clear();
+            let push_col = |jj: usize, rows: &mut Vec<usize>| {
+                for &i in &ri[cp[jj]..cp[jj + 1]] {
+                    let r = self.crow[i];
+                    if r != NONE {
+                        rows.push(r);
+                    }
+                }
+            };
+            push_col(j, &mut rows);
+            if roles.is_p(j) {
+                push_col(roles.q[roles.pair(j)], &mut rows);
+            }
+            rows.sort_unstable();
+            rows.dedup();
+            row_idx.extend_from_slice(&rows);
+            col_ptr.push(row_idx.len());
+        }
+        Pattern::new_checked(nc, nc, col_ptr, None, row_idx)
+    }
+
+    /// Where each kept entry of J goes in the condensed values: the entries copied as
+    /// they are, and the velocity-column entries.
+    fn value_map(
+        &self,
+        roles: &Roles,
+        pattern: &Pattern,
+        condensed: &Pattern,
+    ) -> (Vec<(usize, usize)>, Vec<VelocityEntry>) {
+        let cp = pattern.col_ptr();
+        let ri = pattern.row_idx();
+        let cpos = |r: usize, c: usize| {
+            position(condensed, r, c).expect("condensed pattern holds every mapped entry")
+        };
+        let mut direct = Vec::new();
+        let mut velocity = Vec::new();
+        for j in 0..pattern.ncols() {
+            for k in cp[j]..cp[j + 1] {
+                let r = self.crow[ri[k]];
+                if r == NONE {
+                    continue;
+                }
+                if roles.is_q(j) {
+                    let pair = roles.pair(j);
+                    velocity.push(VelocityEntry {
+                        src: k,
+                        dst: cpos(r, self.cidx[roles.p[pair]]),
+                        row: r,
+                        pair,
+                    });
+                } else {
+                    direct.push((k, cpos(r, self.cidx[j])));
+                }
+            }
+        }
+        (direct, velocity)
     }
 }
 

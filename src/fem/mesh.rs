@@ -708,158 +708,219 @@ impl Builder {
     }
 }
 
+/// The ring radii, inside out: the nucleus r_n, then the `layers` + 1 membrane rings from
+/// r_cp to r_c, `t_layer` apart; each with whether it is a physical circle (curved).
+fn ring_radii(prm: &MeshParams, layers: usize, t_layer: f64) -> Vec<(f64, bool)> {
+    let mut radii = vec![(prm.r_n, true)];
+    for k in 0..=layers {
+        let r = if k == layers {
+            prm.r_c
+        } else {
+            prm.r_cp + k as f64 * t_layer
+        };
+        radii.push((r, k == 0 || k == layers));
+    }
+    radii
+}
+
+/// The vertex angles of each ring, bottom (−π/2) to top (π/2): the nucleus spaced by h
+/// along its arc; the membrane rings spaced by min(h, MEMBRANE_ASPECT · t_layer) along
+/// the mid-membrane circle, alternate rings staggered by half a spacing (module
+/// documentation, step 2), the outer ring r_c on the unstaggered angles.
+fn ring_angles(
+    prm: &MeshParams,
+    radii: &[(f64, bool)],
+    layers: usize,
+    t_layer: f64,
+) -> Vec<Vec<f64>> {
+    let c = prm.center;
+    let h = |y: f64| prm.size_at(y);
+    let arc_y = |r: f64, s: f64| c[1] + r * (s / r - FRAC_PI_2).sin();
+    let to_angles =
+        |r: f64, div: Vec<f64>| -> Vec<f64> { div.iter().map(|s| s / r - FRAC_PI_2).collect() };
+    // Membrane base angles, from the spacing along the mid-membrane circle.
+    let r_mid = 0.5 * (prm.r_cp + prm.r_c);
+    let l_cap = MEMBRANE_ASPECT * t_layer;
+    let base = to_angles(
+        r_mid,
+        graded_division(
+            PI * r_mid,
+            |s| h(arc_y(r_mid, s)).min(l_cap),
+            MIN_CIRCLE_SEGMENTS,
+        ),
+    );
+    let staggered = {
+        let mut a = vec![-FRAC_PI_2];
+        a.extend(base.windows(2).map(|w| 0.5 * (w[0] + w[1])));
+        a.push(FRAC_PI_2);
+        a
+    };
+    radii
+        .iter()
+        .enumerate()
+        .map(|(k, &(r, _))| {
+            if k == 0 {
+                to_angles(
+                    r,
+                    graded_division(PI * r, |s| h(arc_y(r, s)), MIN_CIRCLE_SEGMENTS),
+                )
+            } else if (layers - (k - 1)) % 2 == 0 {
+                base.clone()
+            } else {
+                staggered.clone()
+            }
+        })
+        .collect()
+}
+
+/// The key vertices on the symmetry line x = c_x: their heights, ascending, and their
+/// vertex indices.
+struct Keys {
+    ys: Vec<f64>,
+    ids: Vec<usize>,
+}
+
+impl Keys {
+    /// The key vertex at height exactly `y`.
+    fn of(&self, y: f64) -> Result<usize, MeshError> {
+        self.ys
+            .iter()
+            .position(|&k| k == y)
+            .map(|i| self.ids[i])
+            .ok_or_else(|| MeshError::Inconsistent(format!("no key vertex at y = {y}")))
+    }
+}
+
+/// Adds the vertices of the symmetry line x = c_x and its constraint edges, and returns
+/// its key vertices (each ring's ends and the centre). Between keys the line is graded
+/// with size min(h(y), l_k + ½|y − y_k|) over the ring ends y_k, l_k being the length of
+/// the ring's segment there: a ring segment meets x = 0 at a right angle, and a much
+/// longer segment along x = 0 would leave a skinny corner triangle that the refinement
+/// cannot fix without splitting a constraint.
+fn symmetry_line(
+    b: &mut Builder,
+    prm: &MeshParams,
+    radii: &[(f64, bool)],
+    ring_angles: &[Vec<f64>],
+) -> Keys {
+    let c = prm.center;
+    let mut ends: Vec<(f64, f64)> = Vec::new();
+    for (&(r, _), ang) in radii.iter().zip(ring_angles) {
+        let n = ang.len();
+        ends.push((c[1] - r, r * (ang[1] - ang[0])));
+        ends.push((c[1] + r, r * (ang[n - 1] - ang[n - 2])));
+    }
+    let h_sym = |y: f64| {
+        ends.iter()
+            .map(|&(yk, lk)| lk + 0.5 * (y - yk).abs())
+            .fold(prm.size_at(y), f64::min)
+    };
+    let mut keys: Vec<f64> = ends.iter().map(|e| e.0).collect();
+    keys.push(c[1]);
+    keys.sort_by(f64::total_cmp);
+    let mut sym_ids = Vec::new();
+    let mut key_id: Vec<usize> = Vec::with_capacity(keys.len());
+    for (i, &y) in keys.iter().enumerate() {
+        if i > 0 {
+            let y0 = keys[i - 1];
+            let div = graded_division(y - y0, |s| h_sym(y0 + s), 1);
+            for s in &div[1..div.len() - 1] {
+                sym_ids.push(b.add([c[0], y0 + s]));
+            }
+        }
+        let id = b.add([c[0], y]);
+        sym_ids.push(id);
+        key_id.push(id);
+    }
+    b.chain(&sym_ids);
+    Keys {
+        ys: keys,
+        ids: key_id,
+    }
+}
+
+/// Adds each ring's vertices about the centre `c` at its `angles` and its constraint
+/// edges; the ring's ends are the key vertices on x = c_x.
+fn ring_vertices(
+    b: &mut Builder,
+    c: [f64; 2],
+    radii: &[(f64, bool)],
+    ring_angles: Vec<Vec<f64>>,
+    keys: &Keys,
+) -> Result<Vec<Ring>, MeshError> {
+    let mut rings: Vec<Ring> = Vec::new();
+    for (&(r, curved), angles) in radii.iter().zip(ring_angles) {
+        let n = angles.len();
+        let mut ids = Vec::with_capacity(n);
+        ids.push(keys.of(c[1] - r)?);
+        for &a in &angles[1..n - 1] {
+            ids.push(b.add([c[0] + r * a.cos(), c[1] + r * a.sin()]));
+        }
+        ids.push(keys.of(c[1] + r)?);
+        b.chain(&ids);
+        rings.push(Ring {
+            radius: r,
+            curved,
+            vertices: ids,
+            angles,
+        });
+    }
+    Ok(rings)
+}
+
+/// Adds the interior lattice inside r_cp (module documentation, step 4): rows √3/2 · h
+/// apart, spacing h along a row, alternate rows shifted by h/2, keeping the points at
+/// least LATTICE_CLEARANCE · h from x = c_x and from the circles r_n and r_cp.
+fn interior_lattice(b: &mut Builder, prm: &MeshParams) {
+    let c = prm.center;
+    let h = |y: f64| prm.size_at(y);
+    let interfaces = [prm.r_n, prm.r_cp];
+    let mut y = c[1] - prm.r_cp;
+    let mut row = 0usize;
+    while y < c[1] + prm.r_cp {
+        let hy = h(y);
+        let mut x = if row % 2 == 0 { hy } else { 0.5 * hy };
+        while x < prm.r_cp {
+            let r = x.hypot(y - c[1]);
+            let clear = x >= LATTICE_CLEARANCE * hy
+                && r < prm.r_cp
+                && interfaces
+                    .iter()
+                    .all(|&ri| (r - ri).abs() >= LATTICE_CLEARANCE * hy);
+            if clear {
+                b.add([c[0] + x, y]);
+            }
+            x += hy;
+        }
+        y += 0.5 * 3f64.sqrt() * h(y + 0.25 * 3f64.sqrt() * hy);
+        row += 1;
+    }
+}
+
 impl Mesh {
     /// Generates the mesh described in the module documentation.
     pub fn generate(params: &MeshParams) -> Result<Mesh, MeshError> {
         params.validate()?;
-        let prm = params;
-        let c = prm.center;
-        let h = |y: f64| prm.size_at(y);
-        let layers = prm.membrane_layers();
-        let t_layer = (prm.r_c - prm.r_cp) / layers as f64;
+        let layers = params.membrane_layers();
+        let t_layer = (params.r_c - params.r_cp) / layers as f64;
         let mut b = Builder {
             verts: Vec::new(),
             constraints: Vec::new(),
         };
-
-        // Ring radii, inside out: nucleus, membrane rings r_cp … r_c.
-        let mut radii = vec![(prm.r_n, true)];
-        for k in 0..=layers {
-            let r = if k == layers {
-                prm.r_c
-            } else {
-                prm.r_cp + k as f64 * t_layer
-            };
-            radii.push((r, k == 0 || k == layers));
-        }
-
+        let radii = ring_radii(params, layers, t_layer);
         // 1. Ring angles, bottom (−π/2) to top (π/2).
-        let arc_y = |r: f64, s: f64| c[1] + r * (s / r - FRAC_PI_2).sin();
-        let to_angles =
-            |r: f64, div: Vec<f64>| -> Vec<f64> { div.iter().map(|s| s / r - FRAC_PI_2).collect() };
-        // Membrane base angles, from the spacing along the mid-membrane circle.
-        let r_mid = 0.5 * (prm.r_cp + prm.r_c);
-        let l_cap = MEMBRANE_ASPECT * t_layer;
-        let base = to_angles(
-            r_mid,
-            graded_division(
-                PI * r_mid,
-                |s| h(arc_y(r_mid, s)).min(l_cap),
-                MIN_CIRCLE_SEGMENTS,
-            ),
-        );
-        let staggered = {
-            let mut a = vec![-FRAC_PI_2];
-            a.extend(base.windows(2).map(|w| 0.5 * (w[0] + w[1])));
-            a.push(FRAC_PI_2);
-            a
-        };
-        let ring_angles: Vec<Vec<f64>> = radii
-            .iter()
-            .enumerate()
-            .map(|(k, &(r, _))| {
-                if k == 0 {
-                    to_angles(
-                        r,
-                        graded_division(PI * r, |s| h(arc_y(r, s)), MIN_CIRCLE_SEGMENTS),
-                    )
-                } else if (layers - (k - 1)) % 2 == 0 {
-                    base.clone()
-                } else {
-                    staggered.clone()
-                }
-            })
-            .collect();
-
-        // 2. Symmetry line: key heights (each ring's ends and the centre), graded between
-        // with size min(h(y), l_k + ½|y − y_k|) over the ring ends y_k, l_k being the length
-        // of the ring's segment there: a ring segment meets x = 0 at a right angle, and a
-        // much longer segment along x = 0 would leave a skinny corner triangle that the
-        // refinement cannot fix without splitting a constraint.
-        let mut ends: Vec<(f64, f64)> = Vec::new();
-        for (&(r, _), ang) in radii.iter().zip(&ring_angles) {
-            let n = ang.len();
-            ends.push((c[1] - r, r * (ang[1] - ang[0])));
-            ends.push((c[1] + r, r * (ang[n - 1] - ang[n - 2])));
-        }
-        let h_sym = |y: f64| {
-            ends.iter()
-                .map(|&(yk, lk)| lk + 0.5 * (y - yk).abs())
-                .fold(h(y), f64::min)
-        };
-        let mut keys: Vec<f64> = ends.iter().map(|e| e.0).collect();
-        keys.push(c[1]);
-        keys.sort_by(f64::total_cmp);
-        let mut sym_ids = Vec::new();
-        let mut key_id: Vec<usize> = Vec::with_capacity(keys.len());
-        for (i, &y) in keys.iter().enumerate() {
-            if i > 0 {
-                let y0 = keys[i - 1];
-                let div = graded_division(y - y0, |s| h_sym(y0 + s), 1);
-                for s in &div[1..div.len() - 1] {
-                    sym_ids.push(b.add([c[0], y0 + s]));
-                }
-            }
-            let id = b.add([c[0], y]);
-            sym_ids.push(id);
-            key_id.push(id);
-        }
-        let key_of = |y: f64| -> Result<usize, MeshError> {
-            keys.iter()
-                .position(|&k| k == y)
-                .map(|i| key_id[i])
-                .ok_or_else(|| MeshError::Inconsistent(format!("no key vertex at y = {y}")))
-        };
-        b.chain(&sym_ids);
-
+        let ring_angles = ring_angles(params, &radii, layers, t_layer);
+        // 2. Symmetry line, with the rings' ends and the centre as key vertices.
+        let keys = symmetry_line(&mut b, params, &radii, &ring_angles);
         // 3. Ring vertices; the ends are the key vertices on x = 0.
-        let mut rings: Vec<Ring> = Vec::new();
-        for (&(r, curved), angles) in radii.iter().zip(ring_angles) {
-            let n = angles.len();
-            let mut ids = Vec::with_capacity(n);
-            ids.push(key_of(c[1] - r)?);
-            for &a in &angles[1..n - 1] {
-                ids.push(b.add([c[0] + r * a.cos(), c[1] + r * a.sin()]));
-            }
-            ids.push(key_of(c[1] + r)?);
-            b.chain(&ids);
-            rings.push(Ring {
-                radius: r,
-                curved,
-                vertices: ids,
-                angles,
-            });
-        }
-
+        let rings = ring_vertices(&mut b, params.center, &radii, ring_angles, &keys)?;
         // 4. Interior lattice, rows graded in y.
-        let interfaces = [prm.r_n, prm.r_cp];
-        let mut y = c[1] - prm.r_cp;
-        let mut row = 0usize;
-        while y < c[1] + prm.r_cp {
-            let hy = h(y);
-            let mut x = if row % 2 == 0 { hy } else { 0.5 * hy };
-            while x < prm.r_cp {
-                let r = x.hypot(y - c[1]);
-                let clear = x >= LATTICE_CLEARANCE * hy
-                    && r < prm.r_cp
-                    && interfaces
-                        .iter()
-                        .all(|&ri| (r - ri).abs() >= LATTICE_CLEARANCE * hy);
-                if clear {
-                    b.add([c[0] + x, y]);
-                }
-                x += hy;
-            }
-            y += 0.5 * 3f64.sqrt() * h(y + 0.25 * 3f64.sqrt() * hy);
-            row += 1;
-        }
-
+        interior_lattice(&mut b, params);
         // 5. Constrained Delaunay triangulation and refinement.
-        let (verts, tris) = triangulate(&b.verts, &b.constraints, prm.min_angle_deg)?;
-
+        let (verts, tris) = triangulate(&b.verts, &b.constraints, params.min_angle_deg)?;
         // 6.–7. Domains, mid-nodes and the circles' edges.
-        let parts = quadratic_elements(prm, &rings, verts, &tris)?;
-        Mesh::assemble(parts, |_, y, _| key_of(y))
+        let parts = quadratic_elements(params, &rings, verts, &tris)?;
+        Mesh::assemble(parts, |_, y, _| keys.of(y))
     }
 
     /// Completes a mesh from the parts a builder (the generator, the gmsh reader) made:

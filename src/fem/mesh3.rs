@@ -793,6 +793,70 @@ fn face_key(f: &[usize; 6]) -> [usize; 3] {
     k
 }
 
+/// How far a node read from a mesh file (its coordinates rounded there) may lie from a
+/// circle or a named height and still count as on it: 10⁻⁶ r_c.
+fn fit_tolerance(params: &Mesh3Params) -> f64 {
+    1e-6 * params.r_c
+}
+
+/// Snaps the nodes within 10⁻⁹ r_c of a symmetry plane x = c_x or z = c_z onto it (the
+/// symmetry sets are those exactly on it); refuses a node outside the quarter.
+fn snap_to_symmetry_planes(params: &Mesh3Params, nodes: &mut [[f64; 3]]) -> Result<(), String> {
+    let c = params.center;
+    let snap = 1e-9 * params.r_c;
+    for (i, p) in nodes.iter_mut().enumerate() {
+        for k in [0, 2] {
+            if (p[k] - c[k]).abs() <= snap {
+                p[k] = c[k];
+            } else if p[k] < c[k] {
+                return Err(format!(
+                    "node {i} at {p:?} is outside the quarter x ≥ c_x, z ≥ c_z"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Checks that every tetrahedron's vertices lie inside r_c and on its domain's side of
+/// the interfaces r_n and r_cp (within the fit tolerance): the mesh fits the cell.
+fn check_vertex_radii(
+    params: &Mesh3Params,
+    nodes: &[[f64; 3]],
+    elements: &[[usize; 10]],
+    domains: &[Domain],
+) -> Result<(), String> {
+    let tol = fit_tolerance(params);
+    for (e, (el, d)) in elements.iter().zip(domains).enumerate() {
+        for &n in &el[..4] {
+            let r = norm(sub(nodes[n], params.center));
+            let ok = r <= params.r_c + tol
+                && match d {
+                    Domain::Nucleus => r <= params.r_n + tol,
+                    Domain::Cytoplasm => r >= params.r_n - tol && r <= params.r_cp + tol,
+                    Domain::Membrane => r >= params.r_cp - tol,
+                };
+            if !ok {
+                return Err(format!(
+                    "{d} tetrahedron {e} has a vertex at r = {r} from the centre: the mesh does not fit the cell (r_n {}, r_cp {}, r_c {})",
+                    params.r_n, params.r_cp, params.r_c
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Reverses the tetrahedra of negative volume (vertices 1 and 2 swapped, with their
+/// mid-nodes), so that every element is positively oriented.
+fn orient_positively(nodes: &[[f64; 3]], elements: &mut [[usize; 10]]) {
+    for el in elements.iter_mut() {
+        if six_volume([0, 1, 2, 3].map(|k| nodes[el[k]])) < 0.0 {
+            *el = FLIP.map(|k| el[k]);
+        }
+    }
+}
+
 /// Radius ratio γ = 3 r_in / r_circ and the six dihedral angles (radians) of the straight
 /// tetrahedron p (any orientation).
 fn tet_shape(p: [[f64; 3]; 4]) -> (f64, [f64; 6]) {
@@ -881,48 +945,9 @@ impl Mesh3 {
             line,
             message,
         };
-        let c = params.center;
-        let snap = 1e-9 * params.r_c;
-        let tol = 1e-6 * params.r_c;
-        for (i, p) in nodes.iter_mut().enumerate() {
-            for k in [0, 2] {
-                if (p[k] - c[k]).abs() <= snap {
-                    p[k] = c[k];
-                } else if p[k] < c[k] {
-                    return Err(ferr(
-                        0,
-                        format!("node {i} at {p:?} is outside the quarter x ≥ c_x, z ≥ c_z"),
-                    ));
-                }
-            }
-        }
-        let radius = |p: [f64; 3]| norm(sub(p, c));
-        // Vertices inside r_c and on their domain's side of the interfaces.
-        for (e, (el, d)) in elements.iter().zip(&domains).enumerate() {
-            for &n in &el[..4] {
-                let r = radius(nodes[n]);
-                let ok = r <= params.r_c + tol
-                    && match d {
-                        Domain::Nucleus => r <= params.r_n + tol,
-                        Domain::Cytoplasm => r >= params.r_n - tol && r <= params.r_cp + tol,
-                        Domain::Membrane => r >= params.r_cp - tol,
-                    };
-                if !ok {
-                    return Err(ferr(
-                        0,
-                        format!(
-                            "{d} tetrahedron {e} has a vertex at r = {r} from the centre: the mesh does not fit the cell (r_n {}, r_cp {}, r_c {})",
-                            params.r_n, params.r_cp, params.r_c
-                        ),
-                    ));
-                }
-            }
-        }
-        for el in elements.iter_mut() {
-            if six_volume([0, 1, 2, 3].map(|k| nodes[el[k]])) < 0.0 {
-                *el = FLIP.map(|k| el[k]);
-            }
-        }
+        snap_to_symmetry_planes(params, &mut nodes).map_err(|m| ferr(0, m))?;
+        check_vertex_radii(params, &nodes, &elements, &domains).map_err(|m| ferr(0, m))?;
+        orient_positively(&nodes, &mut elements);
         let mut mesh = Mesh3 {
             params: params.clone(),
             nodes,
@@ -940,78 +965,11 @@ impl Mesh3 {
             },
         };
         let boundary = mesh.check_conformity().map_err(|m| ferr(0, m))?;
-        // Outer faces: boundary faces of the mesh on r = r_c, oriented outward.
-        let mut outer = Vec::with_capacity(faces.len());
-        for (f, line) in faces {
-            let Some(bf) = boundary.get(&face_key(f)) else {
-                return Err(ferr(
-                    *line,
-                    "outer triangle is not a boundary face of the tetrahedra".into(),
-                ));
-            };
-            // The tetrahedron's face, with its own mid-nodes, must be this triangle.
-            let mut fm = [f[3], f[4], f[5]];
-            let mut bm = [bf[3], bf[4], bf[5]];
-            fm.sort_unstable();
-            bm.sort_unstable();
-            if fm != bm {
-                return Err(ferr(
-                    *line,
-                    "outer triangle's mid-nodes are not those of the tetrahedron's face".into(),
-                ));
-            }
-            for &v in &f[..6] {
-                let r = radius(mesh.nodes[v]);
-                if (r - params.r_c).abs() > tol {
-                    return Err(ferr(
-                        *line,
-                        format!(
-                            "outer triangle node at r = {r}, not on r_c = {}",
-                            params.r_c
-                        ),
-                    ));
-                }
-            }
-            outer.push(*bf);
-        }
-        mesh.outer_faces = outer;
+        mesh.outer_faces = mesh
+            .outer_faces_of(&boundary, faces)
+            .map_err(|(line, m)| ferr(line, m))?;
         mesh.set_symmetry_sets();
-        // Named points: vertices on the axis, their heights snapped exactly.
-        let mut on_axis: Vec<usize> = mesh
-            .elements
-            .iter()
-            .flat_map(|el| el[..4].iter().copied())
-            .filter(|&n| mesh.nodes[n][0] == c[0] && mesh.nodes[n][2] == c[2])
-            .collect();
-        on_axis.sort_unstable();
-        on_axis.dedup();
-        let mut find = |y: f64, what: &str| {
-            let found = on_axis
-                .iter()
-                .copied()
-                .find(|&n| (mesh.nodes[n][1] - y).abs() <= tol);
-            match found {
-                Some(n) => {
-                    mesh.nodes[n][1] = y;
-                    Ok(n)
-                }
-                None => Err(ferr(
-                    0,
-                    format!(
-                        "no vertex at the {what} (x = {}, y = {y}, z = {})",
-                        c[0], c[2]
-                    ),
-                )),
-            }
-        };
-        let points = NamedPoints {
-            centre: find(c[1], "centre")?,
-            nucleus_top: find(c[1] + params.r_n, "nucleus top")?,
-            nucleus_bottom: find(c[1] - params.r_n, "nucleus bottom")?,
-            cell_bottom: find(c[1] - params.r_c, "cell bottom")?,
-            cell_top: find(c[1] + params.r_c, "cell top")?,
-        };
-        mesh.points = points;
+        mesh.points = mesh.snap_named_points().map_err(|m| ferr(0, m))?;
         mesh.check_jacobians()?;
         Ok(mesh)
     }
@@ -1025,6 +983,90 @@ impl Mesh3 {
         self.symmetry_z = (0..self.nodes.len())
             .filter(|&n| self.nodes[n][2] == c[2])
             .collect();
+    }
+
+    /// The outer faces from a file's outer triangles `faces` (with their file lines): each
+    /// must be a boundary face of the tetrahedra (in `boundary`) with the same mid-nodes,
+    /// on r = r_c; returned as the tetrahedra's faces, oriented outward. The error is the
+    /// file line and what is wrong.
+    fn outer_faces_of(
+        &self,
+        boundary: &HashMap<[usize; 3], [usize; 6]>,
+        faces: &[([usize; 6], usize)],
+    ) -> Result<Vec<[usize; 6]>, (usize, String)> {
+        let (c, r_c) = (self.params.center, self.params.r_c);
+        let tol = fit_tolerance(&self.params);
+        let mut outer = Vec::with_capacity(faces.len());
+        for (f, line) in faces {
+            let Some(bf) = boundary.get(&face_key(f)) else {
+                return Err((
+                    *line,
+                    "outer triangle is not a boundary face of the tetrahedra".into(),
+                ));
+            };
+            // The tetrahedron's face, with its own mid-nodes, must be this triangle.
+            let mut fm = [f[3], f[4], f[5]];
+            let mut bm = [bf[3], bf[4], bf[5]];
+            fm.sort_unstable();
+            bm.sort_unstable();
+            if fm != bm {
+                return Err((
+                    *line,
+                    "outer triangle's mid-nodes are not those of the tetrahedron's face".into(),
+                ));
+            }
+            for &v in &f[..6] {
+                let r = norm(sub(self.nodes[v], c));
+                if (r - r_c).abs() > tol {
+                    return Err((
+                        *line,
+                        format!("outer triangle node at r = {r}, not on r_c = {r_c}"),
+                    ));
+                }
+            }
+            outer.push(*bf);
+        }
+        Ok(outer)
+    }
+
+    /// The named points: vertices on the axis x = c_x, z = c_z within the fit tolerance of
+    /// the centre's and the circles' poles' heights, their heights snapped exactly.
+    fn snap_named_points(&mut self) -> Result<NamedPoints, String> {
+        let c = self.params.center;
+        let (r_n, r_c) = (self.params.r_n, self.params.r_c);
+        let tol = fit_tolerance(&self.params);
+        let mut on_axis: Vec<usize> = self
+            .elements
+            .iter()
+            .flat_map(|el| el[..4].iter().copied())
+            .filter(|&n| self.nodes[n][0] == c[0] && self.nodes[n][2] == c[2])
+            .collect();
+        on_axis.sort_unstable();
+        on_axis.dedup();
+        let nodes = &mut self.nodes;
+        let mut find = |y: f64, what: &str| {
+            let found = on_axis
+                .iter()
+                .copied()
+                .find(|&n| (nodes[n][1] - y).abs() <= tol);
+            match found {
+                Some(n) => {
+                    nodes[n][1] = y;
+                    Ok(n)
+                }
+                None => Err(format!(
+                    "no vertex at the {what} (x = {}, y = {y}, z = {})",
+                    c[0], c[2]
+                )),
+            }
+        };
+        Ok(NamedPoints {
+            centre: find(c[1], "centre")?,
+            nucleus_top: find(c[1] + r_n, "nucleus top")?,
+            nucleus_bottom: find(c[1] - r_n, "nucleus bottom")?,
+            cell_bottom: find(c[1] - r_c, "cell bottom")?,
+            cell_top: find(c[1] + r_c, "cell top")?,
+        })
     }
 
     /// Checks that every edge has one mid-node and every face belongs to one or two

@@ -216,11 +216,25 @@ impl<D: Dae> Ida<D> {
         }
     }
 
+    /// Creates IDA's memory on the initial values and configures it from `opts`: the
+    /// tolerances, our linear solver, the step limits, the differential components and
+    /// constraints, and (with `opts.calc_ic`) the corrected initial conditions.
     fn setup(&mut self, opts: &IdaOptions, t0: f64) -> Result<(), IntegratorError> {
-        let n = self.user.dae.size();
-        // SAFETY: all pointers passed are valid for the calls; the user data box and the
-        // LsState inside it never move while IDA holds pointers to them; vectors passed to
-        // IDASet* functions are copied by IDA.
+        self.create_memory(opts, t0)?;
+        self.attach_linear_solver(t0)?;
+        self.set_step_limits(opts)?;
+        self.set_components(opts)?;
+        if let Some(ic) = opts.calc_ic {
+            self.correct_initial_conditions(ic)?;
+        }
+        Ok(())
+    }
+
+    /// Creates IDA's memory at `t0` on `yy`, `yp` with our residual, error handler, user
+    /// data and the tolerances of `opts`.
+    fn create_memory(&mut self, opts: &IdaOptions, t0: f64) -> Result<(), IntegratorError> {
+        // SAFETY: all pointers passed are valid for the calls; the user data box never
+        // moves while IDA holds a pointer to it; the tolerance vector is copied by IDA.
         unsafe {
             self.mem = sys::IDACreate(self.ctx.0);
             if self.mem.is_null() {
@@ -256,8 +270,18 @@ impl<D: Dae> Ida<D> {
                     )?;
                 }
             }
+        }
+        Ok(())
+    }
 
-            // The thin matrix: its values are LsState::values.
+    /// Attaches the thin matrix and the linear solver, both pointing at the LsState (the
+    /// matrix's values are LsState::values), and our Jacobian.
+    fn attach_linear_solver(&mut self, t0: f64) -> Result<(), IntegratorError> {
+        // SAFETY: all pointers passed are valid for the calls (the IDA memory is the one
+        // `create_memory` made, before this in `setup`); the LsState inside the user data
+        // box never moves while IDA holds pointers to it; the ops tables are those
+        // SUNMatNewEmpty and SUNLinSolNewEmpty allocated.
+        unsafe {
             let ls_ptr: *mut LsState = &mut self.user.ls;
             self.mat = sys::SUNMatNewEmpty(self.ctx.0);
             if self.mat.is_null() {
@@ -291,6 +315,7 @@ impl<D: Dae> Ida<D> {
             lops.solve = Some(ls_solve);
             lops.free = Some(ls_free);
 
+            let mem = self.mem;
             self.check(
                 "IDASetLinearSolver",
                 sys::IDASetLinearSolver(mem, self.ls, self.mat),
@@ -299,6 +324,17 @@ impl<D: Dae> Ida<D> {
                 "IDASetJacFn",
                 sys::IDASetJacFn(mem, Some(jacobian_trampoline::<D>)),
             )?;
+        }
+        Ok(())
+    }
+
+    /// Sets the BDF order, step and iteration limits of `opts` (IDA's defaults where
+    /// `opts` has none).
+    fn set_step_limits(&self, opts: &IdaOptions) -> Result<(), IntegratorError> {
+        let mem = self.mem;
+        // SAFETY: valid IDA memory (made by `create_memory`, before this in `setup`); the
+        // calls take values only.
+        unsafe {
             self.check(
                 "IDASetMaxOrd",
                 sys::IDASetMaxOrd(mem, opts.max_order as c_int),
@@ -325,6 +361,18 @@ impl<D: Dae> Ida<D> {
             if let Some(m) = opts.max_err_test_fails {
                 self.check("IDASetMaxErrTestFails", sys::IDASetMaxErrTestFails(mem, m))?;
             }
+        }
+        Ok(())
+    }
+
+    /// Tells IDA which components are differential (needed to suppress the algebraic
+    /// ones from the error test and by IDACalcIC) and the constraints of `opts`.
+    fn set_components(&self, opts: &IdaOptions) -> Result<(), IntegratorError> {
+        let n = self.user.dae.size();
+        let mem = self.mem;
+        // SAFETY: valid IDA memory (made by `create_memory`, before this in `setup`); the
+        // vectors passed to IDASet* functions are copied by IDA.
+        unsafe {
             if opts.suppress_alg || opts.calc_ic.is_some() {
                 let id: Vec<f64> = self
                     .user
@@ -356,25 +404,34 @@ impl<D: Dae> Ida<D> {
                 let cv = NVector::from_slice(c, &self.ctx).map_err(IntegratorError::Input)?;
                 self.check("IDASetConstraints", sys::IDASetConstraints(mem, cv.0))?;
             }
-            if let Some(ic) = opts.calc_ic {
-                let (icopt, tout1) = match ic {
-                    CalcIc::AlgebraicAndDerivatives { tout1 } => (sys::IDA_YA_YDP_INIT, tout1),
-                    CalcIc::AllOfY { tout1 } => (sys::IDA_Y_INIT, tout1),
-                };
-                let flag = timing::time(Phase::Ida, || sys::IDACalcIC(mem, icopt, tout1));
-                self.check("IDACalcIC", flag)?;
-                self.check(
-                    "IDAGetConsistentIC",
-                    sys::IDAGetConsistentIC(mem, self.out_y.0, self.out_yp.0),
-                )?;
-                self.yy
-                    .as_mut_slice()
-                    .copy_from_slice(self.out_y.as_slice());
-                self.yp
-                    .as_mut_slice()
-                    .copy_from_slice(self.out_yp.as_slice());
-            }
         }
+        Ok(())
+    }
+
+    /// Corrects the initial conditions by IDACalcIC as `ic` asks, and takes IDA's
+    /// consistent values as the current y and ẏ.
+    fn correct_initial_conditions(&mut self, ic: CalcIc) -> Result<(), IntegratorError> {
+        let mem = self.mem;
+        let (icopt, tout1) = match ic {
+            CalcIc::AlgebraicAndDerivatives { tout1 } => (sys::IDA_YA_YDP_INIT, tout1),
+            CalcIc::AllOfY { tout1 } => (sys::IDA_Y_INIT, tout1),
+        };
+        // SAFETY: valid IDA memory, set up for IDACalcIC (by `setup`, before this); the
+        // output vectors are serial vectors of the problem's length, owned here.
+        unsafe {
+            let flag = timing::time(Phase::Ida, || sys::IDACalcIC(mem, icopt, tout1));
+            self.check("IDACalcIC", flag)?;
+            self.check(
+                "IDAGetConsistentIC",
+                sys::IDAGetConsistentIC(mem, self.out_y.0, self.out_yp.0),
+            )?;
+        }
+        self.yy
+            .as_mut_slice()
+            .copy_from_slice(self.out_y.as_slice());
+        self.yp
+            .as_mut_slice()
+            .copy_from_slice(self.out_yp.as_slice());
         Ok(())
     }
 
@@ -593,8 +650,8 @@ unsafe extern "C" fn residual_trampoline<D: Dae>(
     rr: sys::N_Vector,
     user_data: *mut c_void,
 ) -> c_int {
-    // SAFETY: user_data is the boxed UserData<D> set in `setup`; IDA passes distinct,
-    // valid vectors of length n.
+    // SAFETY: user_data is the boxed UserData<D> set in `create_memory`; IDA passes
+    // distinct, valid vectors of length n.
     unsafe {
         let user = &mut *(user_data as *mut UserData<D>);
         let (y, ypv, r) = (view(yy), view(yp), view_mut(rr));
@@ -654,7 +711,7 @@ unsafe extern "C" fn err_handler<D>(
 }
 
 unsafe fn ls_state<'a>(content: *mut c_void) -> &'a mut LsState {
-    // SAFETY: content was set to the boxed LsState in `setup`.
+    // SAFETY: content was set to the boxed LsState in `attach_linear_solver`.
     unsafe { &mut *(content as *mut LsState) }
 }
 
