@@ -15,9 +15,12 @@
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
+use plotters::chart::SeriesAnno;
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::OutputError;
 use super::geometry::{Backdrop, Bounds, CellShape, Pt, Rect, substrate_floor};
@@ -39,6 +42,14 @@ const LEGEND_GLYPH: i32 = 40;
 
 /// Font family of every text.
 pub(crate) const FONT: &str = "sans-serif";
+
+/// A text style of `size` px in [`FONT`], anchored at the point `h`, `v` of the text.
+fn anchored_text(size: i32, h: HPos, v: VPos) -> TextStyle<'static> {
+    TextStyle::from((FONT, size).into_font()).pos(Pos::new(h, v))
+}
+
+/// A chart with `f64` coordinates on both axes, as every figure here draws.
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 /// Fill colour of the nucleus (the paper's red).
 pub const NUCLEUS: RGBColor = RGBColor(214, 72, 66);
@@ -315,20 +326,48 @@ pub fn draw_time_plot<DB: DrawingBackend>(
     draw_time_plot_on(area, plot, value_range(plot))
 }
 
-/// Draws a time plot into `area` with the value axis `(lo, hi)`. Without a title there
+/// Draws a time plot into `area` with the value axis `range`. Without a title there
 /// is no caption, so a panel beside it built with the same margins lines up.
 pub fn draw_time_plot_on<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     plot: &TimePlot,
-    (lo, hi): (f64, f64),
+    range: (f64, f64),
 ) -> Result<(), String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let t_max = if plot.t_max > 0.0 { plot.t_max } else { 1.0 };
     // 3 % of room after the end, so marks at the end time are not cut.
     let t_axis_end = 1.03 * t_max;
+    let mut chart = time_chart(area, &plot.title, &plot.y_desc, t_axis_end, range)?;
+    draw_phases(&mut chart, plot, range)?;
+    draw_notes(&mut chart, &plot.notes, range, t_max, t_axis_end)?;
+    for c in &plot.curves {
+        draw_curve(&mut chart, c)?;
+    }
+    // The lines joining the paper's values to ours, under the marks.
+    chart
+        .draw_series(plot.links.iter().map(|&(t, a, b)| {
+            PathElement::new(vec![(t, a), (t, b)], RGBColor(90, 90, 90).stroke_width(2))
+        }))
+        .map_err(e)?;
+    for m in &plot.marks {
+        draw_marks(&mut chart, m)?;
+    }
+    draw_time_legend(&mut chart, plot)
+}
+
+/// The axes of a time plot in `area`: time from 0 to `t_axis_end`, the values over
+/// `(lo, hi)` described by `y_desc`, the `title` as caption unless it is empty.
+fn time_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    y_desc: &str,
+    t_axis_end: f64,
+    (lo, hi): (f64, f64),
+) -> Result<Chart<'a, DB>, String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let mut builder = ChartBuilder::on(area);
-    if !plot.title.is_empty() {
-        builder.caption(&plot.title, (FONT, 28));
+    if !title.is_empty() {
+        builder.caption(title, (FONT, 28));
     }
     let mut chart = builder
         .margin(TIME_MARGIN)
@@ -341,15 +380,24 @@ pub fn draw_time_plot_on<DB: DrawingBackend>(
     chart
         .configure_mesh()
         .x_desc("time t (s)")
-        .y_desc(&plot.y_desc)
+        .y_desc(y_desc)
         .x_label_formatter(&fmt_t)
         .axis_desc_style((FONT, 22))
         .label_style((FONT, 18))
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(e)?;
+    Ok(chart)
+}
 
-    // Phases: dashed boundaries, names along the top.
+/// The phases of `plot` on the value axis `(lo, hi)`: a dashed line at each boundary
+/// after 0, each phase's name centred along the top.
+fn draw_phases<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    plot: &TimePlot,
+    (lo, hi): (f64, f64),
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let grey = RGBColor(110, 110, 110);
     for (a, b, name) in phase_intervals(plot) {
         if a > 0.0 {
@@ -363,12 +411,7 @@ pub fn draw_time_plot_on<DB: DrawingBackend>(
                 .map_err(e)?;
         }
         let mid = 0.5 * (a + b);
-        let style = TextStyle::from((FONT, 18).into_font()).color(&grey).pos(
-            plotters::style::text_anchor::Pos::new(
-                plotters::style::text_anchor::HPos::Center,
-                plotters::style::text_anchor::VPos::Top,
-            ),
-        );
+        let style = anchored_text(18, HPos::Center, VPos::Top).color(&grey);
         chart
             .draw_series(std::iter::once(Text::new(
                 name,
@@ -377,9 +420,21 @@ pub fn draw_time_plot_on<DB: DrawingBackend>(
             )))
             .map_err(e)?;
     }
+    Ok(())
+}
 
-    // Notes: a bracket over [from, to] under the phase names, the text above it.
-    for (k, n) in plot.notes.iter().enumerate() {
+/// The `notes` of a time plot on the value axis `(lo, hi)`: a bracket over each note's
+/// interval (cut at `t_axis_end`) under the phase names, its text above it, indented by
+/// 1 % of `t_max`.
+fn draw_notes<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    notes: &[SpanNote],
+    (lo, hi): (f64, f64),
+    t_max: f64,
+    t_axis_end: f64,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    for (k, n) in notes.iter().enumerate() {
         let span = hi - lo;
         let y_text = hi - (0.055 + 0.09 * k as f64) * span;
         let y_line = y_text - 0.045 * span;
@@ -396,96 +451,97 @@ pub fn draw_time_plot_on<DB: DrawingBackend>(
                 BLACK.stroke_width(2),
             )))
             .map_err(e)?;
-        let style =
-            TextStyle::from((FONT, 18).into_font()).pos(plotters::style::text_anchor::Pos::new(
-                plotters::style::text_anchor::HPos::Left,
-                plotters::style::text_anchor::VPos::Top,
-            ));
         chart
             .draw_series(std::iter::once(Text::new(
                 n.text.clone(),
                 (a + 0.01 * t_max, y_text),
-                style,
+                anchored_text(18, HPos::Left, VPos::Top),
             )))
             .map_err(e)?;
     }
+    Ok(())
+}
 
-    for c in &plot.curves {
-        let style = c.color.stroke_width(3);
-        let color = c.color;
-        let anno = match c.stroke {
-            Stroke::Solid => chart
-                .draw_series(LineSeries::new(c.points.iter().copied(), style))
-                .map_err(e)?,
-            Stroke::Dashed => chart
-                .draw_series(DashedLineSeries::new(
-                    c.points.iter().copied(),
-                    14,
-                    8,
-                    style,
-                ))
-                .map_err(e)?,
-            Stroke::Dotted => chart
-                .draw_series(DashedLineSeries::new(c.points.iter().copied(), 3, 6, style))
-                .map_err(e)?,
-        };
-        let stroke = c.stroke;
-        if c.label.is_empty() {
-            continue;
-        }
-        anno.label(&c.label).legend(move |(x, y)| {
-            let s = color.stroke_width(3);
-            match stroke {
-                Stroke::Solid => {
-                    PathElement::new(vec![(x, y), (x + LEGEND_GLYPH, y)], s).into_dyn()
-                }
-                Stroke::Dashed => {
-                    DashedPathElement::new(vec![(x, y), (x + LEGEND_GLYPH, y)], 10, 5, s).into_dyn()
-                }
-                Stroke::Dotted => {
-                    DashedPathElement::new(vec![(x, y), (x + LEGEND_GLYPH, y)], 3, 5, s).into_dyn()
-                }
+/// One curve of a time plot in its colour and stroke, with a legend entry (a sample of
+/// the stroke) if it has a label.
+fn draw_curve<DB: DrawingBackend>(chart: &mut Chart<'_, DB>, c: &Curve) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    let style = c.color.stroke_width(3);
+    let pts = c.points.iter().copied();
+    let anno = match c.stroke {
+        Stroke::Solid => chart
+            .draw_series(LineSeries::new(pts, style))
+            .map_err(e)?,
+        Stroke::Dashed => chart
+            .draw_series(DashedLineSeries::new(pts, 14, 8, style))
+            .map_err(e)?,
+        Stroke::Dotted => chart
+            .draw_series(DashedLineSeries::new(pts, 3, 6, style))
+            .map_err(e)?,
+    };
+    if c.label.is_empty() {
+        return Ok(());
+    }
+    let (color, stroke) = (c.color, c.stroke);
+    anno.label(&c.label).legend(move |(x, y)| {
+        let s = color.stroke_width(3);
+        match stroke {
+            Stroke::Solid => PathElement::new(vec![(x, y), (x + LEGEND_GLYPH, y)], s).into_dyn(),
+            Stroke::Dashed => {
+                DashedPathElement::new(vec![(x, y), (x + LEGEND_GLYPH, y)], 10, 5, s).into_dyn()
             }
-        });
-    }
-    chart
-        .draw_series(plot.links.iter().map(|&(t, a, b)| {
-            PathElement::new(vec![(t, a), (t, b)], RGBColor(90, 90, 90).stroke_width(2))
-        }))
-        .map_err(e)?;
-    for m in &plot.marks {
-        let color = m.color;
-        let style = if m.filled {
-            color.filled()
-        } else {
-            color.stroke_width(3)
-        };
-        let r = m.radius;
-        let anno = match m.shape {
-            MarkShape::Circle => chart
-                .draw_series(m.points.iter().map(|&p| Circle::new(p, r, style)))
-                .map_err(e)?,
-            MarkShape::Square => chart
-                .draw_series(
-                    m.points
-                        .iter()
-                        .map(|&p| EmptyElement::at(p) + Rectangle::new([(-r, -r), (r, r)], style)),
-                )
-                .map_err(e)?,
-        };
-        let shape = m.shape;
-        if !m.label.is_empty() {
-            anno.label(&m.label).legend(move |(x, y)| {
-                let c = (x + LEGEND_GLYPH / 2, y);
-                match shape {
-                    MarkShape::Circle => Circle::new(c, 7, style).into_dyn(),
-                    MarkShape::Square => {
-                        Rectangle::new([(c.0 - 6, c.1 - 6), (c.0 + 6, c.1 + 6)], style).into_dyn()
-                    }
-                }
-            });
+            Stroke::Dotted => {
+                DashedPathElement::new(vec![(x, y), (x + LEGEND_GLYPH, y)], 3, 5, s).into_dyn()
+            }
         }
+    });
+    Ok(())
+}
+
+/// One set of marks of a time plot, circles or squares, filled or hollow, with a legend
+/// entry if it has a label.
+fn draw_marks<DB: DrawingBackend>(chart: &mut Chart<'_, DB>, m: &Marks) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    let style = if m.filled {
+        m.color.filled()
+    } else {
+        m.color.stroke_width(3)
+    };
+    let r = m.radius;
+    let anno = match m.shape {
+        MarkShape::Circle => chart
+            .draw_series(m.points.iter().map(|&p| Circle::new(p, r, style)))
+            .map_err(e)?,
+        MarkShape::Square => chart
+            .draw_series(
+                m.points
+                    .iter()
+                    .map(|&p| EmptyElement::at(p) + Rectangle::new([(-r, -r), (r, r)], style)),
+            )
+            .map_err(e)?,
+    };
+    if m.label.is_empty() {
+        return Ok(());
     }
+    let shape = m.shape;
+    anno.label(&m.label).legend(move |(x, y)| {
+        let c = (x + LEGEND_GLYPH / 2, y);
+        match shape {
+            MarkShape::Circle => Circle::new(c, 7, style).into_dyn(),
+            MarkShape::Square => {
+                Rectangle::new([(c.0 - 6, c.1 - 6), (c.0 + 6, c.1 + 6)], style).into_dyn()
+            }
+        }
+    });
+    Ok(())
+}
+
+/// The legend of a time plot where `plot.legend` puts it.
+fn draw_time_legend<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    plot: &TimePlot,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     // Upper legends start below the row of phase names and the notes.
     let position = match plot.legend {
         SeriesLabelPosition::UpperLeft => {
@@ -663,19 +719,14 @@ pub fn contact_radius_plot(
         ));
     }
     TimePlot {
-        title: "Contact radius: length of the cell contour in contact (half cell)".into(),
-        y_desc: "contact radius (µm)".into(),
-        curves,
         marks,
         links,
-        notes: identical_note(runs, &short_names(runs).join(", "))
-            .into_iter()
-            .collect(),
-        from_zero: true,
-        phase_times: runs.first().map(|r| r.mesh.phase_times).unwrap_or([0.0; 4]),
-        after_active: after_active_name(runs.first().copied()),
-        t_max: t_axis(runs),
-        legend: SeriesLabelPosition::UpperLeft,
+        ..runs_plot(
+            runs,
+            "Contact radius: length of the cell contour in contact (half cell)".into(),
+            "contact radius (µm)",
+            curves,
+        )
     }
 }
 
@@ -748,55 +799,53 @@ pub fn displacement_figure(
     reported: &[DisplacementMarks],
     reported_label: &str,
 ) -> Result<(), OutputError> {
-    let mut curves = Vec::new();
-    let mut marks = Vec::new();
-    let mut links = Vec::new();
-    let mut maxima = Vec::new();
-    for (k, r) in runs.iter().enumerate() {
-        let color = PALETTE[k % PALETTE.len()];
-        for (f, stroke) in [
-            (
-                (|o: &Observables| o.uy_top) as fn(&Observables) -> f64,
-                Stroke::Solid,
-            ),
-            (|o: &Observables| o.uy_nucleus_max, Stroke::Dotted),
-            (|o: &Observables| o.uy_centre, Stroke::Dashed),
-        ] {
-            curves.push(Curve {
-                label: String::new(),
-                points: points(&r.series, f),
-                color,
-                stroke,
-            });
-        }
-        let Some(rep) = reported.get(k) else { continue };
-        let (m, l) = compared_marks(&rep.at_times, color);
-        marks.extend(m);
-        links.extend(l);
-        if let Some(m) = rep.maximum {
-            // Where the nucleus is lowest: the dot only; the paper's maximum is in the
-            // side panel.
-            marks.push(Marks {
-                label: String::new(),
-                points: vec![(m.t, m.ours)],
-                color,
-                radius: 6,
-                filled: true,
-                shape: MarkShape::Circle,
-            });
-            maxima.push((k, color, m, rep.maximum_top));
-        }
-        if let Some(p) = rep.maximum_top {
-            marks.push(Marks {
-                label: String::new(),
-                points: vec![p],
-                color,
-                radius: 5,
-                filled: true,
-                shape: MarkShape::Square,
-            });
-        }
+    let (plot, columns) = displacement_plot(runs, reported, reported_label);
+    // One value axis for the time plot and the panel of maxima beside it.
+    let range = value_axis(
+        plot_values(&plot).chain(columns.iter().flat_map(|c| {
+            [
+                c.compared.paper,
+                c.compared.ours,
+                c.top.unwrap_or(f64::NAN),
+            ]
+        })),
+        false,
+        plot.notes.len(),
+    );
+    let root = BitMapBackend::new(path, TIME_SIZE).into_drawing_area();
+    let err = |x: String| OutputError::draw(path, x);
+    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
+    let root = root
+        .titled(
+            "Vertical displacement of the nucleus (top p_t, lowest point) and the cell centre c",
+            (FONT, 28),
+        )
+        .map_err(|x| OutputError::draw(path, x))?;
+    if columns.is_empty() {
+        draw_time_plot_on(&root, &plot, range).map_err(err)?;
+    } else {
+        let w = root.dim_in_pixel().0;
+        let (left, right) =
+            root.split_horizontally((w as f64 * (1.0 - MAX_PANEL_SHARE)).round() as u32);
+        draw_time_plot_on(&left, &plot, range).map_err(err)?;
+        draw_maxima_panel(&right, &columns, range).map_err(err)?;
     }
+    root.present().map_err(|x| OutputError::draw(path, x))
+}
+
+/// The time plot of [`displacement_figure`] (no title: the figure has one) and the
+/// columns of its side panel, one per run with a reported maximum.
+fn displacement_plot(
+    runs: &[&RunData],
+    reported: &[DisplacementMarks],
+    reported_label: &str,
+) -> (TimePlot, Vec<MaximumColumn>) {
+    let DisplacementLayers {
+        mut curves,
+        mut marks,
+        links,
+        maxima,
+    } = displacement_layers(runs, reported);
     curves.extend(key_curves(
         runs,
         &[
@@ -805,7 +854,6 @@ pub fn displacement_figure(
             (Stroke::Dashed, "cell centre c"),
         ],
     ));
-    let short = short_names(runs);
     let has_marks = marks.iter().any(|m| !m.points.is_empty());
     if has_marks {
         marks.extend(compared_legend(reported_label, "cellsim, compared with it"));
@@ -821,73 +869,134 @@ pub fn displacement_figure(
         }
     }
     let plot = TimePlot {
-        title: String::new(),
-        y_desc: "vertical displacement u_y (µm, negative = down)".into(),
-        curves,
         marks,
         links,
-        notes: identical_note(runs, &short.join(", "))
+        from_zero: false,
+        legend: SeriesLabelPosition::LowerLeft,
+        ..runs_plot(
+            runs,
+            String::new(),
+            "vertical displacement u_y (µm, negative = down)",
+            curves,
+        )
+    };
+    let short = short_names(runs);
+    let columns = maxima
+        .into_iter()
+        .map(|(k, color, compared, top)| MaximumColumn {
+            name: short[k].clone(),
+            color,
+            compared,
+            top: top.map(|p| p.1),
+        })
+        .collect();
+    (plot, columns)
+}
+
+/// The curves and marks of [`displacement_figure`] before the legend entries are added.
+#[derive(Default)]
+struct DisplacementLayers {
+    /// Each run's p_t, lowest point of the nucleus and centre c, unlabelled.
+    curves: Vec<Curve>,
+    /// The compared values, the lowest points of the nucleus and p_t's lowest.
+    marks: Vec<Marks>,
+    /// Lines joining the paper's values to ours: (t, one value, the other).
+    links: Vec<(f64, f64, f64)>,
+    /// The runs with a reported maximum: (index of the run, its colour, the paper's maximum
+    /// against ours, (t, u_y) of p_t's lowest).
+    maxima: Vec<(usize, RGBColor, Compared, Option<(f64, f64)>)>,
+}
+
+/// The curves of `runs` and the marks of what the paper reports about them (`reported`,
+/// one entry per run) for [`displacement_figure`].
+fn displacement_layers(runs: &[&RunData], reported: &[DisplacementMarks]) -> DisplacementLayers {
+    let mut out = DisplacementLayers::default();
+    for (k, r) in runs.iter().enumerate() {
+        let color = PALETTE[k % PALETTE.len()];
+        out.curves.extend(run_curves(
+            r,
+            color,
+            [
+                (|o: &Observables| o.uy_top, Stroke::Solid),
+                (|o: &Observables| o.uy_nucleus_max, Stroke::Dotted),
+                (|o: &Observables| o.uy_centre, Stroke::Dashed),
+            ],
+        ));
+        let Some(rep) = reported.get(k) else { continue };
+        let (m, l) = compared_marks(&rep.at_times, color);
+        out.marks.extend(m);
+        out.links.extend(l);
+        if let Some(m) = rep.maximum {
+            // Where the nucleus is lowest: the dot only; the paper's maximum is in the
+            // side panel.
+            out.marks.push(Marks {
+                label: String::new(),
+                points: vec![(m.t, m.ours)],
+                color,
+                radius: 6,
+                filled: true,
+                shape: MarkShape::Circle,
+            });
+            out.maxima.push((k, color, m, rep.maximum_top));
+        }
+        if let Some(p) = rep.maximum_top {
+            out.marks.push(Marks {
+                label: String::new(),
+                points: vec![p],
+                color,
+                radius: 5,
+                filled: true,
+                shape: MarkShape::Square,
+            });
+        }
+    }
+    out
+}
+
+/// A quantity of a run's rows drawn as a curve.
+type RowValue = fn(&Observables) -> f64;
+
+/// Unlabelled curves of run `r` in `color`, one per quantity in its stroke (several
+/// curves per run: [`key_curves`] makes the legend).
+fn run_curves(r: &RunData, color: RGBColor, quantities: [(RowValue, Stroke); 3]) -> Vec<Curve> {
+    quantities
+        .into_iter()
+        .map(|(f, stroke)| Curve {
+            label: String::new(),
+            points: points(&r.series, f),
+            color,
+            stroke,
+        })
+        .collect()
+}
+
+/// A time plot of `runs` titled `title`: their phases, the time axis to the latest end
+/// and the note where they are the same run; no marks, the value axis from 0, the legend
+/// in the upper left corner.
+fn runs_plot(runs: &[&RunData], title: String, y_desc: &str, curves: Vec<Curve>) -> TimePlot {
+    TimePlot {
+        title,
+        y_desc: y_desc.into(),
+        curves,
+        marks: vec![],
+        links: vec![],
+        notes: identical_note(runs, &short_names(runs).join(", "))
             .into_iter()
             .collect(),
-        from_zero: false,
+        from_zero: true,
         phase_times: runs.first().map(|r| r.mesh.phase_times).unwrap_or([0.0; 4]),
         after_active: after_active_name(runs.first().copied()),
         t_max: t_axis(runs),
-        legend: SeriesLabelPosition::LowerLeft,
-    };
-    let range = value_axis(
-        plot_values(&plot).chain(
-            maxima
-                .iter()
-                .flat_map(|(_, _, m, top)| [m.paper, m.ours, top.map_or(f64::NAN, |p| p.1)]),
-        ),
-        false,
-        plot.notes.len(),
-    );
-    let root = BitMapBackend::new(path, TIME_SIZE).into_drawing_area();
-    let err = |x: String| OutputError::draw(path, x);
-    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
-    let root = root
-        .titled(
-            "Vertical displacement of the nucleus (top p_t, lowest point) and the cell centre c",
-            (FONT, 28),
-        )
-        .map_err(|x| OutputError::draw(path, x))?;
-    if maxima.is_empty() {
-        draw_time_plot_on(&root, &plot, range).map_err(err)?;
-    } else {
-        let w = root.dim_in_pixel().0;
-        let (left, right) =
-            root.split_horizontally((w as f64 * (1.0 - MAX_PANEL_SHARE)).round() as u32);
-        draw_time_plot_on(&left, &plot, range).map_err(err)?;
-        let columns: Vec<MaximumColumn> = maxima
-            .into_iter()
-            .map(|(k, color, compared, top)| MaximumColumn {
-                name: short[k].clone(),
-                color,
-                compared,
-                top: top.map(|p| p.1),
-            })
-            .collect();
-        draw_maxima_panel(&right, &columns, range).map_err(err)?;
+        legend: SeriesLabelPosition::UpperLeft,
     }
-    root.present().map_err(|x| OutputError::draw(path, x))
 }
 
 /// A value printed at height `v` from `x` on, in colour `c`, placed by `vpos`.
-fn value_text(
-    v: f64,
-    x: f64,
-    c: &RGBColor,
-    vpos: plotters::style::text_anchor::VPos,
-) -> Text<'_, (f64, f64), String> {
-    use plotters::style::text_anchor::{HPos, Pos};
+fn value_text(v: f64, x: f64, c: &RGBColor, vpos: VPos) -> Text<'_, (f64, f64), String> {
     Text::new(
         format!("{v:.2}"),
         (x, v),
-        TextStyle::from((FONT, 16).into_font())
-            .color(c)
-            .pos(Pos::new(HPos::Left, vpos)),
+        anchored_text(16, HPos::Left, vpos).color(c),
     )
 }
 
@@ -905,14 +1014,28 @@ struct MaximumColumn {
 
 /// The side panel of [`displacement_figure`]: for each run, the paper's maximum (hollow
 /// circle) and the lowest point of the nucleus (filled dot) joined, p_t's lowest (a
-/// square) beside them, values printed, on the value axis `(lo, hi)`, lined up with the
+/// square) beside them, values printed, on the value axis `range`, lined up with the
 /// time plot beside it.
 fn draw_maxima_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     columns: &[MaximumColumn],
-    (lo, hi): (f64, f64),
+    range: (f64, f64),
 ) -> Result<(), String> {
-    use plotters::style::text_anchor::{HPos, Pos, VPos};
+    let mut chart = maxima_chart(area, columns, range)?;
+    draw_maxima_key(&mut chart, columns.len().max(1), range)?;
+    for (k, col) in columns.iter().enumerate() {
+        draw_maximum_column(&mut chart, k, col)?;
+    }
+    Ok(())
+}
+
+/// The axes of the panel of maxima in `area`: one column per run, named below it; the
+/// value axis `(lo, hi)` without labels (the time plot beside it has them).
+fn maxima_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    columns: &[MaximumColumn],
+    (lo, hi): (f64, f64),
+) -> Result<Chart<'a, DB>, String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let n = columns.len().max(1);
     let mut chart = ChartBuilder::on(area)
@@ -924,14 +1047,7 @@ fn draw_maxima_panel<DB: DrawingBackend>(
         .build_cartesian_2d(0.0..n as f64, lo..hi)
         .map_err(e)?;
     let names: Vec<String> = columns.iter().map(|c| c.name.clone()).collect();
-    let fmt = |x: &f64| {
-        let k = (x - 0.5).round();
-        if (x - 0.5 - k).abs() < 1e-6 && k >= 0.0 {
-            names.get(k as usize).cloned().unwrap_or_default()
-        } else {
-            String::new()
-        }
-    };
+    let fmt = |x: &f64| column_label(&names, *x);
     chart
         .configure_mesh()
         .disable_x_mesh()
@@ -944,32 +1060,56 @@ fn draw_maxima_panel<DB: DrawingBackend>(
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(e)?;
+    Ok(chart)
+}
+
+/// The label at `x` of an axis of columns [k, k + 1) named `names`: column k's name at
+/// its middle, nothing elsewhere.
+fn column_label(names: &[String], x: f64) -> String {
+    let k = (x - 0.5).round();
+    if (x - 0.5 - k).abs() < 1e-6 && k >= 0.0 {
+        names.get(k as usize).cloned().unwrap_or_default()
+    } else {
+        String::new()
+    }
+}
+
+/// The key of the panel of maxima: each marker's shape, whether it is filled, and its
+/// text on two lines.
+const MAXIMA_KEY: [(MarkShape, bool, &str, &str); 3] = [
+    (
+        MarkShape::Circle,
+        false,
+        "paper: maximum displacement",
+        "of the nucleus (Sect. 3.2)",
+    ),
+    (
+        MarkShape::Circle,
+        true,
+        "cellsim, compared with it: lowest",
+        "point of the nucleus (uy_nucleus_max)",
+    ),
+    (
+        MarkShape::Square,
+        true,
+        "cellsim, beside it: lowest p_t,",
+        "the point the paper's Fig. 9 plots",
+    ),
+];
+
+/// Draws [`MAXIMA_KEY`] at the top of the panel of maxima, `n` columns wide, on the value
+/// axis `(lo, hi)`: a marker, then its text.
+fn draw_maxima_key<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    n: usize,
+    (lo, hi): (f64, f64),
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let grey = RGBColor(90, 90, 90);
     let span = hi - lo;
-    // The key: a marker, then its text on two lines.
-    let key: [(MarkShape, bool, &str, &str); 3] = [
-        (
-            MarkShape::Circle,
-            false,
-            "paper: maximum displacement",
-            "of the nucleus (Sect. 3.2)",
-        ),
-        (
-            MarkShape::Circle,
-            true,
-            "cellsim, compared with it: lowest",
-            "point of the nucleus (uy_nucleus_max)",
-        ),
-        (
-            MarkShape::Square,
-            true,
-            "cellsim, beside it: lowest p_t,",
-            "the point the paper's Fig. 9 plots",
-        ),
-    ];
     let x_text = 0.12 * n as f64;
     let x_mark = 0.05 * n as f64;
-    for (k, (shape, filled, a, b)) in key.iter().enumerate() {
+    for (k, (shape, filled, a, b)) in MAXIMA_KEY.iter().enumerate() {
         let y = hi - (0.02 + 0.085 * k as f64) * span;
         let style = if *filled {
             grey.filled()
@@ -992,57 +1132,64 @@ fn draw_maxima_panel<DB: DrawingBackend>(
                 .draw_series(std::iter::once(Text::new(
                     text.to_string(),
                     (x_text, y - 0.036 * line as f64 * span),
-                    TextStyle::from((FONT, 16).into_font())
-                        .color(&grey)
-                        .pos(Pos::new(HPos::Left, VPos::Top)),
+                    anchored_text(16, HPos::Left, VPos::Top).color(&grey),
                 )))
                 .map_err(e)?;
         }
     }
-    for (k, col) in columns.iter().enumerate() {
-        let m = col.compared;
-        let color = &col.color;
-        let x = k as f64 + 0.2;
+    Ok(())
+}
+
+/// Column `k` of the panel of maxima: the paper's maximum (hollow circle) joined to ours
+/// (a dot in the run's colour), p_t's lowest (a square) beside them, each value printed.
+fn draw_maximum_column<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    k: usize,
+    col: &MaximumColumn,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    let m = col.compared;
+    let color = &col.color;
+    let x = k as f64 + 0.2;
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            vec![(x, m.paper), (x, m.ours)],
+            RGBColor(90, 90, 90).stroke_width(2),
+        )))
+        .map_err(e)?;
+    chart
+        .draw_series([
+            Circle::new((x, m.paper), 8, BLACK.stroke_width(3)),
+            Circle::new((x, m.ours), 6, color.filled()),
+        ])
+        .map_err(e)?;
+    // Values beside the marks, the upper one above, the lower one below.
+    let (up, down) = if m.paper >= m.ours {
+        ((m.paper, &BLACK), (m.ours, color))
+    } else {
+        ((m.ours, color), (m.paper, &BLACK))
+    };
+    chart
+        .draw_series([
+            value_text(up.0, x + 0.08, up.1, VPos::Bottom),
+            value_text(down.0, x + 0.08, down.1, VPos::Top),
+        ])
+        .map_err(e)?;
+    if let Some(v) = col.top {
+        let xs = k as f64 + 0.66;
         chart
-            .draw_series(std::iter::once(PathElement::new(
-                vec![(x, m.paper), (x, m.ours)],
-                RGBColor(90, 90, 90).stroke_width(2),
+            .draw_series(std::iter::once(
+                EmptyElement::at((xs, v)) + Rectangle::new([(-5, -5), (5, 5)], color.filled()),
+            ))
+            .map_err(e)?;
+        chart
+            .draw_series(std::iter::once(value_text(
+                v,
+                xs + 0.07,
+                color,
+                VPos::Center,
             )))
             .map_err(e)?;
-        chart
-            .draw_series([
-                Circle::new((x, m.paper), 8, BLACK.stroke_width(3)),
-                Circle::new((x, m.ours), 6, color.filled()),
-            ])
-            .map_err(e)?;
-        // Values beside the marks, the upper one above, the lower one below.
-        let (up, down) = if m.paper >= m.ours {
-            ((m.paper, &BLACK), (m.ours, color))
-        } else {
-            ((m.ours, color), (m.paper, &BLACK))
-        };
-        chart
-            .draw_series([
-                value_text(up.0, x + 0.08, up.1, VPos::Bottom),
-                value_text(down.0, x + 0.08, down.1, VPos::Top),
-            ])
-            .map_err(e)?;
-        if let Some(v) = col.top {
-            let xs = k as f64 + 0.66;
-            chart
-                .draw_series(std::iter::once(
-                    EmptyElement::at((xs, v)) + Rectangle::new([(-5, -5), (5, 5)], color.filled()),
-                ))
-                .map_err(e)?;
-            chart
-                .draw_series(std::iter::once(value_text(
-                    v,
-                    xs + 0.07,
-                    color,
-                    VPos::Center,
-                )))
-                .map_err(e)?;
-        }
     }
     Ok(())
 }
@@ -1062,22 +1209,15 @@ pub const CYTOPLASM_LABEL: &str = "cytoplasm incl. membrane (the paper's Ω_cp)"
 pub fn strain_time_plot(runs: &[&RunData]) -> TimePlot {
     let mut curves = Vec::new();
     for (k, r) in runs.iter().enumerate() {
-        let color = PALETTE[k % PALETTE.len()];
-        for (f, stroke) in [
-            (
-                (|o: &Observables| o.strain_nucleus) as fn(&Observables) -> f64,
-                Stroke::Solid,
-            ),
-            (|o: &Observables| o.strain_cytoplasm, Stroke::Dashed),
-            (|o: &Observables| o.strain_membrane, Stroke::Dotted),
-        ] {
-            curves.push(Curve {
-                label: String::new(),
-                points: points(&r.series, |o| 100.0 * f(o)),
-                color,
-                stroke,
-            });
-        }
+        curves.extend(run_curves(
+            r,
+            PALETTE[k % PALETTE.len()],
+            [
+                (|o: &Observables| 100.0 * o.strain_nucleus, Stroke::Solid),
+                (|o: &Observables| 100.0 * o.strain_cytoplasm, Stroke::Dashed),
+                (|o: &Observables| 100.0 * o.strain_membrane, Stroke::Dotted),
+            ],
+        ));
     }
     curves.extend(key_curves(
         runs,
@@ -1087,21 +1227,12 @@ pub fn strain_time_plot(runs: &[&RunData]) -> TimePlot {
             (Stroke::Dotted, "membrane alone"),
         ],
     ));
-    TimePlot {
-        title: "Mean Green-Lagrange strain norm per domain".into(),
-        y_desc: "mean ‖E‖ over the domain (%)".into(),
+    runs_plot(
+        runs,
+        "Mean Green-Lagrange strain norm per domain".into(),
+        "mean ‖E‖ over the domain (%)",
         curves,
-        marks: vec![],
-        links: vec![],
-        notes: identical_note(runs, &short_names(runs).join(", "))
-            .into_iter()
-            .collect(),
-        from_zero: true,
-        phase_times: runs.first().map(|r| r.mesh.phase_times).unwrap_or([0.0; 4]),
-        after_active: after_active_name(runs.first().copied()),
-        t_max: t_axis(runs),
-        legend: SeriesLabelPosition::UpperLeft,
-    }
+    )
 }
 
 /// Name of the interval after T_a0 in the upside-down figures.
@@ -1316,14 +1447,7 @@ fn draw_bars<DB: DrawingBackend>(
         .y_label_area_size(80)
         .build_cartesian_2d(0.0..n as f64, 0.0..top)
         .map_err(e)?;
-    let fmt = |x: &f64| {
-        let k = (x - 0.5).round();
-        if (x - 0.5 - k).abs() < 1e-6 && k >= 0.0 {
-            names.get(k as usize).cloned().unwrap_or_default()
-        } else {
-            String::new()
-        }
-    };
+    let fmt = |x: &f64| column_label(&names, *x);
     chart
         .configure_mesh()
         .disable_x_mesh()
@@ -1337,12 +1461,6 @@ fn draw_bars<DB: DrawingBackend>(
         .map_err(e)?;
     let paper_color = RGBColor(170, 170, 170);
     let ours_color = RGBColor(31, 119, 180);
-    let text_style = |s: i32| {
-        TextStyle::from((FONT, s).into_font()).pos(plotters::style::text_anchor::Pos::new(
-            plotters::style::text_anchor::HPos::Center,
-            plotters::style::text_anchor::VPos::Bottom,
-        ))
-    };
     let mut paper_rects = Vec::new();
     let mut ours_rects = Vec::new();
     let mut texts = Vec::new();
@@ -1377,7 +1495,7 @@ fn draw_bars<DB: DrawingBackend>(
         .draw_series(
             texts
                 .into_iter()
-                .map(|(s, p)| Text::new(s, p, text_style(18))),
+                .map(|(s, p)| Text::new(s, p, anchored_text(18, HPos::Center, VPos::Bottom))),
         )
         .map_err(e)?;
     chart
@@ -1582,147 +1700,18 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
 ) -> Result<ShapeScale, String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let fs = opts.font as f64;
-    let label_x = (2.6 * fs) as u32;
-    let label_y = (3.2 * fs) as u32;
     let area = area
         .titled(&opts.title, (FONT, opts.font as i32))
         .map_err(e)?;
-    let margin = (0.6 * fs) as u32;
-    // First pass: the plotting area's pixel size; then ranges with equal aspect.
-    let (pw, ph) = {
-        let chart = ChartBuilder::on(&area)
-            .margin(margin)
-            .x_label_area_size(label_x)
-            .y_label_area_size(label_y)
-            .build_cartesian_2d(view.x_min..view.x_max, view.y_min..view.y_max)
-            .map_err(e)?;
-        chart.plotting_area().dim_in_pixel()
-    };
-    let (w, h) = (view.x_max - view.x_min, view.y_max - view.y_min);
-    let s = (pw as f64 / w).min(ph as f64 / h);
-    let (cx, cy) = (
-        0.5 * (view.x_min + view.x_max),
-        0.5 * (view.y_min + view.y_max),
-    );
-    let (hw, hh) = (0.5 * pw as f64 / s, 0.5 * ph as f64 / s);
-    let (x0, x1, y0, y1) = (cx - hw, cx + hw, cy - hh, cy + hh);
-    let mut chart = ChartBuilder::on(&area)
-        .margin(margin)
-        .x_label_area_size(label_x)
-        .y_label_area_size(label_y)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(e)?;
-    chart
-        .configure_mesh()
-        .x_desc(cell.x_label)
-        .y_desc("y (µm)")
-        .axis_desc_style((FONT, (0.8 * fs) as i32))
-        .label_style((FONT, (0.65 * fs) as i32))
-        .light_line_style(RGBColor(238, 238, 238))
-        .bold_line_style(RGBColor(215, 215, 215))
-        .draw()
-        .map_err(e)?;
-
+    let (mut chart, key, columns) = equal_aspect_chart(&area, view, cell.x_label, fs)?;
     // Substrate and fibronectin layer, one strip per pixel column (computed once per
     // view: a movie reuses it for every frame).
-    let back = backdrop_for(backdrop.take(), [x0, x1, y0, y1], pw as usize);
-    let rect = |r: &Rect, c: RGBColor| Rectangle::new([(r[0], r[3]), (r[1], r[2])], c.filled());
-    if cell.layer {
-        chart
-            .draw_series(back.layer().iter().map(|r| rect(r, LAYER)))
-            .map_err(e)?
-            .label("fibronectin layer")
-            .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], LAYER.filled()));
-        // The layer's edge under the cell: the cell hides it where it lies in the layer.
-        chart
-            .draw_series(
-                back.layer_edge()
-                    .iter()
-                    .map(|l| PathElement::new(xy(&l[..]), LAYER_EDGE.stroke_width(2))),
-            )
-            .map_err(e)?;
-    }
-    if !back.foot().is_empty() {
-        chart
-            .draw_series(back.foot().iter().map(|r| rect(r, FOOT)))
-            .map_err(e)?
-            .label("pillar foot (not substrate in the model)")
-            .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], FOOT.filled()));
-    }
-    chart
-        .draw_series(back.substrate().iter().map(|r| rect(r, SUBSTRATE)))
-        .map_err(e)?
-        .label(cell.substrate_label.as_str())
-        .legend(|(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], SUBSTRATE.filled()));
-
-    // The cell.
-    for d in Domain::ALL {
-        let color = domain_color(d);
-        let edge = darker(color, 0.82);
-        let polys: Vec<&Vec<Pt>> = cell
-            .shape
-            .elements
-            .iter()
-            .filter(|(dd, _)| *dd == d)
-            .map(|(_, p)| p)
-            .collect();
-        chart
-            .draw_series(polys.iter().map(|p| Polygon::new(xy(p), color.filled())))
-            .map_err(e)?
-            .label(d.to_string())
-            .legend(move |(x, y)| Rectangle::new([(x, y - 7), (x + 22, y + 7)], color.filled()));
-        // Each piece's outline closes the hairline gaps between neighbouring fills; in the
-        // darker shade it shows the mesh, where the pieces are the elements.
-        let line_color = if opts.mesh_lines && cell.mesh_lines.is_none() {
-            edge
-        } else {
-            color
-        };
-        chart
-            .draw_series(polys.iter().map(|p| {
-                let mut v = xy(p);
-                if let Some(f) = v.first().copied() {
-                    v.push(f);
-                }
-                PathElement::new(v, line_color.stroke_width(1))
-            }))
-            .map_err(e)?;
-        if let (true, Some(lines)) = (opts.mesh_lines, cell.mesh_lines) {
-            chart
-                .draw_series(
-                    lines
-                        .iter()
-                        .filter(|(dd, _)| *dd == d)
-                        .map(|(_, l)| PathElement::new(xy(l), edge.stroke_width(1))),
-                )
-                .map_err(e)?;
-        }
-    }
-    // Each polyline of a list (points [x, y]) as one path in a style.
-    macro_rules! paths {
-        ($lines:expr, $style:expr) => {
-            chart
-                .draw_series($lines.iter().map(|l| PathElement::new(xy(&l[..]), $style)))
-                .map_err(e)?
-        };
-    }
-    paths!(cell.shape.interfaces, RGBColor(40, 40, 40).stroke_width(2));
-    paths!(cell.shape.outer, BLACK.stroke_width(2));
-    for (segs, color, name) in [
-        (&cell.shape.pac, PAC, "active: PAC (push)"),
-        (&cell.shape.bottom, BOTTOM, "active: bottom (pull)"),
-    ] {
-        if segs.is_empty() {
-            continue;
-        }
-        paths!(segs, color.stroke_width(3))
-            .label(name)
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
-            });
-    }
+    let back = backdrop_for(backdrop.take(), key, columns);
+    draw_backdrop(&mut chart, &back, cell)?;
+    draw_cell_fills(&mut chart, cell, opts.mesh_lines)?;
+    draw_cell_lines(&mut chart, cell.shape)?;
     // The substrate's surface on top, as the paper's black line.
-    paths!(back.surface(), BLACK.stroke_width(2));
+    draw_paths(&mut chart, back.surface(), BLACK.stroke_width(2))?;
     *backdrop = Some(back);
     chart
         .draw_series(
@@ -1755,6 +1744,184 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
         px_per_um_x: (px.0 - o.0).abs() as f64 / 10.0,
         px_per_um_y: (py.1 - o.1).abs() as f64 / 10.0,
     })
+}
+
+/// The axes of a drawing in `area` over `view` with equal aspect (texts scaled by the
+/// font size `fs`, the horizontal axis labelled `x_label`), the view widened to the
+/// plotting area's shape; with the widened view [x0, x1, y0, y1] and the plotting area's
+/// width in pixels.
+fn equal_aspect_chart<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, Shift>,
+    view: Bounds,
+    x_label: &str,
+    fs: f64,
+) -> Result<(Chart<'a, DB>, [f64; 4], usize), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    let label_x = (2.6 * fs) as u32;
+    let label_y = (3.2 * fs) as u32;
+    let margin = (0.6 * fs) as u32;
+    // First pass: the plotting area's pixel size; then ranges with equal aspect.
+    let (pw, ph) = {
+        let chart = ChartBuilder::on(area)
+            .margin(margin)
+            .x_label_area_size(label_x)
+            .y_label_area_size(label_y)
+            .build_cartesian_2d(view.x_min..view.x_max, view.y_min..view.y_max)
+            .map_err(e)?;
+        chart.plotting_area().dim_in_pixel()
+    };
+    let (w, h) = (view.x_max - view.x_min, view.y_max - view.y_min);
+    let s = (pw as f64 / w).min(ph as f64 / h);
+    let (cx, cy) = (
+        0.5 * (view.x_min + view.x_max),
+        0.5 * (view.y_min + view.y_max),
+    );
+    let (hw, hh) = (0.5 * pw as f64 / s, 0.5 * ph as f64 / s);
+    let (x0, x1, y0, y1) = (cx - hw, cx + hw, cy - hh, cy + hh);
+    let mut chart = ChartBuilder::on(area)
+        .margin(margin)
+        .x_label_area_size(label_x)
+        .y_label_area_size(label_y)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc("y (µm)")
+        .axis_desc_style((FONT, (0.8 * fs) as i32))
+        .label_style((FONT, (0.65 * fs) as i32))
+        .light_line_style(RGBColor(238, 238, 238))
+        .bold_line_style(RGBColor(215, 215, 215))
+        .draw()
+        .map_err(e)?;
+    Ok((chart, [x0, x1, y0, y1], pw as usize))
+}
+
+/// A legend's colour swatch at `(x, y)`.
+fn swatch(color: RGBColor, (x, y): (i32, i32)) -> Rectangle<(i32, i32)> {
+    Rectangle::new([(x, y - 7), (x + 22, y + 7)], color.filled())
+}
+
+/// The substrate drawing `back` under `cell`: the fibronectin layer and its edge (if the
+/// substrate carries one), the pillars' feet and the substrate, with legend entries.
+fn draw_backdrop<DB: DrawingBackend, B: PlaneBackdrop>(
+    chart: &mut Chart<'_, DB>,
+    back: &B,
+    cell: &PlaneDrawing<'_>,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    let rect = |r: &Rect, c: RGBColor| Rectangle::new([(r[0], r[3]), (r[1], r[2])], c.filled());
+    if cell.layer {
+        chart
+            .draw_series(back.layer().iter().map(|r| rect(r, LAYER)))
+            .map_err(e)?
+            .label("fibronectin layer")
+            .legend(|p| swatch(LAYER, p));
+        // The layer's edge under the cell: the cell hides it where it lies in the layer.
+        draw_paths(chart, back.layer_edge(), LAYER_EDGE.stroke_width(2))?;
+    }
+    if !back.foot().is_empty() {
+        chart
+            .draw_series(back.foot().iter().map(|r| rect(r, FOOT)))
+            .map_err(e)?
+            .label("pillar foot (not substrate in the model)")
+            .legend(|p| swatch(FOOT, p));
+    }
+    chart
+        .draw_series(back.substrate().iter().map(|r| rect(r, SUBSTRATE)))
+        .map_err(e)?
+        .label(cell.substrate_label.as_str())
+        .legend(|p| swatch(SUBSTRATE, p));
+    Ok(())
+}
+
+/// The pieces of `cell` filled in their domains' colours, with legend entries, each
+/// outlined; with `mesh_lines`, the mesh in darker shades.
+fn draw_cell_fills<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    cell: &PlaneDrawing<'_>,
+    mesh_lines: bool,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    for d in Domain::ALL {
+        let color = domain_color(d);
+        let edge = darker(color, 0.82);
+        let polys: Vec<&Vec<Pt>> = cell
+            .shape
+            .elements
+            .iter()
+            .filter(|(dd, _)| *dd == d)
+            .map(|(_, p)| p)
+            .collect();
+        chart
+            .draw_series(polys.iter().map(|p| Polygon::new(xy(p), color.filled())))
+            .map_err(e)?
+            .label(d.to_string())
+            .legend(move |p| swatch(color, p));
+        // Each piece's outline closes the hairline gaps between neighbouring fills; in the
+        // darker shade it shows the mesh, where the pieces are the elements.
+        let line_color = if mesh_lines && cell.mesh_lines.is_none() {
+            edge
+        } else {
+            color
+        };
+        chart
+            .draw_series(polys.iter().map(|p| {
+                let mut v = xy(p);
+                if let Some(f) = v.first().copied() {
+                    v.push(f);
+                }
+                PathElement::new(v, line_color.stroke_width(1))
+            }))
+            .map_err(e)?;
+        if let (true, Some(lines)) = (mesh_lines, cell.mesh_lines) {
+            chart
+                .draw_series(
+                    lines
+                        .iter()
+                        .filter(|(dd, _)| *dd == d)
+                        .map(|(_, l)| PathElement::new(xy(l), edge.stroke_width(1))),
+                )
+                .map_err(e)?;
+        }
+    }
+    Ok(())
+}
+
+/// The lines of `shape`: the domain interfaces (dark grey), the outline (black) and the
+/// active regions (blue, purple, with legend entries).
+fn draw_cell_lines<DB: DrawingBackend>(
+    chart: &mut Chart<'_, DB>,
+    shape: &CellShape,
+) -> Result<(), String> {
+    draw_paths(chart, &shape.interfaces, RGBColor(40, 40, 40).stroke_width(2))?;
+    draw_paths(chart, &shape.outer, BLACK.stroke_width(2))?;
+    for (segs, color, name) in [
+        (&shape.pac, PAC, "active: PAC (push)"),
+        (&shape.bottom, BOTTOM, "active: bottom (pull)"),
+    ] {
+        if segs.is_empty() {
+            continue;
+        }
+        draw_paths(chart, segs, color.stroke_width(3))?
+            .label(name)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 22, y)], color.stroke_width(3))
+            });
+    }
+    Ok(())
+}
+
+/// Each polyline of `lines` (points [x, y]) as one path in `style`; the series, to give
+/// it a legend entry.
+fn draw_paths<'c, 'a, DB: DrawingBackend, L: AsRef<[Pt]>>(
+    chart: &'c mut Chart<'a, DB>,
+    lines: &[L],
+    style: ShapeStyle,
+) -> Result<&'c mut SeriesAnno<'a, DB>, String> {
+    chart
+        .draw_series(lines.iter().map(|l| PathElement::new(xy(l.as_ref()), style)))
+        .map_err(|x| x.to_string())
 }
 
 /// Draws the deformed full cell of `mesh` displaced by `u` into `area` over `view`, with
@@ -1800,7 +1967,6 @@ pub(crate) fn draw_gravity<DB: DrawingBackend>(
     g: &GravityMark,
     fs: f64,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    use plotters::style::text_anchor::{HPos, Pos, VPos};
     let full = 2.4 * fs; // arrow length at full gravity [px]
     let (bx, by) = ((0.6 * fs) as i32, (0.5 * fs) as i32); // box corner within the area
     let cx = bx + (0.7 * fs) as i32;
@@ -1809,7 +1975,7 @@ pub(crate) fn draw_gravity<DB: DrawingBackend>(
     let dir = if g.factor >= 0.0 { 1 } else { -1 }; // +1: down on screen
     let (tail, tip) = (mid - dir * half, mid + dir * half);
     let font = (0.65 * fs) as i32;
-    let style = TextStyle::from((FONT, font).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+    let style = anchored_text(font, HPos::Left, VPos::Center);
     let text_w = raw.estimate_text_size(&g.note, &style)?.0 as i32;
     let box_w = (1.6 * fs) as i32 + text_w;
     let box_h = (0.4 * fs + full) as i32;

@@ -1477,7 +1477,6 @@ fn draw_panel<DB: DrawingBackend>(
     let image = BitMapElement::<(i32, i32)>::with_owned_buffer((0, 0), (pw, ph), bytes)
         .ok_or("the rendered picture has the wrong size")?;
     area.draw(&image).map_err(e)?;
-    let text = |size: f64| TextStyle::from((FONT, (size * fs) as i32).into_font());
     if axes {
         let [right, up, _] = camera.basis();
         let origin = ((2.4 * fs) as i32, ph as i32 - (2.6 * fs) as i32);
@@ -1495,7 +1494,7 @@ fn draw_panel<DB: DrawingBackend>(
                     origin.0 + (1.25 * dx) as i32 - (0.2 * fs) as i32,
                     origin.1 + (1.25 * dy) as i32 - (0.35 * fs) as i32,
                 ),
-                text(0.6),
+                scaled_text(0.6, fs),
             ))
             .map_err(e)?;
         }
@@ -1504,7 +1503,7 @@ fn draw_panel<DB: DrawingBackend>(
         area.draw(&Text::new(
             l.to_string(),
             ((0.6 * fs) as i32, (0.4 * fs) as i32),
-            text(0.65),
+            scaled_text(0.65, fs),
         ))
         .map_err(e)?;
     }
@@ -1521,25 +1520,86 @@ pub fn draw_surface<DB: DrawingBackend>(
     frame: &SurfaceFrame,
     opts: &SurfaceStyleOptions,
 ) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     check_snapshot3(mesh, s)?;
     let fs = opts.font as f64;
-    let area = area
-        .titled(&opts.title, (FONT, opts.font as i32))
-        .map_err(e)?;
-    let (aw, ah) = area.dim_in_pixel();
-    let bar_w = match opts.coloring {
-        Coloring::Strain => (5.5 * fs) as u32,
-        Coloring::Domain => 0,
-    };
-    let pw = aw.saturating_sub(bar_w);
-    let (pic, bar) = area.split_horizontally(pw);
-    let caption_h = if opts.legend { (1.4 * fs) as u32 } else { 0 };
-    let (pic, caption) = pic.split_vertically(ah.saturating_sub(caption_h));
+    let areas = SurfaceAreas::new(area, opts, fs)?;
     let strain_max = outer_strain_max(mesh, s);
     let cell = cell_triangles(mesh, s, opts.coloring, strain_max);
     let mut all = substrate_triangles(mesh, frame);
     all.extend_from_slice(&cell);
+    draw_surface_panels(&areas, &all, &cell, frame, opts, fs)?;
+    if opts.legend {
+        draw_surface_caption(&areas.caption, frame.camera, opts.coloring, fs)?;
+    }
+    if opts.legend && opts.coloring == Coloring::Domain {
+        let pillars = matches!(mesh.substrate.plane, Substrate::Pillars(_));
+        draw_surface_legend(&areas.pic, areas.pw, pillars, fs)?;
+    }
+    if opts.coloring == Coloring::Strain {
+        draw_strain_bar(&areas.bar, strain_max, fs)?;
+    }
+    Ok(())
+}
+
+/// A text style of `size` × the font size `fs` in [`FONT`].
+fn scaled_text(size: f64, fs: f64) -> TextStyle<'static> {
+    TextStyle::from((FONT, (size * fs) as i32).into_font())
+}
+
+/// The parts of a surface view's drawing area under its title.
+struct SurfaceAreas<DB: DrawingBackend> {
+    /// The picture: one panel, or two side by side.
+    pic: DrawingArea<DB, Shift>,
+    /// The strip right of the picture holding the colour bar (empty when coloured by
+    /// domain).
+    bar: DrawingArea<DB, Shift>,
+    /// The strip under the picture holding the caption (empty without the legend).
+    caption: DrawingArea<DB, Shift>,
+    /// Width of the picture [px].
+    pw: u32,
+}
+
+impl<DB: DrawingBackend> SurfaceAreas<DB> {
+    /// `area` under the title of `opts`, divided as its colouring and legend ask (sizes
+    /// scaled by the font size `fs`).
+    fn new(
+        area: &DrawingArea<DB, Shift>,
+        opts: &SurfaceStyleOptions,
+        fs: f64,
+    ) -> Result<Self, String> {
+        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+        let area = area
+            .titled(&opts.title, (FONT, opts.font as i32))
+            .map_err(e)?;
+        let (aw, ah) = area.dim_in_pixel();
+        let bar_w = match opts.coloring {
+            Coloring::Strain => (5.5 * fs) as u32,
+            Coloring::Domain => 0,
+        };
+        let pw = aw.saturating_sub(bar_w);
+        let (pic, bar) = area.split_horizontally(pw);
+        let caption_h = if opts.legend { (1.4 * fs) as u32 } else { 0 };
+        let (pic, caption) = pic.split_vertically(ah.saturating_sub(caption_h));
+        Ok(SurfaceAreas {
+            pic,
+            bar,
+            caption,
+            pw,
+        })
+    }
+}
+
+/// The panels of a surface view in `areas.pic`: coloured by domain, `all` (substrate and
+/// cell) seen by the frame's camera; coloured by strain, `all` from above beside `cell`
+/// alone from below, both shaded at [`STRAIN_SHADING`].
+fn draw_surface_panels<DB: DrawingBackend>(
+    areas: &SurfaceAreas<DB>,
+    all: &[Triangle],
+    cell: &[Triangle],
+    frame: &SurfaceFrame,
+    opts: &SurfaceStyleOptions,
+    fs: f64,
+) -> Result<(), String> {
     let cam = frame.camera;
     match opts.coloring {
         Coloring::Domain => {
@@ -1549,126 +1609,151 @@ pub fn draw_surface<DB: DrawingBackend>(
                 strength: 1.0,
                 label: None,
             };
-            draw_panel(&pic, &all, &panel, opts.legend, fs)?;
+            draw_panel(&areas.pic, all, &panel, opts.legend, fs)?;
         }
         Coloring::Strain => {
-            let (left, right) = pic.split_horizontally(pw / 2);
+            let (left, right) = areas.pic.split_horizontally(areas.pw / 2);
             let above = Panel {
                 camera: cam,
                 screen: frame.screen,
                 strength: STRAIN_SHADING,
                 label: Some("from above"),
             };
-            draw_panel(&left, &all, &above, opts.legend, fs)?;
+            draw_panel(&left, all, &above, opts.legend, fs)?;
             let below = Panel {
                 camera: cam.below(),
                 screen: frame.below,
                 strength: STRAIN_SHADING,
                 label: Some("from below (substrate not drawn)"),
             };
-            draw_panel(&right, &cell, &below, opts.legend, fs)?;
+            draw_panel(&right, cell, &below, opts.legend, fs)?;
         }
     }
-    let text = |size: f64| TextStyle::from((FONT, (size * fs) as i32).into_font());
-    if opts.legend {
-        let seen = match opts.coloring {
-            Coloring::Domain => format!(
-                "seen from elevation {}°, azimuth {}°",
-                cam.elevation_deg, cam.azimuth_deg
-            ),
-            Coloring::Strain => format!(
-                "seen from elevation {}° (left) and {}° (right), azimuth {}°",
-                cam.elevation_deg,
-                cam.below().elevation_deg,
-                cam.azimuth_deg
-            ),
-        };
-        caption
-            .draw(&Text::new(
-                format!("The whole cell: the quarter cell mirrored about x = 0 and z = 0; {seen}."),
-                ((0.6 * fs) as i32, (0.3 * fs) as i32),
-                text(0.5),
-            ))
-            .map_err(e)?;
+    Ok(())
+}
+
+/// The caption of a surface view in `caption`: what it shows and where `cam` sees it from
+/// (and from below too when coloured by strain).
+fn draw_surface_caption<DB: DrawingBackend>(
+    caption: &DrawingArea<DB, Shift>,
+    cam: Camera,
+    coloring: Coloring,
+    fs: f64,
+) -> Result<(), String> {
+    let seen = match coloring {
+        Coloring::Domain => format!(
+            "seen from elevation {}°, azimuth {}°",
+            cam.elevation_deg, cam.azimuth_deg
+        ),
+        Coloring::Strain => format!(
+            "seen from elevation {}° (left) and {}° (right), azimuth {}°",
+            cam.elevation_deg,
+            cam.below().elevation_deg,
+            cam.azimuth_deg
+        ),
+    };
+    caption
+        .draw(&Text::new(
+            format!("The whole cell: the quarter cell mirrored about x = 0 and z = 0; {seen}."),
+            ((0.6 * fs) as i32, (0.3 * fs) as i32),
+            scaled_text(0.5, fs),
+        ))
+        .map_err(|x| x.to_string())
+}
+
+/// The legend of the domain colouring in the upper right corner of `pic` (`pw` wide): the
+/// membrane, the pillars if there are `pillars`, and the floor.
+fn draw_surface_legend<DB: DrawingBackend>(
+    pic: &DrawingArea<DB, Shift>,
+    pw: u32,
+    pillars: bool,
+    fs: f64,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    let entries: Vec<(RGBColor, &str)> = [
+        (MEMBRANE, "membrane (the cell's outer surface)"),
+        (SUBSTRATE, "pillars"),
+        (FLOOR, "substrate floor"),
+    ]
+    .into_iter()
+    .filter(|(c, _)| *c != SUBSTRATE || pillars)
+    .collect();
+    let style = scaled_text(0.55, fs);
+    let sz = (0.55 * fs) as i32;
+    let line = (0.9 * fs) as i32;
+    let mut text_w = 0;
+    for (_, name) in &entries {
+        text_w = text_w.max(pic.estimate_text_size(name, &style).map_err(e)?.0 as i32);
     }
-    if opts.legend && opts.coloring == Coloring::Domain {
-        let pillars = matches!(mesh.substrate.plane, Substrate::Pillars(_));
-        let entries: Vec<(RGBColor, &str)> = [
-            (MEMBRANE, "membrane (the cell's outer surface)"),
-            (SUBSTRATE, "pillars"),
-            (FLOOR, "substrate floor"),
-        ]
-        .into_iter()
-        .filter(|(c, _)| *c != SUBSTRATE || pillars)
-        .collect();
-        let style = text(0.55);
-        let sz = (0.55 * fs) as i32;
-        let line = (0.9 * fs) as i32;
-        let mut text_w = 0;
-        for (_, name) in &entries {
-            text_w = text_w.max(pic.estimate_text_size(name, &style).map_err(e)?.0 as i32);
-        }
-        let box_w = 2 * sz + 24 + text_w;
-        let x1 = pw as i32 - (0.4 * fs) as i32;
-        let x0 = x1 - box_w;
-        let y0 = (0.4 * fs) as i32;
-        let box_h = line * entries.len() as i32 + (0.4 * fs) as i32;
+    let box_w = 2 * sz + 24 + text_w;
+    let x1 = pw as i32 - (0.4 * fs) as i32;
+    let x0 = x1 - box_w;
+    let y0 = (0.4 * fs) as i32;
+    let box_h = line * entries.len() as i32 + (0.4 * fs) as i32;
+    pic.draw(&Rectangle::new(
+        [(x0, y0), (x1, y0 + box_h)],
+        WHITE.mix(0.9).filled(),
+    ))
+    .map_err(e)?;
+    pic.draw(&Rectangle::new([(x0, y0), (x1, y0 + box_h)], BLACK))
+        .map_err(e)?;
+    for (k, (c, name)) in entries.iter().enumerate() {
+        let y = y0 + (0.3 * fs) as i32 + k as i32 * line;
         pic.draw(&Rectangle::new(
-            [(x0, y0), (x1, y0 + box_h)],
-            WHITE.mix(0.9).filled(),
+            [(x0 + 8, y + 2), (x0 + 8 + 2 * sz, y + 2 + sz)],
+            c.filled(),
         ))
         .map_err(e)?;
-        pic.draw(&Rectangle::new([(x0, y0), (x1, y0 + box_h)], BLACK))
-            .map_err(e)?;
-        for (k, (c, name)) in entries.iter().enumerate() {
-            let y = y0 + (0.3 * fs) as i32 + k as i32 * line;
-            pic.draw(&Rectangle::new(
-                [(x0 + 8, y + 2), (x0 + 8 + 2 * sz, y + 2 + sz)],
-                c.filled(),
-            ))
-            .map_err(e)?;
-            pic.draw(&Text::new(
-                name.to_string(),
-                (x0 + 2 * sz + 16, y),
-                style.clone(),
-            ))
-            .map_err(e)?;
-        }
+        pic.draw(&Text::new(
+            name.to_string(),
+            (x0 + 2 * sz + 16, y),
+            style.clone(),
+        ))
+        .map_err(e)?;
     }
-    if opts.coloring == Coloring::Strain {
-        let mut chart = ChartBuilder::on(&bar)
-            .margin_top((1.0 * fs) as u32)
-            .margin_bottom((1.0 * fs) as u32)
-            .margin_right((0.4 * fs) as u32)
-            .y_label_area_size((3.2 * fs) as u32)
-            .build_cartesian_2d(0.0..1.0, 0.0..strain_max)
-            .map_err(e)?;
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .disable_y_mesh()
-            .disable_x_axis()
-            .y_desc("element mean ‖E‖")
-            .axis_desc_style((FONT, (0.6 * fs) as i32))
-            .label_style((FONT, (0.5 * fs) as i32))
-            .draw()
-            .map_err(e)?;
-        let steps = 200;
-        chart
-            .draw_series((0..steps).map(|k| {
-                let (v0, v1) = (
-                    strain_max * k as f64 / steps as f64,
-                    strain_max * (k + 1) as f64 / steps as f64,
-                );
-                let c: RGBColor = ViridisRGB.get_color_normalized(
-                    (0.5 * (v0 + v1)) as f32,
-                    0.0,
-                    strain_max as f32,
-                );
-                Rectangle::new([(0.0, v0), (1.0, v1)], c.filled())
-            }))
-            .map_err(e)?;
-    }
+    Ok(())
+}
+
+/// The colour bar of the strain colouring in `bar`: viridis from 0 to `strain_max`, in
+/// 200 steps, on a labelled axis.
+fn draw_strain_bar<DB: DrawingBackend>(
+    bar: &DrawingArea<DB, Shift>,
+    strain_max: f64,
+    fs: f64,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+    let mut chart = ChartBuilder::on(bar)
+        .margin_top((1.0 * fs) as u32)
+        .margin_bottom((1.0 * fs) as u32)
+        .margin_right((0.4 * fs) as u32)
+        .y_label_area_size((3.2 * fs) as u32)
+        .build_cartesian_2d(0.0..1.0, 0.0..strain_max)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .disable_y_mesh()
+        .disable_x_axis()
+        .y_desc("element mean ‖E‖")
+        .axis_desc_style((FONT, (0.6 * fs) as i32))
+        .label_style((FONT, (0.5 * fs) as i32))
+        .draw()
+        .map_err(e)?;
+    let steps = 200;
+    chart
+        .draw_series((0..steps).map(|k| {
+            let (v0, v1) = (
+                strain_max * k as f64 / steps as f64,
+                strain_max * (k + 1) as f64 / steps as f64,
+            );
+            let c: RGBColor = ViridisRGB.get_color_normalized(
+                (0.5 * (v0 + v1)) as f32,
+                0.0,
+                strain_max as f32,
+            );
+            Rectangle::new([(0.0, v0), (1.0, v1)], c.filled())
+        }))
+        .map_err(e)?;
     Ok(())
 }
 

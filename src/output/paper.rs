@@ -21,6 +21,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use super::OutputError;
+use super::geometry::{Backdrop, Bounds};
 use super::figures::{
     Compared, DisplacementMarks, StrainBars, contact_radius_figure, displacement_figure,
     run_phases, shape_figure_cached, shape_view, strain_bars_figure, strain_time_figure,
@@ -569,6 +570,14 @@ impl PaperReport {
     pub fn ok(&self) -> bool {
         self.problems.is_empty() && self.runs.iter().all(|r| r.result.is_ok())
     }
+
+    /// Notes a file written, or the problem met writing it.
+    fn record(&mut self, res: Result<PathBuf, OutputError>) {
+        match res {
+            Ok(p) => self.written.push(p),
+            Err(e) => self.problems.push(e.to_string()),
+        }
+    }
 }
 
 /// Draws the paper's figures and `comparison.md` into `out` from the run directories of
@@ -576,7 +585,38 @@ impl PaperReport {
 /// missing).
 pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
     let mut report = PaperReport::default();
-    let mut data: Vec<(String, RunData)> = Vec::new();
+    let data = load_runs(runs, &mut report);
+    // The substrate drawing, computed once per view (the pillar scenes share theirs).
+    let backdrops = Backdrops::default();
+    // The figures, drawn on the thread pool once all are listed (each writes its own file),
+    // and recorded in the order listed.
+    let mut figures = comparison_figures(out, &data);
+    figures.extend(shape_figures(out, &data, &backdrops));
+    {
+        use rayon::prelude::*;
+        let drawn: Vec<Result<PathBuf, OutputError>> = figures.par_iter().map(|f| f()).collect();
+        for res in drawn {
+            report.record(res);
+        }
+    }
+    for (name, text) in [
+        (COMPARISON_FILE, comparison_markdown(runs, &data)),
+        (TIMINGS_FILE, timings_markdown(runs, &data)),
+    ] {
+        let p = out.join(name);
+        report.record(
+            std::fs::write(&p, text)
+                .map(|_| p.clone())
+                .map_err(|e| OutputError::write(&p, e)),
+        );
+    }
+    report
+}
+
+/// The files of each of `runs` that started, by scene name; runs that cannot be read
+/// are noted in `report`.
+fn load_runs(runs: &[SceneOutcome], report: &mut PaperReport) -> Vec<(String, RunData)> {
+    let mut data = Vec::new();
     for r in runs {
         if r.result.is_err() && !r.dir.exists() {
             continue; // never started: its error is reported with the runs
@@ -586,23 +626,33 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
             Err(e) => report.problems.push(e.to_string()),
         }
     }
-    let get = |name: &str| data.iter().find(|(n, _)| n == name).map(|(_, d)| d);
-    let record = |res: Result<PathBuf, OutputError>, report: &mut PaperReport| match res {
-        Ok(p) => report.written.push(p),
-        Err(e) => report.problems.push(e.to_string()),
-    };
-    // The substrate drawing, computed once per view (the pillar scenes share theirs).
-    let (pillar_backdrop, flat_backdrop) = (Mutex::new(None), Mutex::new(None));
-    // The figures, drawn on the thread pool once all are listed (each writes its own file),
-    // and recorded in the order listed.
-    type Figure<'a> = Box<dyn Fn() -> Result<PathBuf, OutputError> + Send + Sync + 'a>;
-    let mut figures: Vec<Figure> = Vec::new();
-    let reported = |scene: &str, q: Quantity| {
-        reported_for(scene)
-            .find(|r| r.quantity == q)
-            .map(|r| r.value)
-    };
+    data
+}
 
+/// The run of scene `name` in `data`, if it was loaded.
+fn run_named<'a>(data: &'a [(String, RunData)], name: &str) -> Option<&'a RunData> {
+    data.iter().find(|(n, _)| n == name).map(|(_, d)| d)
+}
+
+/// The value the paper reports for `scene`'s quantity `q`, if it reports one.
+fn reported_value(scene: &str, q: Quantity) -> Option<f64> {
+    reported_for(scene)
+        .find(|r| r.quantity == q)
+        .map(|r| r.value)
+}
+
+/// One figure to draw: writes its file and returns its path.
+type Figure<'a> = Box<dyn Fn() -> Result<PathBuf, OutputError> + Send + Sync + 'a>;
+
+/// The pillar scenes whose nucleus displacement and strain are compared.
+const PILLAR_SCENES: [&str; 3] = ["pillars-push", "pillars-pull", "pillars-push-pull"];
+
+/// The figures comparing the runs of `data` with the paper, to be drawn into `out`: the
+/// contact radius, the nucleus displacement, the strain over time and at the end, and
+/// upside down against the control (for the runs there are).
+fn comparison_figures<'a>(out: &Path, data: &'a [(String, RunData)]) -> Vec<Figure<'a>> {
+    let get = |name: &str| run_named(data, name);
+    let mut figures: Vec<Figure> = Vec::new();
     // Contact radius on the flat substrate (Fig. 6b): both frames, the paper's marks on
     // the reference-frame curve (its measure).
     if let Some(flat) = get("flat") {
@@ -617,8 +667,7 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
     // Nucleus displacement for push, pull, push-pull (Fig. 9's kind of curve): the values
     // at T_g0 and T_as0 on the p_t curve; the paper's maximum against the lowest point of
     // the nucleus, p_t's lowest beside it.
-    let pillar_names = ["pillars-push", "pillars-pull", "pillars-push-pull"];
-    let pillar_runs: Vec<(&str, &RunData)> = pillar_names
+    let pillar_runs: Vec<(&str, &RunData)> = PILLAR_SCENES
         .iter()
         .filter_map(|n| get(n).map(|r| (*n, r)))
         .collect();
@@ -640,19 +689,7 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
     }
 
     // Strain norms (Fig. 7).
-    let bars: Vec<StrainBars> = pillar_names
-        .iter()
-        .map(|n| {
-            let ours = |q| get(n).and_then(|r| our_value(q, r, None).ok());
-            StrainBars {
-                scene: n.trim_start_matches("pillars-").to_string(),
-                paper_nucleus: reported(n, Quantity::StrainNucleus),
-                ours_nucleus: ours(Quantity::StrainNucleus),
-                paper_cytoplasm: reported(n, Quantity::StrainCytoplasm),
-                ours_cytoplasm: ours(Quantity::StrainCytoplasm),
-            }
-        })
-        .collect();
+    let bars = strain_bars(data);
     let p = out.join("strain-norms.png");
     figures.push(Box::new(move || {
         strain_bars_figure(&p, &bars, "cellsim", "paper (Sect. 3.2, Fig. 7)").map(|_| p.clone())
@@ -661,22 +698,89 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
     // Upside down against the control (Fig. 9).
     if let (Some(c), Some(u)) = (get(CONTROL), get("upside-down")) {
         let p = out.join("upside-down.png");
-        let d = reported("upside-down", Quantity::UpsideDownDifference);
+        let d = reported_value("upside-down", Quantity::UpsideDownDifference);
         figures.push(Box::new(move || {
             upside_down_figure(&p, c, u, d).map(|_| p.clone())
         }));
     }
+    figures
+}
 
-    // Shapes at each phase end (Figs. 5, 6a, 8); the pillar scenes share one frame.
-    let pillar_scenes = [
-        "pillars-push",
-        "pillars-pull",
-        "pillars-push-pull",
-        "upside-down",
-    ];
+/// The strain norms of the nucleus and the cytoplasm of each of [`PILLAR_SCENES`], the
+/// paper's and ours from `data`.
+fn strain_bars(data: &[(String, RunData)]) -> Vec<StrainBars> {
+    PILLAR_SCENES
+        .iter()
+        .map(|n| {
+            let ours = |q| run_named(data, n).and_then(|r| our_value(q, r, None).ok());
+            StrainBars {
+                scene: n.trim_start_matches("pillars-").to_string(),
+                paper_nucleus: reported_value(n, Quantity::StrainNucleus),
+                ours_nucleus: ours(Quantity::StrainNucleus),
+                paper_cytoplasm: reported_value(n, Quantity::StrainCytoplasm),
+                ours_cytoplasm: ours(Quantity::StrainCytoplasm),
+            }
+        })
+        .collect()
+}
+
+/// The scenes on pillars, drawn in one frame and sharing a substrate drawing.
+const SHARED_FRAME_SCENES: [&str; 4] = [
+    "pillars-push",
+    "pillars-pull",
+    "pillars-push-pull",
+    "upside-down",
+];
+
+/// The substrate drawings the shape figures share (see [`shape_figures`]).
+#[derive(Default)]
+struct Backdrops {
+    /// That of [`SHARED_FRAME_SCENES`], which share one view.
+    shared: Mutex<Option<Backdrop>>,
+    /// That of the other scenes.
+    others: Mutex<Option<Backdrop>>,
+}
+
+/// The shape figures at each phase end of every scene in `data` (Figs. 5, 6a, 8), to be
+/// drawn into `out`: [`SHARED_FRAME_SCENES`] in one frame, the others each in its own, the
+/// substrate drawing computed once and kept in `backdrops`.
+fn shape_figures<'a>(
+    out: &Path,
+    data: &'a [(String, RunData)],
+    backdrops: &'a Backdrops,
+) -> Vec<Figure<'a>> {
+    let shared = shared_view(data);
+    let mut figures: Vec<Figure> = Vec::new();
+    for s in SCENES {
+        let Some(r) = run_named(data, s.name) else {
+            continue;
+        };
+        let in_shared = SHARED_FRAME_SCENES.contains(&s.name);
+        let view = if in_shared { shared } else { None }
+            .unwrap_or_else(|| shape_view(&r.mesh, &r.states.iter().collect::<Vec<_>>()));
+        let phases = run_phases(r);
+        for st in &r.states {
+            let p = out.join(format!("shape-{}-{}.png", s.name, st.phase));
+            let cache = if in_shared {
+                &backdrops.shared
+            } else {
+                &backdrops.others
+            };
+            figures.push(Box::new(move || {
+                shape_figure_cached(&p, s.name, &r.mesh, st, view, phases.as_ref(), cache)
+                    .map(|_| p.clone())
+            }));
+        }
+    }
+    figures
+}
+
+/// The frame the shapes of [`SHARED_FRAME_SCENES`] share: the union of their runs' views
+/// in `data`; `None` if none ran.
+fn shared_view(data: &[(String, RunData)]) -> Option<Bounds> {
     let mut shared = None;
-    for n in pillar_scenes {
-        if let Some(r) = get(n) {
+    for n in SHARED_FRAME_SCENES {
+        if let Some(r) = run_named(data, n) {
             let states: Vec<&StateFile> = r.states.iter().collect();
             let v = shape_view(&r.mesh, &states);
             shared = Some(match shared {
@@ -685,50 +789,7 @@ pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
             });
         }
     }
-    for s in SCENES {
-        let Some(r) = get(s.name) else { continue };
-        let view = if pillar_scenes.contains(&s.name) {
-            shared
-        } else {
-            None
-        }
-        .unwrap_or_else(|| shape_view(&r.mesh, &r.states.iter().collect::<Vec<_>>()));
-        let phases = run_phases(r);
-        for st in &r.states {
-            let p = out.join(format!("shape-{}-{}.png", s.name, st.phase));
-            let cache = if pillar_scenes.contains(&s.name) {
-                &pillar_backdrop
-            } else {
-                &flat_backdrop
-            };
-            figures.push(Box::new(move || {
-                shape_figure_cached(&p, s.name, &r.mesh, st, view, phases.as_ref(), cache)
-                    .map(|_| p.clone())
-            }));
-        }
-    }
-
-    {
-        use rayon::prelude::*;
-        let drawn: Vec<Result<PathBuf, OutputError>> = figures.par_iter().map(|f| f()).collect();
-        for res in drawn {
-            record(res, &mut report);
-        }
-    }
-
-    for (name, text) in [
-        (COMPARISON_FILE, comparison_markdown(runs, &data)),
-        (TIMINGS_FILE, timings_markdown(runs, &data)),
-    ] {
-        let p = out.join(name);
-        record(
-            std::fs::write(&p, text)
-                .map(|_| p.clone())
-                .map_err(|e| OutputError::write(&p, e)),
-            &mut report,
-        );
-    }
-    report
+    shared
 }
 
 /// The comparison with the paper: physics only, so it changes only when the results do.
