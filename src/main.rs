@@ -686,44 +686,17 @@ fn sweep_error(e: &sweep::SweepError) -> ExitCode {
     ExitCode::from(if e.is_input() { 2 } else { 1 })
 }
 
+/// `cellsim sweep`: checks the arguments and loads the plan, then lists its points, writes
+/// its batch script or runs it.
 fn sweep_command(a: SweepArgs) -> ExitCode {
-    match a.action {
+    match &a.action {
         Some(SweepAction::Plot { dir, quantity }) => {
-            return match sweep::plot(&dir, quantity.as_deref()) {
-                Ok(files) => {
-                    for f in files {
-                        out!("{}", f.display());
-                    }
-                    ExitCode::SUCCESS
-                }
-                Err(e) => sweep_error(&e),
-            };
+            return sweep_plot_command(dir, quantity.as_deref());
         }
-        Some(SweepAction::Collect { dir }) => {
-            return match sweep::collect(&dir) {
-                Ok(c) => {
-                    out!("{}: {}", dir.display(), sweep::counts(&c.rows));
-                    for f in &c.written {
-                        out!("{}", f.display());
-                    }
-                    let missing = c.missing();
-                    if missing.is_empty() {
-                        ExitCode::SUCCESS
-                    } else {
-                        err!(
-                            "{} points without a run: {}",
-                            missing.len(),
-                            missing.join(" ")
-                        );
-                        ExitCode::FAILURE
-                    }
-                }
-                Err(e) => sweep_error(&e),
-            };
-        }
+        Some(SweepAction::Collect { dir }) => return sweep_collect_command(dir),
         None => {}
     }
-    let Some(file) = a.sweep else {
+    let Some(file) = a.sweep.clone() else {
         err!("error: no sweep file given");
         return ExitCode::from(2);
     };
@@ -747,55 +720,98 @@ fn sweep_command(a: SweepArgs) -> ExitCode {
         Err(e) => return sweep_error(&e),
     };
     if a.list {
-        let axes: Vec<&str> = plan.design.axes.iter().map(|x| x.path.as_str()).collect();
-        for p in &plan.points {
-            let at: Vec<String> = axes
-                .iter()
-                .zip(&p.values)
-                .map(|(a, v)| format!("{a}={v}"))
-                .collect();
-            match &p.case {
-                Ok(_) => out!("{} {}: valid", p.id, at.join(" ")),
-                Err(m) => out!(
-                    "{} {}: invalid: {}",
-                    p.id,
-                    at.join(" "),
-                    m.replace('\n', "; ")
-                ),
-            }
+        for line in plan.listing() {
+            out!("{line}");
         }
         return ExitCode::SUCCESS;
     }
     let out = a
         .out
+        .clone()
         .unwrap_or_else(|| PathBuf::from("runs/sweep").join(&plan.name));
     if a.slurm || a.submit {
-        let o = sweep::slurm::SlurmOptions {
-            shard_size: a.shard_size,
-            throttle: a.throttle,
-            sbatch_options: a.slurm_opt,
-            jobs: a.jobs,
-            retry_failed: a.retry_failed,
-            max_wall: a.max_wall,
-        };
-        let path = match sweep::slurm::write_script(&plan, &file, &out, &o) {
-            Ok(p) => p,
-            Err(e) => return sweep_error(&e),
-        };
-        out!(
-            "{}: {} points in {} array tasks",
-            path.display(),
-            plan.points.len(),
-            sweep::slurm::shards(plan.points.len(), a.shard_size)
-        );
-        if a.submit {
-            match sweep::slurm::submit(&path) {
-                Ok(id) => out!("submitted batch job {id}"),
-                Err(e) => return sweep_error(&e),
+        return sweep_slurm_command(&a, &plan, &file, &out);
+    }
+    sweep_run_command(&a, &plan, out, jobs, shard)
+}
+
+/// `cellsim sweep plot DIR`: redraws the figures and prints their paths.
+fn sweep_plot_command(dir: &Path, quantity: Option<&str>) -> ExitCode {
+    match sweep::plot(dir, quantity) {
+        Ok(files) => {
+            for f in files {
+                out!("{}", f.display());
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => sweep_error(&e),
+    }
+}
+
+/// `cellsim sweep collect DIR`: assembles the table and figures and lists the points
+/// without a run (then exit status 1).
+fn sweep_collect_command(dir: &Path) -> ExitCode {
+    match sweep::collect(dir) {
+        Ok(c) => {
+            out!("{}: {}", dir.display(), sweep::counts(&c.rows));
+            for f in &c.written {
+                out!("{}", f.display());
+            }
+            let missing = c.missing();
+            if missing.is_empty() {
+                ExitCode::SUCCESS
+            } else {
+                err!(
+                    "{} points without a run: {}",
+                    missing.len(),
+                    missing.join(" ")
+                );
+                ExitCode::FAILURE
             }
         }
-        return ExitCode::SUCCESS;
+        Err(e) => sweep_error(&e),
     }
+}
+
+/// `cellsim sweep --slurm`: writes the batch script of the plan (and submits it with
+/// `--submit`).
+fn sweep_slurm_command(a: &SweepArgs, plan: &sweep::Plan, file: &Path, out: &Path) -> ExitCode {
+    let o = sweep::slurm::SlurmOptions {
+        shard_size: a.shard_size,
+        throttle: a.throttle,
+        sbatch_options: a.slurm_opt.clone(),
+        jobs: a.jobs,
+        retry_failed: a.retry_failed,
+        max_wall: a.max_wall,
+    };
+    let path = match sweep::slurm::write_script(plan, file, out, &o) {
+        Ok(p) => p,
+        Err(e) => return sweep_error(&e),
+    };
+    out!(
+        "{}: {} points in {} array tasks",
+        path.display(),
+        plan.points.len(),
+        sweep::slurm::shards(plan.points.len(), a.shard_size)
+    );
+    if a.submit {
+        match sweep::slurm::submit(&path) {
+            Ok(id) => out!("submitted batch job {id}"),
+            Err(e) => return sweep_error(&e),
+        }
+    }
+    ExitCode::SUCCESS
+}
+
+/// Runs the plan's points (those of `shard`) into `out` and prints the outcome; exit
+/// status 1 when a point failed.
+fn sweep_run_command(
+    a: &SweepArgs,
+    plan: &sweep::Plan,
+    out: PathBuf,
+    jobs: usize,
+    shard: Option<(usize, usize)>,
+) -> ExitCode {
     let stop = stop_on_signals();
     let opts = sweep::SweepOptions {
         out: out.clone(),
@@ -806,27 +822,14 @@ fn sweep_command(a: SweepArgs) -> ExitCode {
         progress: !a.quiet,
         interrupt: stop.clone(),
     };
-    match sweep::run_sweep(&plan, &opts) {
+    match sweep::run_sweep(plan, &opts) {
         Ok(report) => {
             for r in &report.rows {
                 if r.status == sweep::Status::Invalid {
                     err!("invalid point {}: {}", r.id, r.reason);
                 }
             }
-            out!(
-                "{}: {} ({} run, {} reused{}) in {:.1} s wall; outputs in {}",
-                plan.name,
-                report.counts(),
-                report.ran,
-                report.reused,
-                if report.copied > 0 {
-                    format!(", {} copied", report.copied)
-                } else {
-                    String::new()
-                },
-                report.wall_seconds,
-                out.display()
-            );
+            out!("{}", report.summary(&plan.name, &out));
             for f in &report.written {
                 out!("{}", f.display());
             }

@@ -204,6 +204,8 @@ pub fn wall_at(points: &[(f64, f64)], target: f64) -> Option<(f64, bool)> {
     Some(w)
 }
 
+/// The study's report from its runs: BDF2's order, IDA's slopes, the speed-ups and the
+/// check of the reference (`series[0]`, the reference's output rows, as `rows[0]`).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn analyse(
     case: &Case,
@@ -214,45 +216,91 @@ pub(super) fn analyse(
     series: &[Vec<Observables>],
     interrupted: bool,
 ) -> StudyReport {
-    let q0 = Quantity::UyTop;
-    let local = |q: Quantity| {
-        let mut pts = ladder_points(rows, Role::Bdf2, q);
-        pts.sort_by(|a, b| b.0.total_cmp(&a.0));
-        let orders = pts
-            .windows(2)
-            .map(|w| (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln())
-            .collect::<Vec<f64>>();
-        (pts, orders)
-    };
-    let (sorted, local_orders) = local(ORDER_QUANTITY);
-    let order = fit_loglog(&sorted).map(|f| f.slope);
-    let per_q = |role| {
-        Quantity::ALL
-            .iter()
-            .map(|&q| {
-                (
-                    q,
-                    fit_loglog(&ladder_points(rows, role, q)).map(|f| f.slope),
-                )
-            })
-            .collect::<Vec<_>>()
-    };
+    let (bdf2_order, bdf2_order_fit) = order_fit(rows);
+    let (ida_speedup, ida_speedup_detail) = speedup_at_target(rows);
+    let reference_check = check_reference(&reference, rows, series);
+    StudyReport {
+        case: case.name.clone(),
+        case_file: file.to_string(),
+        output_times: series.first().map_or(0, |s| s.len()),
+        reference,
+        reference_check,
+        bdf2_order,
+        bdf2_order_fit,
+        ida_rtol_slopes: slopes(rows, Role::Ida),
+        ida_speedup,
+        ida_speedup_detail,
+        speedup_curve: speedup_curve(rows, &CURVE_ERRORS),
+        interrupted,
+        settings: opts.settings.clone(),
+        runs: rows.to_vec(),
+    }
+}
 
+/// BDF2's (dt, error of `q`) points, largest dt first, and the orders between successive
+/// rungs.
+fn bdf2_local_orders(rows: &[StudyRow], q: Quantity) -> (Vec<(f64, f64)>, Vec<f64>) {
+    let mut pts = ladder_points(rows, Role::Bdf2, q);
+    pts.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let orders = pts
+        .windows(2)
+        .map(|w| (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln())
+        .collect::<Vec<f64>>();
+    (pts, orders)
+}
+
+/// The slope of each quantity's error against the knob on the ladder of `role`.
+fn slopes(rows: &[StudyRow], role: Role) -> Vec<(Quantity, Option<f64>)> {
+    Quantity::ALL
+        .iter()
+        .map(|&q| {
+            (
+                q,
+                fit_loglog(&ladder_points(rows, role, q)).map(|f| f.slope),
+            )
+        })
+        .collect()
+}
+
+/// BDF2's fitted order on [`ORDER_QUANTITY`] and the details of the fit.
+fn order_fit(rows: &[StudyRow]) -> (Option<f64>, OrderFit) {
+    let (sorted, local_orders) = bdf2_local_orders(rows, ORDER_QUANTITY);
+    let order = fit_loglog(&sorted).map(|f| f.slope);
+    let fit = OrderFit {
+        quantity: ORDER_QUANTITY,
+        dt: sorted.iter().map(|p| p.0).collect(),
+        error: sorted.iter().map(|p| p.1).collect(),
+        local_orders,
+        final_uy_top_local_orders: bdf2_local_orders(rows, Quantity::UyTop).1,
+        per_quantity: slopes(rows, Role::Bdf2),
+    };
+    (order, fit)
+}
+
+/// The cheapest finished run of `role` whose error of the final uy_top is within
+/// [`TARGET_ERROR`]: (label, wall [s]).
+fn cheapest_meeting_target(rows: &[StudyRow], role: Role) -> Option<(String, f64)> {
+    rows.iter()
+        .filter(|r| r.role == role && r.finished)
+        .filter(|r| {
+            r.error(Quantity::UyTop)
+                .is_some_and(|e| e <= TARGET_ERROR)
+        })
+        .min_by(|a, b| a.wall_seconds.total_cmp(&b.wall_seconds))
+        .map(|r| (r.label.clone(), r.wall_seconds))
+}
+
+/// The speed-up at [`TARGET_ERROR`] of the final uy_top, and how it was obtained.
+fn speedup_at_target(rows: &[StudyRow]) -> (Option<f64>, Speedup) {
+    let q0 = Quantity::UyTop;
     let bdf2_w = wall_at(&work_points(rows, Role::Bdf2, q0), TARGET_ERROR);
     let ida_w = wall_at(&work_points(rows, Role::Ida, q0), TARGET_ERROR);
     let speedup = match (bdf2_w, ida_w) {
         (Some((b, _)), Some((i, _))) if i > 0.0 => Some(b / i),
         _ => None,
     };
-    let meeting_target = |role: Role| {
-        rows.iter()
-            .filter(|r| r.role == role && r.finished)
-            .filter(|r| r.error(q0).is_some_and(|e| e <= TARGET_ERROR))
-            .min_by(|a, b| a.wall_seconds.total_cmp(&b.wall_seconds))
-            .map(|r| (r.label.clone(), r.wall_seconds))
-    };
-    let ida_meeting_target = meeting_target(Role::Ida);
-    let bdf2_meeting_target = meeting_target(Role::Bdf2);
+    let ida_meeting_target = cheapest_meeting_target(rows, Role::Ida);
+    let bdf2_meeting_target = cheapest_meeting_target(rows, Role::Bdf2);
     // A lower bound only from BDF2's wall interpolated at the target: extrapolated beyond
     // its ladder, it bounds nothing.
     let speedup_at_least = match (bdf2_w, &ida_meeting_target) {
@@ -263,10 +311,27 @@ pub(super) fn analyse(
         (Some((_, b)), Some((_, i))) if *i > 0.0 => Some(b / i),
         _ => None,
     };
+    let detail = Speedup {
+        target_error: TARGET_ERROR,
+        bdf2_wall: bdf2_w.map(|w| w.0),
+        bdf2_extrapolated: bdf2_w.is_some_and(|w| w.1),
+        ida_wall: ida_w.map(|w| w.0),
+        ida_extrapolated: ida_w.is_some_and(|w| w.1),
+        ida_meeting_target,
+        ida_speedup_at_least: speedup_at_least,
+        bdf2_meeting_target,
+        cheapest_runs_ratio: cheapest_ratio,
+    };
+    (speedup, detail)
+}
 
-    let speedup_curve = speedup_curve(rows, &CURVE_ERRORS);
-
-    // The reference against BDF2's two smallest finished rungs.
+/// The reference against BDF2's two smallest finished rungs (None without one): their
+/// difference on the uy_top curve beside BDF2's own error by Richardson extrapolation.
+fn check_reference(
+    reference: &ReferenceInfo,
+    rows: &[StudyRow],
+    series: &[Vec<Observables>],
+) -> Option<ReferenceCheck> {
     let bdf2_runs: Vec<(usize, &StudyRow)> = {
         let mut v: Vec<(usize, &StudyRow)> = rows
             .iter()
@@ -276,7 +341,7 @@ pub(super) fn analyse(
         v.sort_by(|a, b| a.1.knob().total_cmp(&b.1.knob()));
         v
     };
-    let reference_check = bdf2_runs.first().map(|&(k, r)| {
+    bdf2_runs.first().map(|&(k, r)| {
         let uy = |r: &StudyRow| r.final_values.map(|o| o.uy_top).unwrap_or(f64::NAN);
         let uy_ref = reference.final_values.map(|o| o.uy_top).unwrap_or(f64::NAN);
         let scale = series[0].iter().fold(0.0_f64, |m, o| m.max(o.uy_top.abs()));
@@ -300,39 +365,6 @@ pub(super) fn analyse(
             },
             rel_diff_uy_top: (uy(r) - uy_ref).abs() / uy_ref.abs(),
         }
-    });
-
-    StudyReport {
-        case: case.name.clone(),
-        case_file: file.to_string(),
-        output_times: series.first().map_or(0, |s| s.len()),
-        reference,
-        reference_check,
-        bdf2_order: order,
-        bdf2_order_fit: OrderFit {
-            quantity: ORDER_QUANTITY,
-            dt: sorted.iter().map(|p| p.0).collect(),
-            error: sorted.iter().map(|p| p.1).collect(),
-            local_orders,
-            final_uy_top_local_orders: local(q0).1,
-            per_quantity: per_q(Role::Bdf2),
-        },
-        ida_rtol_slopes: per_q(Role::Ida),
-        ida_speedup: speedup,
-        ida_speedup_detail: Speedup {
-            target_error: TARGET_ERROR,
-            bdf2_wall: bdf2_w.map(|w| w.0),
-            bdf2_extrapolated: bdf2_w.is_some_and(|w| w.1),
-            ida_wall: ida_w.map(|w| w.0),
-            ida_extrapolated: ida_w.is_some_and(|w| w.1),
-            ida_meeting_target,
-            ida_speedup_at_least: speedup_at_least,
-            bdf2_meeting_target,
-            cheapest_runs_ratio: cheapest_ratio,
-        },
-        speedup_curve,
-        interrupted,
-        settings: opts.settings.clone(),
-        runs: rows.to_vec(),
-    }
+    })
 }
+

@@ -61,7 +61,7 @@ pub use analysis::{
     CURVE_ERRORS, LogLogFit, errors_against, fit_loglog, interp_loglog, ladder_points,
     speedup_curve, wall_at, work_points,
 };
-use report::{CsvWriter, fmt_num, fmt_rtol};
+use report::{CsvWriter, fmt_num, fmt_rtol, fmt_sci};
 pub use report::{
     OrderFit, Quantity, ReferenceCheck, ReferenceInfo, Role, Speedup, SpeedupAt, StudyReport,
     StudyRow, StudySettings, summary_text,
@@ -276,11 +276,7 @@ fn reusable(dir: &Path, settings: &RunSettings) -> Option<Summary> {
 }
 
 fn progress_line(r: &StudyRow) {
-    let err = |q| {
-        r.error(q)
-            .map(|e| format!("{e:.3e}"))
-            .unwrap_or_else(|| "—".into())
-    };
+    let err = |q| fmt_sci(r.error(q));
     if r.finished {
         eprintln!(
             "study: {:<22} {:>8.2} s wall {:>7} steps {:>6} jac   err uy_top {}  curve {}{}",
@@ -312,16 +308,79 @@ fn stopped_by_driver(r: &StudyRow) -> bool {
 /// Runs the study; see the module documentation.
 pub fn run_study(case: &Case, file: &str, opts: &StudyOptions) -> Result<StudyReport, StudyError> {
     std::fs::create_dir_all(&opts.out).map_err(io_err(&opts.out))?;
-    // Every error is computed internally (uy_top drives the fit and the speed-up); the
-    // CSV and figures show the quantities asked for.
-    let all = Quantity::ALL.to_vec();
-    let set = &opts.settings;
-    let mut csv = CsvWriter::create(opts.out.join("study.csv"), &set.quantities)?;
-    let interrupted = || opts.interrupt.is_set();
-
+    let csv = CsvWriter::create(opts.out.join("study.csv"), &opts.settings.quantities)?;
     // 1. The reference.
+    let (mut runs, failed_attempts) = reference_run(case, file, opts, csv)?;
+    // 2. The BDF2 ladder, from the largest dt that converges down.
+    bdf2_ladder(case, file, opts, &mut runs)?;
+    // 3. The IDA ladder.
+    ida_ladder(case, file, opts, &mut runs)?;
+    let Runs {
+        csv, rows, series, ..
+    } = runs;
+    drop(csv);
+
+    // 4. Fits, speed-up, reference check.
+    let reference = &rows[0];
+    let report = analyse(
+        case,
+        file,
+        opts,
+        ReferenceInfo {
+            label: reference.label.clone(),
+            rtol: reference.rtol,
+            atol: reference.atol,
+            failed_attempts,
+            wall_seconds: reference.wall_seconds,
+            stats: reference.stats.clone(),
+            final_values: reference.final_values,
+        },
+        &rows,
+        &series,
+        opts.interrupt.is_set(),
+    );
+    write_report(&report, &opts.out)?;
+    plots::plot_study(&report, &opts.out)?;
+    Ok(report)
+}
+
+/// The runs of a study so far, each written to study.csv as it comes.
+struct Runs {
+    csv: CsvWriter,
+    /// The reference's output rows, which every run is compared with.
+    reference: Vec<Observables>,
+    /// The rows of the runs, the reference first, in the order run.
+    rows: Vec<StudyRow>,
+    /// The output rows of each run, in the same order.
+    series: Vec<Vec<Observables>>,
+}
+
+impl Runs {
+    /// Computes a run's errors against the reference, prints and writes its row, and keeps
+    /// it; returns the row.
+    fn record(&mut self, mut o: Outcome) -> Result<StudyRow, StudyError> {
+        // Every error is computed internally (uy_top drives the fit and the speed-up); the
+        // CSV and figures show the quantities asked for.
+        o.row.errors = errors_against(&Quantity::ALL, &o.series, &self.reference, o.row.finished);
+        progress_line(&o.row);
+        self.csv.write(&o.row)?;
+        self.rows.push(o.row.clone());
+        self.series.push(o.series);
+        Ok(o.row)
+    }
+}
+
+/// Runs the reference: IDA at `ref_rtol`, 10× looser after each failure, at most
+/// [`REF_ATTEMPTS`] tries. Returns the runs with it first, and the tolerances that failed
+/// with why.
+fn reference_run(
+    case: &Case,
+    file: &str,
+    opts: &StudyOptions,
+    mut csv: CsvWriter,
+) -> Result<(Runs, Vec<(f64, String)>), StudyError> {
+    let set = &opts.settings;
     let mut failed_attempts = Vec::new();
-    let mut reference: Option<Outcome> = None;
     let mut rtol = set.ref_rtol;
     for _ in 0..REF_ATTEMPTS {
         let settings = {
@@ -332,63 +391,60 @@ pub fn run_study(case: &Case, file: &str, opts: &StudyOptions) -> Result<StudyRe
         let label = format!("ref-ida-rtol{}", fmt_rtol(rtol));
         let mut o = one_run(case, file, opts, Role::Reference, label, settings)?;
         if o.row.finished {
-            o.row.errors = errors_against(&all, &o.series, &o.series, true);
+            o.row.errors = errors_against(&Quantity::ALL, &o.series, &o.series, true);
             progress_line(&o.row);
             csv.write(&o.row)?;
-            reference = Some(o);
-            break;
+            let runs = Runs {
+                csv,
+                reference: o.series.clone(),
+                rows: vec![o.row],
+                series: vec![o.series],
+            };
+            return Ok((runs, failed_attempts));
         }
         progress_line(&o.row);
         csv.write(&o.row)?;
-        if interrupted() {
+        if opts.interrupt.is_set() {
             return Err(StudyError::Interrupted);
         }
         failed_attempts.push((rtol, o.row.failure.clone().unwrap_or_default()));
         rtol *= 10.0;
     }
-    let Some(reference) = reference else {
-        return Err(StudyError::Reference(format!(
-            "IDA did not finish at rtol {}: {}",
-            failed_attempts
-                .iter()
-                .map(|a| fmt_rtol(a.0))
-                .collect::<Vec<_>>()
-                .join(", "),
-            failed_attempts
-                .last()
-                .map(|a| a.1.clone())
-                .unwrap_or_default()
-        )));
-    };
-    let ref_series = reference.series.clone();
-    let mut rows: Vec<StudyRow> = vec![reference.row.clone()];
-    let mut series: Vec<Vec<Observables>> = vec![reference.series.clone()];
+    Err(StudyError::Reference(format!(
+        "IDA did not finish at rtol {}: {}",
+        failed_attempts
+            .iter()
+            .map(|a| fmt_rtol(a.0))
+            .collect::<Vec<_>>()
+            .join(", "),
+        failed_attempts
+            .last()
+            .map(|a| a.1.clone())
+            .unwrap_or_default()
+    )))
+}
 
-    let mut record = |mut o: Outcome,
-                      rows: &mut Vec<StudyRow>,
-                      series: &mut Vec<Vec<Observables>>|
-     -> Result<StudyRow, StudyError> {
-        o.row.errors = errors_against(&all, &o.series, &ref_series, o.row.finished);
-        progress_line(&o.row);
-        csv.write(&o.row)?;
-        rows.push(o.row.clone());
-        series.push(o.series);
-        Ok(o.row)
-    };
-
-    // 2. The BDF2 ladder, from the largest dt that converges down.
+/// Runs the BDF2 ladder: dt halved from `dt_max` until `rungs` rungs from the largest dt
+/// that converges down (giving up after [`MAX_LEADING_FAILURES`] failures first).
+fn bdf2_ladder(
+    case: &Case,
+    file: &str,
+    opts: &StudyOptions,
+    runs: &mut Runs,
+) -> Result<(), StudyError> {
+    let set = &opts.settings;
     let mut dt = set.dt_max;
     let mut dt_inertia = set.dt_inertia;
     let mut counted = 0;
     let mut leading_failures = 0;
-    while counted < set.rungs && !interrupted() {
+    while counted < set.rungs && !opts.interrupt.is_set() {
         let mut settings = scaled_settings(case, case::Integrator::Bdf2, set.bdf2_rtol);
         settings.dt = dt;
         settings.dt_inertia = dt_inertia;
         settings.max_wall_seconds = set.max_wall;
         let label = format!("bdf2-dt{}", fmt_num(dt));
         let o = one_run(case, file, opts, Role::Bdf2, label, settings)?;
-        let row = record(o, &mut rows, &mut series)?;
+        let row = runs.record(o)?;
         if row.finished || counted > 0 {
             counted += 1;
         } else {
@@ -411,44 +467,37 @@ pub fn run_study(case: &Case, file: &str, opts: &StudyOptions) -> Result<StudyRe
         dt /= 2.0;
         dt_inertia = dt_inertia.map(|h| h / 2.0);
     }
+    Ok(())
+}
 
-    // 3. The IDA ladder.
+/// Runs the IDA ladder: IDA at each of `rtols`.
+fn ida_ladder(
+    case: &Case,
+    file: &str,
+    opts: &StudyOptions,
+    runs: &mut Runs,
+) -> Result<(), StudyError> {
+    let set = &opts.settings;
     for &r in &set.rtols {
-        if interrupted() {
+        if opts.interrupt.is_set() {
             break;
         }
         let mut settings = scaled_settings(case, case::Integrator::Ida, r);
         settings.max_wall_seconds = set.max_wall;
         let label = format!("ida-rtol{}", fmt_rtol(r));
         let o = one_run(case, file, opts, Role::Ida, label, settings)?;
-        record(o, &mut rows, &mut series)?;
+        runs.record(o)?;
     }
-    drop(csv);
+    Ok(())
+}
 
-    // 4. Fits, speed-up, reference check.
-    let report = analyse(
-        case,
-        file,
-        opts,
-        ReferenceInfo {
-            label: reference.row.label.clone(),
-            rtol: reference.row.rtol,
-            atol: reference.row.atol,
-            failed_attempts,
-            wall_seconds: reference.row.wall_seconds,
-            stats: reference.row.stats.clone(),
-            final_values: reference.row.final_values,
-        },
-        &rows,
-        &series,
-        interrupted(),
-    );
-    let json = opts.out.join("study.json");
-    let text = serde_json::to_string_pretty(&report).map_err(|e| StudyError::Io {
+/// Writes study.json.
+fn write_report(report: &StudyReport, out: &Path) -> Result<(), StudyError> {
+    let json = out.join("study.json");
+    let text = serde_json::to_string_pretty(report).map_err(|e| StudyError::Io {
         path: json.display().to_string(),
         source: std::io::Error::other(e),
     })?;
-    std::fs::write(&json, text).map_err(io_err(&json))?;
-    plots::plot_study(&report, &opts.out)?;
-    Ok(report)
+    std::fs::write(&json, text).map_err(io_err(&json))
 }
+

@@ -17,7 +17,8 @@ use plotters::prelude::*;
 use crate::output::OutputError;
 use crate::output::figures::PALETTE;
 use crate::study::{
-    Quantity, Role, StudyReport, StudyRow, TARGET_ERROR, fit_loglog, ladder_points, work_points,
+    LogLogFit, ORDER_QUANTITY, Quantity, Role, StudyReport, StudyRow, TARGET_ERROR, fit_loglog,
+    ladder_points, work_points,
 };
 
 const FONT: &str = "sans-serif";
@@ -312,133 +313,150 @@ pub fn dt_sensitivity_figure(path: &Path, report: &StudyReport) -> Result<(), Ou
         .titled(&title, (FONT, 26))
         .map_err(|x| d(x.to_string()))?;
     let panels = root.split_evenly((1, 2));
-    let qs = &report.settings.quantities;
-    let rows = &report.runs;
-
     for (k, role) in [Role::Bdf2, Role::Ida].into_iter().enumerate() {
-        let lines: Vec<(Quantity, Vec<(f64, f64)>)> = qs
-            .iter()
-            .map(|&q| (q, ladder_points(rows, role, q)))
-            .collect();
-        let x = log_range(lines.iter().flat_map(|l| l.1.iter().map(|p| p.0)));
-        let y = log_range(lines.iter().flat_map(|l| l.1.iter().map(|p| p.1)));
-        // Headroom above the data for the legend.
-        let y = (y.0, y.1 * 300.0);
-        let (title, x_desc) = match role {
-            Role::Bdf2 => (
-                match report.bdf2_order {
-                    Some(p) => {
-                        format!("BDF2: error vs step dt — fitted order (uy(p_t)(t) curve) {p:.2}")
-                    }
-                    None => "BDF2: error vs step dt (no fit: fewer than 2 rungs)".into(),
-                },
-                "BDF2 time step dt (s)",
-            ),
-            _ => (
-                "IDA: error vs relative tolerance rtol".to_string(),
-                "IDA relative tolerance rtol (–)",
-            ),
-        };
-        let mut chart =
-            log_chart(&panels[k], &title, x, y, x_desc, "relative error (–)").map_err(d)?;
-        for (j, (q, pts)) in lines.iter().enumerate() {
-            if pts.is_empty() {
-                continue;
-            }
-            let color = PALETTE[j % PALETTE.len()];
-            let slope = fit_loglog(pts)
-                .map(|f| format!("slope {:.2}", f.slope))
-                .unwrap_or_else(|| "no fit".into());
-            draw_line(
-                &mut chart,
-                pts,
-                color,
-                role == Role::Ida,
-                &format!("{} ({slope})", q.title()),
-            )
-            .map_err(d)?;
-            if *q == crate::study::ORDER_QUANTITY {
-                // The fitted line itself, dashed, over the ladder's span.
-                if let Some(f) = fit_loglog(pts) {
-                    let (a, b) = pts.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), p| {
-                        (a.min(p.0), b.max(p.0))
-                    });
-                    let line: Vec<(f64, f64)> = (0..=20)
-                        .map(|i| {
-                            let xx = a * (b / a).powf(i as f64 / 20.0);
-                            (xx, f.eval(xx))
-                        })
-                        .collect();
-                    chart
-                        .draw_series(std::iter::once(DashedPathElement::new(
-                            line,
-                            10,
-                            6,
-                            BLACK.stroke_width(2),
-                        )))
-                        .map_err(|x| d(x.to_string()))?
-                        .label(format!(
-                            "fit: error ∝ {}^{:.2}",
-                            if role == Role::Bdf2 { "dt" } else { "rtol" },
-                            f.slope
-                        ))
-                        .legend(move |(x, y)| {
-                            DashedPathElement::new(
-                                vec![(x, y), (x + 30, y)],
-                                6,
-                                4,
-                                BLACK.stroke_width(2),
-                            )
-                        });
-                    // The theory's slope for comparison: order 2 for BDF2 (through the
-                    // smallest dt), error = rtol for IDA.
-                    let guide: Vec<(f64, f64)> = match role {
-                        Role::Bdf2 => {
-                            let p0 = pts
-                                .iter()
-                                .fold(pts[0], |m, p| if p.0 < m.0 { *p } else { m });
-                            [a, b]
-                                .iter()
-                                .map(|&xx| (xx, p0.1 * (xx / p0.0).powi(2)))
-                                .collect()
-                        }
-                        _ => [a, b].iter().map(|&xx| (xx, xx)).collect(),
-                    };
-                    chart
-                        .draw_series(std::iter::once(DashedPathElement::new(
-                            guide,
-                            3,
-                            5,
-                            GREY.stroke_width(2),
-                        )))
-                        .map_err(|x| d(x.to_string()))?
-                        .label(match role {
-                            Role::Bdf2 => "slope 2 (BDF2's order), through the smallest dt",
-                            _ => "error = rtol",
-                        })
-                        .legend(|(x, y)| {
-                            DashedPathElement::new(
-                                vec![(x, y), (x + 30, y)],
-                                3,
-                                4,
-                                GREY.stroke_width(2),
-                            )
-                        });
-                    // The slope printed on the plot, beside the middle of the fitted line.
-                    let mid = (a * b).sqrt();
-                    let style = TextStyle::from((FONT, 22).into_font()).color(&BLACK);
-                    chart
-                        .draw_series(std::iter::once(
-                            EmptyElement::at((mid, f.eval(mid)))
-                                + Text::new(format!("slope {:.2}", f.slope), (12, 14), style),
-                        ))
-                        .map_err(|x| d(x.to_string()))?;
-                }
-            }
-        }
-        legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(d)?;
+        ladder_panel(&panels[k], report, role).map_err(d)?;
     }
     root.present().map_err(|x| d(x.to_string()))
+}
+
+/// The title and x axis label of the panel of `role`'s ladder (BDF2's with its order).
+fn ladder_panel_title(report: &StudyReport, role: Role) -> (String, &'static str) {
+    match role {
+        Role::Bdf2 => (
+            match report.bdf2_order {
+                Some(p) => {
+                    format!("BDF2: error vs step dt — fitted order (uy(p_t)(t) curve) {p:.2}")
+                }
+                None => "BDF2: error vs step dt (no fit: fewer than 2 rungs)".into(),
+            },
+            "BDF2 time step dt (s)",
+        ),
+        _ => (
+            "IDA: error vs relative tolerance rtol".to_string(),
+            "IDA relative tolerance rtol (–)",
+        ),
+    }
+}
+
+/// One panel of `dt-sensitivity.png`: the error of each quantity against the knob of
+/// `role`'s ladder (dt or rtol) with its slope, and the fit on [`ORDER_QUANTITY`].
+fn ladder_panel(
+    area: &DrawingArea<BitMapBackend<'_>, Shift>,
+    report: &StudyReport,
+    role: Role,
+) -> Result<(), String> {
+    let qs = &report.settings.quantities;
+    let rows = &report.runs;
+    let lines: Vec<(Quantity, Vec<(f64, f64)>)> = qs
+        .iter()
+        .map(|&q| (q, ladder_points(rows, role, q)))
+        .collect();
+    let x = log_range(lines.iter().flat_map(|l| l.1.iter().map(|p| p.0)));
+    let y = log_range(lines.iter().flat_map(|l| l.1.iter().map(|p| p.1)));
+    // Headroom above the data for the legend.
+    let y = (y.0, y.1 * 300.0);
+    let (title, x_desc) = ladder_panel_title(report, role);
+    let mut chart = log_chart(area, &title, x, y, x_desc, "relative error (–)")?;
+    for (j, (q, pts)) in lines.iter().enumerate() {
+        if pts.is_empty() {
+            continue;
+        }
+        let color = PALETTE[j % PALETTE.len()];
+        let slope = fit_loglog(pts)
+            .map(|f| format!("slope {:.2}", f.slope))
+            .unwrap_or_else(|| "no fit".into());
+        draw_line(
+            &mut chart,
+            pts,
+            color,
+            role == Role::Ida,
+            &format!("{} ({slope})", q.title()),
+        )?;
+        if *q == ORDER_QUANTITY {
+            if let Some(f) = fit_loglog(pts) {
+                draw_fit(&mut chart, pts, f, role)?;
+            }
+        }
+    }
+    legend(&mut chart, SeriesLabelPosition::UpperLeft)
+}
+
+/// The fitted line of a ladder's `pts` over their span (dashed), the theory's slope beside
+/// it, and the fitted slope printed by the line.
+fn draw_fit<'a, 'b: 'a>(
+    chart: &mut LogChart<'a, 'b>,
+    pts: &[(f64, f64)],
+    f: LogLogFit,
+    role: Role,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<_>| x.to_string();
+    let (a, b) = pts.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), p| {
+        (a.min(p.0), b.max(p.0))
+    });
+    let line: Vec<(f64, f64)> = (0..=20)
+        .map(|i| {
+            let xx = a * (b / a).powf(i as f64 / 20.0);
+            (xx, f.eval(xx))
+        })
+        .collect();
+    chart
+        .draw_series(std::iter::once(DashedPathElement::new(
+            line,
+            10,
+            6,
+            BLACK.stroke_width(2),
+        )))
+        .map_err(e)?
+        .label(format!(
+            "fit: error ∝ {}^{:.2}",
+            if role == Role::Bdf2 { "dt" } else { "rtol" },
+            f.slope
+        ))
+        .legend(move |(x, y)| {
+            DashedPathElement::new(vec![(x, y), (x + 30, y)], 6, 4, BLACK.stroke_width(2))
+        });
+    chart
+        .draw_series(std::iter::once(DashedPathElement::new(
+            theory_guide(pts, role, (a, b)),
+            3,
+            5,
+            GREY.stroke_width(2),
+        )))
+        .map_err(e)?
+        .label(match role {
+            Role::Bdf2 => "slope 2 (BDF2's order), through the smallest dt",
+            _ => "error = rtol",
+        })
+        .legend(|(x, y)| {
+            DashedPathElement::new(vec![(x, y), (x + 30, y)], 3, 4, GREY.stroke_width(2))
+        });
+    // The slope printed on the plot, beside the middle of the fitted line.
+    let mid = (a * b).sqrt();
+    let style = TextStyle::from((FONT, 22).into_font()).color(&BLACK);
+    chart
+        .draw_series(std::iter::once(
+            EmptyElement::at((mid, f.eval(mid)))
+                + Text::new(format!("slope {:.2}", f.slope), (12, 14), style),
+        ))
+        .map_err(e)?;
+    Ok(())
+}
+
+/// The theory's slope for comparison over the span (a, b) of a ladder's `pts`: order 2
+/// for BDF2 (through the smallest dt), error = rtol for IDA.
+fn theory_guide(pts: &[(f64, f64)], role: Role, (a, b): (f64, f64)) -> Vec<(f64, f64)> {
+    match role {
+        Role::Bdf2 => {
+            let p0 = pts
+                .iter()
+                .fold(pts[0], |m, p| if p.0 < m.0 { *p } else { m });
+            [a, b]
+                .iter()
+                .map(|&xx| (xx, p0.1 * (xx / p0.0).powi(2)))
+                .collect()
+        }
+        _ => [a, b].iter().map(|&xx| (xx, xx)).collect(),
+    }
 }
 
 /// One series of a [`loglog_figure`] panel: measured points (markers and a line) and, when

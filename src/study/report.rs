@@ -1,6 +1,7 @@
 //! The study's records: what each run gave (a row of `study.csv`), the report written to
 //! `study.json`, the CSV writer and the text summary.
 
+use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
@@ -407,24 +408,55 @@ impl StudySettings {
     }
 }
 
+/// `x` with three decimals in exponent notation, or — when absent.
+pub(super) fn fmt_sci(x: Option<f64>) -> String {
+    x.map(|v| format!("{v:.3e}")).unwrap_or_else(|| "—".into())
+}
+
+/// `x` with two decimals, or — when absent.
+fn two_decimals(x: Option<f64>) -> String {
+    x.map(|v| format!("{v:.2}")).unwrap_or_else(|| "—".into())
+}
+
 /// The study's result as printed at the end: reference, table of runs, order, speed-up.
 pub fn summary_text(r: &StudyReport) -> String {
-    use std::fmt::Write as _;
     let mut s = String::new();
-    let e = |x: Option<f64>| x.map(|v| format!("{v:.3e}")).unwrap_or_else(|| "—".into());
+    write_reference(&mut s, &r.reference);
+    write_runs(&mut s, &r.runs);
+    write_order(&mut s, r);
+    write_speedup(&mut s, r);
+    write_curve_speedup(&mut s, &r.speedup_curve);
+    if let Some(c) = &r.reference_check {
+        let _ = writeln!(
+            s,
+            "reference check: {} differs from the reference by {} (max over t of uy_top, relative); BDF2's own error there (Richardson, dt and 2dt) {}; ratio {}",
+            c.bdf2_label,
+            fmt_sci(c.rel_diff_curve),
+            fmt_sci(c.richardson_curve),
+            two_decimals(c.ratio)
+        );
+    }
+    if r.interrupted {
+        let _ = writeln!(s, "interrupted: the study holds the runs done so far");
+    }
+    s
+}
+
+/// The summary's line of the reference: tolerances, cost, and the tolerances that failed.
+fn write_reference(s: &mut String, reference: &ReferenceInfo) {
     let _ = writeln!(
         s,
         "reference: IDA rtol {:e}, atol {:.3e} µm, {:.1} s wall, {} steps{}",
-        r.reference.rtol,
-        r.reference.atol,
-        r.reference.wall_seconds,
-        r.reference.stats.steps,
-        if r.reference.failed_attempts.is_empty() {
+        reference.rtol,
+        reference.atol,
+        reference.wall_seconds,
+        reference.stats.steps,
+        if reference.failed_attempts.is_empty() {
             String::new()
         } else {
             format!(
                 " (tighter tolerances failed: {})",
-                r.reference
+                reference
                     .failed_attempts
                     .iter()
                     .map(|a| format!("{:e}", a.0))
@@ -433,12 +465,16 @@ pub fn summary_text(r: &StudyReport) -> String {
             )
         }
     );
+}
+
+/// The summary's table of the ladders' runs: cost and errors, and why a run failed.
+fn write_runs(s: &mut String, runs: &[StudyRow]) {
     let _ = writeln!(
         s,
         "{:<22} {:>9} {:>8} {:>6} {:>6} {:>10} {:>10} {:>10}",
         "run", "wall s", "steps", "jac", "LU", "err uy_top", "err cr", "err curve"
     );
-    for row in &r.runs {
+    for row in runs {
         if row.role == Role::Reference {
             continue;
         }
@@ -450,15 +486,19 @@ pub fn summary_text(r: &StudyReport) -> String {
             row.stats.steps,
             row.stats.jacobian_evals,
             row.stats.lu_factorizations,
-            e(row.error(Quantity::UyTop)),
-            e(row.error(Quantity::ContactRadius)),
-            e(row.error(Quantity::UyTopCurve)),
+            fmt_sci(row.error(Quantity::UyTop)),
+            fmt_sci(row.error(Quantity::ContactRadius)),
+            fmt_sci(row.error(Quantity::UyTopCurve)),
             match &row.failure {
                 Some(f) if !row.finished => format!("  FAILED: {f}"),
                 _ => String::new(),
             }
         );
     }
+}
+
+/// The summary's line of BDF2's fitted order and local orders.
+fn write_order(s: &mut String, r: &StudyReport) {
     let f = &r.bdf2_order_fit;
     let round = |v: &[f64]| {
         v.iter()
@@ -469,25 +509,26 @@ pub fn summary_text(r: &StudyReport) -> String {
     let _ = writeln!(
         s,
         "bdf2_order (max-in-time error of uy_top(t)): {} over dt {:?}; local orders [{}] (final uy_top: [{}])",
-        r.bdf2_order
-            .map(|v| format!("{v:.2}"))
-            .unwrap_or_else(|| "—".into()),
+        two_decimals(r.bdf2_order),
         f.dt,
         round(&f.local_orders),
         round(&f.final_uy_top_local_orders)
     );
+}
+
+/// The summary's lines of the speed-up at the target error of the final uy_top: the
+/// interpolated one, its lower bound and the cheapest runs' ratio.
+fn write_speedup(s: &mut String, r: &StudyReport) {
     let d = &r.ida_speedup_detail;
     let how = |x: bool| if x { "extrapolated" } else { "interpolated" };
     let _ = writeln!(
         s,
         "ida_speedup at {:e} relative error of the final uy_top: {} (BDF2 {} s, {}; IDA {} s, {})",
         d.target_error,
-        r.ida_speedup
-            .map(|v| format!("{v:.2}"))
-            .unwrap_or_else(|| "—".into()),
-        e(d.bdf2_wall),
+        two_decimals(r.ida_speedup),
+        fmt_sci(d.bdf2_wall),
         how(d.bdf2_extrapolated),
-        e(d.ida_wall),
+        fmt_sci(d.ida_wall),
         how(d.ida_extrapolated)
     );
     if let (Some(v), Some((label, w))) = (d.ida_speedup_at_least, &d.ida_meeting_target) {
@@ -506,36 +547,23 @@ pub fn summary_text(r: &StudyReport) -> String {
             "cheapest runs within the target: {bl} ({bw:.2} s) over {il} ({iw:.2} s) = {v:.2}"
         );
     }
+}
+
+/// The summary's lines of the speed-up at each error of the uy_top curve.
+fn write_curve_speedup(s: &mut String, curve: &[SpeedupAt]) {
     let at = |w: Option<(f64, bool)>| match w {
         Some((v, x)) => format!("{v:.2} s{}", if x { " (extrapolated)" } else { "" }),
         None => "—".into(),
     };
-    for p in &r.speedup_curve {
+    for p in curve {
         let _ = writeln!(
             s,
             "speed-up at {:e} error of the uy_top curve: {} (BDF2 {}, IDA {})",
             p.error,
-            p.ratio
-                .map(|v| format!("{v:.2}"))
-                .unwrap_or_else(|| "—".into()),
+            two_decimals(p.ratio),
             at(p.bdf2_wall),
             at(p.ida_wall)
         );
     }
-    if let Some(c) = &r.reference_check {
-        let _ = writeln!(
-            s,
-            "reference check: {} differs from the reference by {} (max over t of uy_top, relative); BDF2's own error there (Richardson, dt and 2dt) {}; ratio {}",
-            c.bdf2_label,
-            e(c.rel_diff_curve),
-            e(c.richardson_curve),
-            c.ratio
-                .map(|v| format!("{v:.2}"))
-                .unwrap_or_else(|| "—".into())
-        );
-    }
-    if r.interrupted {
-        let _ = writeln!(s, "interrupted: the study holds the runs done so far");
-    }
-    s
 }
+

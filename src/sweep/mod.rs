@@ -39,7 +39,7 @@ pub mod plots;
 pub mod slurm;
 pub mod table;
 
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -57,6 +57,7 @@ use crate::stop::StopFlag;
 
 pub use compare::TableSpec;
 pub use design::{Design, DesignSpec, Kind};
+use design::DesignPoint;
 pub use table::{Row, Status};
 
 /// Why a sweep could not be set up, run or collected.
@@ -368,196 +369,281 @@ fn eval(expr: &str, lookup: &dyn Fn(&str) -> Option<f64>) -> Result<f64, String>
     Ok(v)
 }
 
-impl Plan {
-    /// Reads the sweep file and its base case and resolves every point. Errors name the
-    /// file (and line and column where ron tells them) or the axis.
-    pub fn load(sweep_file: &Path) -> Result<Plan, SweepError> {
-        let text = std::fs::read_to_string(sweep_file).map_err(|e| {
-            SweepError::Input(format!(
-                "{}: cannot read the sweep file: {e}",
-                sweep_file.display()
-            ))
-        })?;
-        let spec: SweepFile = ron::Options::default()
-            .from_str(text.trim_start_matches('\u{FEFF}'))
-            .map_err(|e| SweepError::Input(located(sweep_file, &e)))?;
-        let bad = |m: String| SweepError::Input(format!("{}: {m}", sweep_file.display()));
-        let name_ok = !spec.name.is_empty()
-            && !spec.name.contains(['/', '\\'])
-            && spec.name != "."
-            && spec.name != ".."
-            && !spec.name.chars().any(char::is_control);
-        if !name_ok {
-            return Err(bad(format!(
-                "name = {:?} is not allowed (a single path component, not empty)",
-                spec.name
-            )));
-        }
-        let base = sweep_file
-            .parent()
-            .unwrap_or(Path::new("."))
-            .join(&spec.base);
-        let base_text = std::fs::read(&base).map_err(|e| {
-            bad(format!(
-                "base = {:?}: cannot read {}: {e}",
-                spec.base,
-                base.display()
-            ))
-        })?;
-        let base_text = String::from_utf8(base_text).map_err(|_| {
-            bad(format!(
-                "base = {:?}: {} is not UTF-8 text",
-                spec.base,
-                base.display()
-            ))
-        })?;
-        let base_label = base.display().to_string();
-        let set: Vec<Override> = spec
-            .set
-            .iter()
-            .map(|s| {
-                Override::parse(s)
-                    .map(|o| o.from_source(format!("sweep set `{s}`")))
-                    .map_err(|m| bad(format!("set: {m}")))
-            })
-            .collect::<Result<_, _>>()?;
-        let design = Design::from_spec(&spec.design).map_err(|m| bad(format!("design: {m}")))?;
-        for d in &spec.derive {
-            Override::new(&d.path, "0").map_err(|m| bad(format!("derive: {m}")))?;
-        }
-        let table = spec
-            .table
-            .clone()
-            .map(|t| {
-                t.resolve(
-                    &design,
-                    &spec.name,
-                    sweep_file.parent().unwrap_or(Path::new(".")),
-                )
-            })
-            .transpose()
-            .map_err(bad)?;
+/// Reads and parses the sweep file; a parse error is located by line and column.
+fn read_sweep_file(sweep_file: &Path) -> Result<SweepFile, SweepError> {
+    let text = std::fs::read_to_string(sweep_file).map_err(|e| {
+        SweepError::Input(format!(
+            "{}: cannot read the sweep file: {e}",
+            sweep_file.display()
+        ))
+    })?;
+    ron::Options::default()
+        .from_str(text.trim_start_matches('\u{FEFF}'))
+        .map_err(|e| SweepError::Input(located(sweep_file, &e)))
+}
 
-        // The base alone (with `set`): the values of axes a point leaves alone, and the
-        // defaults derived expressions may read.
-        let base_case = Case::from_str_with_overrides(&base_text, &base_label, &set)
+/// Checks that the sweep's name is a single path component: it names a directory.
+fn check_name(name: &str) -> Result<(), String> {
+    let name_ok = !name.is_empty()
+        && !name.contains(['/', '\\'])
+        && name != "."
+        && name != ".."
+        && !name.chars().any(char::is_control);
+    if name_ok {
+        Ok(())
+    } else {
+        Err(format!(
+            "name = {name:?} is not allowed (a single path component, not empty)"
+        ))
+    }
+}
+
+/// Reads the base case file `path` (`base = name` in the sweep file) as text.
+fn read_base(path: &Path, name: &str) -> Result<String, String> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| format!("base = {name:?}: cannot read {}: {e}", path.display()))?;
+    String::from_utf8(bytes)
+        .map_err(|_| format!("base = {name:?}: {} is not UTF-8 text", path.display()))
+}
+
+/// Parses the sweep's `set`, each override named by its source.
+fn parse_set(set: &[String]) -> Result<Vec<Override>, String> {
+    set.iter()
+        .map(|s| {
+            Override::parse(s)
+                .map(|o| o.from_source(format!("sweep set `{s}`")))
+                .map_err(|m| format!("set: {m}"))
+        })
+        .collect()
+}
+
+/// The base case as the points are resolved against it.
+struct Base {
+    /// The base case file's text.
+    text: String,
+    /// Its path, as errors name it.
+    label: String,
+    /// The base with `set`, resolved (RON), if valid: the values of the axes a point
+    /// leaves alone.
+    resolved: Option<String>,
+    /// A case with every default (RON): the values derived expressions may read that the
+    /// base does not write.
+    defaults: String,
+}
+
+impl Base {
+    /// The base of text `text` read from `path`, with the sweep's `set`.
+    fn new(text: String, path: &Path, set: &[Override]) -> Base {
+        let label = path.display().to_string();
+        let resolved = Case::from_str_with_overrides(&text, &label, set)
             .ok()
             .and_then(|c| c.to_ron().ok());
         let defaults = Case::new("defaults", Substrate::pillars(), 1.0)
             .to_ron()
             .unwrap_or_default();
+        Base {
+            text,
+            label,
+            resolved,
+            defaults,
+        }
+    }
+}
 
-        let mut points = Vec::new();
-        for dp in design.points() {
-            let mut ovs = set.clone();
-            for (axis, v) in design.axes.iter().zip(&dp.values) {
-                let Some(v) = v else { continue };
-                if let Some(set) = axis.variant_set(v) {
-                    for o in set {
-                        let origin = format!("sweep axis `{}`, variant `{v}`: `{o}`", axis.path);
-                        ovs.push(Override::parse(o).map(|o| o.from_source(origin)).map_err(
-                            |m| bad(format!("design: axis `{}`: variant `{v}`: {m}", axis.path)),
-                        )?);
-                    }
-                } else {
-                    let o = Override::new(&axis.path, v)
-                        .map_err(|m| bad(format!("design: axis `{}`: value {m}", axis.path)))?;
-                    ovs.push(o.from_source(format!("sweep axis `{}` = {v}", axis.path)));
-                }
-            }
-            for d in &spec.derive {
-                let written = overrides::apply(&base_text, &ovs).ok().map(|e| e.text);
-                let lookup = |path: &str| -> Option<f64> {
-                    if let Some(o) = ovs.iter().rev().find(|o| o.path == path) {
-                        return parse_number(&o.value);
-                    }
-                    written
-                        .as_deref()
-                        .and_then(|t| value_at(t, path))
-                        .or_else(|| value_at(&defaults, path))
-                        .and_then(|v| parse_number(&v))
-                };
-                let v = eval(&d.expr, &lookup).map_err(|m| {
-                    bad(format!(
-                        "derive `{}` = `{}` at point {}: {m}",
-                        d.path, d.expr, dp.id
-                    ))
-                })?;
-                let value = design::fmt_number(v);
-                let origin = format!("sweep derive `{}` = `{}` = {value}", d.path, d.expr);
+/// Resolves a parsed sweep file: its base, overrides, design, table and points. Errors are
+/// what follows the sweep file's name in the message.
+fn resolve_plan(sweep_file: &Path, spec: SweepFile) -> Result<Plan, String> {
+    check_name(&spec.name)?;
+    let dir = sweep_file.parent().unwrap_or(Path::new("."));
+    let base_path = dir.join(&spec.base);
+    let base_text = read_base(&base_path, &spec.base)?;
+    let set = parse_set(&spec.set)?;
+    let design = Design::from_spec(&spec.design).map_err(|m| format!("design: {m}"))?;
+    for d in &spec.derive {
+        Override::new(&d.path, "0").map_err(|m| format!("derive: {m}"))?;
+    }
+    let table = spec
+        .table
+        .clone()
+        .map(|t| t.resolve(&design, &spec.name, dir))
+        .transpose()?;
+    let base = Base::new(base_text, &base_path, &set);
+    let mut points = design
+        .points()
+        .into_iter()
+        .map(|dp| resolve_point(&base, &design, &set, &spec.derive, dp))
+        .collect::<Result<Vec<_>, _>>()?;
+    if design.kind == Kind::OneAtATime {
+        drop_base_repeats(&mut points);
+    }
+    Ok(Plan {
+        name: spec.name,
+        sweep_file: sweep_file.to_path_buf(),
+        base: base_path,
+        design,
+        set,
+        derive: spec.derive,
+        table,
+        points,
+    })
+}
+
+/// Resolves one point of the design: `set`, its axis values and the derived fields
+/// applied to the base, its case and its value on each axis.
+fn resolve_point(
+    base: &Base,
+    design: &Design,
+    set: &[Override],
+    derive: &[Derived],
+    dp: DesignPoint,
+) -> Result<Point, String> {
+    let mut ovs = set.to_vec();
+    ovs.extend(axis_overrides(design, &dp.values)?);
+    for d in derive {
+        let o = derived_override(base, &ovs, d, &dp.id)?;
+        ovs.push(o);
+    }
+    let case = resolve_case(base, &ovs, &dp.id)?;
+    let values = point_values(design, &dp.values, base.resolved.as_deref());
+    Ok(Point {
+        id: dp.id,
+        values,
+        overrides: ovs,
+        case,
+    })
+}
+
+/// The overrides of a point's axis values, in axis order: a variant's set, or
+/// `PATH=VALUE` (an axis the point leaves alone gives none).
+fn axis_overrides(design: &Design, values: &[Option<String>]) -> Result<Vec<Override>, String> {
+    let mut ovs = Vec::new();
+    for (axis, v) in design.axes.iter().zip(values) {
+        let Some(v) = v else { continue };
+        if let Some(set) = axis.variant_set(v) {
+            for o in set {
+                let origin = format!("sweep axis `{}`, variant `{v}`: `{o}`", axis.path);
                 ovs.push(
-                    Override::new(&d.path, &value)
-                        .map_err(|m| bad(format!("derive: {m}")))?
-                        .from_source(origin),
+                    Override::parse(o)
+                        .map(|o| o.from_source(origin))
+                        .map_err(|m| format!("design: axis `{}`: variant `{v}`: {m}", axis.path))?,
                 );
             }
-            let case = match Case::from_str_with_overrides(&base_text, &base_label, &ovs) {
-                Ok(c) => {
-                    let text = c
-                        .to_ron()
-                        .map_err(|e| bad(format!("point {}: {e}", dp.id)))?;
-                    Ok((c, text))
-                }
-                Err(e @ CaseError::Invalid { .. }) => Err(e.to_string()),
-                Err(e) => {
-                    return Err(SweepError::Input(format!(
-                        "{}: point {}: {e}",
-                        sweep_file.display(),
-                        dp.id
-                    )));
-                }
-            };
-            // On one line: a struct value (a whole `active.pac`) is written over several
-            // lines in a case, and sweep.csv holds one point per line.
-            let values = design
-                .axes
-                .iter()
-                .zip(&dp.values)
-                .map(|(a, v)| match v {
-                    Some(v) => single_line(v),
-                    // A variant axis left alone: the base as it is.
-                    None if a.is_variants() => "(base)".to_string(),
-                    None => base_case
-                        .as_deref()
-                        .and_then(|t| value_at(t, &a.path))
-                        .map(|v| single_line(&v))
-                        .unwrap_or_default(),
-                })
-                .collect();
-            points.push(Point {
-                id: dp.id,
-                values,
-                overrides: ovs,
-                case,
-            });
+        } else {
+            let o = Override::new(&axis.path, v)
+                .map_err(|m| format!("design: axis `{}`: value {m}", axis.path))?;
+            ovs.push(o.from_source(format!("sweep axis `{}` = {v}", axis.path)));
         }
-        // One at a time: a value equal to the base's gives the base point again.
-        if design.kind == Kind::OneAtATime {
-            let base_text_resolved = points
-                .first()
-                .and_then(|p| p.case.as_ref().ok())
-                .map(|(_, t)| t.clone());
-            if let Some(b) = base_text_resolved {
-                let mut first = true;
-                points.retain(|p| {
-                    let keep = first || p.case.as_ref().map_or(true, |(_, t)| *t != b);
-                    first = false;
-                    keep
-                });
-            }
+    }
+    Ok(ovs)
+}
+
+/// The override of derived field `d` at point `id`: its expression evaluated on the
+/// point's case as `ovs` make it (a field neither sets nor the base writes: its default).
+fn derived_override(
+    base: &Base,
+    ovs: &[Override],
+    d: &Derived,
+    id: &str,
+) -> Result<Override, String> {
+    let written = overrides::apply(&base.text, ovs).ok().map(|e| e.text);
+    let lookup = |path: &str| -> Option<f64> {
+        if let Some(o) = ovs.iter().rev().find(|o| o.path == path) {
+            return parse_number(&o.value);
         }
-        Ok(Plan {
-            name: spec.name,
-            sweep_file: sweep_file.to_path_buf(),
-            base,
-            design,
-            set,
-            derive: spec.derive,
-            table,
-            points,
+        written
+            .as_deref()
+            .and_then(|t| value_at(t, path))
+            .or_else(|| value_at(&base.defaults, path))
+            .and_then(|v| parse_number(&v))
+    };
+    let v = eval(&d.expr, &lookup)
+        .map_err(|m| format!("derive `{}` = `{}` at point {id}: {m}", d.path, d.expr))?;
+    let value = design::fmt_number(v);
+    let origin = format!("sweep derive `{}` = `{}` = {value}", d.path, d.expr);
+    Ok(Override::new(&d.path, &value)
+        .map_err(|m| format!("derive: {m}"))?
+        .from_source(origin))
+}
+
+/// The case of point `id` and its text, or `Ok(Err(message))` when it breaks a rule of the
+/// schema (an invalid point); `Err` when an override does not apply at all.
+fn resolve_case(
+    base: &Base,
+    ovs: &[Override],
+    id: &str,
+) -> Result<Result<(Case, String), String>, String> {
+    match Case::from_str_with_overrides(&base.text, &base.label, ovs) {
+        Ok(c) => {
+            let text = c.to_ron().map_err(|e| format!("point {id}: {e}"))?;
+            Ok(Ok((c, text)))
+        }
+        Err(e @ CaseError::Invalid { .. }) => Ok(Err(e.to_string())),
+        Err(e) => Err(format!("point {id}: {e}")),
+    }
+}
+
+/// A point's value on each axis: its own, the base's for an axis it leaves alone, or
+/// `(base)` for a variant axis it leaves alone.
+fn point_values(design: &Design, values: &[Option<String>], base: Option<&str>) -> Vec<String> {
+    // On one line: a struct value (a whole `active.pac`) is written over several lines in
+    // a case, and sweep.csv holds one point per line.
+    design
+        .axes
+        .iter()
+        .zip(values)
+        .map(|(a, v)| match v {
+            Some(v) => single_line(v),
+            // A variant axis left alone: the base as it is.
+            None if a.is_variants() => "(base)".to_string(),
+            None => base
+                .and_then(|t| value_at(t, &a.path))
+                .map(|v| single_line(&v))
+                .unwrap_or_default(),
         })
+        .collect()
+}
+
+/// One at a time: drops the points after the first (the base) whose case is the base's,
+/// as a value equal to the base's gives the base point again.
+fn drop_base_repeats(points: &mut Vec<Point>) {
+    let base_text_resolved = points
+        .first()
+        .and_then(|p| p.case.as_ref().ok())
+        .map(|(_, t)| t.clone());
+    if let Some(b) = base_text_resolved {
+        let mut first = true;
+        points.retain(|p| {
+            let keep = first || p.case.as_ref().map_or(true, |(_, t)| *t != b);
+            first = false;
+            keep
+        });
+    }
+}
+
+impl Plan {
+    /// Reads the sweep file and its base case and resolves every point. Errors name the
+    /// file (and line and column where ron tells them) or the axis.
+    pub fn load(sweep_file: &Path) -> Result<Plan, SweepError> {
+        let spec = read_sweep_file(sweep_file)?;
+        resolve_plan(sweep_file, spec)
+            .map_err(|m| SweepError::Input(format!("{}: {m}", sweep_file.display())))
     }
 
+    /// Each point on one line, as `--list` prints them: id, value on each axis, and valid
+    /// or the validation message.
+    pub fn listing(&self) -> Vec<String> {
+        let axes: Vec<&str> = self.design.axes.iter().map(|x| x.path.as_str()).collect();
+        self.points
+            .iter()
+            .map(|p| {
+                let at = assignments(&axes, &p.values).join(" ");
+                match &p.case {
+                    Ok(_) => format!("{} {at}: valid", p.id),
+                    Err(m) => format!("{} {at}: invalid: {}", p.id, m.replace('\n', "; ")),
+                }
+            })
+            .collect()
+    }
     /// The record written to `sweep.json`.
     pub fn record(&self, settings: Settings) -> Record {
         Record {
@@ -733,6 +819,25 @@ impl SweepReport {
     pub fn counts(&self) -> String {
         counts(&self.rows)
     }
+
+    /// One line: the counts, what this command did, its wall time and where the outputs
+    /// of sweep `name` are (`out`).
+    pub fn summary(&self, name: &str, out: &Path) -> String {
+        format!(
+            "{}: {} ({} run, {} reused{}) in {:.1} s wall; outputs in {}",
+            name,
+            self.counts(),
+            self.ran,
+            self.reused,
+            if self.copied > 0 {
+                format!(", {} copied", self.copied)
+            } else {
+                String::new()
+            },
+            self.wall_seconds,
+            out.display()
+        )
+    }
 }
 
 /// "N points: a finished, b failed, ..." for `rows`.
@@ -768,6 +873,7 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((i, k))
 }
 
+/// The rows and counts the threads running a sweep's points share.
 struct Shared {
     csv: Option<std::fs::File>,
     rows: Vec<Option<Row>>,
@@ -783,242 +889,57 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
     let out = &opts.out;
     let points_dir = out.join("points");
     std::fs::create_dir_all(&points_dir).map_err(SweepError::io(&points_dir))?;
-    let record = plan.record(Settings {
-        jobs: opts.jobs,
-        retry_failed: opts.retry_failed,
-        max_wall: opts.max_wall,
-        shards: opts.shard.map(|(_, k)| k),
-    });
-    let json = serde_json::to_string_pretty(&record).map_err(|e| SweepError::Io {
-        path: out.join("sweep.json").display().to_string(),
-        source: std::io::Error::other(e),
-    })?;
-    write_atomic(&out.join("sweep.json"), &json)?;
+    let record = write_record(plan, opts)?;
     let axes = record.axes();
 
-    // What each point of this command needs.
     let mine: Vec<usize> = (0..plan.points.len())
         .filter(|&k| in_shard(k, opts.shard))
         .collect();
-    let mut rows: Vec<Option<Row>> = vec![None; plan.points.len()];
-    let mut queue = VecDeque::new();
-    let mut reused = 0;
-    // A point whose resolved case is an earlier point's is not run again: it gets a copy
-    // of that point's directory (runs are deterministic), e.g. a reading that leaves one
-    // of the scenes of a variant axis unchanged.
-    let mut first_with: std::collections::HashMap<&str, usize> = Default::default();
-    let mut copies: std::collections::HashMap<usize, Vec<usize>> = Default::default();
-    for &k in &mine {
-        let p = &plan.points[k];
-        let dir = points_dir.join(&p.id);
-        match &p.case {
-            Err(msg) => {
-                if std::fs::read_to_string(dir.join("invalid.txt"))
-                    .ok()
-                    .as_deref()
-                    != Some(msg.as_str())
-                {
-                    reset_point_dir(&dir, "invalid.txt", msg)?;
-                }
-                rows[k] = Some(read_row(&p.id, &p.values, &dir));
-            }
-            Ok((_, text)) if is_done(&dir, text, opts.retry_failed) => {
-                reused += 1;
-                rows[k] = Some(read_row(&p.id, &p.values, &dir));
-                first_with.entry(text).or_insert(k);
-            }
-            Ok((_, text)) => match first_with.get(text.as_str()) {
-                Some(&j) => copies.entry(j).or_default().push(k),
-                None => {
-                    first_with.insert(text, k);
-                    queue.push_back(k);
-                }
-            },
-        }
-    }
-    // Copies of points already done are made now.
-    let mut copied = 0;
-    for (j, ks) in copies.iter_mut() {
-        if rows[*j].is_some() {
-            for &k in ks.iter() {
-                let p = &plan.points[k];
-                let dir = points_dir.join(&p.id);
-                copy_point(&points_dir.join(&plan.points[*j].id), &dir)?;
-                rows[k] = Some(read_row(&p.id, &p.values, &dir));
-                copied += 1;
-            }
-            ks.clear();
-        }
-    }
-    let to_copy: usize = copies.values().map(Vec::len).sum();
-    let to_run = queue.len();
-    let total = to_run + to_copy;
+    let mut todo = Todo::sort(plan, &mine, &points_dir, opts.retry_failed)?;
+    todo.copy_done(plan, &points_dir)?;
+    let to_run = todo.queue.len();
+    let total = to_run + todo.to_copy();
 
     // sweep.csv as points finish (not when sharded: shards share the directory).
     let csv_path = out.join("sweep.csv");
-    let csv = if opts.shard.is_none() {
-        let mut f = std::fs::File::create(&csv_path).map_err(SweepError::io(&csv_path))?;
-        let mut text = table::header(&axes) + "\n";
-        for r in rows.iter().flatten() {
-            text += &(table::line(r) + "\n");
-        }
-        f.write_all(text.as_bytes())
-            .map_err(SweepError::io(&csv_path))?;
-        Some(f)
-    } else {
-        None
+    let csv = match opts.shard {
+        None => Some(start_csv(&csv_path, &axes, &todo.rows)?),
+        Some(_) => None,
     };
-
-    let visible = opts.progress && std::io::stderr().is_terminal();
-    let bar = if visible {
-        let pb = ProgressBar::new(total as u64);
-        let style = ProgressStyle::with_template(
-            "{prefix} [{bar:30}] {pos}/{len} points {msg}, {elapsed} elapsed, ETA {eta}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
-        pb.set_style(style);
-        pb.set_prefix(plan.name.clone());
-        pb.set_message("(0 failed)");
-        pb
-    } else {
-        ProgressBar::hidden()
-    };
+    let log = Log::new(plan, opts, total);
     if opts.progress {
-        let msg = format!(
-            "{}: {} points{}: {} to run, {} reused, {} invalid{}; {} at once",
-            plan.name,
-            mine.len(),
-            opts.shard
-                .map(|(i, k)| format!(" in shard {i}/{k}"))
-                .unwrap_or_default(),
-            to_run,
-            reused,
-            mine.len() - total - reused - copied,
-            if to_copy + copied > 0 {
-                format!(
-                    ", {} the same case as another point (copied)",
-                    to_copy + copied
-                )
-            } else {
-                String::new()
-            },
-            opts.jobs.min(to_run.max(1))
-        );
-        if visible {
-            bar.println(msg);
-        } else {
-            let _ = writeln!(std::io::stderr(), "{msg}");
-        }
+        log.say(start_message(plan, opts, mine.len(), &todo));
     }
-
-    let shared = Mutex::new(Shared {
-        csv,
+    let Todo {
         rows,
-        done: 0,
-        failed: 0,
+        queue,
+        copies,
+        reused,
         copied,
-    });
-    let queue = Mutex::new(queue);
-    let jobs = opts.jobs.clamp(1, to_run.max(1));
-    let first_error: Mutex<Option<SweepError>> = Mutex::new(None);
-    std::thread::scope(|scope| {
-        for _ in 0..jobs {
-            scope.spawn(|| {
-                loop {
-                    if opts.interrupt.is_set() {
-                        break;
-                    }
-                    let next = queue.lock().ok().and_then(|mut q| q.pop_front());
-                    let Some(k) = next else { break };
-                    let p = &plan.points[k];
-                    let dir = points_dir.join(&p.id);
-                    let t0 = Instant::now();
-                    let row = match run_point(p, &dir, opts) {
-                        Ok(row) => row,
-                        Err(e) => {
-                            if let Ok(mut f) = first_error.lock() {
-                                f.get_or_insert(e);
-                            }
-                            break;
-                        }
-                    };
-                    let wall = t0.elapsed().as_secs_f64();
-                    let mut done = vec![(k, row, None)];
-                    // Its copies, unless it was interrupted (then they run later).
-                    if done[0].1.status != Status::Interrupted {
-                        for &c in copies.get(&k).into_iter().flatten() {
-                            let q = &plan.points[c];
-                            let cdir = points_dir.join(&q.id);
-                            match copy_point(&dir, &cdir) {
-                                Ok(()) => done.push((
-                                    c,
-                                    read_row(&q.id, &q.values, &cdir),
-                                    Some(p.id.as_str()),
-                                )),
-                                Err(e) => {
-                                    if let Ok(mut f) = first_error.lock() {
-                                        f.get_or_insert(e);
-                                    }
-                                }
-                            }
-                        }
-                    }
-                    let Ok(mut sh) = shared.lock() else { break };
-                    for (k, row, copy_of) in done {
-                        sh.done += 1;
-                        sh.copied += usize::from(copy_of.is_some());
-                        if row.status == Status::Failed {
-                            sh.failed += 1;
-                        }
-                        if let Some(f) = sh.csv.as_mut() {
-                            let _ = f
-                                .write_all((table::line(&row) + "\n").as_bytes())
-                                .and_then(|_| f.flush());
-                        }
-                        let line = match copy_of {
-                            None => point_line(&row, &axes, sh.done, total, wall),
-                            Some(of) => copy_line(&row, &axes, sh.done, total, of),
-                        };
-                        if visible {
-                            bar.inc(1);
-                            bar.set_message(format!("({} failed)", sh.failed));
-                            if row.status != Status::Finished {
-                                bar.println(line);
-                            }
-                        } else if opts.progress {
-                            let _ = writeln!(std::io::stderr(), "{line}");
-                        }
-                        sh.rows[k] = Some(row);
-                    }
-                }
-            });
-        }
-    });
-    bar.finish_and_clear();
-    if let Some(e) = first_error.into_inner().ok().flatten() {
-        return Err(e);
-    }
-    let (rows, copied) = shared
-        .into_inner()
-        .map(|s| (s.rows, s.copied))
-        .unwrap_or_default();
-    let rows: Vec<Row> = mine
-        .iter()
-        .map(|&k| {
-            let p = &plan.points[k];
-            rows[k]
-                .clone()
-                .unwrap_or_else(|| read_row(&p.id, &p.values, &points_dir.join(&p.id)))
-        })
-        .collect();
-    let mut written = Vec::new();
-    if opts.shard.is_none() {
-        write_atomic(&csv_path, &table::render(&axes, &rows))?;
-        written.push(csv_path);
-        written.extend(plots::draw(out, &record, &rows, None)?);
-        written.extend(compare::write(out, &record, &rows)?);
-    }
+    } = todo;
+    let runner = Runner {
+        plan,
+        opts,
+        points_dir: &points_dir,
+        axes: &axes,
+        copies: &copies,
+        log: &log,
+        queue: Mutex::new(queue),
+        shared: Mutex::new(Shared {
+            csv,
+            rows,
+            done: 0,
+            failed: 0,
+            copied,
+        }),
+        first_error: Mutex::new(None),
+    };
+    let (rows, copied) = runner.run(opts.jobs.clamp(1, to_run.max(1)))?;
+    let rows = rows_in_order(plan, &mine, &points_dir, &rows);
+    let written = match opts.shard {
+        None => write_table_and_figures(out, &record, &rows)?,
+        Some(_) => Vec::new(),
+    };
     Ok(SweepReport {
         rows,
         ran: to_run,
@@ -1029,13 +950,381 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
     })
 }
 
+/// Writes `DIR/sweep.json`, the plan with the command's settings; returns the record.
+fn write_record(plan: &Plan, opts: &SweepOptions) -> Result<Record, SweepError> {
+    let record = plan.record(Settings {
+        jobs: opts.jobs,
+        retry_failed: opts.retry_failed,
+        max_wall: opts.max_wall,
+        shards: opts.shard.map(|(_, k)| k),
+    });
+    let path = opts.out.join("sweep.json");
+    let json = serde_json::to_string_pretty(&record).map_err(|e| SweepError::Io {
+        path: path.display().to_string(),
+        source: std::io::Error::other(e),
+    })?;
+    write_atomic(&path, &json)?;
+    Ok(record)
+}
+
+/// The points of a sweep command sorted by what they need.
+struct Todo {
+    /// By point number, the rows of the points settled before anything runs.
+    rows: Vec<Option<Row>>,
+    /// The points to run, in design order.
+    queue: VecDeque<usize>,
+    /// By point j, the later points whose case is j's: they get a copy of j's directory.
+    copies: HashMap<usize, Vec<usize>>,
+    /// Points whose run was already there.
+    reused: usize,
+    /// Copies made of points already done.
+    copied: usize,
+}
+
+impl Todo {
+    /// Sorts the points `mine`: an invalid point gets its message (unless it has it), a
+    /// point whose run is there is reused, a point whose case is an earlier one's waits
+    /// for a copy of it, the others are queued.
+    fn sort(
+        plan: &Plan,
+        mine: &[usize],
+        points_dir: &Path,
+        retry_failed: bool,
+    ) -> Result<Todo, SweepError> {
+        let mut todo = Todo {
+            rows: vec![None; plan.points.len()],
+            queue: VecDeque::new(),
+            copies: HashMap::new(),
+            reused: 0,
+            copied: 0,
+        };
+        // A point whose resolved case is an earlier point's is not run again: it gets a
+        // copy of that point's directory (runs are deterministic), e.g. a reading that
+        // leaves one of the scenes of a variant axis unchanged.
+        let mut first_with: HashMap<&str, usize> = HashMap::new();
+        for &k in mine {
+            let p = &plan.points[k];
+            let dir = points_dir.join(&p.id);
+            match &p.case {
+                Err(msg) => {
+                    if std::fs::read_to_string(dir.join("invalid.txt"))
+                        .ok()
+                        .as_deref()
+                        != Some(msg.as_str())
+                    {
+                        reset_point_dir(&dir, "invalid.txt", msg)?;
+                    }
+                    todo.rows[k] = Some(read_row(&p.id, &p.values, &dir));
+                }
+                Ok((_, text)) if is_done(&dir, text, retry_failed) => {
+                    todo.reused += 1;
+                    todo.rows[k] = Some(read_row(&p.id, &p.values, &dir));
+                    first_with.entry(text).or_insert(k);
+                }
+                Ok((_, text)) => match first_with.get(text.as_str()) {
+                    Some(&j) => todo.copies.entry(j).or_default().push(k),
+                    None => {
+                        first_with.insert(text, k);
+                        todo.queue.push_back(k);
+                    }
+                },
+            }
+        }
+        Ok(todo)
+    }
+
+    /// Makes the copies of the points already done now.
+    fn copy_done(&mut self, plan: &Plan, points_dir: &Path) -> Result<(), SweepError> {
+        for (j, ks) in self.copies.iter_mut() {
+            if self.rows[*j].is_some() {
+                for &k in ks.iter() {
+                    let p = &plan.points[k];
+                    let dir = points_dir.join(&p.id);
+                    copy_point(&points_dir.join(&plan.points[*j].id), &dir)?;
+                    self.rows[k] = Some(read_row(&p.id, &p.values, &dir));
+                    self.copied += 1;
+                }
+                ks.clear();
+            }
+        }
+        Ok(())
+    }
+
+    /// Copies still to make, once the points they copy have run.
+    fn to_copy(&self) -> usize {
+        self.copies.values().map(Vec::len).sum()
+    }
+}
+
+/// Creates `sweep.csv` with its header and the rows settled so far (the others are
+/// appended as they finish).
+fn start_csv(
+    path: &Path,
+    axes: &[String],
+    rows: &[Option<Row>],
+) -> Result<std::fs::File, SweepError> {
+    let mut f = std::fs::File::create(path).map_err(SweepError::io(path))?;
+    let mut text = table::header(axes) + "\n";
+    for r in rows.iter().flatten() {
+        text += &(table::line(r) + "\n");
+    }
+    f.write_all(text.as_bytes()).map_err(SweepError::io(path))?;
+    Ok(f)
+}
+
+/// The first line of a sweep's progress: its points and what they need.
+fn start_message(plan: &Plan, opts: &SweepOptions, mine: usize, todo: &Todo) -> String {
+    let (to_run, to_copy) = (todo.queue.len(), todo.to_copy());
+    let total = to_run + to_copy;
+    format!(
+        "{}: {} points{}: {} to run, {} reused, {} invalid{}; {} at once",
+        plan.name,
+        mine,
+        opts.shard
+            .map(|(i, k)| format!(" in shard {i}/{k}"))
+            .unwrap_or_default(),
+        to_run,
+        todo.reused,
+        mine - total - todo.reused - todo.copied,
+        if to_copy + todo.copied > 0 {
+            format!(
+                ", {} the same case as another point (copied)",
+                to_copy + todo.copied
+            )
+        } else {
+            String::new()
+        },
+        opts.jobs.min(to_run.max(1))
+    )
+}
+
+/// Where a sweep's progress goes: a bar on a terminal, a line per point otherwise, or
+/// nowhere.
+struct Log {
+    bar: ProgressBar,
+    /// Whether the bar shows (progress asked for, stderr a terminal).
+    visible: bool,
+    /// Whether progress was asked for.
+    progress: bool,
+    /// Points to run or copy.
+    total: usize,
+}
+
+impl Log {
+    /// The log of `total` points of `plan`.
+    fn new(plan: &Plan, opts: &SweepOptions, total: usize) -> Log {
+        let visible = opts.progress && std::io::stderr().is_terminal();
+        let bar = if visible {
+            let pb = ProgressBar::new(total as u64);
+            let style = ProgressStyle::with_template(
+                "{prefix} [{bar:30}] {pos}/{len} points {msg}, {elapsed} elapsed, ETA {eta}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> ");
+            pb.set_style(style);
+            pb.set_prefix(plan.name.clone());
+            pb.set_message("(0 failed)");
+            pb
+        } else {
+            ProgressBar::hidden()
+        };
+        Log {
+            bar,
+            visible,
+            progress: opts.progress,
+            total,
+        }
+    }
+
+    /// Prints `msg` above the bar, or on stderr without one.
+    fn say(&self, msg: String) {
+        if self.visible {
+            self.bar.println(msg);
+        } else {
+            let _ = writeln!(std::io::stderr(), "{msg}");
+        }
+    }
+
+    /// Advances the bar past a finished point (printing its `line` unless it finished
+    /// well), or prints the line without a bar.
+    fn point(&self, row: &Row, line: String, failed: usize) {
+        if self.visible {
+            self.bar.inc(1);
+            self.bar.set_message(format!("({failed} failed)"));
+            if row.status != Status::Finished {
+                self.bar.println(line);
+            }
+        } else if self.progress {
+            let _ = writeln!(std::io::stderr(), "{line}");
+        }
+    }
+}
+
+/// A finished point: its number, its row, and the id of the point it is a copy of.
+type Done<'a> = (usize, Row, Option<&'a str>);
+
+/// What the threads running a sweep's points share.
+struct Runner<'a> {
+    plan: &'a Plan,
+    opts: &'a SweepOptions,
+    points_dir: &'a Path,
+    axes: &'a [String],
+    copies: &'a HashMap<usize, Vec<usize>>,
+    log: &'a Log,
+    queue: Mutex<VecDeque<usize>>,
+    shared: Mutex<Shared>,
+    first_error: Mutex<Option<SweepError>>,
+}
+
+impl<'a> Runner<'a> {
+    /// Runs the queue on `jobs` threads; returns the rows by point number and the count of
+    /// copies made, or the first error writing a point's directory.
+    fn run(self, jobs: usize) -> Result<(Vec<Option<Row>>, usize), SweepError> {
+        std::thread::scope(|scope| {
+            for _ in 0..jobs {
+                scope.spawn(|| self.work());
+            }
+        });
+        self.log.bar.finish_and_clear();
+        if let Some(e) = self.first_error.into_inner().ok().flatten() {
+            return Err(e);
+        }
+        Ok(self
+            .shared
+            .into_inner()
+            .map(|s| (s.rows, s.copied))
+            .unwrap_or_default())
+    }
+
+    /// One thread: runs points off the queue until it is empty, the sweep is interrupted
+    /// or a point's directory cannot be written.
+    fn work(&self) {
+        loop {
+            if self.opts.interrupt.is_set() {
+                break;
+            }
+            let next = self.queue.lock().ok().and_then(|mut q| q.pop_front());
+            let Some(k) = next else { break };
+            let p = &self.plan.points[k];
+            let dir = self.points_dir.join(&p.id);
+            let t0 = Instant::now();
+            let row = match run_point(p, &dir, self.opts) {
+                Ok(row) => row,
+                Err(e) => {
+                    self.fail(e);
+                    break;
+                }
+            };
+            let wall = t0.elapsed().as_secs_f64();
+            let done = self.with_copies(k, &dir, row);
+            if !self.record(done, wall) {
+                break;
+            }
+        }
+    }
+
+    /// Point `k`'s row, then its copies' (made now, unless it was interrupted: then they
+    /// run later).
+    fn with_copies(&self, k: usize, dir: &Path, row: Row) -> Vec<Done<'a>> {
+        let p = &self.plan.points[k];
+        let mut done = vec![(k, row, None)];
+        if done[0].1.status != Status::Interrupted {
+            for &c in self.copies.get(&k).into_iter().flatten() {
+                let q = &self.plan.points[c];
+                let cdir = self.points_dir.join(&q.id);
+                match copy_point(dir, &cdir) {
+                    Ok(()) => done.push((
+                        c,
+                        read_row(&q.id, &q.values, &cdir),
+                        Some(p.id.as_str()),
+                    )),
+                    Err(e) => self.fail(e),
+                }
+            }
+        }
+        done
+    }
+
+    /// Counts finished points, appends their lines to sweep.csv and logs them (`wall`: the
+    /// run's wall time); false if another thread panicked holding the rows.
+    fn record(&self, done: Vec<Done<'a>>, wall: f64) -> bool {
+        let Ok(mut sh) = self.shared.lock() else {
+            return false;
+        };
+        for (k, row, copy_of) in done {
+            sh.done += 1;
+            sh.copied += usize::from(copy_of.is_some());
+            if row.status == Status::Failed {
+                sh.failed += 1;
+            }
+            if let Some(f) = sh.csv.as_mut() {
+                let _ = f
+                    .write_all((table::line(&row) + "\n").as_bytes())
+                    .and_then(|_| f.flush());
+            }
+            let total = self.log.total;
+            let line = match copy_of {
+                None => point_line(&row, self.axes, sh.done, total, wall),
+                Some(of) => copy_line(&row, self.axes, sh.done, total, of),
+            };
+            self.log.point(&row, line, sh.failed);
+            sh.rows[k] = Some(row);
+        }
+        true
+    }
+
+    /// Keeps `e` if it is the first error.
+    fn fail(&self, e: SweepError) {
+        if let Ok(mut f) = self.first_error.lock() {
+            f.get_or_insert(e);
+        }
+    }
+}
+
+/// The rows of the points `mine`, in design order: a point without one in `rows` (not
+/// run, the sweep interrupted) is read from its directory.
+fn rows_in_order(
+    plan: &Plan,
+    mine: &[usize],
+    points_dir: &Path,
+    rows: &[Option<Row>],
+) -> Vec<Row> {
+    mine.iter()
+        .map(|&k| {
+            let p = &plan.points[k];
+            rows[k]
+                .clone()
+                .unwrap_or_else(|| read_row(&p.id, &p.values, &points_dir.join(&p.id)))
+        })
+        .collect()
+}
+
+/// Writes `DIR/sweep.csv` from `rows` and draws the figures and comparison table; returns
+/// the files written.
+fn write_table_and_figures(
+    dir: &Path,
+    record: &Record,
+    rows: &[Row],
+) -> Result<Vec<PathBuf>, SweepError> {
+    let csv = dir.join("sweep.csv");
+    write_atomic(&csv, &table::render(&record.axes(), rows))?;
+    let mut written = vec![csv];
+    written.extend(plots::draw(dir, record, rows, None)?);
+    written.extend(compare::write(dir, record, rows)?);
+    Ok(written)
+}
+
+/// `PATH=VALUE` of a point on each axis.
+fn assignments(axes: &[impl AsRef<str>], values: &[String]) -> Vec<String> {
+    axes.iter()
+        .zip(values)
+        .map(|(a, v)| format!("{}={v}", a.as_ref()))
+        .collect()
+}
+
 /// The log line of a finished point.
 fn point_line(row: &Row, axes: &[String], n: usize, total: usize, wall: f64) -> String {
-    let at: Vec<String> = axes
-        .iter()
-        .zip(&row.values)
-        .map(|(a, v)| format!("{a}={v}"))
-        .collect();
+    let at = assignments(axes, &row.values);
     let detail = match row.status {
         Status::Finished => format!(
             "uy_top {:.4} µm, penetration {:.3} µm",
@@ -1054,11 +1343,7 @@ fn point_line(row: &Row, axes: &[String], n: usize, total: usize, wall: f64) -> 
 
 /// The log line of a point copied from point `of`.
 fn copy_line(row: &Row, axes: &[String], n: usize, total: usize, of: &str) -> String {
-    let at: Vec<String> = axes
-        .iter()
-        .zip(&row.values)
-        .map(|(a, v)| format!("{a}={v}"))
-        .collect();
+    let at = assignments(axes, &row.values);
     format!(
         "[{n}/{total}] {} {}: the same case as {of}, copied ({})",
         row.id,
@@ -1146,17 +1431,12 @@ impl Collected {
 /// shards of a sweep have run).
 pub fn collect(dir: &Path) -> Result<Collected, SweepError> {
     let record = Record::load(dir)?;
-    let axes = record.axes();
     let rows: Vec<Row> = record
         .points
         .iter()
         .map(|p| read_row(&p.id, &p.values, &dir.join("points").join(&p.id)))
         .collect();
-    let csv = dir.join("sweep.csv");
-    write_atomic(&csv, &table::render(&axes, &rows))?;
-    let mut written = vec![csv];
-    written.extend(plots::draw(dir, &record, &rows, None)?);
-    written.extend(compare::write(dir, &record, &rows)?);
+    let written = write_table_and_figures(dir, &record, &rows)?;
     Ok(Collected { rows, written })
 }
 

@@ -13,6 +13,8 @@
 use std::path::{Path, PathBuf};
 
 use plotters::coord::Shift;
+use plotters::coord::ranged1d::SegmentedCoord;
+use plotters::coord::types::RangedCoordusize;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -147,16 +149,51 @@ fn draw_err(path: &Path) -> impl Fn(String) -> OutputError + '_ {
     move |m| OutputError::draw(path, m)
 }
 
+/// The chart of a heat map: one segment per value on each of the two axes.
+type GridChart<'a, 'b> = ChartContext<
+    'a,
+    BitMapBackend<'b>,
+    Cartesian2d<SegmentedCoord<RangedCoordusize>, SegmentedCoord<RangedCoordusize>>,
+>;
+
+/// Draws `heatmap-<q>.png`: `q` over a Grid of two axes, each cell coloured and labelled
+/// with its value or its status, with a colour bar.
 fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), OutputError> {
     let e = draw_err(path);
     let xs = &record.design.axes[0].values;
     let ys = &record.design.axes[1].values;
-    let (nx, ny) = (xs.len(), ys.len());
+    let (lo, hi) = colour_range(rows, q);
+    let title = heat_map_title(record, rows, q);
+    // The title over the whole figure, which is widened to hold it.
+    let title_font = (FONT, 22).into_font();
+    let title_w = title_font.box_size(&title).map_or(0, |(w, _)| w);
+    let size = HeatMapSize::of(xs, ys, title_w);
+    let root = BitMapBackend::new(path, (size.w, size.h)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(x.to_string()))?;
+    let root = root
+        .titled(&title, title_font)
+        .map_err(|x| e(x.to_string()))?;
+    let (main, side) = root.split_horizontally(size.w - COLORBAR_W);
+    let mut chart = grid_chart(&main, record, size.label_w).map_err(&e)?;
     let cell = |r: &Row| {
         let i = xs.iter().position(|v| *v == r.values[0])?;
         let j = ys.iter().position(|v| *v == r.values[1])?;
         Some((i, j))
     };
+    for r in rows {
+        let Some((i, j)) = cell(r) else { continue };
+        let (fill, text) = cell_look(r, q, lo, hi);
+        let failed = r.status == Status::Failed;
+        draw_grid_cell(&mut chart, (i, j), fill, failed, text).map_err(&e)?;
+    }
+    colorbar(&side, lo, hi, &quantity_label(q)).map_err(&e)?;
+    root.present().map_err(|x| e(x.to_string()))?;
+    Ok(())
+}
+
+/// The range of the colour scale: that of the finite values of `q` of the runs (finished
+/// or failed), widened around a single value; [0, 1] without any.
+fn colour_range(rows: &[Row], q: &str) -> (f64, f64) {
     let shown: Vec<f64> = rows
         .iter()
         .filter(|r| matches!(r.status, Status::Finished | Status::Failed))
@@ -174,11 +211,12 @@ fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), O
     if hi - lo < 1e-12 * (1.0 + hi.abs()) {
         (lo, hi) = (lo - 0.5, hi + 0.5);
     }
-    // Room for the labels: a variant axis's names are longer than numbers.
-    let chars = |v: &[String]| v.iter().map(|s| s.chars().count()).max().unwrap_or(0) as u32;
-    let cell_w = (9 * chars(xs) + 20).clamp(110, 260);
-    let label_w = (9 * chars(ys) + 30).clamp(90, 300);
-    let title = format!(
+    (lo, hi)
+}
+
+/// The heat map's title: the sweep, the quantity, and what a cross means if a run failed.
+fn heat_map_title(record: &Record, rows: &[Row], q: &str) -> String {
+    format!(
         "{}: {}{}",
         record.name,
         quantity_label(q),
@@ -187,19 +225,41 @@ fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), O
         } else {
             ""
         }
-    );
-    // The title over the whole figure, which is widened to hold it.
-    let title_font = (FONT, 22).into_font();
-    let title_w = title_font.box_size(&title).map_or(0, |(w, _)| w);
-    let w = ((70 + label_w + cell_w * nx as u32).max(700) + COLORBAR_W).max(title_w + 40);
-    let h = (180 + 90 * ny as u32).max(520);
-    let root = BitMapBackend::new(path, (w, h)).into_drawing_area();
-    root.fill(&WHITE).map_err(|x| e(x.to_string()))?;
-    let root = root
-        .titled(&title, title_font)
-        .map_err(|x| e(x.to_string()))?;
-    let (main, side) = root.split_horizontally(w - COLORBAR_W);
-    let mut chart = ChartBuilder::on(&main)
+    )
+}
+
+/// The size of a heat map [px].
+struct HeatMapSize {
+    /// Width of the figure.
+    w: u32,
+    /// Height of the figure.
+    h: u32,
+    /// Width of the area of the y labels.
+    label_w: u32,
+}
+
+impl HeatMapSize {
+    /// Room for the axes' values `xs` and `ys`, the colour bar and a title `title_w` wide.
+    fn of(xs: &[String], ys: &[String], title_w: u32) -> HeatMapSize {
+        // Room for the labels: a variant axis's names are longer than numbers.
+        let chars = |v: &[String]| v.iter().map(|s| s.chars().count()).max().unwrap_or(0) as u32;
+        let cell_w = (9 * chars(xs) + 20).clamp(110, 260);
+        let label_w = (9 * chars(ys) + 30).clamp(90, 300);
+        let w = ((70 + label_w + cell_w * xs.len() as u32).max(700) + COLORBAR_W).max(title_w + 40);
+        let h = (180 + 90 * ys.len() as u32).max(520);
+        HeatMapSize { w, h, label_w }
+    }
+}
+
+/// The heat map's chart on `area`, its axes labelled with the design's values and paths.
+fn grid_chart<'a, 'b>(
+    area: &'a DrawingArea<BitMapBackend<'b>, Shift>,
+    record: &Record,
+    label_w: u32,
+) -> Result<GridChart<'a, 'b>, String> {
+    let (ax, ay) = (&record.design.axes[0], &record.design.axes[1]);
+    let (nx, ny) = (ax.values.len(), ay.values.len());
+    let mut chart = ChartBuilder::on(area)
         .margin(16)
         .x_label_area_size(60)
         .y_label_area_size(label_w)
@@ -207,7 +267,7 @@ fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), O
             (0..nx.max(1) - 1).into_segmented(),
             (0..ny.max(1) - 1).into_segmented(),
         )
-        .map_err(|x| e(x.to_string()))?;
+        .map_err(|x| x.to_string())?;
     let label = |vals: &[String], v: &SegmentValue<usize>| match v {
         SegmentValue::CenterOf(i) => vals.get(*i).cloned().unwrap_or_default(),
         _ => String::new(),
@@ -217,71 +277,84 @@ fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), O
         .disable_mesh()
         .x_labels(nx + 1)
         .y_labels(ny + 1)
-        .x_label_formatter(&|v| label(xs, v))
-        .y_label_formatter(&|v| label(ys, v))
-        .x_desc(&record.design.axes[0].path)
-        .y_desc(&record.design.axes[1].path)
+        .x_label_formatter(&|v| label(&ax.values, v))
+        .y_label_formatter(&|v| label(&ay.values, v))
+        .x_desc(&ax.path)
+        .y_desc(&ay.path)
         .axis_desc_style((FONT, 18))
         .label_style((FONT, 16))
         .draw()
-        .map_err(|x| e(x.to_string()))?;
+        .map_err(|x| x.to_string())?;
+    Ok(chart)
+}
+
+/// A cell's fill and label: the value's colour and the value for a run, else grey or
+/// white and the status.
+fn cell_look(r: &Row, q: &str, lo: f64, hi: f64) -> (RGBColor, String) {
+    let v = r.quantity(q).filter(|v| v.is_finite());
+    match (r.status, v) {
+        (Status::Finished | Status::Failed, Some(v)) => {
+            (colormap((v - lo) / (hi - lo)), fmt_value(v))
+        }
+        (Status::Invalid, _) => (GREY, "invalid".to_string()),
+        (Status::Missing, _) => (WHITE, "missing".to_string()),
+        (Status::Interrupted, _) => (WHITE, "interrupted".to_string()),
+        (_, None) => (WHITE, r.status.as_str().to_string()),
+    }
+}
+
+/// Draws cell (i, j): its fill, a white border, a red cross if the run `failed`, and its
+/// label in black or white, whichever reads on the fill.
+fn draw_grid_cell(
+    chart: &mut GridChart<'_, '_>,
+    (i, j): (usize, usize),
+    fill: RGBColor,
+    failed: bool,
+    text: String,
+) -> Result<(), String> {
+    let e = |x: DrawingAreaErrorKind<_>| x.to_string();
     let corners = |i: usize, j: usize| {
         [
             (SegmentValue::Exact(i), SegmentValue::Exact(j)),
             (SegmentValue::Exact(i + 1), SegmentValue::Exact(j + 1)),
         ]
     };
-    for r in rows {
-        let Some((i, j)) = cell(r) else { continue };
-        let v = r.quantity(q).filter(|v| v.is_finite());
-        let (fill, text) = match (r.status, v) {
-            (Status::Finished | Status::Failed, Some(v)) => {
-                (colormap((v - lo) / (hi - lo)), fmt_value(v))
-            }
-            (Status::Invalid, _) => (GREY, "invalid".to_string()),
-            (Status::Missing, _) => (WHITE, "missing".to_string()),
-            (Status::Interrupted, _) => (WHITE, "interrupted".to_string()),
-            (_, None) => (WHITE, r.status.as_str().to_string()),
-        };
+    chart
+        .draw_series(std::iter::once(Rectangle::new(
+            corners(i, j),
+            fill.filled(),
+        )))
+        .map_err(e)?;
+    chart
+        .draw_series(std::iter::once(Rectangle::new(
+            corners(i, j),
+            WHITE.stroke_width(2),
+        )))
+        .map_err(e)?;
+    if failed {
+        // A cross over the cell: the value is the last one written before it stopped.
+        let (a, b) = (corners(i, j)[0].clone(), corners(i, j)[1].clone());
+        let style = RED.stroke_width(3);
         chart
-            .draw_series(std::iter::once(Rectangle::new(
-                corners(i, j),
-                fill.filled(),
-            )))
-            .map_err(|x| e(x.to_string()))?;
-        chart
-            .draw_series(std::iter::once(Rectangle::new(
-                corners(i, j),
-                WHITE.stroke_width(2),
-            )))
-            .map_err(|x| e(x.to_string()))?;
-        if r.status == Status::Failed {
-            // A cross over the cell: the value is the last one written before it stopped.
-            let (a, b) = (corners(i, j)[0].clone(), corners(i, j)[1].clone());
-            let style = RED.stroke_width(3);
-            chart
-                .draw_series([
-                    PathElement::new(vec![a.clone(), b.clone()], style),
-                    PathElement::new(vec![(a.0, b.1), (b.0, a.1)], style),
-                ])
-                .map_err(|x| e(x.to_string()))?;
-        }
-        let luminance = 0.299 * fill.0 as f64 + 0.587 * fill.1 as f64 + 0.114 * fill.2 as f64;
-        let color = if luminance < 140.0 { WHITE } else { BLACK };
-        let style = (FONT, 17)
-            .into_font()
-            .color(&color)
-            .pos(Pos::new(HPos::Center, VPos::Center));
-        chart
-            .draw_series(std::iter::once(Text::new(
-                text,
-                (SegmentValue::CenterOf(i), SegmentValue::CenterOf(j)),
-                style,
-            )))
-            .map_err(|x| e(x.to_string()))?;
+            .draw_series([
+                PathElement::new(vec![a.clone(), b.clone()], style),
+                PathElement::new(vec![(a.0, b.1), (b.0, a.1)], style),
+            ])
+            .map_err(e)?;
     }
-    colorbar(&side, lo, hi, &quantity_label(q)).map_err(&e)?;
-    root.present().map_err(|x| e(x.to_string()))?;
+    let luminance = 0.299 * fill.0 as f64 + 0.587 * fill.1 as f64 + 0.114 * fill.2 as f64;
+    let color = if luminance < 140.0 { WHITE } else { BLACK };
+    let style = (FONT, 17)
+        .into_font()
+        .color(&color)
+        .pos(Pos::new(HPos::Center, VPos::Center));
+    chart
+        .draw_series(std::iter::once(Text::new(
+            text,
+            (SegmentValue::CenterOf(i), SegmentValue::CenterOf(j)),
+            style,
+        )))
+        .map_err(e)?;
     Ok(())
 }
 
