@@ -464,14 +464,15 @@ fn draw_notes<DB: DrawingBackend>(
 
 /// One curve of a time plot in its colour and stroke, with a legend entry (a sample of
 /// the stroke) if it has a label.
-fn draw_curve<DB: DrawingBackend>(chart: &mut Chart<'_, DB>, c: &Curve) -> Result<(), String> {
+fn draw_curve<'a, DB: DrawingBackend + 'a>(
+    chart: &mut Chart<'a, DB>,
+    c: &Curve,
+) -> Result<(), String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let style = c.color.stroke_width(3);
     let pts = c.points.iter().copied();
     let anno = match c.stroke {
-        Stroke::Solid => chart
-            .draw_series(LineSeries::new(pts, style))
-            .map_err(e)?,
+        Stroke::Solid => chart.draw_series(LineSeries::new(pts, style)).map_err(e)?,
         Stroke::Dashed => chart
             .draw_series(DashedLineSeries::new(pts, 14, 8, style))
             .map_err(e)?,
@@ -500,7 +501,10 @@ fn draw_curve<DB: DrawingBackend>(chart: &mut Chart<'_, DB>, c: &Curve) -> Resul
 
 /// One set of marks of a time plot, circles or squares, filled or hollow, with a legend
 /// entry if it has a label.
-fn draw_marks<DB: DrawingBackend>(chart: &mut Chart<'_, DB>, m: &Marks) -> Result<(), String> {
+fn draw_marks<'a, DB: DrawingBackend + 'a>(
+    chart: &mut Chart<'a, DB>,
+    m: &Marks,
+) -> Result<(), String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let style = if m.filled {
         m.color.filled()
@@ -537,8 +541,8 @@ fn draw_marks<DB: DrawingBackend>(chart: &mut Chart<'_, DB>, m: &Marks) -> Resul
 }
 
 /// The legend of a time plot where `plot.legend` puts it.
-fn draw_time_legend<DB: DrawingBackend>(
-    chart: &mut Chart<'_, DB>,
+fn draw_time_legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut Chart<'a, DB>,
     plot: &TimePlot,
 ) -> Result<(), String> {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
@@ -802,13 +806,11 @@ pub fn displacement_figure(
     let (plot, columns) = displacement_plot(runs, reported, reported_label);
     // One value axis for the time plot and the panel of maxima beside it.
     let range = value_axis(
-        plot_values(&plot).chain(columns.iter().flat_map(|c| {
-            [
-                c.compared.paper,
-                c.compared.ours,
-                c.top.unwrap_or(f64::NAN),
-            ]
-        })),
+        plot_values(&plot).chain(
+            columns
+                .iter()
+                .flat_map(|c| [c.compared.paper, c.compared.ours, c.top.unwrap_or(f64::NAN)]),
+        ),
         false,
         plot.notes.len(),
     );
@@ -883,11 +885,11 @@ fn displacement_plot(
     let short = short_names(runs);
     let columns = maxima
         .into_iter()
-        .map(|(k, color, compared, top)| MaximumColumn {
-            name: short[k].clone(),
-            color,
-            compared,
-            top: top.map(|p| p.1),
+        .map(|m| MaximumColumn {
+            name: short[m.run].clone(),
+            color: m.color,
+            compared: m.compared,
+            top: m.top.map(|p| p.1),
         })
         .collect();
     (plot, columns)
@@ -902,9 +904,19 @@ struct DisplacementLayers {
     marks: Vec<Marks>,
     /// Lines joining the paper's values to ours: (t, one value, the other).
     links: Vec<(f64, f64, f64)>,
-    /// The runs with a reported maximum: (index of the run, its colour, the paper's maximum
-    /// against ours, (t, u_y) of p_t's lowest).
-    maxima: Vec<(usize, RGBColor, Compared, Option<(f64, f64)>)>,
+    /// The runs with a reported maximum.
+    maxima: Vec<ReportedMaximum>,
+}
+
+/// A run whose maximum the paper reports.
+struct ReportedMaximum {
+    /// Index of the run.
+    run: usize,
+    color: RGBColor,
+    /// The paper's maximum against ours.
+    compared: Compared,
+    /// (t, u_y) of p_t at its lowest.
+    top: Option<(f64, f64)>,
 }
 
 /// The curves of `runs` and the marks of what the paper reports about them (`reported`,
@@ -937,7 +949,12 @@ fn displacement_layers(runs: &[&RunData], reported: &[DisplacementMarks]) -> Dis
                 filled: true,
                 shape: MarkShape::Circle,
             });
-            out.maxima.push((k, color, m, rep.maximum_top));
+            out.maxima.push(ReportedMaximum {
+                run: k,
+                color,
+                compared: m,
+                top: rep.maximum_top,
+            });
         }
         if let Some(p) = rep.maximum_top {
             out.marks.push(Marks {
@@ -1894,7 +1911,11 @@ fn draw_cell_lines<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     shape: &CellShape,
 ) -> Result<(), String> {
-    draw_paths(chart, &shape.interfaces, RGBColor(40, 40, 40).stroke_width(2))?;
+    draw_paths(
+        chart,
+        &shape.interfaces,
+        RGBColor(40, 40, 40).stroke_width(2),
+    )?;
     draw_paths(chart, &shape.outer, BLACK.stroke_width(2))?;
     for (segs, color, name) in [
         (&shape.pac, PAC, "active: PAC (push)"),
@@ -1920,7 +1941,11 @@ fn draw_paths<'c, 'a, DB: DrawingBackend, L: AsRef<[Pt]>>(
     style: ShapeStyle,
 ) -> Result<&'c mut SeriesAnno<'a, DB>, String> {
     chart
-        .draw_series(lines.iter().map(|l| PathElement::new(xy(l.as_ref()), style)))
+        .draw_series(
+            lines
+                .iter()
+                .map(|l| PathElement::new(xy(l.as_ref()), style)),
+        )
         .map_err(|x| x.to_string())
 }
 

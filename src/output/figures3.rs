@@ -1746,11 +1746,8 @@ fn draw_strain_bar<DB: DrawingBackend>(
                 strain_max * k as f64 / steps as f64,
                 strain_max * (k + 1) as f64 / steps as f64,
             );
-            let c: RGBColor = ViridisRGB.get_color_normalized(
-                (0.5 * (v0 + v1)) as f32,
-                0.0,
-                strain_max as f32,
-            );
+            let c: RGBColor =
+                ViridisRGB.get_color_normalized((0.5 * (v0 + v1)) as f32, 0.0, strain_max as f32);
             Rectangle::new([(0.0, v0), (1.0, v1)], c.filled())
         }))
         .map_err(e)?;

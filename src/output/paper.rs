@@ -21,12 +21,12 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use super::OutputError;
-use super::geometry::{Backdrop, Bounds};
 use super::figures::{
     Compared, DisplacementMarks, StrainBars, contact_radius_figure, displacement_figure,
     run_phases, shape_figure_cached, shape_view, strain_bars_figure, strain_time_figure,
     upside_down_figure,
 };
+use super::geometry::{Backdrop, Bounds};
 use crate::fem::Domain;
 use crate::record::{MeshFile, Observables, RunData, StateFile};
 

@@ -282,10 +282,7 @@ fn order_fit(rows: &[StudyRow]) -> (Option<f64>, OrderFit) {
 fn cheapest_meeting_target(rows: &[StudyRow], role: Role) -> Option<(String, f64)> {
     rows.iter()
         .filter(|r| r.role == role && r.finished)
-        .filter(|r| {
-            r.error(Quantity::UyTop)
-                .is_some_and(|e| e <= TARGET_ERROR)
-        })
+        .filter(|r| r.error(Quantity::UyTop).is_some_and(|e| e <= TARGET_ERROR))
         .min_by(|a, b| a.wall_seconds.total_cmp(&b.wall_seconds))
         .map(|r| (r.label.clone(), r.wall_seconds))
 }
@@ -367,4 +364,3 @@ fn check_reference(
         }
     })
 }
-

@@ -500,4 +500,3 @@ fn write_report(report: &StudyReport, out: &Path) -> Result<(), StudyError> {
     })?;
     std::fs::write(&json, text).map_err(io_err(&json))
 }
-

@@ -566,4 +566,3 @@ fn write_curve_speedup(s: &mut String, curve: &[SpeedupAt]) {
         );
     }
 }
-

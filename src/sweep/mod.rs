@@ -56,8 +56,8 @@ use crate::run::{self, Progress, RunError, RunOptions};
 use crate::stop::StopFlag;
 
 pub use compare::TableSpec;
-pub use design::{Design, DesignSpec, Kind};
 use design::DesignPoint;
+pub use design::{Design, DesignSpec, Kind};
 pub use table::{Row, Status};
 
 /// Why a sweep could not be set up, run or collected.
@@ -1233,11 +1233,9 @@ impl<'a> Runner<'a> {
                 let q = &self.plan.points[c];
                 let cdir = self.points_dir.join(&q.id);
                 match copy_point(dir, &cdir) {
-                    Ok(()) => done.push((
-                        c,
-                        read_row(&q.id, &q.values, &cdir),
-                        Some(p.id.as_str()),
-                    )),
+                    Ok(()) => {
+                        done.push((c, read_row(&q.id, &q.values, &cdir), Some(p.id.as_str())))
+                    }
                     Err(e) => self.fail(e),
                 }
             }
@@ -1283,12 +1281,7 @@ impl<'a> Runner<'a> {
 
 /// The rows of the points `mine`, in design order: a point without one in `rows` (not
 /// run, the sweep interrupted) is read from its directory.
-fn rows_in_order(
-    plan: &Plan,
-    mine: &[usize],
-    points_dir: &Path,
-    rows: &[Option<Row>],
-) -> Vec<Row> {
+fn rows_in_order(plan: &Plan, mine: &[usize], points_dir: &Path, rows: &[Option<Row>]) -> Vec<Row> {
     mine.iter()
         .map(|&k| {
             let p = &plan.points[k];
