@@ -47,7 +47,7 @@ thread_local! {
 }
 
 /// The permutation last stored in `GIVEN`, as an external ordering.
-fn given(_: &cellsim::dae::Pattern) -> Result<Vec<usize>, String> {
+fn given(_: &cellsim::dae::Pattern) -> Result<Vec<usize>, cellsim::dae::linsolve::OrderingError> {
     Ok(GIVEN.with(|g| g.borrow().clone()))
 }
 

@@ -205,13 +205,7 @@ impl LinearSolver for CondensedLu {
             .as_mut()
             .ok_or(LinearSolverError::NotReady("analyse"))?;
         self.factorized = false;
-        if values.len() != plan.nnz {
-            return Err(LinearSolverError::Other(format!(
-                "condensed solver: {} values for a pattern of {} entries",
-                values.len(),
-                plan.nnz
-            )));
-        }
+        LinearSolverError::check_values("condensed solver", values.len(), plan.nnz)?;
         for k in 0..plan.p.len() {
             let (alpha, gamma) = (values[plan.pos_pp[k]], values[plan.pos_pq[k]]);
             if gamma == 0.0 || !gamma.is_finite() || !alpha.is_finite() {
@@ -242,20 +236,8 @@ impl LinearSolver for CondensedLu {
     }
 
     fn solve_in_place(&mut self, b: &mut [f64]) -> Result<(), LinearSolverError> {
-        let plan = self
-            .plan
-            .as_mut()
-            .ok_or(LinearSolverError::NotReady("analyse"))?;
-        if !self.factorized {
-            return Err(LinearSolverError::NotReady("factorize"));
-        }
-        if b.len() != plan.n {
-            return Err(LinearSolverError::Other(format!(
-                "condensed solver: right-hand side of length {} for {} unknowns",
-                b.len(),
-                plan.n
-            )));
-        }
+        let plan = LinearSolverError::ready(self.plan.as_mut(), self.factorized)?;
+        LinearSolverError::check_rhs("condensed solver", b.len(), plan.n)?;
         // g_k = b_(p_k)/γ_k; condensed right-hand side b_i − Σ_k J_(i, q_k) g_k.
         for k in 0..plan.p.len() {
             plan.g[k] = b[plan.p[k]] * plan.inv_gamma[k];

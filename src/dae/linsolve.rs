@@ -47,9 +47,71 @@ pub enum LinearSolverError {
         /// What the backend said.
         detail: String,
     },
+    /// Values whose number does not fit the pattern analysed.
+    #[error("{solver}: {got} values for a pattern of {expected} entries")]
+    WrongValues {
+        /// The backend ("KLU", "UMFPACK", "condensed solver", a permuted solver's name).
+        solver: &'static str,
+        /// How many values were given.
+        got: usize,
+        /// The pattern's entries.
+        expected: usize,
+    },
+    /// A right-hand side whose length does not fit the unknowns analysed.
+    #[error("{solver}: right-hand side of length {got} for {expected} unknowns")]
+    WrongRhs {
+        /// The backend.
+        solver: &'static str,
+        /// Its length.
+        got: usize,
+        /// The unknowns.
+        expected: usize,
+    },
     /// Anything else.
     #[error("{0}")]
     Other(String),
+}
+
+impl LinearSolverError {
+    /// `got` values for a pattern of `expected` entries: an error unless they agree.
+    pub fn check_values(solver: &'static str, got: usize, expected: usize) -> Result<(), Self> {
+        let e = Self::WrongValues {
+            solver,
+            got,
+            expected,
+        };
+        (got == expected).then_some(()).ok_or(e)
+    }
+
+    /// A right-hand side of length `got` for `expected` unknowns: an error unless they agree.
+    pub fn check_rhs(solver: &'static str, got: usize, expected: usize) -> Result<(), Self> {
+        let e = Self::WrongRhs {
+            solver,
+            got,
+            expected,
+        };
+        (got == expected).then_some(()).ok_or(e)
+    }
+
+    /// The state `s` of an analysed solver, required factorized when `factorized` says
+    /// not: `NotReady` for the step missing.
+    pub fn ready<T>(s: Option<T>, factorized: bool) -> Result<T, Self> {
+        let s = s.ok_or(Self::NotReady("analyse"))?;
+        factorized.then_some(s).ok_or(Self::NotReady("factorize"))
+    }
+
+    /// A solution `x` from `solver`: an error (a zero pivot spread by back-substitution:
+    /// its column is not known here) unless every entry is finite.
+    pub fn check_finite(solver: &'static str, x: &[f64], detail: &str) -> Result<(), Self> {
+        if x.iter().all(|v| v.is_finite()) {
+            return Ok(());
+        }
+        Err(LinearSolverError::Singular {
+            solver,
+            column: None,
+            detail: detail.into(),
+        })
+    }
 }
 
 fn at_column(column: Option<usize>) -> String {
@@ -94,7 +156,36 @@ impl LinearSolverFactory for FaerFactory {
 
 /// A fill-reducing ordering computed outside faer from the pattern alone: the
 /// permutation `perm` (the column eliminated k-th is `perm[k]`), or why it failed.
-pub type OrderingFn = fn(&Pattern) -> Result<Vec<usize>, String>;
+pub type OrderingFn = fn(&Pattern) -> Result<Vec<usize>, OrderingError>;
+
+/// Why an external ordering ([`OrderingFn`]) failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OrderingError {
+    /// The pattern is not square.
+    #[error("{rows} × {cols} matrix: not square")]
+    NotSquare {
+        /// Its rows.
+        rows: usize,
+        /// Its columns.
+        cols: usize,
+    },
+    /// More unknowns than the library's indices can count.
+    #[error("{unknowns} unknowns: too many for {library}'s 32-bit indices")]
+    TooLarge {
+        /// The unknowns.
+        unknowns: usize,
+        /// The library ("METIS").
+        library: &'static str,
+    },
+    /// The library's routine returned an error status.
+    #[error("{function} returned {status}")]
+    Failed {
+        /// The routine ("METIS_NodeND").
+        function: &'static str,
+        /// Its status.
+        status: i64,
+    },
+}
 
 /// The fill-reducing column ordering of [`FaerLu`]. faer's LU pivots rows by partial
 /// pivoting within the order of columns chosen here.
@@ -552,16 +643,7 @@ impl LinearSolver for FaerLu {
                 }
             }
         }
-        if b.iter().all(|v| v.is_finite()) {
-            Ok(())
-        } else {
-            // The zero pivot's column is not known here: back-substitution spreads it.
-            Err(LinearSolverError::Singular {
-                solver: "faer",
-                column: None,
-                detail: "non-finite solution (zero pivot)".into(),
-            })
-        }
+        LinearSolverError::check_finite("faer", b, "non-finite solution (zero pivot)")
     }
 
     fn name(&self) -> &'static str {
@@ -665,14 +747,7 @@ impl LinearSolver for Permuted {
         if !self.analysed {
             return Err(LinearSolverError::NotReady("analyse"));
         }
-        if values.len() != self.src.len() {
-            return Err(LinearSolverError::Other(format!(
-                "{}: {} values for a pattern of {} entries",
-                self.name,
-                values.len(),
-                self.src.len()
-            )));
-        }
+        LinearSolverError::check_values(self.name, values.len(), self.src.len())?;
         for (v, &k) in self.values.iter_mut().zip(&self.src) {
             *v = values[k];
         }
@@ -683,14 +758,7 @@ impl LinearSolver for Permuted {
         if !self.analysed {
             return Err(LinearSolverError::NotReady("analyse"));
         }
-        if b.len() != self.perm.len() {
-            return Err(LinearSolverError::Other(format!(
-                "{}: right-hand side of length {} for {} unknowns",
-                self.name,
-                b.len(),
-                self.perm.len()
-            )));
-        }
+        LinearSolverError::check_rhs(self.name, b.len(), self.perm.len())?;
         // A x = b ⇔ A' (P x) = P b.
         for (w, &i) in self.work.iter_mut().zip(&self.perm) {
             *w = b[i];
@@ -780,7 +848,7 @@ pub(crate) mod tests {
     }
 
     /// The unknowns in reverse order: an external ordering for the tests.
-    fn reversed(p: &Pattern) -> Result<Vec<usize>, String> {
+    fn reversed(p: &Pattern) -> Result<Vec<usize>, OrderingError> {
         Ok((0..p.ncols()).rev().collect())
     }
 
@@ -837,7 +905,7 @@ pub(crate) mod tests {
 
     #[test]
     fn an_ordering_that_is_not_a_permutation_is_refused() {
-        fn twice_zero(p: &Pattern) -> Result<Vec<usize>, String> {
+        fn twice_zero(p: &Pattern) -> Result<Vec<usize>, OrderingError> {
             Ok(vec![0; p.ncols()])
         }
         let (p, _) = test_matrix(5);

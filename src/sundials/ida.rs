@@ -145,6 +145,14 @@ impl<D: Dae> Drop for Ida<D> {
     }
 }
 
+/// The error of `function` having returned NULL (`p`) at time `t`.
+fn non_null<T>(p: *mut T, function: &'static str, t: f64) -> Result<(), IntegratorError> {
+    match p.is_null() {
+        true => Err(sundials_err(function, -1, "NULL returned".into(), t)),
+        false => Ok(()),
+    }
+}
+
 fn sundials_err(function: &'static str, flag: c_int, message: String, t: f64) -> IntegratorError {
     IntegratorError::Sundials {
         function,
@@ -237,9 +245,7 @@ impl<D: Dae> Ida<D> {
         // moves while IDA holds a pointer to it; the tolerance vector is copied by IDA.
         unsafe {
             self.mem = sys::IDACreate(self.ctx.0);
-            if self.mem.is_null() {
-                return Err(sundials_err("IDACreate", -1, "NULL returned".into(), t0));
-            }
+            non_null(self.mem, "IDACreate", t0)?;
             let mem = self.mem;
             let user_ptr: *mut UserData<D> = &mut *self.user;
             self.check(
@@ -284,14 +290,7 @@ impl<D: Dae> Ida<D> {
         unsafe {
             let ls_ptr: *mut LsState = &mut self.user.ls;
             self.mat = sys::SUNMatNewEmpty(self.ctx.0);
-            if self.mat.is_null() {
-                return Err(sundials_err(
-                    "SUNMatNewEmpty",
-                    -1,
-                    "NULL returned".into(),
-                    t0,
-                ));
-            }
+            non_null(self.mat, "SUNMatNewEmpty", t0)?;
             (*self.mat).content = ls_ptr.cast();
             let mops = &mut *(*self.mat).ops;
             mops.getid = Some(mat_getid);
@@ -299,14 +298,7 @@ impl<D: Dae> Ida<D> {
             mops.destroy = Some(mat_destroy);
 
             self.ls = sys::SUNLinSolNewEmpty(self.ctx.0);
-            if self.ls.is_null() {
-                return Err(sundials_err(
-                    "SUNLinSolNewEmpty",
-                    -1,
-                    "NULL returned".into(),
-                    t0,
-                ));
-            }
+            non_null(self.ls, "SUNLinSolNewEmpty", t0)?;
             (*self.ls).content = ls_ptr.cast();
             let lops = &mut *(*self.ls).ops;
             lops.gettype = Some(ls_gettype);

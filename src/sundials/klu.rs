@@ -144,13 +144,7 @@ impl LinearSolver for KluLu {
             .state
             .as_mut()
             .ok_or(LinearSolverError::NotReady("analyse"))?;
-        if values.len() != self.nnz {
-            return Err(LinearSolverError::Other(format!(
-                "KLU: {} values for a pattern of {} entries",
-                values.len(),
-                self.nnz
-            )));
-        }
+        LinearSolverError::check_values("KLU", values.len(), self.nnz)?;
         self.factorized = false;
         // SAFETY: the data array holds nnz values (allocated in analyse).
         let flag = unsafe {
@@ -170,13 +164,7 @@ impl LinearSolver for KluLu {
     }
 
     fn solve_in_place(&mut self, b: &mut [f64]) -> Result<(), LinearSolverError> {
-        let st = self
-            .state
-            .as_mut()
-            .ok_or(LinearSolverError::NotReady("analyse"))?;
-        if !self.factorized {
-            return Err(LinearSolverError::NotReady("factorize"));
-        }
+        let st = LinearSolverError::ready(self.state.as_mut(), self.factorized)?;
         st.b.as_mut_slice().copy_from_slice(b);
         // SAFETY: all handles valid; x and b are distinct serial vectors of length n.
         let flag = unsafe { sys::SUNLinSolSolve(st.ls, st.a, st.x.0, st.b.0, 0.0) };
@@ -188,15 +176,7 @@ impl LinearSolver for KluLu {
             });
         }
         b.copy_from_slice(st.x.as_slice());
-        if b.iter().all(|v| v.is_finite()) {
-            Ok(())
-        } else {
-            Err(LinearSolverError::Singular {
-                solver: "klu",
-                column: None,
-                detail: "non-finite solution".into(),
-            })
-        }
+        LinearSolverError::check_finite("klu", b, "non-finite solution")
     }
 
     fn name(&self) -> &'static str {

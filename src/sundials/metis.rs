@@ -6,6 +6,7 @@ use std::sync::Mutex;
 use metis_sys as sys;
 
 use crate::dae::Pattern;
+use crate::dae::linsolve::OrderingError;
 
 /// METIS keeps its random-number state in globals (GKlib), so concurrent calls from the
 /// runs of `paper`, `study` or `sweep` would race on it and give orderings that depend on
@@ -22,7 +23,7 @@ pub(super) fn exclusive<R>(f: impl FnOnce() -> R) -> R {
 /// The nested-dissection permutation of the square pattern `a` computed by METIS on the
 /// graph of A + Aᵀ (diagonal dropped): `perm[k]` is the unknown eliminated k-th.
 /// Deterministic (METIS's default seed).
-pub fn nested_dissection(a: &Pattern) -> Result<Vec<usize>, String> {
+pub fn nested_dissection(a: &Pattern) -> Result<Vec<usize>, OrderingError> {
     let n = square(a)?;
     // Adjacency of A + Aᵀ without the diagonal.
     let (cp, ri) = (a.col_ptr(), a.row_idx());
@@ -41,7 +42,7 @@ pub fn nested_dissection(a: &Pattern) -> Result<Vec<usize>, String> {
 /// The nested-dissection permutation of the columns of `a` computed by METIS on the graph
 /// of AᵀA (columns adjacent when they share a row): the ordering of the Cholesky factor
 /// of AᵀA, which bounds the L and U of an LU with partial pivoting.
-pub fn nested_dissection_ata(a: &Pattern) -> Result<Vec<usize>, String> {
+pub fn nested_dissection_ata(a: &Pattern) -> Result<Vec<usize>, OrderingError> {
     let n = square(a)?;
     let (cp, ri) = (a.col_ptr(), a.row_idx());
     let mut rows: Vec<Vec<usize>> = vec![Vec::new(); n];
@@ -59,21 +60,27 @@ pub fn nested_dissection_ata(a: &Pattern) -> Result<Vec<usize>, String> {
     node_nd(adj)
 }
 
-fn square(a: &Pattern) -> Result<usize, String> {
+fn square(a: &Pattern) -> Result<usize, OrderingError> {
     let n = a.ncols();
     if a.nrows() != n {
-        return Err(format!("{} × {n} matrix: not square", a.nrows()));
+        return Err(OrderingError::NotSquare {
+            rows: a.nrows(),
+            cols: n,
+        });
     }
     Ok(n)
 }
 
 /// METIS_NodeND on the symmetric graph `adj` (no self-loops; lists deduplicated here).
-fn node_nd(mut adj: Vec<Vec<usize>>) -> Result<Vec<usize>, String> {
+fn node_nd(mut adj: Vec<Vec<usize>>) -> Result<Vec<usize>, OrderingError> {
     let n = adj.len();
     if n == 0 {
         return Ok(Vec::new());
     }
-    let too_big = || format!("{n} unknowns: too many for METIS's 32-bit indices");
+    let too_big = || OrderingError::TooLarge {
+        unknowns: n,
+        library: "METIS",
+    };
     let mut xadj: Vec<sys::idx_t> = Vec::with_capacity(n + 1);
     let mut adjncy: Vec<sys::idx_t> = Vec::new();
     xadj.push(0);
@@ -109,7 +116,10 @@ fn node_nd(mut adj: Vec<Vec<usize>>) -> Result<Vec<usize>, String> {
         }
     });
     if status != sys::rstatus_et_METIS_OK {
-        return Err(format!("METIS_NodeND returned {status}"));
+        return Err(OrderingError::Failed {
+            function: "METIS_NodeND",
+            status: status.into(),
+        });
     }
     // METIS computes `iperm[i]`, the new position of unknown i, and from it `perm[k]`,
     // the unknown at position k: the elimination order.

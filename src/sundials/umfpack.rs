@@ -260,13 +260,7 @@ impl LinearSolver for UmfpackLu {
         if self.symbolic.is_null() {
             return Err(LinearSolverError::NotReady("analyse"));
         }
-        if values.len() != self.ax.len() {
-            return Err(LinearSolverError::Other(format!(
-                "UMFPACK: {} values for a pattern of {} entries",
-                values.len(),
-                self.ax.len()
-            )));
-        }
+        LinearSolverError::check_values("UMFPACK", values.len(), self.ax.len())?;
         self.ax.copy_from_slice(values);
         // SAFETY: the previous Numeric (if any) is freed; the arrays are those analysed.
         let status = unsafe {
@@ -311,13 +305,7 @@ impl LinearSolver for UmfpackLu {
         if self.numeric.is_null() {
             return Err(LinearSolverError::NotReady("factorize"));
         }
-        if b.len() != self.x.len() {
-            return Err(LinearSolverError::Other(format!(
-                "UMFPACK: right-hand side of length {} for {} unknowns",
-                b.len(),
-                self.x.len()
-            )));
-        }
+        LinearSolverError::check_rhs("UMFPACK", b.len(), self.x.len())?;
         // SAFETY: x, b of length n, Wi n and W 5n as wsolve requires; Numeric valid.
         let status = unsafe {
             umfpack_dl_wsolve(
@@ -342,15 +330,7 @@ impl LinearSolver for UmfpackLu {
             });
         }
         b.copy_from_slice(&self.x);
-        if b.iter().all(|v| v.is_finite()) {
-            Ok(())
-        } else {
-            Err(LinearSolverError::Singular {
-                solver: "umfpack",
-                column: None,
-                detail: "non-finite solution".into(),
-            })
-        }
+        LinearSolverError::check_finite("umfpack", b, "non-finite solution")
     }
 
     fn name(&self) -> &'static str {
