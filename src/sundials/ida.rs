@@ -68,6 +68,32 @@ pub struct IdaOptions {
     pub max_err_test_fails: Option<i32>,
     /// Relative change of cj that triggers a new Jacobian (IDA's default 0.25).
     pub delta_cj: Option<f64>,
+    /// Solve each Newton system by GMRES preconditioned by the last LU of the iteration
+    /// matrix instead of by that LU alone (`None`: the LU alone).
+    pub krylov: Option<Krylov>,
+}
+
+/// GMRES (SUNDIALS' SPGMR, left preconditioning) on the Newton systems, with the
+/// products `J v` by IDA's difference quotients of the residual (exact to round-off at the
+/// current iterate) and the preconditioner the LU of the iteration matrix factorized at
+/// IDA's preconditioner set-ups: a factorization kept across steps where the plain
+/// Newton iteration on it would fail to converge.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Krylov {
+    /// Largest Krylov subspace (SPGMR's `maxl`; IDA's default 5).
+    pub max_dim: i32,
+    /// The linear iterations' tolerance as a fraction of the Newton tolerance
+    /// (IDASetEpsLin; IDA's default 0.05).
+    pub eps_lin: f64,
+}
+
+impl Default for Krylov {
+    fn default() -> Self {
+        Self {
+            max_dim: 5,
+            eps_lin: 0.05,
+        }
+    }
 }
 
 impl Default for IdaOptions {
@@ -87,6 +113,7 @@ impl Default for IdaOptions {
             max_conv_fails: None,
             max_err_test_fails: None,
             delta_cj: None,
+            krylov: None,
         }
     }
 }
@@ -123,6 +150,8 @@ pub struct Ida<D: Dae> {
     tstop: Option<f64>,
     t_internal: f64,
     t_out: f64,
+    /// GMRES preconditioned by the LU ([`Krylov`]) rather than the LU alone.
+    krylov: bool,
     // Dropped last: everything above was created in this context.
     ctx: Context,
 }
@@ -203,6 +232,7 @@ impl<D: Dae> Ida<D> {
             tstop: None,
             t_internal: t0,
             t_out: t0,
+            krylov: opts.krylov.is_some(),
             ctx,
         };
         ida.setup(&opts, t0)?;
@@ -229,7 +259,10 @@ impl<D: Dae> Ida<D> {
     /// constraints, and (with `opts.calc_ic`) the corrected initial conditions.
     fn setup(&mut self, opts: &IdaOptions, t0: f64) -> Result<(), IntegratorError> {
         self.create_memory(opts, t0)?;
-        self.attach_linear_solver(t0)?;
+        match opts.krylov {
+            None => self.attach_linear_solver(t0)?,
+            Some(k) => self.attach_krylov(k, t0)?,
+        }
         self.set_step_limits(opts)?;
         self.set_components(opts)?;
         if let Some(ic) = opts.calc_ic {
@@ -316,6 +349,30 @@ impl<D: Dae> Ida<D> {
                 "IDASetJacFn",
                 sys::IDASetJacFn(mem, Some(jacobian_trampoline::<D>)),
             )?;
+        }
+        Ok(())
+    }
+
+    /// Attaches SPGMR with our preconditioner: set-up = Jacobian and LU factorization,
+    /// solve = the LU's triangular solves ([`Krylov`]).
+    fn attach_krylov(&mut self, k: Krylov, t0: f64) -> Result<(), IntegratorError> {
+        // SAFETY: valid IDA memory (made by `create_memory`, before this in `setup`) and
+        // template vector; the preconditioner callbacks receive the boxed UserData set by
+        // `create_memory`.
+        unsafe {
+            let pretype = sys::SUN_PREC_LEFT as c_int;
+            self.ls = sys::SUNLinSol_SPGMR(self.yy.0, pretype, k.max_dim, self.ctx.0);
+            non_null(self.ls, "SUNLinSol_SPGMR", t0)?;
+            let mem = self.mem;
+            self.check(
+                "IDASetLinearSolver",
+                sys::IDASetLinearSolver(mem, self.ls, ptr::null_mut()),
+            )?;
+            self.check(
+                "IDASetPreconditioner",
+                sys::IDASetPreconditioner(mem, Some(prec_setup::<D>), Some(prec_solve::<D>)),
+            )?;
+            self.check("IDASetEpsLin", sys::IDASetEpsLin(mem, k.eps_lin))?;
         }
         Ok(())
     }
@@ -593,10 +650,23 @@ impl<D: Dae> Integrator for Ida<D> {
             sys::IDAGetLastOrder(self.mem, &mut order);
             sys::IDAGetLastStep(self.mem, &mut h);
         }
+        let residual_evals = self.getter("IDAGetNumResEvals", sys::IDAGetNumResEvals);
+        // With GMRES the Jacobians are the preconditioner's set-ups, and the products J v
+        // cost a residual each.
+        let (residual_evals, jacobian_evals) = match self.krylov {
+            false => (
+                residual_evals,
+                self.getter("IDAGetNumJacEvals", sys::IDAGetNumJacEvals),
+            ),
+            true => (
+                residual_evals + self.getter("IDAGetNumLinResEvals", sys::IDAGetNumLinResEvals),
+                self.getter("IDAGetNumPrecEvals", sys::IDAGetNumPrecEvals),
+            ),
+        };
         Stats {
             steps: self.getter("IDAGetNumSteps", sys::IDAGetNumSteps),
-            residual_evals: self.getter("IDAGetNumResEvals", sys::IDAGetNumResEvals),
-            jacobian_evals: self.getter("IDAGetNumJacEvals", sys::IDAGetNumJacEvals),
+            residual_evals,
+            jacobian_evals,
             lu_factorizations: self.user.ls.factorizations,
             newton_iters: self.getter("IDAGetNumNonlinSolvIters", sys::IDAGetNumNonlinSolvIters),
             newton_failures: self.getter(
@@ -679,6 +749,57 @@ unsafe extern "C" fn jacobian_trampoline<D: Dae>(
     }
 }
 
+/// A callback's status as IDA's preconditioner routines return it: 0, positive
+/// (recoverable: IDA retries with a smaller step or a new set-up) or negative.
+fn prec_code(code: c_int) -> c_int {
+    code.signum()
+}
+
+unsafe extern "C" fn prec_setup<D: Dae>(
+    t: f64,
+    yy: sys::N_Vector,
+    yp: sys::N_Vector,
+    _rr: sys::N_Vector,
+    cj: f64,
+    user_data: *mut c_void,
+) -> c_int {
+    // SAFETY: as for the Jacobian: user_data is the boxed UserData<D>, the vectors valid.
+    unsafe {
+        let user = &mut *(user_data as *mut UserData<D>);
+        let (y, ypv) = (view(yy), view(yp));
+        let UserData { dae, ls, .. } = user;
+        let out = guard(|| {
+            timing::time(Phase::Jacobian, || {
+                dae.jacobian(t, y, ypv, cj, &mut ls.values)
+            })
+        });
+        let code = dae_code(user, out, "jacobian");
+        if code != 0 {
+            return prec_code(code);
+        }
+        prec_code(factorize(&mut user.ls))
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+unsafe extern "C" fn prec_solve<D: Dae>(
+    _t: f64,
+    _yy: sys::N_Vector,
+    _yp: sys::N_Vector,
+    _rr: sys::N_Vector,
+    r: sys::N_Vector,
+    z: sys::N_Vector,
+    _cj: f64,
+    _delta: f64,
+    user_data: *mut c_void,
+) -> c_int {
+    // SAFETY: user_data is the boxed UserData<D>; r and z are serial vectors of length n.
+    unsafe {
+        let user = &mut *(user_data as *mut UserData<D>);
+        prec_code(solve(&mut user.ls, r, z))
+    }
+}
+
 unsafe extern "C" fn err_handler<D>(
     error_code: c_int,
     module: *const c_char,
@@ -758,13 +879,32 @@ fn ls_code(st: &mut LsState, r: Result<Result<(), LinearSolverError>, String>) -
 
 unsafe extern "C" fn ls_setup(s: sys::SUNLinearSolver, _a: sys::SUNMatrix) -> c_int {
     // SAFETY: our solver; content is the LsState.
+    unsafe { factorize(ls_state((*s).content)) }
+}
+
+/// Factorizes the iteration matrix in `st.values`, counted.
+fn factorize(st: &mut LsState) -> c_int {
+    let LsState { solver, values, .. } = st;
+    let r = guard(|| timing::time(Phase::Factorize, || solver.factorize(values)));
+    if matches!(r, Ok(Ok(()))) {
+        st.factorizations += 1;
+    }
+    ls_code(st, r)
+}
+
+/// `x = A⁻¹ b` by the factorization of `st` (x and b possibly the same vector).
+///
+/// # Safety
+/// `x` and `b` are valid serial vectors of the solver's length.
+unsafe fn solve(st: &mut LsState, b: sys::N_Vector, x: sys::N_Vector) -> c_int {
+    // SAFETY: per the contract.
     unsafe {
-        let st = ls_state((*s).content);
-        let LsState { solver, values, .. } = st;
-        let r = guard(|| timing::time(Phase::Factorize, || solver.factorize(values)));
-        if matches!(r, Ok(Ok(()))) {
-            st.factorizations += 1;
+        if x != b {
+            view_mut(x).copy_from_slice(view(b));
         }
+        let xs = view_mut(x);
+        let LsState { solver, .. } = st;
+        let r = guard(|| timing::time(Phase::Solve, || solver.solve_in_place(xs)));
         ls_code(st, r)
     }
 }
@@ -777,16 +917,7 @@ unsafe extern "C" fn ls_solve(
     _tol: f64,
 ) -> c_int {
     // SAFETY: our solver; x and b are serial vectors of length n (possibly the same one).
-    unsafe {
-        let st = ls_state((*s).content);
-        if x != b {
-            view_mut(x).copy_from_slice(view(b));
-        }
-        let xs = view_mut(x);
-        let LsState { solver, .. } = st;
-        let r = guard(|| timing::time(Phase::Solve, || solver.solve_in_place(xs)));
-        ls_code(st, r)
-    }
+    unsafe { solve(ls_state((*s).content), b, x) }
 }
 
 unsafe extern "C" fn ls_free(s: sys::SUNLinearSolver) -> c_int {

@@ -12,7 +12,7 @@ mod klu;
 mod metis;
 mod umfpack;
 
-pub use ida::{CalcIc, Ida, IdaOptions};
+pub use ida::{CalcIc, Ida, IdaOptions, Krylov};
 pub use klu::KluLu;
 pub use metis::{nested_dissection, nested_dissection_ata};
 pub use umfpack::{UmfpackLu, UmfpackOrdering};
