@@ -16,13 +16,13 @@
 
 use nalgebra::Vector2;
 
-use super::element::{ElementOf, ElementState};
-use super::kernels::{Formulation, check_admissible};
+use super::element::ElementOf;
+use super::kernels::{Formulation, Solid, check_admissible, inadmissible};
 use super::kinematics::{Axisymmetric, NodalOf, contract, deformation, rate};
 use super::plan::TangentOf;
-use crate::dae::{DaeError, ElementPoint, Inadmissible};
-use crate::physics::axisym::{HOOP, HOOP_ENTRIES};
-use crate::physics::{BlockDiag, Real, Viscosity, Yeoh, material_point_hoop, piola_total_hoop};
+use crate::dae::{DaeError, ElementPoint};
+use crate::physics::hoop::{HOOP, HOOP_ENTRIES};
+use crate::physics::{BlockDiag, Real, material_point_hoop, piola_total_hoop};
 
 /// Nodes of the six-node triangle.
 const NODES: usize = 6;
@@ -51,82 +51,54 @@ struct HoopPoint {
     Fa: nalgebra::Matrix2<f64>,
 }
 
-/// `F = F₂ ⊕ λ`, `Ḟ = Ḟ₂ ⊕ λ̇` and `F_a` at standard point `q` of element `e`, checked
-/// admissible (`det F₂ > 0`, `λ > 0`).
+/// `F = F₂ ⊕ λ`, `Ḟ = Ḟ₂ ⊕ λ̇` and `F_a` at standard point `q`, checked admissible
+/// (`det F₂ > 0`, `λ > 0`).
 #[inline]
-fn hoop_point(
-    e: usize,
-    el: &Element,
-    q: usize,
-    st: &ElementState<DIM, NODES>,
-    t_a: f64,
-) -> Result<HoopPoint, DaeError> {
+fn hoop_point(s: &Solid<DIM, NODES>, q: usize) -> Result<HoopPoint, DaeError> {
+    let (el, st) = (s.el, s.st);
     let g = &el.geo.grads[q];
     let F2 = deformation(&st.u, g);
-    check_admissible(e, q, &F2)?;
+    check_admissible(s.e, q, &F2)?;
     let lambda = 1.0 + over_r(el, q, &st.u);
     if !(lambda > 0.0 && lambda.is_finite()) {
-        return Err(DaeError::Inadmissible(Inadmissible::Element {
-            t: f64::NAN,
-            element: e,
-            point: ElementPoint::Quadrature(q),
-            quantity: "hoop stretch 1 + u_r/r",
-            value: lambda,
-        }));
+        let quantity = "hoop stretch 1 + u_r/r";
+        return Err(inadmissible(
+            s.e,
+            ElementPoint::Quadrature(q),
+            quantity,
+            lambda,
+        ));
     }
     let F = BlockDiag::new(F2, lambda);
     let Fdot = BlockDiag::new(rate(&st.v, g), over_r(el, q, &st.v));
     Ok(HoopPoint {
         F,
         Fdot,
-        Fa: el.active_fa(q, t_a),
+        Fa: el.active_fa(q, s.t_a),
     })
 }
 
 impl Formulation<DIM, NODES, 12> for Axisymmetric {
     /// `f_aᵢ += w (P_iJ ∂Nₐ/∂X_J + δ_ir P₃₃ Nₐ/r)`.
-    fn solid_residual(
-        e: usize,
-        el: &Element,
-        law: &Yeoh,
-        visc: &Viscosity,
-        st: &ElementState<DIM, NODES>,
-        t_a: f64,
-        fe: &mut ElementVector,
-    ) -> Result<(), DaeError> {
-        for q in 0..el.geo.jxw.len() {
-            let g = &el.geo.grads[q];
-            let h = &el.hoop[q];
-            let pt = hoop_point(e, el, q, st, t_a)?;
-            let p = piola_total_hoop(law, visc, &pt.F, &pt.Fdot, &pt.Fa);
-            let w = el.geo.jxw[q];
+    fn solid_residual(s: &Solid<DIM, NODES>, fe: &mut ElementVector) -> Result<(), DaeError> {
+        s.each_point(hoop_point, |q, g, w, pt| {
+            let h = &s.el.hoop[q];
+            let p = piola_total_hoop(s.law, s.visc, &pt.F, &pt.Fdot, &pt.Fa);
             for a in 0..NODES {
                 for i in 0..DIM {
                     fe[a][i] += w * contract::<DIM>(|l| p.plane[(i, l)] * g[a][l]);
                 }
                 fe[a][0] += w * p.hoop * h[a];
             }
-        }
-        Ok(())
+        })
     }
 
     /// `K_(ai)(bk) += w Σ_αβ B_(ai)α (∂P_α/∂F_β) B_(bk)β` over the five entries α, β of
     /// (F₂, λ): `B_(ai)(iJ) = ∂Nₐ/∂X_J`, `B_(a,r)λ = Nₐ/r`; `C` the same with `∂P/∂Ḟ`.
-    fn solid_tangent(
-        e: usize,
-        el: &Element,
-        law: &Yeoh,
-        visc: &Viscosity,
-        st: &ElementState<DIM, NODES>,
-        t_a: f64,
-        tan: &mut ElementTangent,
-    ) -> Result<(), DaeError> {
-        for q in 0..el.geo.jxw.len() {
-            let g = &el.geo.grads[q];
-            let h = &el.hoop[q];
-            let pt = hoop_point(e, el, q, st, t_a)?;
-            let mp = material_point_hoop(law, visc, &pt.F, &pt.Fdot, &pt.Fa);
-            let w = el.geo.jxw[q];
+    fn solid_tangent(s: &Solid<DIM, NODES>, tan: &mut ElementTangent) -> Result<(), DaeError> {
+        s.each_point(hoop_point, |q, g, w, pt| {
+            let h = &s.el.hoop[q];
+            let mp = material_point_hoop(s.law, s.visc, &pt.F, &pt.Fdot, &pt.Fa);
             for a in 0..NODES {
                 for i in 0..DIM {
                     // ak_β = w Σ_α B_(ai)α A_αβ, the same for C.
@@ -158,8 +130,7 @@ impl Formulation<DIM, NODES, 12> for Axisymmetric {
                     }
                 }
             }
-        }
-        Ok(())
+        })
     }
 
     /// `λ = x_r/X_r`: the current over the reference radius (`1 + u_r/r`).

@@ -16,7 +16,7 @@
 //! - [`Formulation::solid_residual`] / [`Formulation::solid_tangent`]: `f_aᵢ += w P_iJ
 //!   ∂Nₐ/∂X_J`, `K_(ai)(bk) += w ∂Nₐ/∂X_J ∂P_iJ/∂F_kL ∂N_b/∂X_L`, and `C` the same with
 //!   `∂P/∂Ḟ`, at (F, Ḟ, F_a) — the kinematic model's part: [`PlaneStrain`] and [`ThreeD`]
-//!   here ([`solid_residual`], [`solid_tangent`] over their [`SolidLaw`]), the
+//!   here (`solid_residual`, `solid_tangent` over their stress and material point), the
 //!   axisymmetric hoop row in [`super::axisym`];
 //! - [`mass_residual`] / [`mass_tangent`]: gravity `−g s_g t_g Σ_b M_ab e_y`, inertia
 //!   `M v̇` and drag `c_d M₁ v`;
@@ -33,7 +33,7 @@
 //! each instance inlines them (3 % more instructions on `cases/fast/push-pull-short.ron`
 //! when they were not, callgrind).
 
-use nalgebra::{Matrix2, Matrix3, SMatrix, SVector};
+use nalgebra::{SMatrix, SVector};
 
 use super::ModelParams;
 use super::element::{ElementOf, ElementState};
@@ -45,8 +45,8 @@ use super::shape::{Seeded, Shape};
 use crate::dae::{DaeError, ElementPoint, Inadmissible};
 use crate::fem::ElementTabulation;
 use crate::physics::{
-    Real, Surface, Viscosity, Yeoh, adhesion_force, adhesion_hoop_factor, adhesion_rate,
-    contact_force, material_point, material_point3, piola_total, piola_total3,
+    MaterialPointOf, Real, Surface, Viscosity, Yeoh, adhesion_force, adhesion_hoop_factor,
+    adhesion_rate, contact_force, material_point, material_point3, piola_total, piola_total3,
 };
 
 /// The time-dependent switches of MODEL.md §5 at one time.
@@ -75,156 +75,78 @@ impl Switches {
     }
 }
 
+/// The solid's inputs on element `e`: the element, its law and the viscosity, its state
+/// and the active-strain ramp `t_a`.
+pub(crate) struct Solid<'a, const D: usize, const N: usize> {
+    pub(crate) e: usize,
+    pub(crate) el: &'a ElementOf<D, N>,
+    pub(crate) law: &'a Yeoh,
+    pub(crate) visc: &'a Viscosity,
+    pub(crate) st: &'a ElementState<D, N>,
+    pub(crate) t_a: f64,
+}
+
+impl<const D: usize, const N: usize> Solid<'_, D, N> {
+    /// Calls `f(q, ∇N, w, point(q))` at each standard point `q` in turn, `point` the
+    /// kinematics there (checked admissible).
+    #[inline(always)]
+    pub(crate) fn each_point<P>(
+        &self,
+        point: impl Fn(&Self, usize) -> Result<P, DaeError>,
+        mut f: impl FnMut(usize, &NodalOf<D, N>, f64, P),
+    ) -> Result<(), DaeError> {
+        for q in 0..self.el.geo.jxw.len() {
+            let pt = point(self, q)?;
+            f(q, &self.el.geo.grads[q], self.el.geo.jxw[q], pt);
+        }
+        Ok(())
+    }
+
+    /// `F` (checked admissible), `Ḟ` and `F_a` at standard point `q`.
+    #[inline(always)]
+    #[allow(clippy::type_complexity)]
+    fn point(&self, q: usize) -> Result<[SMatrix<f64, D, D>; 3], DaeError> {
+        let g = &self.el.geo.grads[q];
+        let f = deformation(&self.st.u, g);
+        check_admissible(self.e, q, &f)?;
+        Ok([f, rate(&self.st.v, g), self.el.active_fa(q, self.t_a)])
+    }
+}
+
 /// What a kinematic model changes in the element kernels (MODEL.md §3, §10): the solid's
 /// internal force and tangents at the standard points, and `F₃₃` at the band points. The
 /// element loops are generic over it, so the choice is made once per loop and each model
 /// runs its own code.
 pub(crate) trait Formulation<const D: usize, const N: usize, const E: usize> {
-    /// The solid's internal force of element `e`.
-    fn solid_residual(
-        e: usize,
-        el: &ElementOf<D, N>,
-        law: &Yeoh,
-        visc: &Viscosity,
-        st: &ElementState<D, N>,
-        t_a: f64,
-        fe: &mut NodalOf<D, N>,
-    ) -> Result<(), DaeError>;
+    /// The solid's internal force.
+    fn solid_residual(s: &Solid<D, N>, fe: &mut NodalOf<D, N>) -> Result<(), DaeError>;
 
-    /// The solid's tangents `K`, `C` of element `e`.
-    fn solid_tangent(
-        e: usize,
-        el: &ElementOf<D, N>,
-        law: &Yeoh,
-        visc: &Viscosity,
-        st: &ElementState<D, N>,
-        t_a: f64,
-        tan: &mut TangentOf<E, N>,
-    ) -> Result<(), DaeError>;
+    /// The solid's tangents `K`, `C`.
+    fn solid_tangent(s: &Solid<D, N>, tan: &mut TangentOf<E, N>) -> Result<(), DaeError>;
 
     /// `F₃₃` at a band point with current position `x` and reference position `x_ref`:
     /// `None` where there is none beyond `F` (plane strain: 1; 3-D).
     fn hoop<T: Real>(x: &SVector<T, D>, x_ref: &[f64; D]) -> Option<T>;
 }
 
-/// The solid law of a kinematic model whose `F` is the element's `D × D` gradient: the
-/// total first Piola–Kirchhoff stress and its tangents at a point.
-pub(crate) trait SolidLaw<const D: usize> {
-    /// The stress with its tangents.
-    type Point: PointTangents;
-    /// `P(F, Ḟ, F_a)` (Yeoh with active strain, plus Kelvin–Voigt viscosity).
-    fn piola(
-        law: &Yeoh,
-        visc: &Viscosity,
-        f: &SMatrix<f64, D, D>,
-        fdot: &SMatrix<f64, D, D>,
-        fa: &SMatrix<f64, D, D>,
-    ) -> SMatrix<f64, D, D>;
-    /// `P` and `∂P/∂F`, `∂P/∂Ḟ`.
-    fn point(
-        law: &Yeoh,
-        visc: &Viscosity,
-        f: &SMatrix<f64, D, D>,
-        fdot: &SMatrix<f64, D, D>,
-        fa: &SMatrix<f64, D, D>,
-    ) -> Self::Point;
-}
-
-/// The tangents of a material point, flattened `D i + J` for `P_iJ` (rows) and `D k + L`
-/// for `F_kL` (columns).
-pub(crate) trait PointTangents {
-    /// `∂P_row/∂F_col`.
-    fn dp_df(&self, row: usize, col: usize) -> f64;
-    /// `∂P_row/∂Ḟ_col`.
-    fn dp_dfdot(&self, row: usize, col: usize) -> f64;
-}
-
-impl<const D: usize, const DD: usize> PointTangents for crate::physics::MaterialPointOf<D, DD> {
-    #[inline(always)]
-    fn dp_df(&self, row: usize, col: usize) -> f64 {
-        self.dP_dF[(row, col)]
-    }
-    #[inline(always)]
-    fn dp_dfdot(&self, row: usize, col: usize) -> f64 {
-        self.dP_dFdot[(row, col)]
-    }
-}
-
-impl SolidLaw<2> for PlaneStrain {
-    type Point = crate::physics::MaterialPoint;
-    #[inline(always)]
-    fn piola(
-        law: &Yeoh,
-        visc: &Viscosity,
-        f: &Matrix2<f64>,
-        fdot: &Matrix2<f64>,
-        fa: &Matrix2<f64>,
-    ) -> Matrix2<f64> {
-        piola_total(law, visc, f, fdot, fa)
-    }
-    #[inline(always)]
-    fn point(
-        law: &Yeoh,
-        visc: &Viscosity,
-        f: &Matrix2<f64>,
-        fdot: &Matrix2<f64>,
-        fa: &Matrix2<f64>,
-    ) -> Self::Point {
-        material_point(law, visc, f, fdot, fa)
-    }
-}
-
-impl SolidLaw<3> for ThreeD {
-    type Point = crate::physics::MaterialPoint3;
-    #[inline(always)]
-    fn piola(
-        law: &Yeoh,
-        visc: &Viscosity,
-        f: &Matrix3<f64>,
-        fdot: &Matrix3<f64>,
-        fa: &Matrix3<f64>,
-    ) -> Matrix3<f64> {
-        piola_total3(law, visc, f, fdot, fa)
-    }
-    #[inline(always)]
-    fn point(
-        law: &Yeoh,
-        visc: &Viscosity,
-        f: &Matrix3<f64>,
-        fdot: &Matrix3<f64>,
-        fa: &Matrix3<f64>,
-    ) -> Self::Point {
-        material_point3(law, visc, f, fdot, fa)
-    }
-}
-
+/// The formulation of a kinematic model whose `F` is the element's `D × D` gradient, with
+/// its total first Piola–Kirchhoff stress `$piola` and material point `$point`.
 macro_rules! solid_formulation {
-    ($kin:ty, $d:literal, $n:literal, $e:literal) => {
+    ($kin:ty, $d:literal, $n:literal, $e:literal, $piola:ident, $point:ident) => {
         impl Formulation<$d, $n, $e> for $kin {
             #[inline(always)]
-            fn solid_residual(
-                e: usize,
-                el: &ElementOf<$d, $n>,
-                law: &Yeoh,
-                visc: &Viscosity,
-                st: &ElementState<$d, $n>,
-                t_a: f64,
-                fe: &mut NodalOf<$d, $n>,
-            ) -> Result<(), DaeError> {
-                solid_residual::<Self, $d, $n>(e, el, law, visc, st, t_a, fe)
+            fn solid_residual(s: &Solid<$d, $n>, fe: &mut NodalOf<$d, $n>) -> Result<(), DaeError> {
+                solid_residual(s, fe, |[f, fdot, fa]| $piola(s.law, s.visc, &f, &fdot, &fa))
             }
 
             #[inline(always)]
             fn solid_tangent(
-                e: usize,
-                el: &ElementOf<$d, $n>,
-                law: &Yeoh,
-                visc: &Viscosity,
-                st: &ElementState<$d, $n>,
-                t_a: f64,
+                s: &Solid<$d, $n>,
                 tan: &mut TangentOf<$e, $n>,
             ) -> Result<(), DaeError> {
-                solid_tangent::<Self, $d, $n, $e>(e, el, law, visc, st, t_a, tan)
+                solid_tangent(s, tan, |[f, fdot, fa]| {
+                    $point(s.law, s.visc, &f, &fdot, &fa)
+                })
             }
 
             #[inline(always)]
@@ -235,8 +157,25 @@ macro_rules! solid_formulation {
     };
 }
 
-solid_formulation!(PlaneStrain, 2, 6, 12);
-solid_formulation!(ThreeD, 3, 10, 30);
+solid_formulation!(PlaneStrain, 2, 6, 12, piola_total, material_point);
+solid_formulation!(ThreeD, 3, 10, 30, piola_total3, material_point3);
+
+/// The error of a quantity `quantity` = `value` out of its admissible range at `point`
+/// of element `e`.
+pub(crate) fn inadmissible(
+    e: usize,
+    point: ElementPoint,
+    quantity: &'static str,
+    value: f64,
+) -> DaeError {
+    DaeError::Inadmissible(Inadmissible::Element {
+        t: f64::NAN,
+        element: e,
+        point,
+        quantity,
+        value,
+    })
+}
 
 /// `F` of element `e` at point `q` is admissible: `J = det F > 0` and finite.
 #[inline(always)]
@@ -249,75 +188,39 @@ pub(crate) fn check_admissible<const D: usize>(
     if j > 0.0 && j.is_finite() {
         Ok(())
     } else {
-        Err(DaeError::Inadmissible(Inadmissible::Element {
-            t: f64::NAN,
-            element: e,
-            point: ElementPoint::Quadrature(q),
-            quantity: "det F",
-            value: j,
-        }))
+        Err(inadmissible(e, ElementPoint::Quadrature(q), "det F", j))
     }
 }
 
-/// `F` (checked admissible), `Ḟ` and `F_a` at standard point `q` of element `e`.
+/// The solid's internal force `f_aᵢ += Σ_q w_q P_iJ ∂Nₐ/∂X_J`, with `P = piola(F, Ḟ, F_a)`
+/// the total first Piola–Kirchhoff stress (Yeoh with active strain, plus Kelvin–Voigt
+/// viscosity).
 #[inline(always)]
-#[allow(clippy::type_complexity)]
-fn solid_point<const D: usize, const N: usize>(
-    e: usize,
-    el: &ElementOf<D, N>,
-    q: usize,
-    st: &ElementState<D, N>,
-    t_a: f64,
-) -> Result<(SMatrix<f64, D, D>, SMatrix<f64, D, D>, SMatrix<f64, D, D>), DaeError> {
-    let g = &el.geo.grads[q];
-    let f = deformation(&st.u, g);
-    check_admissible(e, q, &f)?;
-    Ok((f, rate(&st.v, g), el.active_fa(q, t_a)))
-}
-
-/// The solid's internal force `f_aᵢ += Σ_q w_q P_iJ ∂Nₐ/∂X_J`, with `P` the total first
-/// Piola–Kirchhoff stress of `L` (Yeoh with active strain, plus Kelvin–Voigt viscosity).
-#[inline(always)]
-pub(crate) fn solid_residual<L: SolidLaw<D>, const D: usize, const N: usize>(
-    e: usize,
-    el: &ElementOf<D, N>,
-    law: &Yeoh,
-    visc: &Viscosity,
-    st: &ElementState<D, N>,
-    t_a: f64,
+fn solid_residual<const D: usize, const N: usize>(
+    s: &Solid<D, N>,
     fe: &mut NodalOf<D, N>,
+    piola: impl Fn([SMatrix<f64, D, D>; 3]) -> SMatrix<f64, D, D>,
 ) -> Result<(), DaeError> {
-    for q in 0..el.geo.jxw.len() {
-        let g = &el.geo.grads[q];
-        let (f, fdot, fa) = solid_point(e, el, q, st, t_a)?;
-        let p = L::piola(law, visc, &f, &fdot, &fa);
-        let w = el.geo.jxw[q];
+    s.each_point(Solid::point, |_, g, w, pt| {
+        let p = piola(pt);
         for a in 0..N {
             for i in 0..D {
                 fe[a][i] += w * contract::<D>(|l| p[(i, l)] * g[a][l]);
             }
         }
-    }
-    Ok(())
+    })
 }
 
 /// The solid's tangents `K_(ai)(bk) += w Σ_JL ∂Nₐ/∂X_J A_(iJ)(kL) ∂N_b/∂X_L` with
-/// `A = ∂P/∂F`, and `C` the same with `∂P/∂Ḟ`.
+/// `A = ∂P/∂F`, and `C` the same with `∂P/∂Ḟ`, from the material point `point(F, Ḟ, F_a)`.
 #[inline(always)]
-pub(crate) fn solid_tangent<L: SolidLaw<D>, const D: usize, const N: usize, const E: usize>(
-    e: usize,
-    el: &ElementOf<D, N>,
-    law: &Yeoh,
-    visc: &Viscosity,
-    st: &ElementState<D, N>,
-    t_a: f64,
+fn solid_tangent<const D: usize, const N: usize, const E: usize, const DD: usize>(
+    s: &Solid<D, N>,
     tan: &mut TangentOf<E, N>,
+    point: impl Fn([SMatrix<f64, D, D>; 3]) -> MaterialPointOf<D, DD>,
 ) -> Result<(), DaeError> {
-    for q in 0..el.geo.jxw.len() {
-        let g = &el.geo.grads[q];
-        let (f, fdot, fa) = solid_point(e, el, q, st, t_a)?;
-        let mp = L::point(law, visc, &f, &fdot, &fa);
-        let w = el.geo.jxw[q];
+    s.each_point(Solid::point, |_, g, w, pt| {
+        let mp = point(pt);
         for a in 0..N {
             for i in 0..D {
                 // ak_(kL) = w Σ_J ∂Nₐ/∂X_J A_(iJ)(kL), the same for C (D² of 9 used).
@@ -328,8 +231,8 @@ pub(crate) fn solid_tangent<L: SolidLaw<D>, const D: usize, const N: usize, cons
                     .zip(ck[..D * D].iter_mut())
                     .enumerate()
                 {
-                    *akc = w * contract::<D>(|j| mp.dp_df(D * i + j, col) * g[a][j]);
-                    *ckc = w * contract::<D>(|j| mp.dp_dfdot(D * i + j, col) * g[a][j]);
+                    *akc = w * contract::<D>(|j| mp.dP_dF[(D * i + j, col)] * g[a][j]);
+                    *ckc = w * contract::<D>(|j| mp.dP_dFdot[(D * i + j, col)] * g[a][j]);
                 }
                 let rr = D * a + i;
                 for b in 0..N {
@@ -341,8 +244,7 @@ pub(crate) fn solid_tangent<L: SolidLaw<D>, const D: usize, const N: usize, cons
                 }
             }
         }
-    }
-    Ok(())
+    })
 }
 
 /// Gravity, inertia and drag: `f_a,y += g_now Σ_b M_ab` (body force `−ρ g s_g t_g e_y`
@@ -488,9 +390,37 @@ fn band_is_zero<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usiz
     }
 }
 
-/// The band forces `f_aᵢ −= Σ_q w_q Nₐ bᵢ` ([`band_force`]); `mue`: the nodal μ_as when
-/// adhesion acts on the element.
-#[allow(clippy::too_many_arguments)]
+/// The band forces' inputs on element `el`: the tabulation of the band rule, the
+/// parameters, the substrate, the element's state, its nodal μ_as `mue` when adhesion acts
+/// on it, and the adhesion ramp `t_as`.
+pub(crate) struct Band<'a, S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> {
+    pub(crate) el: &'a ElementOf<D, N>,
+    pub(crate) ctab: &'a S::Tab,
+    pub(crate) p: &'a ModelParams,
+    pub(crate) sub: &'a S::Substrate,
+    pub(crate) st: &'a ElementState<D, N>,
+    pub(crate) mue: Option<&'a [f64; N]>,
+    pub(crate) t_as: f64,
+}
+
+impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> Band<'_, S, D, N, E> {
+    /// [`band_force`] at band point `q`.
+    #[inline(always)]
+    fn force<T: Real>(
+        &self,
+        q: usize,
+        x: &SVector<T, D>,
+        f: &SMatrix<T, D, D>,
+        j: T,
+        hoop: Option<T>,
+        mu: Option<T>,
+    ) -> SVector<T, D> {
+        let radial = self.el.radial.get(q);
+        band_force::<S, T, D, N, E>(self.p, self.sub, x, f, j, hoop, radial, mu, self.t_as)
+    }
+}
+
+/// The band forces `f_aᵢ −= Σ_q w_q Nₐ bᵢ` ([`band_force`]).
 #[inline(always)]
 pub(crate) fn band_residual<
     S: Shape<D, N, E>,
@@ -500,16 +430,11 @@ pub(crate) fn band_residual<
     const E: usize,
 >(
     e: usize,
-    el: &ElementOf<D, N>,
-    ctab: &S::Tab,
-    p: &ModelParams,
-    sub: &S::Substrate,
-    st: &ElementState<D, N>,
-    mue: Option<&[f64; N]>,
-    t_as: f64,
+    band: &Band<S, D, N, E>,
     fe: &mut NodalOf<D, N>,
 ) -> Result<(), DaeError> {
-    let values = ctab.values();
+    let (el, p, sub, st, mue) = (band.el, band.p, band.sub, band.st, band.mue);
+    let values = band.ctab.values();
     for q in 0..el.cgeo.jxw.len() {
         let nv = &values[q];
         if !S::CHECK_EVERY_BAND_POINT {
@@ -523,28 +448,12 @@ pub(crate) fn band_residual<
         let hoop = K::hoop(&pt.x, &el.cgeo.x[q]);
         let j3 = hoop.map_or(j, |l| j * l);
         if !(j > 0.0 && j3 > 0.0) {
-            return Err(DaeError::Inadmissible(Inadmissible::Element {
-                t: f64::NAN,
-                element: e,
-                point: ElementPoint::Contact(q),
-                quantity: "det F",
-                value: j3,
-            }));
+            return Err(inadmissible(e, ElementPoint::Contact(q), "det F", j3));
         }
         if S::CHECK_EVERY_BAND_POINT && band_is_zero::<S, D, N, E>(p, sub, &pt.x, mue.is_some()) {
             continue;
         }
-        let b = band_force::<S, f64, D, N, E>(
-            p,
-            sub,
-            &pt.x,
-            &pt.f,
-            j,
-            hoop,
-            el.radial.get(q),
-            pt.mu,
-            t_as,
-        );
+        let b = band.force(q, &pt.x, &pt.f, j, hoop, pt.mu);
         let w = el.cgeo.jxw[q];
         for a in 0..N {
             for i in 0..D {
@@ -559,7 +468,6 @@ pub(crate) fn band_residual<
 /// x_k → k, F_kL → D + D k + L, μ_as → D + D²),
 /// `K_(ai)(bk) −= w Nₐ (∂bᵢ/∂x_k N_b + Σ_L ∂bᵢ/∂F_kL ∂N_b/∂X_L)` and
 /// `B_(ai)b −= w Nₐ ∂bᵢ/∂μ_as N_b` (membrane elements with adhesion).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn band_tangent<
     S: Shape<D, N, E>,
@@ -568,17 +476,12 @@ pub(crate) fn band_tangent<
     const N: usize,
     const E: usize,
 >(
-    el: &ElementOf<D, N>,
-    ctab: &S::Tab,
-    p: &ModelParams,
-    sub: &S::Substrate,
-    st: &ElementState<D, N>,
-    mue: Option<&[f64; N]>,
-    t_as: f64,
+    band: &Band<S, D, N, E>,
     tan: &mut TangentOf<E, N>,
 ) {
+    let (el, p, sub, st, mue) = (band.el, band.p, band.sub, band.st, band.mue);
     let with_mu = el.with_mu;
-    let values = ctab.values();
+    let values = band.ctab.values();
     let f_dir = |k: usize, l: usize| D + D * k + l;
     let mu_dir = D + D * D;
     for q in 0..el.cgeo.jxw.len() {
@@ -596,17 +499,7 @@ pub(crate) fn band_tangent<
         let mud = pt.mu.map(|mu| S::BandDual::seeded(mu, mu_dir));
         // F₃₃ = x_r/X_r (axisymmetric) is a function of x: no dual direction of its own.
         let hoop = K::hoop(&xd, &el.cgeo.x[q]);
-        let b = band_force::<S, S::BandDual, D, N, E>(
-            p,
-            sub,
-            &xd,
-            &fd,
-            j,
-            hoop,
-            el.radial.get(q),
-            mud,
-            t_as,
-        );
+        let b = band.force(q, &xd, &fd, j, hoop, mud);
         let w = el.cgeo.jxw[q];
         for i in 0..D {
             let db = b[i].gradient();

@@ -218,6 +218,15 @@ impl<const D: usize, const N: usize, const E: usize> Scratch<D, N, E> {
     }
 }
 
+/// `Ok` when every value of `v` is finite, else `what` is not.
+fn all_finite(v: &[f64], what: &'static str) -> Result<(), DaeError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(DaeError::Inadmissible(Inadmissible::NonFinite(what)))
+    }
+}
+
 /// `e` with the time `t` of the residual or Jacobian that met it.
 fn at_time(e: DaeError, t: f64) -> DaeError {
     match e {
@@ -472,6 +481,54 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         st
     }
 
+    /// The switches at `t` and the caps of state `y` ([`Self::fill_caps`]) in the scratch
+    /// vector, taken until the residual or Jacobian puts it back.
+    fn switches_and_caps(&mut self, t: f64, y: &[f64]) -> (Switches, Vec<(f64, f64)>) {
+        let mut caps = std::mem::take(&mut self.scratch.caps);
+        let sw = Switches::at(&self.params, t);
+        self.fill_caps(y, sw.t_as, &mut caps);
+        (sw, caps)
+    }
+
+    /// The solid's inputs on element `e` in state `st` at the active-strain ramp `t_a`.
+    #[inline(always)]
+    fn solid<'a>(
+        &'a self,
+        e: usize,
+        st: &'a ElementState<D, N>,
+        t_a: f64,
+    ) -> kernels::Solid<'a, D, N> {
+        let el = &self.elements[e];
+        kernels::Solid {
+            e,
+            el,
+            law: &self.params.solids[el.solid],
+            visc: &self.params.viscosity,
+            st,
+            t_a,
+        }
+    }
+
+    /// The band forces' inputs on `el` in state `st` ([`kernels::Band`]).
+    #[inline(always)]
+    fn band<'a>(
+        &'a self,
+        el: &'a ElementOf<D, N>,
+        st: &'a ElementState<D, N>,
+        mue: Option<&'a [f64; N]>,
+        t_as: f64,
+    ) -> kernels::Band<'a, S, D, N, E> {
+        kernels::Band {
+            el,
+            ctab: &self.ctab,
+            p: &self.params,
+            sub: &self.substrate,
+            st,
+            mue,
+            t_as,
+        }
+    }
+
     /// Φ(A) and dΦ/dA of every μ_as unknown, in their order, into `out` (emptied when
     /// adhesion cannot act at `t_as`): computed once per residual or Jacobian, not once
     /// per element that shares the node.
@@ -545,11 +602,9 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         r: &mut [f64],
     ) -> Result<(), DaeError> {
         let mut buf = self.scratch.take_vectors();
-        let mut caps = std::mem::take(&mut self.scratch.caps);
+        let (sw, caps) = self.switches_and_caps(t, y);
         r.fill(0.0);
         let p = &self.params;
-        let sw = Switches::at(p, t);
-        self.fill_caps(y, sw.t_as, &mut caps);
         let inertia = self.dofs.inertia;
         if inertia {
             let n_u = self.dofs.n_u;
@@ -562,22 +617,12 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
             let el = &self.elements[e];
             let st = self.gather(el, y, yp);
             *fe = [[0.0f64; D]; N];
-            let law = &p.solids[el.solid];
-            K::solid_residual(e, el, law, &p.viscosity, &st, sw.t_a, fe)?;
+            K::solid_residual(&self.solid(e, &st, sw.t_a), fe)?;
             kernels::mass_residual(el, g_now, inertia, p.drag, &st, fe);
             if self.in_reach(el, &st.u) {
                 let mue = self.gather_mu(el, &caps, sw.t_as).map(|m| m.0);
-                kernels::band_residual::<S, K, D, N, E>(
-                    e,
-                    el,
-                    &self.ctab,
-                    p,
-                    &self.substrate,
-                    &st,
-                    mue.as_ref(),
-                    sw.t_as,
-                    fe,
-                )?;
+                let band = self.band(el, &st, mue.as_ref(), sw.t_as);
+                kernels::band_residual::<S, K, D, N, E>(e, &band, fe)?;
             }
             Ok(())
         };
@@ -597,11 +642,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
             let x = self.position(y, i);
             r[row] = kernels::mu_rate_residual::<S, D, N, E>(p, &self.substrate, &x, yp[row]);
         }
-        if r.iter().all(|v| v.is_finite()) {
-            Ok(())
-        } else {
-            Err(DaeError::Inadmissible(Inadmissible::NonFinite("residual")))
-        }
+        all_finite(r, "residual")
     }
 
     /// The iteration matrix with the kernels of the kinematic model `K` ([`Dae::jacobian`]).
@@ -614,32 +655,22 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         v: &mut [f64],
     ) -> Result<(), DaeError> {
         let mut buf = self.scratch.take_tangents();
-        let mut caps = std::mem::take(&mut self.scratch.caps);
+        let (sw, caps) = self.switches_and_caps(t, y);
         v.fill(0.0);
         let p = &self.params;
-        let sw = Switches::at(p, t);
-        self.fill_caps(y, sw.t_as, &mut caps);
         let inertia = self.dofs.inertia;
         self.plan.add_kinematic(cj, v);
         let element = |e: usize, tan: &mut Box<TangentOf<E, N>>| -> Result<(), DaeError> {
             let el = &self.elements[e];
             let st = self.gather(el, y, yp);
             tan.reset(el.with_mu);
-            let law = &p.solids[el.solid];
-            K::solid_tangent(e, el, law, &p.viscosity, &st, sw.t_a, tan)?;
+            K::solid_tangent(&self.solid(e, &st, sw.t_a), tan)?;
             kernels::mass_tangent(el, cj, inertia, p.drag, tan);
             if self.in_reach(el, &st.u) {
                 let mue = self.gather_mu(el, &caps, sw.t_as);
-                kernels::band_tangent::<S, K, D, N, E>(
-                    el,
-                    &self.ctab,
-                    p,
-                    &self.substrate,
-                    &st,
-                    mue.map(|m| m.0).as_ref(),
-                    sw.t_as,
-                    tan,
-                );
+                let mu = mue.map(|m| m.0);
+                let band = self.band(el, &st, mu.as_ref(), sw.t_as);
+                kernels::band_tangent::<S, K, D, N, E>(&band, tan);
                 // The unknown is the exposure A: ∂f/∂A_b = ∂f/∂μ_b dμ_b/dA_b.
                 if let Some((_, g)) = mue {
                     for row in tan.b.iter_mut() {
@@ -674,11 +705,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
                 }
             }
         }
-        if v.iter().all(|x| x.is_finite()) {
-            Ok(())
-        } else {
-            Err(DaeError::Inadmissible(Inadmissible::NonFinite("Jacobian")))
-        }
+        all_finite(v, "Jacobian")
     }
 }
 

@@ -140,6 +140,27 @@ pub struct Quarter;
 pub(crate) const THREE_D: &str =
     "the half-plane mesh cannot carry the 3-D model (a Cell3 on a Mesh3 does)";
 
+/// `nodes` marked in `out`: their component `c` is eliminated.
+fn mark<const D: usize>(mut out: Vec<[bool; D]>, nodes: &[usize], c: usize) -> Vec<[bool; D]> {
+    for &i in nodes {
+        out[i][c] = true;
+    }
+    out
+}
+
+/// `cell.method::<K>(args)` with `K` the formulation of the half-plane case's kinematic
+/// model.
+macro_rules! by_kinematics {
+    ($cell:ident . $method:ident ( $($arg:expr),* )) => {{
+        use super::kinematics::{Axisymmetric, PlaneStrain};
+        match $cell.params.kinematics {
+            KinematicModel::PlaneStrain => $cell.$method::<PlaneStrain>($($arg),*),
+            KinematicModel::Axisymmetric => $cell.$method::<Axisymmetric>($($arg),*),
+            KinematicModel::ThreeD => Err(DaeError::Fatal(THREE_D.into())),
+        }
+    }};
+}
+
 impl Shape<2, 6, 12> for HalfPlane {
     type Mesh = Mesh;
     type Substrate = Substrate;
@@ -168,11 +189,7 @@ impl Shape<2, 6, 12> for HalfPlane {
 
     /// u_x = 0 on the symmetry line.
     fn eliminated(mesh: &Mesh, _: Constraints) -> Vec<[bool; 2]> {
-        let mut out = vec![[false; 2]; mesh.nodes.len()];
-        for &i in &mesh.symmetry_nodes {
-            out[i][0] = true;
-        }
-        out
+        mark(vec![[false; 2]; mesh.nodes.len()], &mesh.symmetry_nodes, 0)
     }
 
     fn contact_lengths(cell: &CellOf<Self, 2, 6, 12>, y: &[f64]) -> (f64, f64) {
@@ -186,12 +203,7 @@ impl Shape<2, 6, 12> for HalfPlane {
         yp: &[f64],
         r: &mut [f64],
     ) -> Result<(), DaeError> {
-        use super::kinematics::{Axisymmetric, PlaneStrain};
-        match cell.params.kinematics {
-            KinematicModel::PlaneStrain => cell.residual_of::<PlaneStrain>(t, y, yp, r),
-            KinematicModel::Axisymmetric => cell.residual_of::<Axisymmetric>(t, y, yp, r),
-            KinematicModel::ThreeD => Err(DaeError::Fatal(THREE_D.into())),
-        }
+        by_kinematics!(cell.residual_of(t, y, yp, r))
     }
 
     fn jacobian(
@@ -202,12 +214,7 @@ impl Shape<2, 6, 12> for HalfPlane {
         cj: f64,
         v: &mut [f64],
     ) -> Result<(), DaeError> {
-        use super::kinematics::{Axisymmetric, PlaneStrain};
-        match cell.params.kinematics {
-            KinematicModel::PlaneStrain => cell.jacobian_of::<PlaneStrain>(t, y, yp, cj, v),
-            KinematicModel::Axisymmetric => cell.jacobian_of::<Axisymmetric>(t, y, yp, cj, v),
-            KinematicModel::ThreeD => Err(DaeError::Fatal(THREE_D.into())),
-        }
+        by_kinematics!(cell.jacobian_of(t, y, yp, cj, v))
     }
 }
 
@@ -244,14 +251,12 @@ impl Shape<3, 10, 30> for Quarter {
     /// u_x = 0 on the plane x = c_x; u_z = 0 on z = c_z, or everywhere for the slab.
     fn eliminated(mesh: &Mesh3, constraints: Constraints) -> Vec<[bool; 3]> {
         let slab = constraints == Constraints::Slab;
-        let mut out = vec![[false, false, slab]; mesh.nodes.len()];
-        for &i in &mesh.symmetry_x {
-            out[i][0] = true;
-        }
-        for &i in &mesh.symmetry_z {
-            out[i][2] = true;
-        }
-        out
+        let out = mark(
+            vec![[false, false, slab]; mesh.nodes.len()],
+            &mesh.symmetry_x,
+            0,
+        );
+        mark(out, &mesh.symmetry_z, 2)
     }
 
     fn contact_lengths(cell: &CellOf<Self, 3, 10, 30>, y: &[f64]) -> (f64, f64) {

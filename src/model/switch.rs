@@ -17,7 +17,33 @@ pub struct Restart<'a> {
     pub atol: f64,
 }
 
+/// The error of the restart `what` at `t`, refused with `message`.
+fn refused(what: &'static str, t: f64, message: String) -> ModelError {
+    ModelError::Restart {
+        what,
+        t,
+        source: Box::new(crate::dae::IntegratorError::Problem { t, message }),
+    }
+}
+
 impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S, D, N, E> {
+    /// This cell rebuilt with `params`, its μ_as unknowns deferred or not as here.
+    fn rebuilt(&self, params: ModelParams) -> Result<Self, ModelError> {
+        let deferred = self.history.is_some();
+        let with_mu = !deferred && self.params.adhesion.is_some();
+        Self::build(params, self.mesh.clone(), self.constraints, with_mu)
+    }
+
+    /// This cell's deferred μ_as history, if any, restarted at `t` from the membrane
+    /// motion of `m` in state (`y`, `yp`), given to `m`.
+    fn carry_history(&self, m: &mut Self, t: f64, y: &[f64], yp: &[f64]) -> Result<(), String> {
+        if let Some(h) = &self.history {
+            let (x, xdot) = m.membrane_motion(y, yp);
+            m.history = Some(h.restarted(t, x, xdot).map_err(|e| e.to_string())?);
+        }
+        Ok(())
+    }
+
     /// Whether at time `t` the contact carries the cell's current weight (gravity ramped
     /// and signed as at `t`; false while there is no downward load).
     pub fn contact_carries_weight(&self, t: f64, y: &[f64]) -> bool {
@@ -47,13 +73,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         yp2[..self.dofs.n_u].iter_mut().for_each(|v| *v = 0.0);
         let mut params = self.params.clone();
         params.inertia = false;
-        let deferred = self.history.is_some();
-        let mut m = Self::build(
-            params,
-            self.mesh.clone(),
-            self.constraints,
-            !deferred && self.params.adhesion.is_some(),
-        )?;
+        let mut m = self.rebuilt(params)?;
         let atol = Atol::Vector(m.atol_vector(restart.atol));
         let for_y: Vec<bool> = (0..m.dofs.n).map(|i| i < m.dofs.n_u).collect();
         consistent_init(
@@ -71,18 +91,8 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
             t,
             source: Box::new(source),
         })?;
-        if let Some(h) = &self.history {
-            let (x, xdot) = m.membrane_motion(&y2, &yp2);
-            let restarted = h.restarted(t, x, xdot).map_err(|e| ModelError::Restart {
-                what: "switching inertia off",
-                t,
-                source: Box::new(crate::dae::IntegratorError::Problem {
-                    t,
-                    message: e.to_string(),
-                }),
-            })?;
-            m.history = Some(restarted);
-        }
+        self.carry_history(&mut m, t, &y2, &yp2)
+            .map_err(|e| refused("switching inertia off", t, e))?;
         m.set_initial(t, y2, yp2);
         Ok(m)
     }
@@ -98,32 +108,19 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         y: &[f64],
         yp: &[f64],
     ) -> Result<Self, ModelError> {
-        let refuse = |message: String| ModelError::Restart {
-            what: "branching",
-            t,
-            source: Box::new(crate::dae::IntegratorError::Problem { t, message }),
-        };
+        let refuse = |message: String| refused("branching", t, message);
         if params.adhesion.is_some() != self.params.adhesion.is_some() {
             return Err(refuse("one case has adhesion and the other not".into()));
         }
         params.inertia = self.dofs.inertia;
-        let deferred = self.history.is_some();
-        let mut m = Self::build(
-            params,
-            self.mesh.clone(),
-            self.constraints,
-            !deferred && self.params.adhesion.is_some(),
-        )?;
+        let mut m = self.rebuilt(params)?;
         if m.dofs.n != self.dofs.n || y.len() != m.dofs.n || yp.len() != m.dofs.n {
             return Err(refuse(format!(
                 "the systems differ: {} unknowns against {}",
                 m.dofs.n, self.dofs.n
             )));
         }
-        if let Some(h) = &self.history {
-            let (x, xdot) = m.membrane_motion(y, yp);
-            m.history = Some(h.restarted(t, x, xdot).map_err(|e| refuse(e.to_string()))?);
-        }
+        self.carry_history(&mut m, t, y, yp).map_err(refuse)?;
         m.set_initial(t, y.to_vec(), yp.to_vec());
         Ok(m)
     }
@@ -139,11 +136,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         y: &[f64],
         yp: &[f64],
     ) -> Result<Self, ModelError> {
-        let restart_err = |e: String| ModelError::Restart {
-            what: "adding the adhesion unknowns",
-            t,
-            source: Box::new(crate::dae::IntegratorError::Problem { t, message: e }),
-        };
+        let restart_err = |e: String| refused("adding the adhesion unknowns", t, e);
         let h = self
             .history
             .as_ref()

@@ -508,14 +508,27 @@ mod tests {
 
     const DOMAINS: [Domain; 3] = [Domain::Nucleus, Domain::Cytoplasm, Domain::Membrane];
 
+    /// A random offset from the centre in [−10, 10]³, or on the axis.
+    fn offset(rng: &mut crate::physics::plane_strain::tests::Rng, on_axis: bool) -> Vector3<f64> {
+        if on_axis {
+            Vector3::new(0.0, rng.uniform(-10.0, 10.0), 0.0)
+        } else {
+            Vector3::new(
+                rng.uniform(-10.0, 10.0),
+                rng.uniform(-10.0, 10.0),
+                rng.uniform(-10.0, 10.0),
+            )
+        }
+    }
+
     fn embed(A: &Matrix2<f64>) -> Matrix3<f64> {
-        crate::physics::solid3::tests::embed(A, 1.0)
+        crate::physics::three_d::tests::embed(A, 1.0)
     }
 
     #[test]
     fn in_the_plane_through_the_centre_fa3_is_fa_plus_one_exactly() {
         // z = c_z, x > c_x: the meridian is the 2-D half plane.
-        let mut rng = crate::physics::material::tests::Rng::new(103);
+        let mut rng = crate::physics::plane_strain::tests::Rng::new(103);
         for (a, c_z) in variants() {
             let [cx, cy] = a.center;
             for _ in 0..2000 {
@@ -540,19 +553,11 @@ mod tests {
     fn fa3_is_axisymmetric() {
         // X' = c + R(X − c) for R a rotation about the vertical axis: F_a(X') = R F_a(X) Rᵀ,
         // on and off the axis.
-        let mut rng = crate::physics::material::tests::Rng::new(107);
+        let mut rng = crate::physics::plane_strain::tests::Rng::new(107);
         for (a, c_z) in variants() {
             let c = Vector3::new(a.center[0], a.center[1], c_z);
             for i in 0..500 {
-                let p = if i % 50 == 0 {
-                    Vector3::new(0.0, rng.uniform(-10.0, 10.0), 0.0)
-                } else {
-                    Vector3::new(
-                        rng.uniform(-10.0, 10.0),
-                        rng.uniform(-10.0, 10.0),
-                        rng.uniform(-10.0, 10.0),
-                    )
-                };
+                let p = offset(&mut rng, i % 50 == 0);
                 let R = nalgebra::Rotation3::from_axis_angle(
                     &Vector3::y_axis(),
                     rng.uniform(-3.2, 3.2),
@@ -573,20 +578,12 @@ mod tests {
     fn fa3_bounds_and_indicators() {
         // det F_a ∈ [(1 − e_PAC)(1 − e_bot), 1], F_a symmetric with eigenvalues in
         // [1 − e, 1], indicators in [0, 1]; the fibre directions contract as stated.
-        let mut rng = crate::physics::material::tests::Rng::new(109);
+        let mut rng = crate::physics::plane_strain::tests::Rng::new(109);
         for (a, c_z) in variants() {
             let (ep, eb) = (a.pac.unwrap().e, a.bottom.unwrap().e);
             let c = Vector3::new(a.center[0], a.center[1], c_z);
             for i in 0..3000 {
-                let p = if i % 10 == 0 {
-                    Vector3::new(0.0, rng.uniform(-10.0, 10.0), 0.0)
-                } else {
-                    Vector3::new(
-                        rng.uniform(-10.0, 10.0),
-                        rng.uniform(-10.0, 10.0),
-                        rng.uniform(-10.0, 10.0),
-                    )
-                };
+                let p = offset(&mut rng, i % 10 == 0);
                 let X = c + p;
                 let (cp, cb) = (a.chi_pac3(&X, c_z), a.chi_bottom3(&X, c_z));
                 assert!((0.0..=1.0).contains(&cp) && (0.0..=1.0).contains(&cb));

@@ -16,9 +16,9 @@
 
 use nalgebra::{Matrix2, Matrix3};
 
-use super::axisym::{BlockDiag, HOOP, material_point_hoop, piola_total_hoop};
-use super::material::tests::{Rng, cytoplasm};
-use super::solid3::tests::cases as cases3;
+use super::hoop::{BlockDiag, HOOP, material_point_hoop, piola_total_hoop};
+use super::plane_strain::tests::{Rng, cytoplasm};
+use super::three_d::tests::cases as cases3;
 use super::{Viscosity, Yeoh, material_point, material_point3, piola_total, piola_total3};
 
 /// A kinematics under test: its `F`, `F_a`, and the laws evaluated on them.

@@ -655,7 +655,7 @@ mod tests {
     }
 
     fn embed(F: &Matrix2<f64>) -> Matrix3<f64> {
-        crate::physics::solid3::tests::embed(F, 1.0)
+        crate::physics::three_d::tests::embed(F, 1.0)
     }
 
     #[test]
@@ -663,7 +663,7 @@ mod tests {
         // In the plane z = z₀ with F = F₂ ⊕ 1 and N in the plane: contact, layer,
         // adhesion force (every reading) and rate are the 2-D ones with a zero z entry.
         let c = crate::physics::reference::contact();
-        let mut rng = crate::physics::material::tests::Rng::new(97);
+        let mut rng = crate::physics::plane_strain::tests::Rng::new(97);
         let y_top = crate::physics::reference::pillars().y_top;
         for (s3, s2, z0) in substrates3() {
             for ad in adhesion_readings() {
@@ -682,7 +682,7 @@ mod tests {
                     let f3 = contact_force(&s3, &c, &X3, J);
                     assert_eq!(f3, Vector3::new(f2.x, f2.y, 0.0), "{s3:?} ({x}, {y})");
                     assert_eq!(layer(&s3, &ad, &X3), layer(&s2, &ad, &X2));
-                    let F2 = crate::physics::material::tests::Rng::deformation(&mut rng, 0.4);
+                    let F2 = crate::physics::plane_strain::tests::Rng::deformation(&mut rng, 0.4);
                     let phi = rng.uniform(-3.0, 3.0);
                     let N2 = Vector2::new(phi.cos(), phi.sin());
                     let N3 = Vector3::new(N2.x, N2.y, 0.0);
@@ -705,7 +705,7 @@ mod tests {
 
     #[test]
     fn cofactor3_is_det_f_times_the_inverse_transpose() {
-        let mut rng = crate::physics::material::tests::Rng::new(101);
+        let mut rng = crate::physics::plane_strain::tests::Rng::new(101);
         for _ in 0..20 {
             let F = Matrix3::identity() + Matrix3::from_fn(|_, _| rng.uniform(-0.8, 0.8));
             let J = F.determinant();

@@ -13,9 +13,11 @@
 //! Module map (sections of `MODEL.md`):
 //! - [`smooth`]: the C² smooth step `S(s; a, b)` and regularised Heaviside `H_ε` (§5);
 //! - [`phases`]: the time switches `t_g`, `t_as`, `t_a` and the gravity flip `s_g` (§5);
-//! - [`material`]: compressible Yeoh solid with active strain and Kelvin–Voigt viscosity (§3);
-//! - [`axisym`]: the same laws with the hoop stretch of the axisymmetric model (§10);
-//! - [`solid3`]: the same laws with a full 3 × 3 `F`, for the 3-D quarter cell (§10), with
+//! - [`law`]: compressible Yeoh solid with active strain and Kelvin–Voigt viscosity (§3),
+//!   whatever the kinematics, and the material point the kernels take;
+//! - [`plane_strain`]: the laws with the 2 × 2 `F` of plane strain (§3);
+//! - [`hoop`]: the same laws with the hoop stretch of the axisymmetric model (§10);
+//! - [`three_d`]: the same laws with a full 3 × 3 `F`, for the 3-D quarter cell (§10), with
 //!   a closed-form tangent;
 //! - [`active`]: the active-strain tensor `F_a` of the PAC and bottom fibres (§6), in 2-D
 //!   and about the vertical axis of the 3-D cell (§10);
@@ -36,38 +38,57 @@
 //! counts per function).
 
 pub mod active;
-pub mod axisym;
 #[cfg(test)]
 mod checks;
+pub mod hoop;
+pub mod law;
 pub mod loads;
-pub mod material;
 pub mod phases;
+pub mod plane_strain;
 pub mod smooth;
-pub mod solid3;
 pub mod substrate;
+pub mod three_d;
 
 pub use active::{ActiveStrain, Bottom, Domain, Pac};
-pub use axisym::{
-    BlockDiag, KinematicModel, MaterialPointHoop, admissible_hoop, material_point_hoop,
-    piola_total_hoop,
+pub use hoop::{
+    BlockDiag, MaterialPointHoop, admissible_hoop, material_point_hoop, piola_total_hoop,
+};
+pub use law::{
+    Invariants, IsotropicSolid, MaterialPointOf, StressScalars, TangentScalars, Viscosity, Yeoh,
 };
 pub use loads::{
     Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_hoop_factor, adhesion_rate,
     cofactor, contact_force, gravity_force, layer,
 };
-pub use material::{
-    Invariants, IsotropicSolid, MaterialPoint, MaterialPointOf, StressScalars, TangentScalars,
-    Viscosity, Yeoh, admissible, material_point, piola_total,
-};
 pub use phases::{Flip, Phases};
+pub use plane_strain::{MaterialPoint, admissible, material_point, piola_total};
 pub use smooth::{heaviside, smooth_step, smooth_step_d};
-pub use solid3::{
+pub use substrate::{Lattice, PillarFoot, Pillars, Substrate, Substrate3, Surface};
+pub use three_d::{
     MaterialPoint3, admissible3, material_point3, material_point3_dual, piola_total3,
 };
-pub use substrate::{Lattice, PillarFoot, Pillars, Substrate, Substrate3, Surface};
 
 use nalgebra::RealField;
 use num_dual::DualNum;
+use serde::{Deserialize, Serialize};
+
+/// How the in-plane deformation of the half-plane model is completed to three dimensions
+/// (the case's `geometry.model`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum KinematicModel {
+    /// Plane strain, `F₃₃ = 1`: the paper's 2-D half cell (a cylinder along z), per unit
+    /// thickness.
+    #[default]
+    PlaneStrain,
+    /// Axisymmetric about the vertical axis through the cell centre: the (x, y) half-plane
+    /// is the meridian (r, y), `F₃₃ = 1 + u_r/r`, every integral weighted by r (per
+    /// radian). A real 3-D (spherical) cell; MODEL.md §10.
+    Axisymmetric,
+    /// The 3-D quarter cell x ≥ 0, z ≥ 0 on ten-node tetrahedra, meshed by gmsh
+    /// (`crate::model3d`; MODEL.md §10): no half-plane, the section z = 0 is the 2-D
+    /// model's.
+    ThreeD,
+}
 
 /// The scalar type of every function of the unknowns: `f64` for residuals, a forward-mode
 /// dual number such as `num_dual::DualSVec64<N>` for exact tangents.

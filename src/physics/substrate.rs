@@ -43,7 +43,7 @@
 #![allow(non_snake_case)]
 
 use super::{PhysicsError, Real, abs, check, cst, powf, powi, re, sqrt};
-use nalgebra::{Vector2, Vector3};
+use nalgebra::{SVector, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// How a pillar meets the floor.
@@ -162,6 +162,16 @@ fn abs_pow<T: Real>(u: T, q: f64) -> (T, T) {
 }
 
 impl Pillars {
+    /// `ρ^{1/q}`: two square roots for the usual q = 4 (a third of the cost of powf).
+    #[inline(always)]
+    fn root<T: Real>(&self, rho: T) -> T {
+        if self.q == 4.0 {
+            sqrt(sqrt(rho))
+        } else {
+            powf(rho, 1.0 / self.q)
+        }
+    }
+
     /// Checks `w, h > 0`, `s ≥ 0`, `q ≥ 2` (so the normal is C¹), all finite.
     pub fn validate(&self) -> Result<(), PhysicsError> {
         check(
@@ -238,12 +248,7 @@ impl Pillars {
             // The pillar's centre, a·b deep inside: no direction; never reached in practice.
             return (cst(a.min(b)), Vector2::new(cst(0.0), cst(1.0)));
         }
-        // ρ^{1/q}: two square roots for the usual q = 4 (a third of the cost of powf).
-        let r = if self.q == 4.0 {
-            sqrt(sqrt(rho))
-        } else {
-            powf(rho, 1.0 / self.q)
-        };
+        let r = self.root(rho);
         let gx = gu / a;
         let gy = gv / b;
         let g = sqrt(gx * gx + gy * gy);
@@ -290,6 +295,21 @@ impl Pillars {
         cell_center: [f64; 2],
         r_c: f64,
     ) -> Result<f64, PhysicsError> {
+        let sum = cell_center[0] + cell_center[1];
+        self.check_gap_inputs(gap, &cell_center, sum, r_c)?;
+        let (_, clearance) = self.lowest_clearance(cell_center, r_c);
+        Ok(clearance - gap)
+    }
+
+    /// Checks the parameters, the gap, the cell's radius `r_c` and its centre `cell_center`
+    /// (`sum`: the sum of its coordinates, for the message) of a `y_top` placement.
+    fn check_gap_inputs(
+        &self,
+        gap: f64,
+        cell_center: &[f64],
+        sum: f64,
+        r_c: f64,
+    ) -> Result<(), PhysicsError> {
         self.validate()?;
         check(gap.is_finite(), "gap", gap, "must be finite")?;
         check(
@@ -301,11 +321,9 @@ impl Pillars {
         check(
             cell_center.iter().all(|v| v.is_finite()),
             "cell_center",
-            cell_center[0] + cell_center[1],
+            sum,
             "must be finite",
-        )?;
-        let (_, clearance) = self.lowest_clearance(cell_center, r_c);
-        Ok(clearance - gap)
+        )
     }
 
     /// `(x*, G(x*))` minimising `G(x) = circle bottom(x) − (y_surf(x) − y_top)` over the
@@ -375,29 +393,7 @@ impl Substrate {
     /// left to itself the compiler inlined neither (see `model::kernels`).
     #[inline(always)]
     pub fn eval<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
-        if T::NDERIV == 0 {
-            self.eval_inline(x)
-        } else {
-            self.eval_dual(x)
-        }
-    }
-
-    #[inline(never)]
-    fn eval_dual<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
-        self.eval_inline(x)
-    }
-
-    #[inline(always)]
-    fn eval_inline<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
-        let up = Vector2::new(cst(0.0), cst(1.0));
-        match self {
-            Substrate::Flat { y_s } => (-x.y + *y_s, up),
-            Substrate::Pillars(p) => {
-                let d_floor = -x.y + (p.y_top - p.height);
-                let (d_p, n_p) = p.eval_pillar(x);
-                floor_and_pillar(d_floor, up, d_p, n_p, p.fillet)
-            }
-        }
+        Surface::eval(self, x)
     }
 
     /// The substrate surface as a polyline for plotting, over `[x_min, x_max]` [µm].
@@ -445,21 +441,58 @@ impl Substrate {
 /// outward unit normal `n(x)` at a current position, generic over [`Real`] for exact
 /// tangents. The 2-D section ([`Substrate`]) and the 3-D substrate ([`Substrate3`]).
 pub trait Surface<const D: usize> {
-    /// `(d(x), n(x))`.
-    fn eval<T: Real>(&self, x: &nalgebra::SVector<T, D>) -> (T, nalgebra::SVector<T, D>);
+    /// `(d(x), n(x))`: inlined in `f64`, one function per dual type otherwise (see
+    /// [`Substrate::eval`]).
+    #[inline(always)]
+    fn eval<T: Real>(&self, x: &SVector<T, D>) -> (T, SVector<T, D>) {
+        if T::NDERIV == 0 {
+            self.eval_inline(x)
+        } else {
+            self.eval_dual(x)
+        }
+    }
+
+    #[doc(hidden)]
+    #[inline(never)]
+    fn eval_dual<T: Real>(&self, x: &SVector<T, D>) -> (T, SVector<T, D>) {
+        self.eval_inline(x)
+    }
+
+    /// `(d(x), n(x))`, the implementation.
+    #[doc(hidden)]
+    fn eval_inline<T: Real>(&self, x: &SVector<T, D>) -> (T, SVector<T, D>);
+}
+
+/// `(d(x), n(x))` of the floor and pillars `plane` at `x` (`y` its second entry), with
+/// `(d, n)` of the pillars from `pillar`.
+#[inline(always)]
+fn plane_eval<T: Real, const D: usize>(
+    plane: &Substrate,
+    x: &SVector<T, D>,
+    pillar: impl FnOnce(&Pillars) -> (T, SVector<T, D>),
+) -> (T, SVector<T, D>) {
+    let up = SVector::from_fn(|i, _| cst(if i == 1 { 1.0 } else { 0.0 }));
+    match plane {
+        Substrate::Flat { y_s } => (-x[1] + *y_s, up),
+        Substrate::Pillars(p) => {
+            let d_floor = -x[1] + (p.y_top - p.height);
+            let (d_p, n_p) = pillar(p);
+            floor_and_pillar(d_floor, up, d_p, n_p, p.fillet)
+        }
+    }
 }
 
 impl Surface<2> for Substrate {
     #[inline(always)]
-    fn eval<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
-        Substrate::eval(self, x)
+    fn eval_inline<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
+        plane_eval(self, x, |p| p.eval_pillar(x))
     }
 }
 
 impl Surface<3> for Substrate3 {
     #[inline(always)]
-    fn eval<T: Real>(&self, x: &Vector3<T>) -> (T, Vector3<T>) {
-        Substrate3::eval(self, x)
+    fn eval_inline<T: Real>(&self, x: &Vector3<T>) -> (T, Vector3<T>) {
+        plane_eval(&self.plane, x, |p| p.eval_pillar3(x, self.lattice))
     }
 }
 
@@ -532,11 +565,7 @@ impl Pillars {
             // The pillar's centre: no direction; never reached in practice.
             return (cst(a.min(b)), Vector3::new(cst(0.0), cst(1.0), cst(0.0)));
         }
-        let r = if self.q == 4.0 {
-            sqrt(sqrt(rho))
-        } else {
-            powf(rho, 1.0 / self.q)
-        };
+        let r = self.root(rho);
         let gx = gu / a;
         let gy = gv / b;
         let gz = gw / a;
@@ -581,20 +610,7 @@ impl Pillars {
         cell_center: [f64; 3],
         r_c: f64,
     ) -> Result<f64, PhysicsError> {
-        self.validate()?;
-        check(gap.is_finite(), "gap", gap, "must be finite")?;
-        check(
-            r_c.is_finite() && r_c > 0.0,
-            "r_c",
-            r_c,
-            "must be finite and > 0",
-        )?;
-        check(
-            cell_center.iter().all(|v| v.is_finite()),
-            "cell_center",
-            cell_center.iter().sum(),
-            "must be finite",
-        )?;
+        self.check_gap_inputs(gap, &cell_center, cell_center.iter().sum(), r_c)?;
         let (_, clearance) = self.lowest_clearance3(lattice, cell_center, r_c);
         Ok(clearance - gap)
     }
@@ -663,29 +679,7 @@ impl Substrate3 {
     /// dual type otherwise, as [`Substrate::eval`].
     #[inline(always)]
     pub fn eval<T: Real>(&self, x: &Vector3<T>) -> (T, Vector3<T>) {
-        if T::NDERIV == 0 {
-            self.eval_inline(x)
-        } else {
-            self.eval_dual(x)
-        }
-    }
-
-    #[inline(never)]
-    fn eval_dual<T: Real>(&self, x: &Vector3<T>) -> (T, Vector3<T>) {
-        self.eval_inline(x)
-    }
-
-    #[inline(always)]
-    fn eval_inline<T: Real>(&self, x: &Vector3<T>) -> (T, Vector3<T>) {
-        let up = Vector3::new(cst(0.0), cst(1.0), cst(0.0));
-        match &self.plane {
-            Substrate::Flat { y_s } => (-x.y + *y_s, up),
-            Substrate::Pillars(p) => {
-                let d_floor = -x.y + (p.y_top - p.height);
-                let (d_p, n_p) = p.eval_pillar3(x, self.lattice);
-                floor_and_pillar(d_floor, up, d_p, n_p, p.fillet)
-            }
-        }
+        Surface::eval(self, x)
     }
 
     /// Height `y` of the substrate surface at `(x, z)` [µm], for plotting: `y_s` (flat) or
@@ -1066,7 +1060,7 @@ mod tests3 {
             assert!((ds - 0.1).abs() < 1e-12, "{ds}");
             assert!((ns - Vector3::new(-1.0, 0.0, 0.0)).norm() < 1e-12);
             // At and above mid-height the two are the same surface, bit for bit.
-            let mut rng = crate::physics::material::tests::Rng::new(5);
+            let mut rng = crate::physics::plane_strain::tests::Rng::new(5);
             for _ in 0..500 {
                 let x = Vector3::new(
                     rng.uniform(-20.0, 20.0),
@@ -1212,7 +1206,7 @@ mod tests3 {
     fn the_plane_through_a_row_of_axes_is_the_2d_substrate() {
         // z̃ = 0: z = 0 on the gap lattice, z = ±P/2 (+kP) on the four-pillar one. The same
         // depth and in-plane normal as 2-D, bit for bit, and n_z = 0.
-        let mut rng = crate::physics::material::tests::Rng::new(83);
+        let mut rng = crate::physics::plane_strain::tests::Rng::new(83);
         for p in [
             pillars(),
             Pillars {
@@ -1311,7 +1305,7 @@ mod tests3 {
 
     #[test]
     fn both_lattices_keep_the_quarter_symmetry_and_are_periodic() {
-        let mut rng = crate::physics::material::tests::Rng::new(89);
+        let mut rng = crate::physics::plane_strain::tests::Rng::new(89);
         let per = pillars().period();
         for s in both(pillars()) {
             for _ in 0..500 {

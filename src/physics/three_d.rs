@@ -2,7 +2,7 @@
 //! quarter cell (MODEL.md §10).
 //!
 //! The same compressible Yeoh solid with active strain `F = F_e F_a` and the same
-//! Kelvin–Voigt viscosity as [`super::material`] (plane strain) and [`super::axisym`]
+//! Kelvin–Voigt viscosity as [`super::plane_strain`] and [`super::hoop`]
 //! (hoop stretch), with `F`, `Ḟ` and `F_a` general 3 × 3 tensors. Those two keep their own
 //! functions; nothing here is called by them.
 //!
@@ -58,9 +58,8 @@
 #![allow(non_snake_case)]
 
 use nalgebra::{Matrix3, SMatrix};
-use num_dual::DualSVec64;
 
-use super::material::{Invariants, IsotropicSolid, StressScalars, TangentScalars};
+use super::law::{Invariants, IsotropicSolid, StressScalars, TangentScalars, dual_material_point};
 use super::{Real, Viscosity, Yeoh};
 
 /// Number of entries of a 3 × 3 tensor, the size of the flattened tangents.
@@ -326,7 +325,7 @@ pub fn admissible3(F: &Matrix3<f64>) -> bool {
 }
 
 /// The material point of the 3-D model (the flattening `3i + J`, `3k + L`).
-pub type MaterialPoint3 = super::material::MaterialPointOf<3, ENTRIES3>;
+pub type MaterialPoint3 = super::law::MaterialPointOf<3, ENTRIES3>;
 
 /// `P` and its exact tangents `∂P/∂F`, `∂P/∂Ḟ` at one material point of the 3-D model, in
 /// closed form (module notes): the solid's through `∂S_s/∂C` written with `M = F_a⁻¹F_a⁻ᵀ`
@@ -462,44 +461,15 @@ pub fn material_point3_dual(
     Fdot: &Matrix3<f64>,
     Fa: &Matrix3<f64>,
 ) -> MaterialPoint3 {
-    type D9 = DualSVec64<ENTRIES3>;
-    let Fd = Matrix3::from_fn(|k, l| D9::from_re(F[(k, l)]).derivative(3 * k + l));
-    let Gd = Fdot.map(D9::from_re);
-    let P1 = piola_total3(yeoh, visc, &Fd, &Gd, Fa);
-    let mut P = Matrix3::zeros();
-    let mut dP_dF = SMatrix::<f64, ENTRIES3, ENTRIES3>::zeros();
-    for i in 0..3 {
-        for j in 0..3 {
-            P[(i, j)] = P1[(i, j)].re;
-            let g = P1[(i, j)]
-                .eps
-                .unwrap_generic(nalgebra::Const::<ENTRIES3>, nalgebra::U1);
-            for c in 0..ENTRIES3 {
-                dP_dF[(3 * i + j, c)] = g[c];
-            }
-        }
-    }
-    let mut dP_dFdot = SMatrix::<f64, ENTRIES3, ENTRIES3>::zeros();
-    for k in 0..3 {
-        for l in 0..3 {
-            let mut E = Matrix3::zeros();
-            E[(k, l)] = 1.0;
-            let col = visc.piola_viscous3(F, &E);
-            for i in 0..3 {
-                for j in 0..3 {
-                    dP_dFdot[(3 * i + j, 3 * k + l)] = col[(i, j)];
-                }
-            }
-        }
-    }
-    MaterialPoint3 { P, dP_dF, dP_dFdot }
+    let piola = |Fd: &_, Gd: &_| piola_total3(yeoh, visc, Fd, Gd, Fa);
+    dual_material_point(F, Fdot, piola, |E| visc.piola_viscous3(F, E))
 }
 
 #[cfg(test)]
 pub(super) mod tests {
     use super::*;
-    use crate::physics::axisym::{BlockDiag, HOOP, material_point_hoop, piola_total_hoop};
-    use crate::physics::material::tests::{Rng, active, cytoplasm};
+    use crate::physics::hoop::{BlockDiag, HOOP, material_point_hoop, piola_total_hoop};
+    use crate::physics::plane_strain::tests::{Rng, active, cytoplasm};
     use crate::physics::{material_point, piola_total, reference};
     use nalgebra::{Matrix2, Rotation3, SVector, Vector3};
 

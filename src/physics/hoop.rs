@@ -10,7 +10,7 @@
 //!
 //! (plane strain is `c = 1`), the stresses are block diagonal too and gain their 33 entry,
 //! and `Ḟ = Ḟ₂ ⊕ λ̇` with `λ̇ = u̇_r/r`. The energy and the laws are the plane-strain ones
-//! of [`super::material`] with that one entry free; plane strain keeps its own functions
+//! of [`super::plane_strain`] with that one entry free; plane strain keeps its own functions
 //! (`λ = 1` fixed, no derivative with respect to it).
 //!
 //! Admissibility: every function assumes `det F₂ > 0` and `λ > 0` ([`admissible_hoop`]).
@@ -19,29 +19,10 @@
 
 use nalgebra::{Matrix2, SMatrix};
 use num_dual::DualSVec64;
-use serde::{Deserialize, Serialize};
 
-use super::material::{Invariants, IsotropicSolid, StressScalars};
-use super::material::{Sym, ViscousKinematics, elastic_right_cauchy_green};
+use super::law::{Invariants, IsotropicSolid, StressScalars};
+use super::plane_strain::{Sym, ViscousKinematics, elastic_right_cauchy_green};
 use super::{Real, Viscosity, Yeoh};
-
-/// How the in-plane deformation of the half-plane model is completed to three dimensions
-/// (the case's `geometry.model`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum KinematicModel {
-    /// Plane strain, `F₃₃ = 1`: the paper's 2-D half cell (a cylinder along z), per unit
-    /// thickness.
-    #[default]
-    PlaneStrain,
-    /// Axisymmetric about the vertical axis through the cell centre: the (x, y) half-plane
-    /// is the meridian (r, y), `F₃₃ = 1 + u_r/r`, every integral weighted by r (per
-    /// radian). A real 3-D (spherical) cell; MODEL.md §10.
-    Axisymmetric,
-    /// The 3-D quarter cell x ≥ 0, z ≥ 0 on ten-node tetrahedra, meshed by gmsh
-    /// (`crate::model3d`; MODEL.md §10): no half-plane, the section z = 0 is the 2-D
-    /// model's.
-    ThreeD,
-}
 
 /// A block-diagonal 3 × 3 tensor `A₂ ⊕ a₃₃`: its meridian (r, y) block and its hoop (θθ)
 /// entry.
@@ -265,8 +246,8 @@ pub fn material_point_hoop(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::material::tests::{Rng, active, cytoplasm};
     use crate::physics::piola_total;
+    use crate::physics::plane_strain::tests::{Rng, active, cytoplasm};
 
     /// A random admissible `F₂ ⊕ λ`: `F₂` as the plane-strain tests draw it, λ ∈ [0.6, 1.6).
     fn deformation(rng: &mut Rng, s: f64) -> BlockDiag<f64> {
