@@ -1,4 +1,4 @@
-//! Per-call cost of the 3-D material laws and loads (`src/physics/solid3.rs`,
+//! Per-call cost of the 3-D material laws and loads (`src/physics/three_d.rs`,
 //! `substrate.rs`, `loads.rs`) beside their 2-D counterparts, on fixed pseudo-random inputs
 //! (F within ±0.4 of I, half of them with an active strain, Ḟ within ±1):
 //!
