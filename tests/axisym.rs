@@ -7,7 +7,7 @@ use std::process::Command;
 
 use cellsim::case::{self, Case, KinematicModel};
 use cellsim::dae::{Atol, Dae, Integrator};
-use cellsim::fem::p2::{edge_map, edge_shape};
+use cellsim::fem::tri6::{edge_map, edge_shape};
 use cellsim::fem::{Domain, EdgeRule, Mesh};
 use cellsim::model::{CellModel, ModelParams};
 use cellsim::physics::{BlockDiag, Substrate, Viscosity, Yeoh, piola_total_hoop};

@@ -1,7 +1,7 @@
 //! The 3-D P2 pieces (MODEL.md §10): the gmsh-meshed quarter cell (volumes and their
 //! convergence, the patch test, symmetry sets, named points, outer faces, determinism and
 //! the cache, refusals) and the extruded slab (volumes, conformity, the 2-D space inside
-//! the 3-D one). The element and quadrature tests are unit tests of `fem::tet` and
+//! the 3-D one). The element and quadrature tests are unit tests of `fem::tet10` and
 //! `fem::quadrature`.
 
 use std::collections::HashMap;
@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use cellsim::case::{Case, terms};
-use cellsim::fem::mesh3::Generated;
-use cellsim::fem::p2;
-use cellsim::fem::tet::{self, TET_FACES};
+use cellsim::fem::mesh::quarter_cell::Generated;
+use cellsim::fem::tet10::{self as tet, TET_FACES};
+use cellsim::fem::tri6 as p2;
 use cellsim::fem::{
     Domain, EdgeRule, Mesh, Mesh3, Mesh3Params, MeshError, TetRule, TetTabulation, TriangleRule,
 };

@@ -145,7 +145,7 @@ fn global_jacobian_is_exact_for_every_reading_of_the_paper() {
 }
 
 use cellsim::dae::{Atol, Integrator, Pattern};
-use cellsim::fem::p2::{edge_map, edge_shape};
+use cellsim::fem::tri6::{edge_map, edge_shape};
 use cellsim::fem::{Domain, EdgeRule};
 use cellsim::physics::{Viscosity, Yeoh, piola_total};
 use cellsim::sundials::{Ida, IdaOptions};

@@ -4,7 +4,7 @@
 
 use cellsim::case::{self, Case};
 use cellsim::dae::{Atol, Dae, Integrator};
-use cellsim::fem::tet::{TET_FACES, face_map};
+use cellsim::fem::tet10::{TET_FACES, face_map};
 use cellsim::fem::{Domain, Mesh, Mesh3, Mesh3Params, MeshParams, TriangleRule};
 use cellsim::model::{Cell3, Constraints};
 use cellsim::model::{CellModel, ModelParams};
@@ -175,7 +175,7 @@ fn patch_test_homogeneous_deformation_gives_exact_internal_forces() {
             for (xi, w) in rule.points.iter().zip(&rule.weights) {
                 let (_, nda) = face_map(&x, *xi);
                 let t = p * Vector3::from(nda) * sign;
-                let nv = cellsim::fem::p2::shape(*xi);
+                let nv = cellsim::fem::tri6::shape(*xi);
                 for a in 0..6 {
                     for k in 0..3 {
                         exact[nodes[a]][k] += w * nv[a] * t[k];

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use cellsim::case::{self, Case};
-use cellsim::fem::tet;
+use cellsim::fem::tet10 as tet;
 use cellsim::fem::{Domain, Mesh3, TetRule};
 use cellsim::output::figures::ShapeStyleOptions;
 use cellsim::output::figures3::{
@@ -97,7 +97,7 @@ fn snapshot(mesh: &Mesh3File, w: f64, t: f64) -> Snapshot3 {
 
 /// VTK's quadratic tetrahedron: shape functions in VTK's node order (vertices, then the
 /// mid-nodes of (0,1), (1,2), (2,0), (0,3), (1,3), (2,3)) and their gradients, written out
-/// from VTK's definition, independently of `fem::tet`.
+/// from VTK's definition, independently of `fem::tet10`.
 const VTK_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]];
 
 fn vtk_volume(x: &[[f64; 3]]) -> (f64, f64) {
@@ -159,7 +159,7 @@ fn vtu3_reads_back_with_quadratic_tetrahedra_in_vtk_order() {
     }
     assert_eq!(g.points, mf.nodes);
     // Every cell: VTK's node order of the element, a positive VTK volume equal to the
-    // element's own (gmsh order, fem::tet), each mid-node nearest to the midpoint of
+    // element's own (gmsh order, fem::tet10), each mid-node nearest to the midpoint of
     // VTK's edge of its index.
     let rule = TetRule::degree(4);
     let (mut total_vtk, mut total) = (0.0, 0.0);

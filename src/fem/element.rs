@@ -1,12 +1,203 @@
 //! What a finite-element model needs of its mesh and of its element's shape functions,
 //! written once for the six-node triangles of the half cell ([`super::Mesh`],
-//! [`super::P2Tabulation`]) and the ten-node tetrahedra of the quarter cell
-//! ([`super::Mesh3`], [`super::TetTabulation`]): `D` the spatial dimension, `N` the nodes
-//! per element.
+//! [`super::tri6`]) and the ten-node tetrahedra of the quarter cell ([`super::Mesh3`],
+//! [`super::tet10`]): `D` the spatial dimension, `N` the nodes per element. An element is a
+//! [`Lagrange`] type (its shape functions and quadrature rules); the tabulation at
+//! quadrature points, the isoparametric Jacobian and the element geometry are generic.
 
-use super::p2::GeometryOf;
-use super::{Domain, Mesh, Mesh3, NamedPoints, P2Error, P2Tabulation, TetError, TetTabulation};
-use super::{TetRule, TriangleRule};
+use std::marker::PhantomData;
+
+use nalgebra::SMatrix;
+use thiserror::Error;
+
+use super::quadrature::Rule;
+use super::{Domain, Mesh, Mesh3, NamedPoints};
+
+/// An isoparametric Lagrange element on the reference simplex of dimension `D` with `N`
+/// nodes.
+pub trait Lagrange<const D: usize, const N: usize>: Send + Sync {
+    /// Shape function values at reference point ξ.
+    fn shape(xi: [f64; D]) -> [f64; N];
+    /// Reference gradients ∇_ξ Nₐ at ξ.
+    fn grad_shape(xi: [f64; D]) -> [[f64; D]; N];
+    /// The reference simplex's rule exact to `degree`.
+    fn rule(degree: usize) -> Rule<[f64; D]>;
+    /// `rule` on each sub-simplex of `levels` regular refinements.
+    fn subdivided(rule: &Rule<[f64; D]>, levels: u32) -> Rule<[f64; D]>;
+
+    /// The isoparametric map of an element with nodal coordinates `x` at reference point
+    /// ξ: the physical point x(ξ), J = ∂x/∂ξ and det J.
+    fn map(x: &[[f64; D]; N], xi: [f64; D]) -> ([f64; D], SMatrix<f64, D, D>, f64)
+    where
+        SMatrix<f64, D, D>: JacobianMatrix<D>,
+    {
+        let (jac, det) = jacobian(x, &Self::grad_shape(xi));
+        (interpolate(x, &Self::shape(xi)), jac, det)
+    }
+}
+
+/// The algebra of a `D`×`D` Jacobian matrix that the element geometry needs.
+pub trait JacobianMatrix<const D: usize> {
+    /// det J.
+    fn det(&self) -> f64;
+    /// Physical gradients J⁻ᵀ gₐ of the reference gradients gₐ, given det J (non-zero).
+    fn inverse_transpose<const N: usize>(&self, det: f64, grads: &[[f64; D]; N]) -> [[f64; D]; N];
+}
+
+/// Σₐ nₐ xₐ: the point with shape values `n` of the element with nodes `x`.
+#[inline]
+fn interpolate<const D: usize, const N: usize>(x: &[[f64; D]; N], n: &[f64; N]) -> [f64; D] {
+    let mut p = [0.0; D];
+    for a in 0..N {
+        for i in 0..D {
+            p[i] += n[a] * x[a][i];
+        }
+    }
+    p
+}
+
+/// Jacobian J = ∂x/∂ξ (J[(i, j)] = ∂xᵢ/∂ξⱼ) and its determinant from the nodal coordinates
+/// `x` and precomputed reference gradients.
+#[inline]
+pub fn jacobian<const D: usize, const N: usize>(
+    x: &[[f64; D]; N],
+    ref_grads: &[[f64; D]; N],
+) -> (SMatrix<f64, D, D>, f64)
+where
+    SMatrix<f64, D, D>: JacobianMatrix<D>,
+{
+    let mut jac = SMatrix::<f64, D, D>::zeros();
+    for a in 0..N {
+        for i in 0..D {
+            for j in 0..D {
+                jac[(i, j)] += x[a][i] * ref_grads[a][j];
+            }
+        }
+    }
+    let det = jac.det();
+    (jac, det)
+}
+
+/// Physical gradients ∇ₓNₐ = J⁻ᵀ ∇_ξ Nₐ from the Jacobian J, its determinant `det` (must be
+/// non-zero; the caller checks its sign) and the reference gradients.
+#[inline]
+pub fn physical_gradients<const D: usize, const N: usize>(
+    jac: &SMatrix<f64, D, D>,
+    det: f64,
+    ref_grads: &[[f64; D]; N],
+) -> [[f64; D]; N]
+where
+    SMatrix<f64, D, D>: JacobianMatrix<D>,
+{
+    jac.inverse_transpose(det, ref_grads)
+}
+
+/// Errors of an element's geometry.
+#[derive(Debug, Clone, Error, PartialEq)]
+pub enum JacobianError<const D: usize> {
+    /// The isoparametric Jacobian det(∂x/∂ξ) is not positive at a point: the element is
+    /// inverted or degenerate there.
+    #[error(
+        "non-positive element Jacobian {det:e} at reference point ({})",
+        coordinates(xi)
+    )]
+    NonPositiveJacobian {
+        /// det(∂x/∂ξ) found.
+        det: f64,
+        /// Reference point where it was evaluated.
+        xi: [f64; D],
+    },
+}
+
+/// "a, b, …": a point's coordinates for messages.
+fn coordinates(xi: &[f64]) -> String {
+    xi.iter().map(f64::to_string).collect::<Vec<_>>().join(", ")
+}
+
+/// Geometry of one element of dimension `D` with `N` nodes at the points of a tabulation:
+/// what a total-Lagrangian assembly needs, computed once on the reference configuration.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GeometryOf<const D: usize, const N: usize> {
+    /// Physical (reference-configuration) point x(ξ_q).
+    pub x: Vec<[f64; D]>,
+    /// det J(ξ_q) · w_q: the integration weight in physical space.
+    pub jxw: Vec<f64>,
+    /// Physical gradients ∇ₓNₐ(ξ_q).
+    pub grads: Vec<[[f64; D]; N]>,
+}
+
+/// Shape values and reference gradients of element `E` tabulated at the points of a rule,
+/// so that element loops do no polynomial evaluation.
+#[derive(Debug, Clone)]
+pub struct Tabulation<E, const D: usize, const N: usize> {
+    /// The rule's reference points.
+    pub points: Vec<[f64; D]>,
+    /// The rule's weights (summing to the reference simplex's measure).
+    pub weights: Vec<f64>,
+    /// Nₐ(ξ_q) for each point q.
+    pub values: Vec<[f64; N]>,
+    /// ∇_ξ Nₐ(ξ_q) for each point q.
+    pub grads: Vec<[[f64; D]; N]>,
+    element: PhantomData<E>,
+}
+
+impl<E: Lagrange<D, N>, const D: usize, const N: usize> Tabulation<E, D, N>
+where
+    SMatrix<f64, D, D>: JacobianMatrix<D>,
+{
+    /// Tabulates the element's basis at the points of `rule`.
+    pub fn new(rule: &Rule<[f64; D]>) -> Self {
+        Self {
+            points: rule.points.clone(),
+            weights: rule.weights.clone(),
+            values: rule.points.iter().map(|&p| E::shape(p)).collect(),
+            grads: rule.points.iter().map(|&p| E::grad_shape(p)).collect(),
+            element: PhantomData,
+        }
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True if there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Geometry of the element with nodal coordinates `x` at every tabulated point; fails
+    /// if det J ≤ 0 at any of them.
+    pub fn geometry(&self, x: &[[f64; D]; N]) -> Result<GeometryOf<D, N>, JacobianError<D>> {
+        let mut out = GeometryOf::default();
+        self.geometry_into(x, &mut out)?;
+        Ok(out)
+    }
+
+    /// As [`Tabulation::geometry`], reusing the buffers of `out`.
+    pub fn geometry_into(
+        &self,
+        x: &[[f64; D]; N],
+        out: &mut GeometryOf<D, N>,
+    ) -> Result<(), JacobianError<D>> {
+        out.x.clear();
+        out.jxw.clear();
+        out.grads.clear();
+        for q in 0..self.len() {
+            let (jac, det) = jacobian(x, &self.grads[q]);
+            if det <= 0.0 || !det.is_finite() {
+                return Err(JacobianError::NonPositiveJacobian {
+                    det,
+                    xi: self.points[q],
+                });
+            }
+            out.x.push(interpolate(x, &self.values[q]));
+            out.jxw.push(det * self.weights[q]);
+            out.grads.push(jac.inverse_transpose(det, &self.grads[q]));
+        }
+        Ok(())
+    }
+}
 
 /// A conforming mesh of the cell: nodes, elements of `N` nodes, their domains and the
 /// named points on the vertical axis.
@@ -39,45 +230,38 @@ pub trait CellMesh<const D: usize, const N: usize>: Clone + Send + Sync {
     }
 }
 
-impl CellMesh<2, 6> for Mesh {
-    fn nodes(&self) -> &[[f64; 2]] {
-        &self.nodes
-    }
-    fn elements(&self) -> &[[usize; 6]] {
-        &self.elements
-    }
-    fn domains(&self) -> &[Domain] {
-        &self.domains
-    }
-    fn points(&self) -> &NamedPoints {
-        &self.points
-    }
+/// The [`CellMesh`] of a mesh type with the fields `nodes`, `elements`, `domains`, `points`.
+macro_rules! cell_mesh {
+    ($mesh:ty, $d:literal, $n:literal) => {
+        impl CellMesh<$d, $n> for $mesh {
+            fn nodes(&self) -> &[[f64; $d]] {
+                &self.nodes
+            }
+            fn elements(&self) -> &[[usize; $n]] {
+                &self.elements
+            }
+            fn domains(&self) -> &[Domain] {
+                &self.domains
+            }
+            fn points(&self) -> &NamedPoints {
+                &self.points
+            }
+        }
+    };
 }
 
-impl CellMesh<3, 10> for Mesh3 {
-    fn nodes(&self) -> &[[f64; 3]] {
-        &self.nodes
-    }
-    fn elements(&self) -> &[[usize; 10]] {
-        &self.elements
-    }
-    fn domains(&self) -> &[Domain] {
-        &self.domains
-    }
-    fn points(&self) -> &NamedPoints {
-        &self.points
-    }
-}
+cell_mesh!(Mesh, 2, 6);
+cell_mesh!(Mesh3, 3, 10);
 
 /// An element whose reference geometry is not valid: inverted or degenerate.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ElementGeometryError {
     /// A six-node triangle's.
     #[error(transparent)]
-    Triangle(#[from] P2Error),
+    Triangle(#[from] JacobianError<2>),
     /// A ten-node tetrahedron's.
     #[error(transparent)]
-    Tetrahedron(#[from] TetError),
+    Tetrahedron(#[from] JacobianError<3>),
 }
 
 /// The element's shape functions tabulated at the points of a quadrature rule, and the
@@ -102,42 +286,117 @@ pub trait ElementTabulation<const D: usize, const N: usize>: Send + Sync {
     -> Result<GeometryOf<D, N>, ElementGeometryError>;
 }
 
-impl ElementTabulation<2, 6> for P2Tabulation {
+impl<E: Lagrange<D, N>, const D: usize, const N: usize> ElementTabulation<D, N>
+    for Tabulation<E, D, N>
+where
+    SMatrix<f64, D, D>: JacobianMatrix<D>,
+    ElementGeometryError: From<JacobianError<D>>,
+{
     fn on_rule(degree: usize, levels: u32) -> Self {
-        let rule = TriangleRule::degree(degree);
-        P2Tabulation::new(&if levels == 0 {
+        let rule = E::rule(degree);
+        Self::new(&if levels == 0 {
             rule
         } else {
-            rule.subdivided(levels)
+            E::subdivided(&rule, levels)
         })
     }
-    fn values(&self) -> &[[f64; 6]] {
+    fn values(&self) -> &[[f64; N]] {
         &self.values
     }
     fn element_geometry(
         &self,
-        x: &[[f64; 2]; 6],
-    ) -> Result<GeometryOf<2, 6>, ElementGeometryError> {
+        x: &[[f64; D]; N],
+    ) -> Result<GeometryOf<D, N>, ElementGeometryError> {
         Ok(self.geometry(x)?)
     }
 }
 
-impl ElementTabulation<3, 10> for TetTabulation {
-    fn on_rule(degree: usize, levels: u32) -> Self {
-        let rule = TetRule::degree(degree);
-        TetTabulation::new(&if levels == 0 {
-            rule
-        } else {
-            rule.subdivided(levels)
-        })
+/// Checks every Lagrange element passes, written once for the triangle and the
+/// tetrahedron: `nodes` are the reference nodes, `points` sample points, `x` a curved
+/// element.
+#[cfg(test)]
+pub(crate) mod checks {
+    use super::{JacobianMatrix, Lagrange};
+    use nalgebra::SMatrix;
+
+    /// Σ Nₐ = 1 and Σ ∇Nₐ = 0.
+    pub fn partition_of_unity<E: Lagrange<D, N>, const D: usize, const N: usize>(
+        points: &[[f64; D]],
+    ) {
+        for &xi in points {
+            let n = E::shape(xi);
+            assert!((n.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+            let g = E::grad_shape(xi);
+            for j in 0..D {
+                assert!(g.iter().map(|ga| ga[j]).sum::<f64>().abs() < 1e-13);
+            }
+        }
     }
-    fn values(&self) -> &[[f64; 10]] {
-        &self.values
+
+    /// Nₐ(node b) = δₐᵦ.
+    pub fn kronecker<E: Lagrange<D, N>, const D: usize, const N: usize>(nodes: &[[f64; D]; N]) {
+        for (b, xi) in nodes.iter().enumerate() {
+            let n = E::shape(*xi);
+            for (a, na) in n.iter().enumerate() {
+                let expect = if a == b { 1.0 } else { 0.0 };
+                assert!((na - expect).abs() < 1e-15, "N{a} at node {b} = {na}");
+            }
+        }
     }
-    fn element_geometry(
-        &self,
-        x: &[[f64; 3]; 10],
-    ) -> Result<GeometryOf<3, 10>, ElementGeometryError> {
-        Ok(self.geometry(x)?)
+
+    /// The reference gradients are the central differences of the shape functions.
+    pub fn gradients_are_derivatives<E: Lagrange<D, N>, const D: usize, const N: usize>(
+        points: &[[f64; D]],
+    ) {
+        let h = 1e-6;
+        for &xi in points {
+            let g = E::grad_shape(xi);
+            for j in 0..D {
+                let (mut p, mut m) = (xi, xi);
+                p[j] += h;
+                m[j] -= h;
+                let (np, nm) = (E::shape(p), E::shape(m));
+                for a in 0..N {
+                    let fd = (np[a] - nm[a]) / (2.0 * h);
+                    assert!(
+                        (fd - g[a][j]).abs() < 1e-8,
+                        "a={a} j={j}: {fd} vs {}",
+                        g[a][j]
+                    );
+                }
+            }
+        }
+    }
+
+    /// The map interpolates the nodes, and J is the central difference of the map.
+    pub fn map_interpolates_and_jacobian<E: Lagrange<D, N>, const D: usize, const N: usize>(
+        nodes: &[[f64; D]; N],
+        x: &[[f64; D]; N],
+        points: &[[f64; D]],
+    ) where
+        SMatrix<f64, D, D>: JacobianMatrix<D>,
+    {
+        for (a, xi) in nodes.iter().enumerate() {
+            let (p, _, _) = E::map(x, *xi);
+            for i in 0..D {
+                assert!((p[i] - x[a][i]).abs() < 1e-15);
+            }
+        }
+        let h = 1e-6;
+        for &xi in points {
+            let (_, jac, det) = E::map(x, xi);
+            assert!(det > 0.0);
+            for j in 0..D {
+                let (mut p, mut m) = (xi, xi);
+                p[j] += h;
+                m[j] -= h;
+                let (xp, _, _) = E::map(x, p);
+                let (xm, _, _) = E::map(x, m);
+                for i in 0..D {
+                    let fd = (xp[i] - xm[i]) / (2.0 * h);
+                    assert!((fd - jac[(i, j)]).abs() < 1e-8);
+                }
+            }
+        }
     }
 }

@@ -1,12 +1,12 @@
 //! Reading and writing meshes in the gmsh 4.1 ASCII format (`.msh`).
 //!
 //! Only what the cell model needs: 6-node triangles (gmsh element type 9, whose local node
-//! order is that of [`super::p2`]) on surfaces tagged with the physical groups `nucleus`,
+//! order is that of [`super::tri6`]) on surfaces tagged with the physical groups `nucleus`,
 //! `cytoplasm` and `membrane` (case-insensitive). Points, lines and other element types
 //! are ignored; linear triangles are refused.
 //!
 //! In 3-D ([`Mesh3::read_gmsh`]): 10-node tetrahedra (type 11, the local order of
-//! [`super::tet`]) in volumes of the physical groups `nucleus`, `cytoplasm`, `membrane`,
+//! [`super::tet10`]) in volumes of the physical groups `nucleus`, `cytoplasm`, `membrane`,
 //! and 6-node triangles in surfaces of the physical group `outer`; other elements of the
 //! usual types are skipped, linear tetrahedra in a cell volume are refused. The nodes the
 //! tetrahedra use are renumbered compactly in the order of the file's `$Nodes`.
@@ -15,9 +15,8 @@ use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::mesh::{Domain, Mesh, MeshError, MeshParams, MeshParts};
-use super::mesh3::{Mesh3, Mesh3Params};
-use super::p2::EDGES;
+use super::mesh::{Domain, Mesh, Mesh3, Mesh3Params, MeshError, MeshParams, MeshParts};
+use super::tri6::EDGES;
 
 /// gmsh element type of the 6-node triangle.
 const TRIANGLE6: u32 = 9;
@@ -632,7 +631,7 @@ impl<'a> MshFile<'a> {
 impl Mesh3 {
     /// Reads a gmsh 4.1 ASCII mesh of 10-node tetrahedra with physical volume groups named
     /// `nucleus`, `cytoplasm`, `membrane` and the 6-node triangles of the physical surface
-    /// `outer`, and completes it for the cell `params` (see [`super::mesh3`]: the checks
+    /// `outer`, and completes it for the cell `params` (see [`super::mesh::quarter_cell`]: the checks
     /// against the cell, the symmetry planes, the named points, the Jacobians).
     pub fn read_gmsh(path: &Path, params: &Mesh3Params) -> Result<Mesh3, MeshError> {
         params.validate()?;

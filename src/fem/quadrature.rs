@@ -66,15 +66,32 @@ fn legendre_and_derivative(n: usize, x: f64) -> (f64, f64) {
     (p1, d)
 }
 
-/// A quadrature rule on the reference triangle with vertices (0,0), (1,0), (0,1):
-/// ∫_T̂ f dξ ≈ Σ_q w_q f(ξ_q). The weights sum to the triangle's area ½.
+/// A quadrature rule ∫ f ≈ Σ_q w_q f(p_q) on a reference domain whose points are `P`:
+/// [`TriangleRule`], [`TetRule`], [`EdgeRule`].
 #[derive(Debug, Clone, PartialEq)]
-pub struct TriangleRule {
-    /// Points ξ_q = (ξ, η) in reference coordinates, all strictly inside the triangle.
-    pub points: Vec<[f64; 2]>,
-    /// Weights w_q > 0, summing to ½.
+pub struct Rule<P> {
+    /// Points p_q in reference coordinates, all strictly inside the domain.
+    pub points: Vec<P>,
+    /// Weights w_q > 0, summing to the domain's measure.
     pub weights: Vec<f64>,
 }
+
+impl<P> Rule<P> {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True if the rule has no points.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+}
+
+/// A quadrature rule on the reference triangle with vertices (0,0), (1,0), (0,1):
+/// ∫_T̂ f dξ ≈ Σ_q w_q f(ξ_q), points ξ_q = (ξ, η); the weights sum to the triangle's
+/// area ½.
+pub type TriangleRule = Rule<[f64; 2]>;
 
 impl TriangleRule {
     /// A rule exact for every polynomial of total degree ≤ `d`.
@@ -150,16 +167,6 @@ impl TriangleRule {
             }
         }
         Self { points, weights }
-    }
-
-    /// Number of points.
-    pub fn len(&self) -> usize {
-        self.points.len()
-    }
-
-    /// True if the rule has no points.
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
     }
 
     /// This rule applied on each of the 4^`levels` congruent sub-triangles obtained by
@@ -240,14 +247,8 @@ fn degree4_orbits() -> [f64; 4] {
 }
 
 /// A quadrature rule on the unit interval [0, 1] for integrals along an element edge
-/// parametrised by s ∈ [0, 1] from its first to its last vertex.
-#[derive(Debug, Clone, PartialEq)]
-pub struct EdgeRule {
-    /// Points s_q ∈ (0, 1).
-    pub points: Vec<f64>,
-    /// Weights w_q > 0, summing to 1.
-    pub weights: Vec<f64>,
-}
+/// parametrised by s ∈ [0, 1] from its first to its last vertex; the weights sum to 1.
+pub type EdgeRule = Rule<f64>;
 
 impl EdgeRule {
     /// Gauss–Legendre rule exact for polynomials of degree ≤ `d` (⌈(d + 1)/2⌉ points, at
@@ -255,16 +256,6 @@ impl EdgeRule {
     pub fn degree(d: usize) -> Self {
         let (points, weights) = gauss_legendre((d + 1).div_ceil(2).max(1));
         Self { points, weights }
-    }
-
-    /// Number of points.
-    pub fn len(&self) -> usize {
-        self.points.len()
-    }
-
-    /// True if the rule has no points.
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
     }
 
     /// This rule applied on each of 2^`levels` equal sub-intervals.
@@ -284,15 +275,9 @@ impl EdgeRule {
 }
 
 /// A quadrature rule on the reference tetrahedron with vertices (0,0,0), (1,0,0), (0,1,0),
-/// (0,0,1): ∫_T̂ f dξ ≈ Σ_q w_q f(ξ_q). The weights sum to the tetrahedron's volume ⅙.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TetRule {
-    /// Points ξ_q = (ξ, η, ζ) in reference coordinates, all strictly inside the
-    /// tetrahedron.
-    pub points: Vec<[f64; 3]>,
-    /// Weights w_q > 0, summing to ⅙.
-    pub weights: Vec<f64>,
-}
+/// (0,0,1): ∫_T̂ f dξ ≈ Σ_q w_q f(ξ_q), points ξ_q = (ξ, η, ζ); the weights sum to the
+/// tetrahedron's volume ⅙.
+pub type TetRule = Rule<[f64; 3]>;
 
 impl TetRule {
     /// A rule exact for every polynomial of total degree ≤ `d`.
@@ -380,16 +365,6 @@ impl TetRule {
             }
         }
         Self { points, weights }
-    }
-
-    /// Number of points.
-    pub fn len(&self) -> usize {
-        self.points.len()
-    }
-
-    /// True if the rule has no points.
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
     }
 
     /// This rule applied on each of the 8^`levels` sub-tetrahedra of `levels` regular

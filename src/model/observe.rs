@@ -11,7 +11,7 @@ use super::dofs::NONE;
 use super::element::ElementOf;
 use super::kinematics::{NodalOf, det};
 use super::{CellOf, Shape, deformation};
-use crate::fem::p2::edge_shape;
+use crate::fem::tri6::edge_shape;
 use crate::fem::{CellMesh, Domain, ElementTabulation};
 use crate::physics::{KinematicModel, contact_force};
 use crate::record::Observables;

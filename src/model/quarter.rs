@@ -8,7 +8,7 @@ use nalgebra::{Vector2, Vector3};
 use super::Cell3;
 use super::observe::add_band_lengths;
 use crate::fem::TriangleRule;
-use crate::fem::tet::face_map;
+use crate::fem::tet10::face_map;
 use crate::physics::Substrate;
 use crate::record::{Mesh3File, Observables3, Snapshot3};
 

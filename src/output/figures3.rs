@@ -64,7 +64,7 @@ use super::geometry::{
     ACTIVE_LEVEL, Bounds, CellShape, Pt, Rect, contour, element_polygon, intervals,
 };
 use super::vtu3::check_snapshot3;
-use crate::fem::{Domain, p2, tet};
+use crate::fem::{Domain, tet10 as tet, tri6 as p2};
 use crate::physics::{ActiveStrain, Substrate, Substrate3, smooth_step};
 use crate::record::read::Run3Data;
 use crate::record::{Mesh3File, RunData, Snapshot3};

@@ -5,7 +5,7 @@
 use nalgebra::Vector2;
 
 use crate::fem::Domain;
-use crate::fem::p2::{EDGES, edge_shape, shape};
+use crate::fem::tri6::{EDGES, edge_shape, shape};
 use crate::physics::{ActiveStrain, Substrate};
 use crate::record::MeshFile;
 
@@ -51,7 +51,7 @@ pub fn edge_polyline(x: &[Pt; 3], pieces: usize) -> Vec<Pt> {
 }
 
 /// The boundary of a P2 element with node positions `x` (local order of
-/// [`crate::fem::p2`]) as a closed polygon, counter-clockwise in the reference element,
+/// [`crate::fem::tri6`]) as a closed polygon, counter-clockwise in the reference element,
 /// each side traced with `pieces` straight pieces (first point not repeated).
 pub fn element_polygon(x: &[Pt; 6], pieces: usize) -> Vec<Pt> {
     let mut out = Vec::with_capacity(3 * pieces);

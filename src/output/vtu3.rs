@@ -11,7 +11,7 @@
 //! - cell data `domain` (0 nucleus, 1 cytoplasm, 2 membrane), `mean_E_norm` (the element's
 //!   reference-volume mean of ‖E‖_F) and `det_F` (its mean det F).
 //!
-//! **Node order.** The mesh is in gmsh's order ([`crate::fem::tet`]): vertices 0–3, then
+//! **Node order.** The mesh is in gmsh's order ([`crate::fem::tet10`]): vertices 0–3, then
 //! the mid-edge nodes of (0,1), (1,2), (0,2), (0,3), (2,3), (1,3). VTK's quadratic
 //! tetrahedron has the same vertices and the mid-edge nodes of (0,1), (1,2), (2,0), (0,3),
 //! (1,3), (2,3): gmsh's nodes 8 and 9 are swapped ([`GMSH_OF_VTK`]). Both take a

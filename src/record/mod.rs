@@ -343,7 +343,7 @@ impl MeshFile {
     /// isoparametric P2 map integrated exactly (it is quadratic; a degree-2 rule is exact),
     /// the areas the run's reference-area means are weighted with.
     pub fn area(&self, d: Domain) -> f64 {
-        use crate::fem::{P2Tabulation, TriangleRule, p2};
+        use crate::fem::{P2Tabulation, TriangleRule, tri6 as p2};
         let tab = P2Tabulation::new(&TriangleRule::degree(2));
         self.elements
             .iter()
@@ -401,7 +401,7 @@ pub struct Snapshot {
 pub struct Mesh3File {
     /// Reference node coordinates [µm].
     pub nodes: Vec<[f64; 3]>,
-    /// Ten-node tetrahedra (gmsh's node order, [`crate::fem::tet`]).
+    /// Ten-node tetrahedra (gmsh's node order, [`crate::fem::tet10`]).
     pub elements: Vec<[usize; 10]>,
     /// Domain of each element.
     pub domains: Vec<Domain>,

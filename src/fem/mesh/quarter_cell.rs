@@ -48,7 +48,7 @@
 //! final name (a mesh failing the checks stays under its temporary name, which the error
 //! gives); a cached file is read instead of running gmsh.
 //!
-//! **Reading** ([`Mesh3::read_gmsh`], in [`super::gmsh`]): 10-node tetrahedra (gmsh type 11)
+//! **Reading** ([`Mesh3::read_gmsh`], in [`crate::fem::gmsh`]): 10-node tetrahedra (gmsh type 11)
 //! in the three physical volumes and 6-node triangles (type 9) in `outer`; the nodes the
 //! tetrahedra use are renumbered compactly in file order. The completion checks what the
 //! model relies on: every vertex inside the ball r_c and on the side of the interfaces its
@@ -83,10 +83,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use super::mesh::{Domain, MIN_ANGLE_DEG, Mesh, MeshError, MeshParams, NamedPoints};
-use super::p2::EDGES;
-use super::quadrature::{TetRule, TriangleRule};
-use super::tet::{self, FLIP, REFERENCE_NODES, TET_EDGES, TET_FACES, TetTabulation};
+use super::super::quadrature::{TetRule, TriangleRule};
+use super::super::tet10::{self, FLIP, REFERENCE_NODES, TET_EDGES, TET_FACES, TetTabulation};
+use super::super::tri6::EDGES;
+use super::{Domain, MIN_ANGLE_DEG, Mesh, MeshError, MeshParams, NamedPoints};
 
 /// Largest number of tetrahedra [`Mesh3::generate`] accepts to build (estimated from the
 /// sizes before meshing, [`Mesh3Params::estimated_tets`]), so that a typo in a case file
@@ -380,7 +380,7 @@ impl Mesh3Params {
 /// A P2 tetrahedral mesh of the quarter cell (or of the extruded slab,
 /// [`Mesh3::extruded`]).
 ///
-/// Element node order is that of [`super::tet`] (gmsh's type 11); every element is
+/// Element node order is that of [`crate::fem::tet10`] (gmsh's type 11); every element is
 /// positively oriented.
 #[derive(Debug, Clone, Serialize)]
 pub struct Mesh3 {
@@ -393,7 +393,7 @@ pub struct Mesh3 {
     /// Domain of each element.
     pub domains: Vec<Domain>,
     /// The six-node boundary triangles on the cell surface r = r_c (for the slab: on the
-    /// cylinder over the 2-D outer boundary), oriented outward ([`super::tet::face_map`]'s
+    /// cylinder over the 2-D outer boundary), oriented outward ([`crate::fem::tet10::face_map`]'s
     /// normal points out of the cell).
     pub outer_faces: Vec<[usize; 6]>,
     /// Nodes on the symmetry plane x = c_x (coordinate exactly c_x), ascending.
@@ -1185,7 +1185,7 @@ impl Mesh3 {
             }
             let x = self.element_coords(e);
             for q in 0..tab.len() {
-                v += tet::jacobian(&x, &tab.grads[q]).1 * tab.weights[q];
+                v += tet10::jacobian(&x, &tab.grads[q]).1 * tab.weights[q];
             }
         }
         v
@@ -1198,7 +1198,7 @@ impl Mesh3 {
         for f in &self.outer_faces {
             let x = self.face_coords(f);
             for (p, w) in rule.points.iter().zip(&rule.weights) {
-                a += w * norm(tet::face_map(&x, *p).1);
+                a += w * norm(tet10::face_map(&x, *p).1);
             }
         }
         a
@@ -1213,7 +1213,7 @@ impl Mesh3 {
         let mut max = f64::NEG_INFINITY;
         let mut at = [0.0; 3];
         for q in 0..tab.len() {
-            let det = tet::jacobian(&x, &tab.grads[q]).1;
+            let det = tet10::jacobian(&x, &tab.grads[q]).1;
             if det < min || det.is_nan() {
                 min = det;
                 at = tab.points[q];
@@ -1422,7 +1422,7 @@ impl Mesh3 {
                     f[3 + s] = mid(tri[s], tri[(s + 1) % 3]);
                 }
                 let x: [[f64; 3]; 6] = f.map(|n| nodes[n]);
-                let (pt, n) = tet::face_map(&x, [1.0 / 3.0, 1.0 / 3.0]);
+                let (pt, n) = tet10::face_map(&x, [1.0 / 3.0, 1.0 / 3.0]);
                 if n[0] * (pt[0] - c2[0]) + n[1] * (pt[1] - c2[1]) < 0.0 {
                     f = reverse_face(f);
                 }

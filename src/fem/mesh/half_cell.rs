@@ -49,14 +49,14 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use std::fmt;
 use std::path::Path;
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
 };
-use thiserror::Error;
 
-use super::p2::{self, EDGES, P2Tabulation, REFERENCE_NODES};
-use super::quadrature::TriangleRule;
+use super::super::quadrature::TriangleRule;
+use super::super::tri6::{self, EDGES, P2Tabulation, REFERENCE_NODES};
+use super::{MeshError, NamedPoints};
 
 /// The three material sub-domains of the cell (defined with the physics it selects).
 pub use crate::physics::Domain;
@@ -224,132 +224,10 @@ impl MeshParams {
     }
 }
 
-/// Errors of mesh generation and mesh input.
-#[derive(Debug, Error)]
-pub enum MeshError {
-    /// A mesh parameter is out of range.
-    #[error("mesh parameter `{field}` = {value}: {rule}")]
-    InvalidParam {
-        /// Field name in [`MeshParams`].
-        field: &'static str,
-        /// Value given.
-        value: f64,
-        /// The rule it breaks.
-        rule: &'static str,
-    },
-    /// The requested sizes would give an unreasonably large mesh.
-    #[error("mesh too fine: about {estimate:.0} elements estimated, limit {limit:.0}")]
-    TooFine {
-        /// Estimated element count.
-        estimate: f64,
-        /// [`MAX_ELEMENTS`].
-        limit: f64,
-    },
-    /// spade refused a vertex or a constraint.
-    #[error("triangulation failed: {0}")]
-    Triangulation(String),
-    /// The Delaunay refinement ran out of vertices before meeting the angle limit.
-    #[error("Delaunay refinement did not complete ({vertices} vertices); lower min_angle_deg")]
-    RefinementIncomplete {
-        /// Vertex count when it stopped.
-        vertices: usize,
-    },
-    /// An element's isoparametric map is not orientation preserving somewhere.
-    #[error(
-        "element {element}: isoparametric Jacobian {det:e} ≤ 0 at reference point ({}, {})",
-        xi[0], xi[1]
-    )]
-    NonPositiveJacobian {
-        /// Element index.
-        element: usize,
-        /// Minimum of det J over the element.
-        det: f64,
-        /// Where the minimum is attained.
-        xi: [f64; 2],
-    },
-    /// A generated mesh failed an internal consistency check (a bug, not a user error).
-    #[error("mesh generation inconsistency: {0}")]
-    Inconsistent(String),
-    /// Reading a mesh file failed.
-    #[error("cannot read mesh file {path}: {source}")]
-    Io {
-        /// File path.
-        path: String,
-        /// Underlying error.
-        source: std::io::Error,
-    },
-    /// Writing a mesh or a drawing of it failed.
-    #[error("cannot write {path}: {source}")]
-    Write {
-        /// File path.
-        path: String,
-        /// Underlying error.
-        source: std::io::Error,
-    },
-    /// A mesh file is malformed or does not fit the model.
-    #[error("mesh file {path}, line {line}: {message}")]
-    Format {
-        /// File path.
-        path: String,
-        /// 1-based line number (0 when not tied to a line).
-        line: usize,
-        /// What is wrong.
-        message: String,
-    },
-    /// The gmsh executable (the 3-D mesher, [`super::mesh3`]) could not be started.
-    #[error(
-        "gmsh not found on PATH: install the Debian package `gmsh` (make deps does) (tried `{program}`)"
-    )]
-    GmshNotFound {
-        /// The program that was run.
-        program: String,
-    },
-    /// gmsh ran but failed.
-    #[error("gmsh failed ({status}) on {input}: {stderr}")]
-    GmshFailed {
-        /// Its exit status.
-        status: String,
-        /// The geometry file it was given.
-        input: String,
-        /// The last lines of its error output.
-        stderr: String,
-    },
-    /// A tetrahedron's isoparametric map is not orientation preserving at a point where it
-    /// is checked (the 3-D twin of [`MeshError::NonPositiveJacobian`]).
-    #[error(
-        "tetrahedron {element}: isoparametric Jacobian {det:e} ≤ 0 at reference point ({}, {}, {})",
-        xi[0], xi[1], xi[2]
-    )]
-    NonPositiveJacobian3 {
-        /// Element index.
-        element: usize,
-        /// The smallest det J found.
-        det: f64,
-        /// Where.
-        xi: [f64; 3],
-    },
-}
-
-/// Node indices of the reference points used for output (MODEL.md §2); all are vertices on
-/// the symmetry line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub struct NamedPoints {
-    /// Cell centre c.
-    pub centre: usize,
-    /// Nucleus top p_t = c + (0, r_n).
-    pub nucleus_top: usize,
-    /// Nucleus bottom p_b = c − (0, r_n).
-    pub nucleus_bottom: usize,
-    /// Cell bottom c − (0, r_c).
-    pub cell_bottom: usize,
-    /// Cell top c + (0, r_c).
-    pub cell_top: usize,
-}
-
 /// A P2 triangle mesh of the half cell.
 ///
 /// Nodes `0..n_vertices` are element vertices, the rest mid-side nodes. Element node order
-/// is that of [`super::p2`]: vertices counter-clockwise, then mid(0,1), mid(1,2), mid(2,0).
+/// is that of [`crate::fem::tri6`]: vertices counter-clockwise, then mid(0,1), mid(1,2), mid(2,0).
 #[derive(Debug, Clone, Serialize)]
 pub struct Mesh {
     /// The parameters the mesh was built from.
@@ -1028,7 +906,7 @@ impl Mesh {
             }
             let x = self.element_coords(e);
             for q in 0..tab.len() {
-                let (_, det) = p2::jacobian(&x, &tab.grads[q]);
+                let (_, det) = tri6::jacobian(&x, &tab.grads[q]);
                 a += det * tab.weights[q];
             }
         }
@@ -1043,9 +921,9 @@ impl Mesh {
     pub fn jacobian_range(&self, e: usize) -> (f64, f64, [f64; 2]) {
         let x = self.element_coords(e);
         let vals: [f64; 6] =
-            std::array::from_fn(|a| p2::jacobian(&x, &p2::grad_shape(REFERENCE_NODES[a])).1);
+            std::array::from_fn(|a| tri6::jacobian(&x, &tri6::grad_shape(REFERENCE_NODES[a])).1);
         let q = |xi: [f64; 2]| {
-            let n = p2::shape(xi);
+            let n = tri6::shape(xi);
             (0..6).map(|a| n[a] * vals[a]).sum::<f64>()
         };
         let mut cands: Vec<[f64; 2]> = REFERENCE_NODES.to_vec();
@@ -1264,6 +1142,8 @@ impl Mesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fem::element::Lagrange;
+    use crate::fem::tri6::Tri6;
 
     fn mesh(refine: f64) -> Mesh {
         Mesh::generate(&params(refine)).expect("mesh generation")
@@ -1549,7 +1429,7 @@ mod tests {
             let sampled = samples
                 .iter()
                 .chain(REFERENCE_NODES.iter())
-                .map(|&xi| p2::map(&x, xi).2)
+                .map(|&xi| Tri6::map(&x, xi).2)
                 .fold(f64::INFINITY, f64::min);
             assert!(
                 sampled >= min - 1e-12,
@@ -1559,7 +1439,7 @@ mod tests {
                 sampled - min < 1e-3 * sampled.abs().max(1e-3),
                 "{sampled} vs {min}"
             );
-            assert!((p2::map(&x, at).2 - min).abs() < 1e-12);
+            assert!((Tri6::map(&x, at).2 - min).abs() < 1e-12);
         }
         // Pull the mid-node of element 42 across its opposite vertex.
         let el = m.elements[42];
@@ -1888,7 +1768,7 @@ mod tests {
             for e in EDGES {
                 let xe = [m.nodes[el[e[0]]], m.nodes[el[e[1]]], m.nodes[el[e[2]]]];
                 for k in 0..8 {
-                    pts.push(tx(p2::edge_map(&xe, k as f64 / 8.0).0));
+                    pts.push(tx(tri6::edge_map(&xe, k as f64 / 8.0).0));
                 }
             }
             root.draw(&Polygon::new(pts.clone(), fill.filled()))

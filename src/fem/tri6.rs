@@ -17,9 +17,10 @@
 //! its edge (e.g. it lies on a circle), the edge is a parabola through the three nodes.
 
 use nalgebra::Matrix2;
-use thiserror::Error;
 
-use super::quadrature::{EdgeRule, TriangleRule};
+use super::element::{GeometryOf, JacobianError, JacobianMatrix, Lagrange, Tabulation};
+pub use super::element::{jacobian, physical_gradients};
+use super::quadrature::TriangleRule;
 
 /// Reference coordinates (ξ, η) of the six local nodes.
 pub const REFERENCE_NODES: [[f64; 2]; 6] = [
@@ -35,19 +36,12 @@ pub const REFERENCE_NODES: [[f64; 2]; 6] = [
 /// counter-clockwise around the element: edge k goes from vertex k to vertex (k + 1) mod 3.
 pub const EDGES: [[usize; 3]; 3] = [[0, 3, 1], [1, 4, 2], [2, 5, 0]];
 
-/// Errors of the element geometry.
-#[derive(Debug, Clone, Error, PartialEq)]
-pub enum P2Error {
-    /// The isoparametric Jacobian det(∂x/∂ξ) is not positive at a point: the element is
-    /// inverted or degenerate there.
-    #[error("non-positive element Jacobian {det:e} at reference point ({}, {})", xi[0], xi[1])]
-    NonPositiveJacobian {
-        /// det(∂x/∂ξ) found.
-        det: f64,
-        /// Reference point where it was evaluated.
-        xi: [f64; 2],
-    },
-}
+/// The six-node triangle, as a [`Lagrange`] element.
+#[derive(Debug, Clone, Copy)]
+pub struct Tri6;
+
+/// Errors of the triangle's geometry.
+pub type P2Error = JacobianError<2>;
 
 /// Shape function values N₀ … N₅ at reference point ξ = (ξ, η).
 #[inline]
@@ -83,58 +77,41 @@ pub fn grad_shape(xi: [f64; 2]) -> [[f64; 2]; 6] {
     ]
 }
 
-/// The isoparametric map of an element with nodal coordinates `x` (local order above) at
-/// reference point ξ: returns the physical point x(ξ), the Jacobian J = ∂x/∂ξ
-/// (J[(i, j)] = ∂xᵢ/∂ξⱼ) and det J.
+impl Lagrange<2, 6> for Tri6 {
+    fn shape(xi: [f64; 2]) -> [f64; 6] {
+        shape(xi)
+    }
+    fn grad_shape(xi: [f64; 2]) -> [[f64; 2]; 6] {
+        grad_shape(xi)
+    }
+    fn rule(degree: usize) -> TriangleRule {
+        TriangleRule::degree(degree)
+    }
+    fn subdivided(rule: &TriangleRule, levels: u32) -> TriangleRule {
+        rule.subdivided(levels)
+    }
+}
+
+/// The isoparametric map at reference point ξ: x(ξ), J = ∂x/∂ξ and det J ([`Lagrange::map`]).
 #[inline]
 pub fn map(x: &[[f64; 2]; 6], xi: [f64; 2]) -> ([f64; 2], Matrix2<f64>, f64) {
-    let n = shape(xi);
-    let g = grad_shape(xi);
-    let mut p = [0.0; 2];
-    let mut jac = Matrix2::zeros();
-    for a in 0..6 {
-        for i in 0..2 {
-            p[i] += n[a] * x[a][i];
-            for j in 0..2 {
-                jac[(i, j)] += x[a][i] * g[a][j];
-            }
-        }
-    }
-    let det = jac.determinant();
-    (p, jac, det)
+    Tri6::map(x, xi)
 }
 
-/// Jacobian J = ∂x/∂ξ and its determinant from precomputed reference gradients.
-#[inline]
-pub fn jacobian(x: &[[f64; 2]; 6], ref_grads: &[[f64; 2]; 6]) -> (Matrix2<f64>, f64) {
-    let mut jac = Matrix2::zeros();
-    for a in 0..6 {
-        for i in 0..2 {
-            for j in 0..2 {
-                jac[(i, j)] += x[a][i] * ref_grads[a][j];
-            }
+impl JacobianMatrix<2> for Matrix2<f64> {
+    fn det(&self) -> f64 {
+        self.determinant()
+    }
+    fn inverse_transpose<const N: usize>(&self, det: f64, grads: &[[f64; 2]; N]) -> [[f64; 2]; N] {
+        // J⁻¹ = adj(J)/det; J⁻ᵀ g = (1/det) [ J₁₁ g₀ − J₁₀ g₁ , −J₀₁ g₀ + J₀₀ g₁ ].
+        let inv = 1.0 / det;
+        let mut out = [[0.0; 2]; N];
+        for (o, g) in out.iter_mut().zip(grads) {
+            o[0] = inv * (self[(1, 1)] * g[0] - self[(1, 0)] * g[1]);
+            o[1] = inv * (-self[(0, 1)] * g[0] + self[(0, 0)] * g[1]);
         }
+        out
     }
-    let det = jac.determinant();
-    (jac, det)
-}
-
-/// Physical gradients ∇ₓNₐ = J⁻ᵀ ∇_ξ Nₐ from the Jacobian J, its determinant `det` (must
-/// be non-zero; the caller checks its sign) and the reference gradients.
-#[inline]
-pub fn physical_gradients(
-    jac: &Matrix2<f64>,
-    det: f64,
-    ref_grads: &[[f64; 2]; 6],
-) -> [[f64; 2]; 6] {
-    // J⁻¹ = adj(J)/det; J⁻ᵀ g = (1/det) [ J₁₁ g₀ − J₁₀ g₁ , −J₀₁ g₀ + J₀₀ g₁ ].
-    let inv = 1.0 / det;
-    let mut out = [[0.0; 2]; 6];
-    for (o, g) in out.iter_mut().zip(ref_grads) {
-        o[0] = inv * (jac[(1, 1)] * g[0] - jac[(1, 0)] * g[1]);
-        o[1] = inv * (-jac[(0, 1)] * g[0] + jac[(0, 0)] * g[1]);
-    }
-    out
 }
 
 /// Shape functions of the 3-node quadratic edge (vertex a, mid-node m, vertex b) at
@@ -171,132 +148,11 @@ pub fn edge_map(x: &[[f64; 2]; 3], s: f64) -> ([f64; 2], [f64; 2]) {
     (p, t)
 }
 
-/// Shape values and reference gradients tabulated at the points of a triangle rule, so
-/// that element loops do no polynomial evaluation.
-#[derive(Debug, Clone)]
-pub struct P2Tabulation {
-    /// The rule's reference points.
-    pub points: Vec<[f64; 2]>,
-    /// The rule's weights (sum ½).
-    pub weights: Vec<f64>,
-    /// Nₐ(ξ_q) for each point q.
-    pub values: Vec<[f64; 6]>,
-    /// ∇_ξ Nₐ(ξ_q) for each point q.
-    pub grads: Vec<[[f64; 2]; 6]>,
-}
-
-/// Geometry of one element of dimension `D` with `N` nodes at the points of a tabulation:
-/// what a total-Lagrangian assembly needs, computed once on the reference configuration.
-/// [`ElementGeometry`] is the six-node triangle's, [`super::tet::TetGeometry`] the ten-node
-/// tetrahedron's.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct GeometryOf<const D: usize, const N: usize> {
-    /// Physical (reference-configuration) point x(ξ_q).
-    pub x: Vec<[f64; D]>,
-    /// det J(ξ_q) · w_q: the integration weight in physical space.
-    pub jxw: Vec<f64>,
-    /// Physical gradients ∇ₓNₐ(ξ_q).
-    pub grads: Vec<[[f64; D]; N]>,
-}
+/// Shape values and reference gradients tabulated at the points of a triangle rule.
+pub type P2Tabulation = Tabulation<Tri6, 2, 6>;
 
 /// Geometry of one six-node triangle at the points of a [`P2Tabulation`].
 pub type ElementGeometry = GeometryOf<2, 6>;
-
-impl P2Tabulation {
-    /// Tabulates the P2 basis at the points of `rule`.
-    pub fn new(rule: &TriangleRule) -> Self {
-        Self {
-            points: rule.points.clone(),
-            weights: rule.weights.clone(),
-            values: rule.points.iter().map(|&p| shape(p)).collect(),
-            grads: rule.points.iter().map(|&p| grad_shape(p)).collect(),
-        }
-    }
-
-    /// Number of points.
-    pub fn len(&self) -> usize {
-        self.points.len()
-    }
-
-    /// True if there are no points.
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
-    }
-
-    /// Geometry of the element with nodal coordinates `x` at every tabulated point; fails
-    /// if det J ≤ 0 at any of them.
-    pub fn geometry(&self, x: &[[f64; 2]; 6]) -> Result<ElementGeometry, P2Error> {
-        let mut out = ElementGeometry::default();
-        self.geometry_into(x, &mut out)?;
-        Ok(out)
-    }
-
-    /// As [`P2Tabulation::geometry`], reusing the buffers of `out`.
-    pub fn geometry_into(
-        &self,
-        x: &[[f64; 2]; 6],
-        out: &mut ElementGeometry,
-    ) -> Result<(), P2Error> {
-        out.x.clear();
-        out.jxw.clear();
-        out.grads.clear();
-        for q in 0..self.len() {
-            let (jac, det) = jacobian(x, &self.grads[q]);
-            if det <= 0.0 || !det.is_finite() {
-                return Err(P2Error::NonPositiveJacobian {
-                    det,
-                    xi: self.points[q],
-                });
-            }
-            let n = &self.values[q];
-            let mut p = [0.0; 2];
-            for a in 0..6 {
-                p[0] += n[a] * x[a][0];
-                p[1] += n[a] * x[a][1];
-            }
-            out.x.push(p);
-            out.jxw.push(det * self.weights[q]);
-            out.grads
-                .push(physical_gradients(&jac, det, &self.grads[q]));
-        }
-        Ok(())
-    }
-}
-
-/// Edge shape values and derivatives tabulated at the points of an edge rule.
-#[derive(Debug, Clone)]
-pub struct EdgeTabulation {
-    /// The rule's points s_q ∈ (0, 1).
-    pub points: Vec<f64>,
-    /// The rule's weights (sum 1).
-    pub weights: Vec<f64>,
-    /// Edge shape values at each point.
-    pub values: Vec<[f64; 3]>,
-    /// d/ds of the edge shape functions at each point.
-    pub derivs: Vec<[f64; 3]>,
-}
-
-impl EdgeTabulation {
-    /// Tabulates the 3-node edge basis at the points of `rule`.
-    pub fn new(rule: &EdgeRule) -> Self {
-        Self {
-            points: rule.points.clone(),
-            weights: rule.weights.clone(),
-            values: rule.points.iter().map(|&s| edge_shape(s)).collect(),
-            derivs: rule.points.iter().map(|&s| edge_grad_shape(s)).collect(),
-        }
-    }
-
-    /// Number of points.
-    pub fn len(&self) -> usize {
-        self.points.len()
-    }
-
-    /// True if there are no points.
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
-    }
-}
 
 #[cfg(test)]
 mod tests {
@@ -320,59 +176,21 @@ mod tests {
         ]
     }
 
-    fn sample_points() -> Vec<[f64; 2]> {
-        let mut pts = REFERENCE_NODES.to_vec();
-        pts.extend(TriangleRule::degree(6).points);
-        pts.push([0.1, 0.7]);
-        pts
-    }
-
     #[test]
-    fn partition_of_unity_and_zero_gradient_sum() {
-        for xi in sample_points() {
-            let n = shape(xi);
-            assert!((n.iter().sum::<f64>() - 1.0).abs() < 1e-14);
-            let g = grad_shape(xi);
-            for j in 0..2 {
-                assert!(g.iter().map(|ga| ga[j]).sum::<f64>().abs() < 1e-13);
-            }
-        }
-    }
-
-    #[test]
-    fn kronecker_property_at_nodes() {
-        for (b, xi) in REFERENCE_NODES.iter().enumerate() {
-            let n = shape(*xi);
-            for (a, na) in n.iter().enumerate() {
-                let expect = if a == b { 1.0 } else { 0.0 };
-                assert!((na - expect).abs() < 1e-15, "N{a} at node {b} = {na}");
-            }
-        }
+    fn shape_functions_and_map() {
+        use crate::fem::element::checks;
+        let points = sample_points();
+        checks::partition_of_unity::<Tri6, 2, 6>(&points);
+        checks::kronecker::<Tri6, 2, 6>(&REFERENCE_NODES);
+        checks::gradients_are_derivatives::<Tri6, 2, 6>(&points);
+        checks::map_interpolates_and_jacobian::<Tri6, 2, 6>(&REFERENCE_NODES, &curved(), &points);
         for (b, s) in [0.0, 0.5, 1.0].iter().enumerate() {
             let n = edge_shape(*s);
             for (a, na) in n.iter().enumerate() {
                 assert!((na - if a == b { 1.0 } else { 0.0 }).abs() < 1e-15);
             }
         }
-    }
-
-    #[test]
-    fn reference_gradients_match_finite_differences() {
         let h = 1e-6;
-        for xi in sample_points() {
-            let g = grad_shape(xi);
-            for j in 0..2 {
-                let mut p = xi;
-                let mut m = xi;
-                p[j] += h;
-                m[j] -= h;
-                let (np, nm) = (shape(p), shape(m));
-                for a in 0..6 {
-                    let fd = (np[a] - nm[a]) / (2.0 * h);
-                    assert!((fd - g[a][j]).abs() < 1e-8, "a={a} j={j}");
-                }
-            }
-        }
         for s in [0.0, 0.2, 0.5, 0.9] {
             let d = edge_grad_shape(s);
             let (p, m) = (edge_shape(s + h), edge_shape(s - h));
@@ -382,29 +200,11 @@ mod tests {
         }
     }
 
-    #[test]
-    fn map_interpolates_nodes_and_jacobian_matches_finite_differences() {
-        let x = curved();
-        for (a, xi) in REFERENCE_NODES.iter().enumerate() {
-            let (p, _, _) = map(&x, *xi);
-            assert!((p[0] - x[a][0]).abs() < 1e-15 && (p[1] - x[a][1]).abs() < 1e-15);
-        }
-        let h = 1e-6;
-        for xi in sample_points() {
-            let (_, jac, det) = map(&x, xi);
-            assert!(det > 0.0);
-            for j in 0..2 {
-                let (mut p, mut m) = (xi, xi);
-                p[j] += h;
-                m[j] -= h;
-                let (xp, _, _) = map(&x, p);
-                let (xm, _, _) = map(&x, m);
-                for i in 0..2 {
-                    let fd = (xp[i] - xm[i]) / (2.0 * h);
-                    assert!((fd - jac[(i, j)]).abs() < 1e-8);
-                }
-            }
-        }
+    fn sample_points() -> Vec<[f64; 2]> {
+        let mut pts = REFERENCE_NODES.to_vec();
+        pts.extend(TriangleRule::degree(6).points);
+        pts.push([0.1, 0.7]);
+        pts
     }
 
     /// Isoparametric completeness: on a curved element the P2 space contains every field
@@ -418,7 +218,7 @@ mod tests {
         let f = |p: [f64; 2]| 0.7 - 1.3 * p[0] + 2.1 * p[1];
         let nodal: Vec<f64> = x.iter().map(|p| f(*p)).collect();
         for xi in sample_points() {
-            let (p, jac, det) = map(&x, xi);
+            let (p, jac, det) = Tri6::map(&x, xi);
             let n = shape(xi);
             let g = physical_gradients(&jac, det, &grad_shape(xi));
             let val: f64 = (0..6).map(|a| n[a] * nodal[a]).sum();
@@ -447,7 +247,7 @@ mod tests {
         let grad = |p: [f64; 2]| [1.0 + 6.0 * p[0] - p[1], -2.0 - p[0] + p[1]];
         let nodal: Vec<f64> = x.iter().map(|p| f(*p)).collect();
         for xi in sample_points() {
-            let (p, jac, det) = map(&x, xi);
+            let (p, jac, det) = Tri6::map(&x, xi);
             let n = shape(xi);
             let g = physical_gradients(&jac, det, &grad_shape(xi));
             let val: f64 = (0..6).map(|a| n[a] * nodal[a]).sum();
@@ -475,7 +275,7 @@ mod tests {
         };
         let nodal: Vec<f64> = REFERENCE_NODES.iter().map(|s| q(*s)).collect();
         for xi in sample_points() {
-            let (_, jac, det) = map(&x, xi);
+            let (_, jac, det) = Tri6::map(&x, xi);
             let n = shape(xi);
             let g = physical_gradients(&jac, det, &grad_shape(xi));
             let val: f64 = (0..6).map(|a| n[a] * nodal[a]).sum();
@@ -529,7 +329,7 @@ mod tests {
         // Edge (−1,0), (0,1), (1,0) is the parabola y = 1 − x²; its length is
         // √5 + asinh(2)/2.
         let x = [[-1.0, 0.0], [0.0, 1.0], [1.0, 0.0]];
-        let tab = EdgeTabulation::new(&EdgeRule::degree(20).subdivided(3));
+        let tab = crate::fem::EdgeRule::degree(20).subdivided(3);
         let len: f64 = (0..tab.len())
             .map(|q| {
                 let (_, t) = edge_map(&x, tab.points[q]);

@@ -13,19 +13,20 @@
 //! A tetrahedron is positively oriented when (x₁ − x₀) × (x₂ − x₀) · (x₃ − x₀) > 0, which
 //! is what gmsh writes; then det J > 0 wherever the map is regular.
 //!
-//! Faces are six-node triangles in the order of [`super::p2`] (gmsh type 9: vertices, then
+//! Faces are six-node triangles in the order of [`super::tri6`] (gmsh type 9: vertices, then
 //! mid(0,1), mid(1,2), mid(2,0)); [`TET_FACES`] lists them outward-oriented, face k opposite
 //! vertex k. On a surface triangle embedded in 3-D, [`face_map`] gives the point and the
 //! area-weighted normal ∂x/∂ξ × ∂x/∂η: ∫_S f dA = ∫_T̂ f |n| dξ and ∫_S f n dA = ∫_T̂ f n dξ.
 //!
 //! Element geometry at quadrature points is a [`TetGeometry`] = [`GeometryOf<3, 10>`], the
-//! 3-D twin of the triangle's [`super::p2::ElementGeometry`].
+//! 3-D twin of the triangle's [`super::tri6::ElementGeometry`].
 
 use nalgebra::Matrix3;
-use thiserror::Error;
 
-use super::p2::{self, GeometryOf};
+use super::element::{GeometryOf, JacobianError, JacobianMatrix, Lagrange, Tabulation};
+pub use super::element::{jacobian, physical_gradients};
 use super::quadrature::TetRule;
+use super::tri6;
 
 /// Reference coordinates (ξ, η, ζ) of the ten local nodes.
 pub const REFERENCE_NODES: [[f64; 3]; 10] = [
@@ -70,22 +71,12 @@ pub fn edge_node(i: usize, j: usize) -> Option<usize> {
 /// det J · w and physical gradients.
 pub type TetGeometry = GeometryOf<3, 10>;
 
+/// The ten-node tetrahedron, as a [`Lagrange`] element.
+#[derive(Debug, Clone, Copy)]
+pub struct Tet10;
+
 /// Errors of the tetrahedron's geometry.
-#[derive(Debug, Clone, Error, PartialEq)]
-pub enum TetError {
-    /// The isoparametric Jacobian det(∂x/∂ξ) is not positive at a point: the element is
-    /// inverted or degenerate there.
-    #[error(
-        "non-positive element Jacobian {det:e} at reference point ({}, {}, {})",
-        xi[0], xi[1], xi[2]
-    )]
-    NonPositiveJacobian {
-        /// det(∂x/∂ξ) found.
-        det: f64,
-        /// Reference point where it was evaluated.
-        xi: [f64; 3],
-    },
-}
+pub type TetError = JacobianError<3>;
 
 /// Shape function values N₀ … N₉ at reference point ξ = (ξ, η, ζ).
 #[inline]
@@ -133,81 +124,70 @@ pub fn grad_shape(xi: [f64; 3]) -> [[f64; 3]; 10] {
     ]
 }
 
-/// Jacobian J = ∂x/∂ξ (J[(i, j)] = ∂xᵢ/∂ξⱼ) and its determinant from the nodal coordinates
-/// `x` and precomputed reference gradients.
-#[inline]
-pub fn jacobian(x: &[[f64; 3]; 10], ref_grads: &[[f64; 3]; 10]) -> (Matrix3<f64>, f64) {
-    let mut jac = Matrix3::zeros();
-    for a in 0..10 {
-        for i in 0..3 {
-            for j in 0..3 {
-                jac[(i, j)] += x[a][i] * ref_grads[a][j];
-            }
-        }
+impl Lagrange<3, 10> for Tet10 {
+    fn shape(xi: [f64; 3]) -> [f64; 10] {
+        shape(xi)
     }
-    let det = jac.determinant();
-    (jac, det)
+    fn grad_shape(xi: [f64; 3]) -> [[f64; 3]; 10] {
+        grad_shape(xi)
+    }
+    fn rule(degree: usize) -> TetRule {
+        TetRule::degree(degree)
+    }
+    fn subdivided(rule: &TetRule, levels: u32) -> TetRule {
+        rule.subdivided(levels)
+    }
 }
 
-/// The isoparametric map at reference point ξ: the physical point x(ξ), J = ∂x/∂ξ and
-/// det J.
+/// The isoparametric map at reference point ξ: x(ξ), J = ∂x/∂ξ and det J ([`Lagrange::map`]).
 #[inline]
 pub fn map(x: &[[f64; 3]; 10], xi: [f64; 3]) -> ([f64; 3], Matrix3<f64>, f64) {
-    let n = shape(xi);
-    let mut p = [0.0; 3];
-    for a in 0..10 {
-        for i in 0..3 {
-            p[i] += n[a] * x[a][i];
-        }
-    }
-    let (jac, det) = jacobian(x, &grad_shape(xi));
-    (p, jac, det)
+    Tet10::map(x, xi)
 }
 
-/// Physical gradients ∇ₓNₐ = J⁻ᵀ ∇_ξ Nₐ from the Jacobian J, its determinant `det` (must be
-/// non-zero; the caller checks its sign) and the reference gradients. J⁻ᵀ = cof(J)/det.
-#[inline]
-pub fn physical_gradients(
-    jac: &Matrix3<f64>,
-    det: f64,
-    ref_grads: &[[f64; 3]; 10],
-) -> [[f64; 3]; 10] {
-    let j = |r: usize, c: usize| jac[(r, c)];
-    let inv = 1.0 / det;
-    // Cofactor matrix of J, scaled by 1/det: the inverse transpose.
-    let m = [
-        [
-            j(1, 1) * j(2, 2) - j(1, 2) * j(2, 1),
-            j(1, 2) * j(2, 0) - j(1, 0) * j(2, 2),
-            j(1, 0) * j(2, 1) - j(1, 1) * j(2, 0),
-        ],
-        [
-            j(0, 2) * j(2, 1) - j(0, 1) * j(2, 2),
-            j(0, 0) * j(2, 2) - j(0, 2) * j(2, 0),
-            j(0, 1) * j(2, 0) - j(0, 0) * j(2, 1),
-        ],
-        [
-            j(0, 1) * j(1, 2) - j(0, 2) * j(1, 1),
-            j(0, 2) * j(1, 0) - j(0, 0) * j(1, 2),
-            j(0, 0) * j(1, 1) - j(0, 1) * j(1, 0),
-        ],
-    ];
-    let mut out = [[0.0; 3]; 10];
-    for (o, g) in out.iter_mut().zip(ref_grads) {
-        for i in 0..3 {
-            o[i] = inv * (m[i][0] * g[0] + m[i][1] * g[1] + m[i][2] * g[2]);
-        }
+impl JacobianMatrix<3> for Matrix3<f64> {
+    fn det(&self) -> f64 {
+        self.determinant()
     }
-    out
+    /// J⁻ᵀ = cof(J)/det.
+    fn inverse_transpose<const N: usize>(&self, det: f64, grads: &[[f64; 3]; N]) -> [[f64; 3]; N] {
+        let j = |r: usize, c: usize| self[(r, c)];
+        let inv = 1.0 / det;
+        // Cofactor matrix of J, scaled by 1/det: the inverse transpose.
+        let m = [
+            [
+                j(1, 1) * j(2, 2) - j(1, 2) * j(2, 1),
+                j(1, 2) * j(2, 0) - j(1, 0) * j(2, 2),
+                j(1, 0) * j(2, 1) - j(1, 1) * j(2, 0),
+            ],
+            [
+                j(0, 2) * j(2, 1) - j(0, 1) * j(2, 2),
+                j(0, 0) * j(2, 2) - j(0, 2) * j(2, 0),
+                j(0, 1) * j(2, 0) - j(0, 0) * j(2, 1),
+            ],
+            [
+                j(0, 1) * j(1, 2) - j(0, 2) * j(1, 1),
+                j(0, 2) * j(1, 0) - j(0, 0) * j(1, 2),
+                j(0, 0) * j(1, 1) - j(0, 1) * j(1, 0),
+            ],
+        ];
+        let mut out = [[0.0; 3]; N];
+        for (o, g) in out.iter_mut().zip(grads) {
+            for i in 0..3 {
+                o[i] = inv * (m[i][0] * g[0] + m[i][1] * g[1] + m[i][2] * g[2]);
+            }
+        }
+        out
+    }
 }
 
-/// The map of a six-node triangle embedded in 3-D (node order of [`super::p2`]) at
+/// The map of a six-node triangle embedded in 3-D (node order of [`super::tri6`]) at
 /// reference point ξ = (ξ, η) of the reference triangle: the point x(ξ) and the
 /// area-weighted normal ∂x/∂ξ × ∂x/∂η (its length is the area element: dA = |n| dξ dη).
 #[inline]
 pub fn face_map(x: &[[f64; 3]; 6], xi: [f64; 2]) -> ([f64; 3], [f64; 3]) {
-    let n = p2::shape(xi);
-    let g = p2::grad_shape(xi);
+    let n = tri6::shape(xi);
+    let g = tri6::grad_shape(xi);
     let mut p = [0.0; 3];
     let mut t = [[0.0; 3]; 2];
     for a in 0..6 {
@@ -226,77 +206,8 @@ pub fn face_map(x: &[[f64; 3]; 6], xi: [f64; 2]) -> ([f64; 3], [f64; 3]) {
     (p, normal)
 }
 
-/// Shape values and reference gradients tabulated at the points of a tetrahedron rule, so
-/// that element loops do no polynomial evaluation.
-#[derive(Debug, Clone)]
-pub struct TetTabulation {
-    /// The rule's reference points.
-    pub points: Vec<[f64; 3]>,
-    /// The rule's weights (sum ⅙).
-    pub weights: Vec<f64>,
-    /// Nₐ(ξ_q) for each point q.
-    pub values: Vec<[f64; 10]>,
-    /// ∇_ξ Nₐ(ξ_q) for each point q.
-    pub grads: Vec<[[f64; 3]; 10]>,
-}
-
-impl TetTabulation {
-    /// Tabulates the P2 basis at the points of `rule`.
-    pub fn new(rule: &TetRule) -> Self {
-        Self {
-            points: rule.points.clone(),
-            weights: rule.weights.clone(),
-            values: rule.points.iter().map(|&p| shape(p)).collect(),
-            grads: rule.points.iter().map(|&p| grad_shape(p)).collect(),
-        }
-    }
-
-    /// Number of points.
-    pub fn len(&self) -> usize {
-        self.points.len()
-    }
-
-    /// True if there are no points.
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
-    }
-
-    /// Geometry of the element with nodal coordinates `x` at every tabulated point; fails
-    /// if det J ≤ 0 at any of them.
-    pub fn geometry(&self, x: &[[f64; 3]; 10]) -> Result<TetGeometry, TetError> {
-        let mut out = TetGeometry::default();
-        self.geometry_into(x, &mut out)?;
-        Ok(out)
-    }
-
-    /// As [`TetTabulation::geometry`], reusing the buffers of `out`.
-    pub fn geometry_into(&self, x: &[[f64; 3]; 10], out: &mut TetGeometry) -> Result<(), TetError> {
-        out.x.clear();
-        out.jxw.clear();
-        out.grads.clear();
-        for q in 0..self.len() {
-            let (jac, det) = jacobian(x, &self.grads[q]);
-            if det <= 0.0 || !det.is_finite() {
-                return Err(TetError::NonPositiveJacobian {
-                    det,
-                    xi: self.points[q],
-                });
-            }
-            let n = &self.values[q];
-            let mut p = [0.0; 3];
-            for a in 0..10 {
-                for i in 0..3 {
-                    p[i] += n[a] * x[a][i];
-                }
-            }
-            out.x.push(p);
-            out.jxw.push(det * self.weights[q]);
-            out.grads
-                .push(physical_gradients(&jac, det, &self.grads[q]));
-        }
-        Ok(())
-    }
-}
+/// Shape values and reference gradients tabulated at the points of a tetrahedron rule.
+pub type TetTabulation = Tabulation<Tet10, 3, 10>;
 
 #[cfg(test)]
 mod tests {
@@ -322,6 +233,16 @@ mod tests {
         x[4][1] += 0.06;
         x[8][2] += 0.08;
         x
+    }
+
+    #[test]
+    fn shape_functions_and_map() {
+        use crate::fem::element::checks;
+        let points = sample_points();
+        checks::partition_of_unity::<Tet10, 3, 10>(&points);
+        checks::kronecker::<Tet10, 3, 10>(&REFERENCE_NODES);
+        checks::gradients_are_derivatives::<Tet10, 3, 10>(&points);
+        checks::map_interpolates_and_jacobian::<Tet10, 3, 10>(&REFERENCE_NODES, &curved(), &points);
     }
 
     fn sample_points() -> Vec<[f64; 3]> {
@@ -354,7 +275,7 @@ mod tests {
         }
         // The flipped reference element has det J = −1 and flipping twice is the identity.
         let flipped: [[f64; 3]; 10] = std::array::from_fn(|a| REFERENCE_NODES[FLIP[a]]);
-        let (_, _, det) = map(&flipped, [0.2, 0.3, 0.1]);
+        let (_, _, det) = Tet10::map(&flipped, [0.2, 0.3, 0.1]);
         assert!((det + 1.0).abs() < 1e-15);
         for a in 0..10 {
             assert_eq!(FLIP[FLIP[a]], a);
@@ -367,51 +288,6 @@ mod tests {
                     flipped[4 + k][i],
                     0.5 * (flipped[e[0]][i] + flipped[e[1]][i])
                 );
-            }
-        }
-    }
-
-    #[test]
-    fn partition_of_unity_and_zero_gradient_sum() {
-        for xi in sample_points() {
-            let n = shape(xi);
-            assert!((n.iter().sum::<f64>() - 1.0).abs() < 1e-14);
-            let g = grad_shape(xi);
-            for j in 0..3 {
-                assert!(g.iter().map(|ga| ga[j]).sum::<f64>().abs() < 1e-13);
-            }
-        }
-    }
-
-    #[test]
-    fn kronecker_property_at_nodes() {
-        for (b, xi) in REFERENCE_NODES.iter().enumerate() {
-            let n = shape(*xi);
-            for (a, na) in n.iter().enumerate() {
-                let expect = if a == b { 1.0 } else { 0.0 };
-                assert!((na - expect).abs() < 1e-15, "N{a} at node {b} = {na}");
-            }
-        }
-    }
-
-    #[test]
-    fn reference_gradients_match_finite_differences() {
-        let h = 1e-6;
-        for xi in sample_points() {
-            let g = grad_shape(xi);
-            for j in 0..3 {
-                let (mut p, mut m) = (xi, xi);
-                p[j] += h;
-                m[j] -= h;
-                let (np, nm) = (shape(p), shape(m));
-                for a in 0..10 {
-                    let fd = (np[a] - nm[a]) / (2.0 * h);
-                    assert!(
-                        (fd - g[a][j]).abs() < 1e-8,
-                        "a={a} j={j}: {fd} vs {}",
-                        g[a][j]
-                    );
-                }
             }
         }
     }
@@ -452,33 +328,6 @@ mod tests {
         }
     }
 
-    #[test]
-    fn map_interpolates_nodes_and_jacobian_matches_finite_differences() {
-        let x = curved();
-        for (a, xi) in REFERENCE_NODES.iter().enumerate() {
-            let (p, _, _) = map(&x, *xi);
-            for i in 0..3 {
-                assert!((p[i] - x[a][i]).abs() < 1e-15);
-            }
-        }
-        let h = 1e-6;
-        for xi in sample_points() {
-            let (_, jac, det) = map(&x, xi);
-            assert!(det > 0.0);
-            for j in 0..3 {
-                let (mut p, mut m) = (xi, xi);
-                p[j] += h;
-                m[j] -= h;
-                let (xp, _, _) = map(&x, p);
-                let (xm, _, _) = map(&x, m);
-                for i in 0..3 {
-                    let fd = (xp[i] - xm[i]) / (2.0 * h);
-                    assert!((fd - jac[(i, j)]).abs() < 1e-8);
-                }
-            }
-        }
-    }
-
     /// On a curved element the physical gradients are those of the chain rule: J⁻ᵀ ∇_ξ, and
     /// fields linear in the physical coordinates have exact values and gradients.
     #[test]
@@ -487,7 +336,7 @@ mod tests {
         let f = |p: [f64; 3]| 0.7 - 1.3 * p[0] + 2.1 * p[1] - 0.4 * p[2];
         let nodal: Vec<f64> = x.iter().map(|p| f(*p)).collect();
         for xi in sample_points() {
-            let (p, jac, det) = map(&x, xi);
+            let (p, jac, det) = Tet10::map(&x, xi);
             let g = physical_gradients(&jac, det, &grad_shape(xi));
             let inv_t = jac.try_inverse().expect("regular").transpose();
             let rg = grad_shape(xi);

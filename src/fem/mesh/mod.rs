@@ -1,0 +1,135 @@
+//! The cell's meshes: [`half_cell`], the P2 triangle mesh of the 2-D half cell, and
+//! [`quarter_cell`], the P2 tetrahedral mesh of the 3-D quarter cell (and the 2-D mesh
+//! extruded into a slab); here what they share.
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+pub mod half_cell;
+pub mod quarter_cell;
+
+pub(crate) use half_cell::MeshParts;
+pub use half_cell::{Domain, MAX_ELEMENTS, MIN_ANGLE_DEG, Mesh, MeshParams, MeshQuality};
+pub use quarter_cell::{Mesh3, Mesh3Params, Mesh3Quality};
+
+/// Errors of mesh generation and mesh input.
+#[derive(Debug, Error)]
+pub enum MeshError {
+    /// A mesh parameter is out of range.
+    #[error("mesh parameter `{field}` = {value}: {rule}")]
+    InvalidParam {
+        /// Field name in [`MeshParams`].
+        field: &'static str,
+        /// Value given.
+        value: f64,
+        /// The rule it breaks.
+        rule: &'static str,
+    },
+    /// The requested sizes would give an unreasonably large mesh.
+    #[error("mesh too fine: about {estimate:.0} elements estimated, limit {limit:.0}")]
+    TooFine {
+        /// Estimated element count.
+        estimate: f64,
+        /// [`MAX_ELEMENTS`].
+        limit: f64,
+    },
+    /// spade refused a vertex or a constraint.
+    #[error("triangulation failed: {0}")]
+    Triangulation(String),
+    /// The Delaunay refinement ran out of vertices before meeting the angle limit.
+    #[error("Delaunay refinement did not complete ({vertices} vertices); lower min_angle_deg")]
+    RefinementIncomplete {
+        /// Vertex count when it stopped.
+        vertices: usize,
+    },
+    /// An element's isoparametric map is not orientation preserving somewhere.
+    #[error(
+        "element {element}: isoparametric Jacobian {det:e} ≤ 0 at reference point ({}, {})",
+        xi[0], xi[1]
+    )]
+    NonPositiveJacobian {
+        /// Element index.
+        element: usize,
+        /// Minimum of det J over the element.
+        det: f64,
+        /// Where the minimum is attained.
+        xi: [f64; 2],
+    },
+    /// A generated mesh failed an internal consistency check (a bug, not a user error).
+    #[error("mesh generation inconsistency: {0}")]
+    Inconsistent(String),
+    /// Reading a mesh file failed.
+    #[error("cannot read mesh file {path}: {source}")]
+    Io {
+        /// File path.
+        path: String,
+        /// Underlying error.
+        source: std::io::Error,
+    },
+    /// Writing a mesh or a drawing of it failed.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// File path.
+        path: String,
+        /// Underlying error.
+        source: std::io::Error,
+    },
+    /// A mesh file is malformed or does not fit the model.
+    #[error("mesh file {path}, line {line}: {message}")]
+    Format {
+        /// File path.
+        path: String,
+        /// 1-based line number (0 when not tied to a line).
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// The gmsh executable (the 3-D mesher, [`quarter_cell`]) could not be started.
+    #[error(
+        "gmsh not found on PATH: install the Debian package `gmsh` (make deps does) (tried `{program}`)"
+    )]
+    GmshNotFound {
+        /// The program that was run.
+        program: String,
+    },
+    /// gmsh ran but failed.
+    #[error("gmsh failed ({status}) on {input}: {stderr}")]
+    GmshFailed {
+        /// Its exit status.
+        status: String,
+        /// The geometry file it was given.
+        input: String,
+        /// The last lines of its error output.
+        stderr: String,
+    },
+    /// A tetrahedron's isoparametric map is not orientation preserving at a point where it
+    /// is checked (the 3-D twin of [`MeshError::NonPositiveJacobian`]).
+    #[error(
+        "tetrahedron {element}: isoparametric Jacobian {det:e} ≤ 0 at reference point ({}, {}, {})",
+        xi[0], xi[1], xi[2]
+    )]
+    NonPositiveJacobian3 {
+        /// Element index.
+        element: usize,
+        /// The smallest det J found.
+        det: f64,
+        /// Where.
+        xi: [f64; 3],
+    },
+}
+
+/// Node indices of the reference points used for output (MODEL.md §2); all are vertices on
+/// the symmetry line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NamedPoints {
+    /// Cell centre c.
+    pub centre: usize,
+    /// Nucleus top p_t = c + (0, r_n).
+    pub nucleus_top: usize,
+    /// Nucleus bottom p_b = c − (0, r_n).
+    pub nucleus_bottom: usize,
+    /// Cell bottom c − (0, r_c).
+    pub cell_bottom: usize,
+    /// Cell top c + (0, r_c).
+    pub cell_top: usize,
+}
