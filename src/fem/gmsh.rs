@@ -181,9 +181,9 @@ impl<'a> MshFile<'a> {
         Ok(())
     }
 
-    /// `$PhysicalNames` (dim tag "name"): the 2-D physical tags of the three domains.
-    fn physical_domains(&self) -> Result<HashMap<i64, Domain>, MeshError> {
-        let mut phys_domain: HashMap<i64, Domain> = HashMap::new();
+    /// `$PhysicalNames` (dim tag "name"), each with the cell domain its name is, if any.
+    fn physical_names(&self) -> Result<Vec<(u32, i64, String, Option<Domain>)>, MeshError> {
+        let mut out = Vec::new();
         if let Some(sec) = self.find("PhysicalNames") {
             for (i, l) in sec.lines.iter().enumerate().skip(1) {
                 let line = sec.first_line + i;
@@ -202,9 +202,18 @@ impl<'a> MshFile<'a> {
                     "membrane" => Some(Domain::Membrane),
                     _ => None,
                 };
-                if let (2, Some(d)) = (dim, d) {
-                    phys_domain.insert(tag, d);
-                }
+                out.push((dim, tag, name, d));
+            }
+        }
+        Ok(out)
+    }
+
+    /// `$PhysicalNames` (dim tag "name"): the 2-D physical tags of the three domains.
+    fn physical_domains(&self) -> Result<HashMap<i64, Domain>, MeshError> {
+        let mut phys_domain: HashMap<i64, Domain> = HashMap::new();
+        for (dim, tag, _, d) in self.physical_names()? {
+            if let (2, Some(d)) = (dim, d) {
+                phys_domain.insert(tag, d);
             }
         }
         if phys_domain.len() < 3 {
@@ -433,33 +442,15 @@ impl<'a> MshFile<'a> {
     fn physical_groups3(&self) -> Result<(HashMap<i64, Domain>, HashSet<i64>), MeshError> {
         let mut domains: HashMap<i64, Domain> = HashMap::new();
         let mut outer: HashSet<i64> = HashSet::new();
-        if let Some(sec) = self.find("PhysicalNames") {
-            for (i, l) in sec.lines.iter().enumerate().skip(1) {
-                let line = sec.first_line + i;
-                let mut parts = l.splitn(3, char::is_whitespace);
-                let dim = parts.next().and_then(|s| s.parse::<u32>().ok());
-                let tag = parts.next().and_then(|s| s.parse::<i64>().ok());
-                let name = parts
-                    .next()
-                    .map(|s| s.trim().trim_matches('"').to_lowercase());
-                let (Some(dim), Some(tag), Some(name)) = (dim, tag, name) else {
-                    return Err(self.err(line, format!("cannot read physical name `{l}`")));
-                };
-                let d = match name.as_str() {
-                    "nucleus" => Some(Domain::Nucleus),
-                    "cytoplasm" => Some(Domain::Cytoplasm),
-                    "membrane" => Some(Domain::Membrane),
-                    _ => None,
-                };
-                match (dim, d) {
-                    (3, Some(d)) => {
-                        domains.insert(tag, d);
-                    }
-                    (2, None) if name == "outer" => {
-                        outer.insert(tag);
-                    }
-                    _ => {}
+        for (dim, tag, name, d) in self.physical_names()? {
+            match (dim, d) {
+                (3, Some(d)) => {
+                    domains.insert(tag, d);
                 }
+                (2, None) if name == "outer" => {
+                    outer.insert(tag);
+                }
+                _ => {}
             }
         }
         let found: HashSet<Domain> = domains.values().copied().collect();
@@ -628,6 +619,15 @@ impl<'a> MshFile<'a> {
     }
 }
 
+/// The text of the file at `path` and its name for messages.
+fn read_text(path: &Path) -> Result<(String, String), MeshError> {
+    let pstr = path.display().to_string();
+    match std::fs::read_to_string(path) {
+        Ok(text) => Ok((text, pstr)),
+        Err(source) => Err(MeshError::Io { path: pstr, source }),
+    }
+}
+
 impl Mesh3 {
     /// Reads a gmsh 4.1 ASCII mesh of 10-node tetrahedra with physical volume groups named
     /// `nucleus`, `cytoplasm`, `membrane` and the 6-node triangles of the physical surface
@@ -635,11 +635,7 @@ impl Mesh3 {
     /// against the cell, the symmetry planes, the named points, the Jacobians).
     pub fn read_gmsh(path: &Path, params: &Mesh3Params) -> Result<Mesh3, MeshError> {
         params.validate()?;
-        let pstr = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| MeshError::Io {
-            path: pstr.clone(),
-            source,
-        })?;
+        let (text, pstr) = read_text(path)?;
         Self::parse_gmsh(&text, &pstr, params)
     }
 
@@ -736,11 +732,7 @@ impl Mesh {
     /// reordered; every element's Jacobian is checked.
     pub fn read_gmsh(path: &Path, params: &MeshParams) -> Result<Mesh, MeshError> {
         params.validate()?;
-        let pstr = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| MeshError::Io {
-            path: pstr.clone(),
-            source,
-        })?;
+        let (text, pstr) = read_text(path)?;
         Self::parse_gmsh(&text, &pstr, params)
     }
 

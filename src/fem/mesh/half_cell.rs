@@ -149,21 +149,8 @@ impl MeshParams {
             );
         }
         let far = self.center[0].abs().max(self.center[1].abs());
-        if self.h_bottom.min(self.h_nucleus) / self.refine < 1e-9 * far {
-            return bad(
-                "center",
-                far,
-                "too far from the origin for the element size (coordinates would lose precision)",
-            );
-        }
-        let estimate = self.estimated_elements();
-        if estimate > MAX_ELEMENTS {
-            return Err(MeshError::TooFine {
-                estimate,
-                limit: MAX_ELEMENTS,
-            });
-        }
-        Ok(())
+        let h_min = self.h_bottom.min(self.h_nucleus) / self.refine;
+        super::check_scale(h_min, far, self.estimated_elements(), MAX_ELEMENTS)
     }
 
     /// Estimated number of elements of the mesh these parameters give, computed from the
@@ -975,17 +962,8 @@ impl Mesh {
 
     /// Fails with the first element whose det J is not positive everywhere on it.
     pub fn check_jacobians(&self) -> Result<(), MeshError> {
-        for e in 0..self.elements.len() {
-            let (min, _, xi) = self.jacobian_range(e);
-            if min <= 0.0 || min.is_nan() {
-                return Err(MeshError::NonPositiveJacobian {
-                    element: e,
-                    det: min,
-                    xi,
-                });
-            }
-        }
-        Ok(())
+        let refusal = |element, det, xi| MeshError::NonPositiveJacobian { element, det, xi };
+        super::check_jacobians(self.elements.len(), |e| self.jacobian_range(e), refusal)
     }
 
     /// Size and shape statistics.

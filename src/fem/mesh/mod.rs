@@ -133,3 +133,41 @@ pub struct NamedPoints {
     /// Cell top c + (0, r_c).
     pub cell_top: usize,
 }
+
+/// Fails with `refusal(e, det, at)` for the first of `elements` whose smallest det J
+/// (`range(e)`: minimum, maximum, where the minimum is) is not positive.
+pub(crate) fn check_jacobians<X>(
+    elements: usize,
+    range: impl Fn(usize) -> (f64, f64, X),
+    refusal: impl Fn(usize, f64, X) -> MeshError,
+) -> Result<(), MeshError> {
+    for e in 0..elements {
+        let (min, _, at) = range(e);
+        if min <= 0.0 || min.is_nan() {
+            return Err(refusal(e, min, at));
+        }
+    }
+    Ok(())
+}
+
+/// The checks both meshers' parameters end with: the finest element size `h_min` not lost
+/// in the round-off of coordinates as far as `far` from the origin, and at most `limit`
+/// elements in the `estimate`.
+pub(crate) fn check_scale(
+    h_min: f64,
+    far: f64,
+    estimate: f64,
+    limit: f64,
+) -> Result<(), MeshError> {
+    if h_min < 1e-9 * far {
+        return Err(MeshError::InvalidParam {
+            field: "center",
+            value: far,
+            rule: "too far from the origin for the element size (coordinates would lose precision)",
+        });
+    }
+    if estimate > limit {
+        return Err(MeshError::TooFine { estimate, limit });
+    }
+    Ok(())
+}

@@ -190,21 +190,8 @@ impl Mesh3Params {
             return bad("r_c", self.r_c, layer_rule);
         }
         let far = self.center.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        if self.h_bottom.min(self.h_nucleus) / self.refine < 1e-9 * far {
-            return bad(
-                "center",
-                far,
-                "too far from the origin for the element size (coordinates would lose precision)",
-            );
-        }
-        let estimate = self.estimated_tets();
-        if estimate > MAX_TETS {
-            return Err(MeshError::TooFine {
-                estimate,
-                limit: MAX_TETS,
-            });
-        }
-        Ok(())
+        let h_min = self.h_bottom.min(self.h_nucleus) / self.refine;
+        super::check_scale(h_min, far, self.estimated_tets(), MAX_TETS)
     }
 
     /// The 2-D parameters of the section z = c_z (the half cell of the plane-strain and
@@ -1225,17 +1212,8 @@ impl Mesh3 {
 
     /// Fails with the first element whose det J is not positive at all its check points.
     pub fn check_jacobians(&self) -> Result<(), MeshError> {
-        for e in 0..self.elements.len() {
-            let (min, _, xi) = self.jacobian_range(e);
-            if min <= 0.0 || min.is_nan() {
-                return Err(MeshError::NonPositiveJacobian3 {
-                    element: e,
-                    det: min,
-                    xi,
-                });
-            }
-        }
-        Ok(())
+        let refusal = |element, det, xi| MeshError::NonPositiveJacobian3 { element, det, xi };
+        super::check_jacobians(self.elements.len(), |e| self.jacobian_range(e), refusal)
     }
 
     /// Size and shape statistics.
