@@ -116,6 +116,9 @@ struct MshFile<'a> {
 /// A cell triangle as read: its six node tags, its domain and the line it is on.
 type TaggedTriangle = ([usize; 6], Domain, usize);
 
+/// A physical group: dimension, tag, name (lower case) and the cell domain it names.
+type PhysicalName = (u32, i64, String, Option<Domain>);
+
 impl<'a> MshFile<'a> {
     /// Splits `text` into `$Name … $EndName` sections.
     fn split(text: &'a str, path: &'a str) -> Result<Self, MeshError> {
@@ -182,7 +185,7 @@ impl<'a> MshFile<'a> {
     }
 
     /// `$PhysicalNames` (dim tag "name"), each with the cell domain its name is, if any.
-    fn physical_names(&self) -> Result<Vec<(u32, i64, String, Option<Domain>)>, MeshError> {
+    fn physical_names(&self) -> Result<Vec<PhysicalName>, MeshError> {
         let mut out = Vec::new();
         if let Some(sec) = self.find("PhysicalNames") {
             for (i, l) in sec.lines.iter().enumerate().skip(1) {
