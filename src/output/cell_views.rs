@@ -1476,7 +1476,7 @@ fn draw_panel<DB: DrawingBackend>(
     let bytes = render(tris, camera, screen, (pw as usize, ph as usize), strength);
     let image = BitMapElement::<(i32, i32)>::with_owned_buffer((0, 0), (pw, ph), bytes)
         .ok_or_else(|| DrawError("the rendered picture has the wrong size".into()))?;
-    area.draw(&image).map_err(DrawError::from)?;
+    area.draw(&image)?;
     if axes {
         let [right, up, _] = camera.basis();
         let origin = ((2.4 * fs) as i32, ph as i32 - (2.6 * fs) as i32);
@@ -1486,8 +1486,7 @@ fn draw_panel<DB: DrawingBackend>(
             unit[k] = 1.0;
             let (dx, dy) = (dot(unit, right) * len, -dot(unit, up) * len);
             let tip = (origin.0 + dx as i32, origin.1 + dy as i32);
-            area.draw(&PathElement::new(vec![origin, tip], BLACK.stroke_width(2)))
-                .map_err(DrawError::from)?;
+            area.draw(&PathElement::new(vec![origin, tip], BLACK.stroke_width(2)))?;
             area.draw(&Text::new(
                 name.to_string(),
                 (
@@ -1495,8 +1494,7 @@ fn draw_panel<DB: DrawingBackend>(
                     origin.1 + (1.25 * dy) as i32 - (0.35 * fs) as i32,
                 ),
                 scaled_text(0.6, fs),
-            ))
-            .map_err(DrawError::from)?;
+            ))?;
         }
     }
     if let Some(l) = label {
@@ -1504,8 +1502,7 @@ fn draw_panel<DB: DrawingBackend>(
             l.to_string(),
             ((0.6 * fs) as i32, (0.4 * fs) as i32),
             scaled_text(0.65, fs),
-        ))
-        .map_err(DrawError::from)?;
+        ))?;
     }
     Ok(())
 }
@@ -1567,9 +1564,7 @@ impl<DB: DrawingBackend> SurfaceAreas<DB> {
         opts: &SurfaceStyleOptions,
         fs: f64,
     ) -> Result<Self, DrawError> {
-        let area = area
-            .titled(&opts.title, (FONT, opts.font as i32))
-            .map_err(DrawError::from)?;
+        let area = area.titled(&opts.title, (FONT, opts.font as i32))?;
         let (aw, ah) = area.dim_in_pixel();
         let bar_w = match opts.coloring {
             Coloring::Strain => (5.5 * fs) as u32,
@@ -1681,11 +1676,7 @@ fn draw_surface_legend<DB: DrawingBackend>(
     let line = (0.9 * fs) as i32;
     let mut text_w = 0;
     for (_, name) in &entries {
-        text_w = text_w.max(
-            pic.estimate_text_size(name, &style)
-                .map_err(DrawError::from)?
-                .0 as i32,
-        );
+        text_w = text_w.max(pic.estimate_text_size(name, &style)?.0 as i32);
     }
     let box_w = 2 * sz + 24 + text_w;
     let x1 = pw as i32 - (0.4 * fs) as i32;
@@ -1695,23 +1686,19 @@ fn draw_surface_legend<DB: DrawingBackend>(
     pic.draw(&Rectangle::new(
         [(x0, y0), (x1, y0 + box_h)],
         WHITE.mix(0.9).filled(),
-    ))
-    .map_err(DrawError::from)?;
-    pic.draw(&Rectangle::new([(x0, y0), (x1, y0 + box_h)], BLACK))
-        .map_err(DrawError::from)?;
+    ))?;
+    pic.draw(&Rectangle::new([(x0, y0), (x1, y0 + box_h)], BLACK))?;
     for (k, (c, name)) in entries.iter().enumerate() {
         let y = y0 + (0.3 * fs) as i32 + k as i32 * line;
         pic.draw(&Rectangle::new(
             [(x0 + 8, y + 2), (x0 + 8 + 2 * sz, y + 2 + sz)],
             c.filled(),
-        ))
-        .map_err(DrawError::from)?;
+        ))?;
         pic.draw(&Text::new(
             name.to_string(),
             (x0 + 2 * sz + 16, y),
             style.clone(),
-        ))
-        .map_err(DrawError::from)?;
+        ))?;
     }
     Ok(())
 }
@@ -1728,8 +1715,7 @@ fn draw_strain_bar<DB: DrawingBackend>(
         .margin_bottom((1.0 * fs) as u32)
         .margin_right((0.4 * fs) as u32)
         .y_label_area_size((3.2 * fs) as u32)
-        .build_cartesian_2d(0.0..1.0, 0.0..strain_max)
-        .map_err(DrawError::from)?;
+        .build_cartesian_2d(0.0..1.0, 0.0..strain_max)?;
     chart
         .configure_mesh()
         .disable_x_mesh()
@@ -1738,20 +1724,17 @@ fn draw_strain_bar<DB: DrawingBackend>(
         .y_desc("element mean ‖E‖")
         .axis_desc_style((FONT, (0.6 * fs) as i32))
         .label_style((FONT, (0.5 * fs) as i32))
-        .draw()
-        .map_err(DrawError::from)?;
+        .draw()?;
     let steps = 200;
-    chart
-        .draw_series((0..steps).map(|k| {
-            let (v0, v1) = (
-                strain_max * k as f64 / steps as f64,
-                strain_max * (k + 1) as f64 / steps as f64,
-            );
-            let c: RGBColor =
-                ViridisRGB.get_color_normalized((0.5 * (v0 + v1)) as f32, 0.0, strain_max as f32);
-            Rectangle::new([(0.0, v0), (1.0, v1)], c.filled())
-        }))
-        .map_err(DrawError::from)?;
+    chart.draw_series((0..steps).map(|k| {
+        let (v0, v1) = (
+            strain_max * k as f64 / steps as f64,
+            strain_max * (k + 1) as f64 / steps as f64,
+        );
+        let c: RGBColor =
+            ViridisRGB.get_color_normalized((0.5 * (v0 + v1)) as f32, 0.0, strain_max as f32);
+        Rectangle::new([(0.0, v0), (1.0, v1)], c.filled())
+    }))?;
     Ok(())
 }
 

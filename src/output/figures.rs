@@ -343,11 +343,9 @@ pub fn draw_time_plot_on<DB: DrawingBackend>(
         draw_curve(&mut chart, c)?;
     }
     // The lines joining the paper's values to ours, under the marks.
-    chart
-        .draw_series(plot.links.iter().map(|&(t, a, b)| {
-            PathElement::new(vec![(t, a), (t, b)], RGBColor(90, 90, 90).stroke_width(2))
-        }))
-        .map_err(DrawError::from)?;
+    chart.draw_series(plot.links.iter().map(|&(t, a, b)| {
+        PathElement::new(vec![(t, a), (t, b)], RGBColor(90, 90, 90).stroke_width(2))
+    }))?;
     for m in &plot.marks {
         draw_marks(&mut chart, m)?;
     }
@@ -372,8 +370,7 @@ fn time_chart<'a, DB: DrawingBackend>(
         .margin_right(44)
         .x_label_area_size(TIME_X_LABELS)
         .y_label_area_size(90)
-        .build_cartesian_2d(0.0..t_axis_end, lo..hi)
-        .map_err(DrawError::from)?;
+        .build_cartesian_2d(0.0..t_axis_end, lo..hi)?;
     let fmt_t = |v: &f64| group_thousands(*v);
     chart
         .configure_mesh()
@@ -383,8 +380,7 @@ fn time_chart<'a, DB: DrawingBackend>(
         .axis_desc_style((FONT, 22))
         .label_style((FONT, 18))
         .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(DrawError::from)?;
+        .draw()?;
     Ok(chart)
 }
 
@@ -398,24 +394,20 @@ fn draw_phases<DB: DrawingBackend>(
     let grey = RGBColor(110, 110, 110);
     for (a, b, name) in phase_intervals(plot) {
         if a > 0.0 {
-            chart
-                .draw_series(DashedLineSeries::new(
-                    vec![(a, lo), (a, hi)],
-                    8,
-                    6,
-                    grey.stroke_width(2),
-                ))
-                .map_err(DrawError::from)?;
+            chart.draw_series(DashedLineSeries::new(
+                vec![(a, lo), (a, hi)],
+                8,
+                6,
+                grey.stroke_width(2),
+            ))?;
         }
         let mid = 0.5 * (a + b);
         let style = anchored_text(18, HPos::Center, VPos::Top).color(&grey);
-        chart
-            .draw_series(std::iter::once(Text::new(
-                name,
-                (mid, hi - 0.01 * (hi - lo)),
-                style,
-            )))
-            .map_err(DrawError::from)?;
+        chart.draw_series(std::iter::once(Text::new(
+            name,
+            (mid, hi - 0.01 * (hi - lo)),
+            style,
+        )))?;
     }
     Ok(())
 }
@@ -436,24 +428,20 @@ fn draw_notes<DB: DrawingBackend>(
         let y_line = y_text - 0.045 * span;
         let tick = 0.015 * span;
         let (a, b) = (n.from.max(0.0), n.to.min(t_axis_end));
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                vec![
-                    (a, y_line - tick),
-                    (a, y_line),
-                    (b, y_line),
-                    (b, y_line - tick),
-                ],
-                BLACK.stroke_width(2),
-            )))
-            .map_err(DrawError::from)?;
-        chart
-            .draw_series(std::iter::once(Text::new(
-                n.text.clone(),
-                (a + 0.01 * t_max, y_text),
-                anchored_text(18, HPos::Left, VPos::Top),
-            )))
-            .map_err(DrawError::from)?;
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![
+                (a, y_line - tick),
+                (a, y_line),
+                (b, y_line),
+                (b, y_line - tick),
+            ],
+            BLACK.stroke_width(2),
+        )))?;
+        chart.draw_series(std::iter::once(Text::new(
+            n.text.clone(),
+            (a + 0.01 * t_max, y_text),
+            anchored_text(18, HPos::Left, VPos::Top),
+        )))?;
     }
     Ok(())
 }
@@ -467,15 +455,9 @@ fn draw_curve<'a, DB: DrawingBackend + 'a>(
     let style = c.color.stroke_width(3);
     let pts = c.points.iter().copied();
     let anno = match c.stroke {
-        Stroke::Solid => chart
-            .draw_series(LineSeries::new(pts, style))
-            .map_err(DrawError::from)?,
-        Stroke::Dashed => chart
-            .draw_series(DashedLineSeries::new(pts, 14, 8, style))
-            .map_err(DrawError::from)?,
-        Stroke::Dotted => chart
-            .draw_series(DashedLineSeries::new(pts, 3, 6, style))
-            .map_err(DrawError::from)?,
+        Stroke::Solid => chart.draw_series(LineSeries::new(pts, style))?,
+        Stroke::Dashed => chart.draw_series(DashedLineSeries::new(pts, 14, 8, style))?,
+        Stroke::Dotted => chart.draw_series(DashedLineSeries::new(pts, 3, 6, style))?,
     };
     if c.label.is_empty() {
         return Ok(());
@@ -509,16 +491,14 @@ fn draw_marks<'a, DB: DrawingBackend + 'a>(
     };
     let r = m.radius;
     let anno = match m.shape {
-        MarkShape::Circle => chart
-            .draw_series(m.points.iter().map(|&p| Circle::new(p, r, style)))
-            .map_err(DrawError::from)?,
-        MarkShape::Square => chart
-            .draw_series(
-                m.points
-                    .iter()
-                    .map(|&p| EmptyElement::at(p) + Rectangle::new([(-r, -r), (r, r)], style)),
-            )
-            .map_err(DrawError::from)?,
+        MarkShape::Circle => {
+            chart.draw_series(m.points.iter().map(|&p| Circle::new(p, r, style)))?
+        }
+        MarkShape::Square => chart.draw_series(
+            m.points
+                .iter()
+                .map(|&p| EmptyElement::at(p) + Rectangle::new([(-r, -r), (r, r)], style)),
+        )?,
     };
     if m.label.is_empty() {
         return Ok(());
@@ -556,8 +536,7 @@ fn draw_time_legend<'a, DB: DrawingBackend + 'a>(
         .label_font((FONT, 18))
         .background_style(WHITE.mix(0.9))
         .border_style(BLACK)
-        .draw()
-        .map_err(DrawError::from)?;
+        .draw()?;
     Ok(())
 }
 
@@ -1055,8 +1034,7 @@ fn maxima_chart<'a, DB: DrawingBackend>(
         .margin_right(12)
         .x_label_area_size(TIME_X_LABELS)
         .y_label_area_size(0)
-        .build_cartesian_2d(0.0..n as f64, lo..hi)
-        .map_err(DrawError::from)?;
+        .build_cartesian_2d(0.0..n as f64, lo..hi)?;
     let names: Vec<String> = columns.iter().map(|c| c.name.clone()).collect();
     let fmt = |x: &f64| column_label(&names, *x);
     chart
@@ -1069,8 +1047,7 @@ fn maxima_chart<'a, DB: DrawingBackend>(
         .axis_desc_style((FONT, 22))
         .label_style((FONT, 18))
         .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(DrawError::from)?;
+        .draw()?;
     Ok(chart)
 }
 
@@ -1128,23 +1105,19 @@ fn draw_maxima_key<DB: DrawingBackend>(
         };
         let y_mark = y - 0.018 * span;
         match shape {
-            MarkShape::Circle => chart
-                .draw_series(std::iter::once(Circle::new((x_mark, y_mark), 6, style)))
-                .map_err(DrawError::from)?,
-            MarkShape::Square => chart
-                .draw_series(std::iter::once(
-                    EmptyElement::at((x_mark, y_mark)) + Rectangle::new([(-5, -5), (5, 5)], style),
-                ))
-                .map_err(DrawError::from)?,
+            MarkShape::Circle => {
+                chart.draw_series(std::iter::once(Circle::new((x_mark, y_mark), 6, style)))?
+            }
+            MarkShape::Square => chart.draw_series(std::iter::once(
+                EmptyElement::at((x_mark, y_mark)) + Rectangle::new([(-5, -5), (5, 5)], style),
+            ))?,
         };
         for (line, text) in [a, b].iter().enumerate() {
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    text.to_string(),
-                    (x_text, y - 0.036 * line as f64 * span),
-                    anchored_text(16, HPos::Left, VPos::Top).color(&grey),
-                )))
-                .map_err(DrawError::from)?;
+            chart.draw_series(std::iter::once(Text::new(
+                text.to_string(),
+                (x_text, y - 0.036 * line as f64 * span),
+                anchored_text(16, HPos::Left, VPos::Top).color(&grey),
+            )))?;
         }
     }
     Ok(())
@@ -1160,45 +1133,35 @@ fn draw_maximum_column<DB: DrawingBackend>(
     let m = col.compared;
     let color = &col.color;
     let x = k as f64 + 0.2;
-    chart
-        .draw_series(std::iter::once(PathElement::new(
-            vec![(x, m.paper), (x, m.ours)],
-            RGBColor(90, 90, 90).stroke_width(2),
-        )))
-        .map_err(DrawError::from)?;
-    chart
-        .draw_series([
-            Circle::new((x, m.paper), 8, BLACK.stroke_width(3)),
-            Circle::new((x, m.ours), 6, color.filled()),
-        ])
-        .map_err(DrawError::from)?;
+    chart.draw_series(std::iter::once(PathElement::new(
+        vec![(x, m.paper), (x, m.ours)],
+        RGBColor(90, 90, 90).stroke_width(2),
+    )))?;
+    chart.draw_series([
+        Circle::new((x, m.paper), 8, BLACK.stroke_width(3)),
+        Circle::new((x, m.ours), 6, color.filled()),
+    ])?;
     // Values beside the marks, the upper one above, the lower one below.
     let (up, down) = if m.paper >= m.ours {
         ((m.paper, &BLACK), (m.ours, color))
     } else {
         ((m.ours, color), (m.paper, &BLACK))
     };
-    chart
-        .draw_series([
-            value_text(up.0, x + 0.08, up.1, VPos::Bottom),
-            value_text(down.0, x + 0.08, down.1, VPos::Top),
-        ])
-        .map_err(DrawError::from)?;
+    chart.draw_series([
+        value_text(up.0, x + 0.08, up.1, VPos::Bottom),
+        value_text(down.0, x + 0.08, down.1, VPos::Top),
+    ])?;
     if let Some(v) = col.top {
         let xs = k as f64 + 0.66;
-        chart
-            .draw_series(std::iter::once(
-                EmptyElement::at((xs, v)) + Rectangle::new([(-5, -5), (5, 5)], color.filled()),
-            ))
-            .map_err(DrawError::from)?;
-        chart
-            .draw_series(std::iter::once(value_text(
-                v,
-                xs + 0.07,
-                color,
-                VPos::Center,
-            )))
-            .map_err(DrawError::from)?;
+        chart.draw_series(std::iter::once(
+            EmptyElement::at((xs, v)) + Rectangle::new([(-5, -5), (5, 5)], color.filled()),
+        ))?;
+        chart.draw_series(std::iter::once(value_text(
+            v,
+            xs + 0.07,
+            color,
+            VPos::Center,
+        )))?;
     }
     Ok(())
 }
@@ -1453,8 +1416,7 @@ fn draw_bars<DB: DrawingBackend>(
         .margin(16)
         .x_label_area_size(50)
         .y_label_area_size(80)
-        .build_cartesian_2d(0.0..n as f64, 0.0..top)
-        .map_err(DrawError::from)?;
+        .build_cartesian_2d(0.0..n as f64, 0.0..top)?;
     let fmt = |x: &f64| column_label(&names, *x);
     chart
         .configure_mesh()
@@ -1465,8 +1427,7 @@ fn draw_bars<DB: DrawingBackend>(
         .axis_desc_style((FONT, 22))
         .label_style((FONT, 20))
         .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(DrawError::from)?;
+        .draw()?;
     let paper_color = RGBColor(170, 170, 170);
     let ours_color = RGBColor(31, 119, 180);
     let mut paper_rects = Vec::new();
@@ -1494,18 +1455,15 @@ fn draw_bars<DB: DrawingBackend>(
         (&ours_rects, ours_color, ours_label),
     ] {
         chart
-            .draw_series(rects.iter().map(|r| Rectangle::new(*r, color.filled())))
-            .map_err(DrawError::from)?
+            .draw_series(rects.iter().map(|r| Rectangle::new(*r, color.filled())))?
             .label(label)
             .legend(move |(x, y)| Rectangle::new([(x, y - 8), (x + 24, y + 8)], color.filled()));
     }
-    chart
-        .draw_series(
-            texts
-                .into_iter()
-                .map(|(s, p)| Text::new(s, p, anchored_text(18, HPos::Center, VPos::Bottom))),
-        )
-        .map_err(DrawError::from)?;
+    chart.draw_series(
+        texts
+            .into_iter()
+            .map(|(s, p)| Text::new(s, p, anchored_text(18, HPos::Center, VPos::Bottom))),
+    )?;
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::UpperLeft)
@@ -1513,8 +1471,7 @@ fn draw_bars<DB: DrawingBackend>(
         .label_font((FONT, 18))
         .background_style(WHITE.mix(0.9))
         .border_style(BLACK)
-        .draw()
-        .map_err(DrawError::from)?;
+        .draw()?;
     Ok(())
 }
 
@@ -1711,9 +1668,7 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
     backdrop_for: impl FnOnce(Option<B>, [f64; 4], usize) -> B,
 ) -> Result<ShapeScale, DrawError> {
     let fs = opts.font as f64;
-    let area = area
-        .titled(&opts.title, (FONT, opts.font as i32))
-        .map_err(DrawError::from)?;
+    let area = area.titled(&opts.title, (FONT, opts.font as i32))?;
     let (mut chart, key, columns) = equal_aspect_chart(&area, view, cell.x_label, fs)?;
     // Substrate and fibronectin layer, one strip per pixel column (computed once per
     // view: a movie reuses it for every frame).
@@ -1730,12 +1685,11 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
                 .markers
                 .iter()
                 .map(|p| Circle::new((p[0], p[1]), 4, BLACK.filled())),
-        )
-        .map_err(DrawError::from)?
+        )?
         .label("p_t, c, p_b")
         .legend(|(x, y)| Circle::new((x + 11, y), 4, BLACK.filled()));
     if let Some(g) = &opts.gravity {
-        draw_gravity(&chart.plotting_area().strip_coord_spec(), g, fs).map_err(DrawError::from)?;
+        draw_gravity(&chart.plotting_area().strip_coord_spec(), g, fs)?;
     }
     if opts.legend {
         chart
@@ -1745,8 +1699,7 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
             .label_font((FONT, (0.65 * fs) as i32))
             .background_style(WHITE.mix(0.9))
             .border_style(BLACK)
-            .draw()
-            .map_err(DrawError::from)?;
+            .draw()?;
     }
     let o = chart.backend_coord(&(0.0, 0.0));
     let px = chart.backend_coord(&(10.0, 0.0));
@@ -1776,8 +1729,7 @@ fn equal_aspect_chart<'a, DB: DrawingBackend>(
             .margin(margin)
             .x_label_area_size(label_x)
             .y_label_area_size(label_y)
-            .build_cartesian_2d(view.x_min..view.x_max, view.y_min..view.y_max)
-            .map_err(DrawError::from)?;
+            .build_cartesian_2d(view.x_min..view.x_max, view.y_min..view.y_max)?;
         chart.plotting_area().dim_in_pixel()
     };
     let (w, h) = (view.x_max - view.x_min, view.y_max - view.y_min);
@@ -1792,8 +1744,7 @@ fn equal_aspect_chart<'a, DB: DrawingBackend>(
         .margin(margin)
         .x_label_area_size(label_x)
         .y_label_area_size(label_y)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(DrawError::from)?;
+        .build_cartesian_2d(x0..x1, y0..y1)?;
     chart
         .configure_mesh()
         .x_desc(x_label)
@@ -1802,8 +1753,7 @@ fn equal_aspect_chart<'a, DB: DrawingBackend>(
         .label_style((FONT, (0.65 * fs) as i32))
         .light_line_style(RGBColor(238, 238, 238))
         .bold_line_style(RGBColor(215, 215, 215))
-        .draw()
-        .map_err(DrawError::from)?;
+        .draw()?;
     Ok((chart, [x0, x1, y0, y1], pw as usize))
 }
 
@@ -1822,8 +1772,7 @@ fn draw_backdrop<DB: DrawingBackend, B: PlaneBackdrop>(
     let rect = |r: &Rect, c: RGBColor| Rectangle::new([(r[0], r[3]), (r[1], r[2])], c.filled());
     if cell.layer {
         chart
-            .draw_series(back.layer().iter().map(|r| rect(r, LAYER)))
-            .map_err(DrawError::from)?
+            .draw_series(back.layer().iter().map(|r| rect(r, LAYER)))?
             .label("fibronectin layer")
             .legend(|p| swatch(LAYER, p));
         // The layer's edge under the cell: the cell hides it where it lies in the layer.
@@ -1831,14 +1780,12 @@ fn draw_backdrop<DB: DrawingBackend, B: PlaneBackdrop>(
     }
     if !back.foot().is_empty() {
         chart
-            .draw_series(back.foot().iter().map(|r| rect(r, FOOT)))
-            .map_err(DrawError::from)?
+            .draw_series(back.foot().iter().map(|r| rect(r, FOOT)))?
             .label("pillar foot (not substrate in the model)")
             .legend(|p| swatch(FOOT, p));
     }
     chart
-        .draw_series(back.substrate().iter().map(|r| rect(r, SUBSTRATE)))
-        .map_err(DrawError::from)?
+        .draw_series(back.substrate().iter().map(|r| rect(r, SUBSTRATE)))?
         .label(cell.substrate_label.as_str())
         .legend(|p| swatch(SUBSTRATE, p));
     Ok(())
@@ -1862,8 +1809,7 @@ fn draw_cell_fills<DB: DrawingBackend>(
             .map(|(_, p)| p)
             .collect();
         chart
-            .draw_series(polys.iter().map(|p| Polygon::new(xy(p), color.filled())))
-            .map_err(DrawError::from)?
+            .draw_series(polys.iter().map(|p| Polygon::new(xy(p), color.filled())))?
             .label(d.to_string())
             .legend(move |p| swatch(color, p));
         // Each piece's outline closes the hairline gaps between neighbouring fills; in the
@@ -1873,24 +1819,20 @@ fn draw_cell_fills<DB: DrawingBackend>(
         } else {
             color
         };
-        chart
-            .draw_series(polys.iter().map(|p| {
-                let mut v = xy(p);
-                if let Some(f) = v.first().copied() {
-                    v.push(f);
-                }
-                PathElement::new(v, line_color.stroke_width(1))
-            }))
-            .map_err(DrawError::from)?;
+        chart.draw_series(polys.iter().map(|p| {
+            let mut v = xy(p);
+            if let Some(f) = v.first().copied() {
+                v.push(f);
+            }
+            PathElement::new(v, line_color.stroke_width(1))
+        }))?;
         if let (true, Some(lines)) = (mesh_lines, cell.mesh_lines) {
-            chart
-                .draw_series(
-                    lines
-                        .iter()
-                        .filter(|(dd, _)| *dd == d)
-                        .map(|(_, l)| PathElement::new(xy(l), edge.stroke_width(1))),
-                )
-                .map_err(DrawError::from)?;
+            chart.draw_series(
+                lines
+                    .iter()
+                    .filter(|(dd, _)| *dd == d)
+                    .map(|(_, l)| PathElement::new(xy(l), edge.stroke_width(1))),
+            )?;
         }
     }
     Ok(())

@@ -41,33 +41,24 @@ pub struct Scene {
     pub text: &'static str,
 }
 
+/// The [`Scene`] named `name`: its case file `cases/<name>.ron`, compiled in.
+macro_rules! scene {
+    ($name:literal) => {
+        Scene {
+            name: $name,
+            file: concat!("cases/", $name, ".ron"),
+            text: include_str!(concat!("../../cases/", $name, ".ron")),
+        }
+    };
+}
+
 /// The five scenes of MODEL.md §7, in the paper's order.
 pub const SCENES: [Scene; 5] = [
-    Scene {
-        name: "flat",
-        file: "cases/flat.ron",
-        text: include_str!("../../cases/flat.ron"),
-    },
-    Scene {
-        name: "pillars-push",
-        file: "cases/pillars-push.ron",
-        text: include_str!("../../cases/pillars-push.ron"),
-    },
-    Scene {
-        name: "pillars-pull",
-        file: "cases/pillars-pull.ron",
-        text: include_str!("../../cases/pillars-pull.ron"),
-    },
-    Scene {
-        name: "pillars-push-pull",
-        file: "cases/pillars-push-pull.ron",
-        text: include_str!("../../cases/pillars-push-pull.ron"),
-    },
-    Scene {
-        name: "upside-down",
-        file: "cases/upside-down.ron",
-        text: include_str!("../../cases/upside-down.ron"),
-    },
+    scene!("flat"),
+    scene!("pillars-push"),
+    scene!("pillars-pull"),
+    scene!("pillars-push-pull"),
+    scene!("upside-down"),
 ];
 
 /// Name of the control run of the upside-down comparison.
