@@ -1,4 +1,4 @@
-//! Draws every figure of the 3-D quarter cell ([`cellsim::output::figures3`]), a VTU file
+//! Draws every figure of the 3-D quarter cell ([`cellsim::output::cell_views`]), a VTU file
 //! and a GIF into a directory, from states built here:
 //!
 //! - a synthetic smooth deformation of the default mesh (`cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())`,
@@ -22,13 +22,13 @@ use cellsim::dae::{Atol, Integrator};
 use cellsim::fem::{Domain, Mesh3, Mesh3Params, TetRule, TetTabulation};
 use cellsim::model::Cell3;
 use cellsim::model::ModelParams;
-use cellsim::output::figures::ShapeStyleOptions;
-use cellsim::output::figures3::{
+use cellsim::output::cell_views::{
     Coloring, FIGURE_SIZE, Section, draw_section, gravity_at, section_figure, surface_figure,
 };
+use cellsim::output::figures::ShapeStyleOptions;
 use cellsim::output::geometry::Bounds;
-use cellsim::output::movie3::{Movie3, MovieView};
-use cellsim::output::vtu3::write_vtu3;
+use cellsim::output::movie::{Movie3, MovieView};
+use cellsim::output::vtu::write_vtu3;
 use cellsim::physics::{Lattice, Substrate, Substrate3};
 use cellsim::record::{Mesh3File, Snapshot3, write_json};
 use cellsim::scene;

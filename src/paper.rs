@@ -37,28 +37,41 @@ pub struct PaperOptions {
     pub interrupt: StopFlag,
 }
 
+/// Why the paper's cases could not be had.
+#[derive(Debug, thiserror::Error)]
+pub enum PaperCasesError {
+    /// A case file could not be read or is not a case.
+    #[error(transparent)]
+    Case(#[from] crate::case::CaseError),
+    /// A case file holds another scene than the one expected.
+    #[error("{label}: case name `{found}`, expected `{expected}`")]
+    Name {
+        /// The file (or compiled-in copy).
+        label: String,
+        /// The case's name.
+        found: String,
+        /// The scene's name.
+        expected: &'static str,
+    },
+}
+
 /// The cases to run: the five scenes and the control, each with its label for messages.
-pub fn paper_cases(cases_dir: Option<&Path>) -> Result<Vec<(Case, String)>, String> {
+pub fn paper_cases(cases_dir: Option<&Path>) -> Result<Vec<(Case, String)>, PaperCasesError> {
     let mut out = Vec::new();
     for s in SCENES {
         let (case, label) = match cases_dir {
             Some(d) => {
                 let p = d.join(Path::new(s.file).file_name().unwrap_or_default());
-                (
-                    Case::load(&p).map_err(|e| e.to_string())?,
-                    p.display().to_string(),
-                )
+                (Case::load(&p)?, p.display().to_string())
             }
-            None => (
-                Case::from_str(s.text, s.file).map_err(|e| e.to_string())?,
-                s.file.to_string(),
-            ),
+            None => (Case::from_str(s.text, s.file)?, s.file.to_string()),
         };
         if case.name != s.name {
-            return Err(format!(
-                "{label}: case name `{}`, expected `{}`",
-                case.name, s.name
-            ));
+            return Err(PaperCasesError::Name {
+                label,
+                found: case.name,
+                expected: s.name,
+            });
         }
         out.push((case, label));
     }
@@ -210,7 +223,7 @@ pub fn run_paper(opts: &PaperOptions) -> Result<PaperReport, OutputError> {
                 .as_ref()
                 .map(|p| p.display().to_string())
                 .unwrap_or_else(|| "cases (compiled in)".into()),
-            message: m,
+            message: m.to_string(),
         })?;
     let start = Instant::now();
     let runs = run_cases(&cases, opts);

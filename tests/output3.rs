@@ -1,4 +1,4 @@
-//! The 3-D cell's outputs (`output::vtu3`, `figures3`, `movie3`) on the default quarter
+//! The 3-D cell's outputs (`output::vtu`, `cell_views`, `movie`) on the default quarter
 //! mesh: the ParaView file read back, the sections' areas against the balls', every figure
 //! and the GIF.
 
@@ -9,12 +9,12 @@ use std::sync::OnceLock;
 use cellsim::case::{self, Case};
 use cellsim::fem::tet10 as tet;
 use cellsim::fem::{Domain, Mesh3, TetRule};
-use cellsim::output::figures::ShapeStyleOptions;
-use cellsim::output::figures3::{
+use cellsim::output::cell_views::{
     self, Coloring, FIGURE_SIZE, Section, SectionShape, section_figure, surface_figure,
 };
-use cellsim::output::movie3::{FRAME_SIZE, MAX_FRAMES, Movie3, MovieView};
-use cellsim::output::vtu3::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu3};
+use cellsim::output::figures::ShapeStyleOptions;
+use cellsim::output::movie::{FRAME_SIZE, MAX_FRAMES, Movie3, MovieView};
+use cellsim::output::vtu::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu3};
 use cellsim::physics::{Lattice, Substrate, Substrate3};
 use cellsim::record::{Mesh3File, Snapshot3};
 use cellsim::scene;
@@ -397,7 +397,7 @@ fn section_figures_draw_the_cell_and_the_substrate() {
     let (w, h) = (900u32, 700u32);
     let mut buf = vec![0u8; 3 * (w * h) as usize];
     let area = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-    let view = figures3::section_view(&mf, &[&s], Section::Diagonal);
+    let view = cell_views::section_view(&mf, &[&s], Section::Diagonal);
     let opts = ShapeStyleOptions {
         title: "scale".into(),
         legend: false,
@@ -405,8 +405,9 @@ fn section_figures_draw_the_cell_and_the_substrate() {
         mesh_lines: false,
         gravity: None,
     };
-    let scale = figures3::draw_section(&area, &mf, &s.u, Section::Diagonal, view, &opts, &mut None)
-        .expect("draw");
+    let scale =
+        cell_views::draw_section(&area, &mf, &s.u, Section::Diagonal, view, &opts, &mut None)
+            .expect("draw");
     assert!(
         (scale.px_per_um_x - scale.px_per_um_y).abs() < 0.11,
         "{scale:?}"

@@ -704,7 +704,7 @@ fn comparison_uses_the_reported_table() {
     // A partial run has no final value, and says why.
     let partial = RunData::load(interrupted_copy("partial-values")).expect("partial");
     let e = paper::our_value(Quantity::StrainNucleus, &partial, None).expect_err("no end");
-    assert!(e.contains("stopped at t = "), "{e}");
+    assert!(e.to_string().contains("stopped at t = "), "{e}");
 
     let runs = vec![SceneOutcome {
         name: "pillars-push-pull".into(),

@@ -248,13 +248,20 @@ struct MaterialsRepr {
     beta_fraction: f64,
 }
 
-fn default_gamma() -> f64 {
-    Materials::default().gamma
+/// Functions giving the default of a field of a section (`name: Section.field`), for
+/// `#[serde(default = "name")]`.
+macro_rules! field_defaults {
+    ($($name:ident: $section:ident.$field:ident),+ $(,)?) => {
+        $(fn $name() -> f64 {
+            $section::default().$field
+        })+
+    };
 }
 
-fn default_beta_fraction() -> f64 {
-    Materials::default().beta_fraction
-}
+field_defaults!(
+    default_gamma: Materials.gamma,
+    default_beta_fraction: Materials.beta_fraction,
+);
 
 impl From<MaterialsRepr> for Materials {
     fn from(r: MaterialsRepr) -> Self {
@@ -481,27 +488,15 @@ impl Pillars {
     }
 }
 
-fn default_y_s() -> f64 {
-    Flat::default().y_s
-}
-fn default_width() -> f64 {
-    Pillars::default().width
-}
-fn default_spacing() -> f64 {
-    Pillars::default().spacing
-}
-fn default_height() -> f64 {
-    Pillars::default().height
-}
-fn default_first_center() -> f64 {
-    Pillars::default().first_center
-}
-fn default_q() -> f64 {
-    Pillars::default().q
-}
-fn default_gap() -> f64 {
-    Pillars::default().gap
-}
+field_defaults!(
+    default_y_s: Flat.y_s,
+    default_width: Pillars.width,
+    default_spacing: Pillars.spacing,
+    default_height: Pillars.height,
+    default_first_center: Pillars.first_center,
+    default_q: Pillars.q,
+    default_gap: Pillars.gap,
+);
 
 /// The substrate as written in a file: struct variants, so that a file says
 /// `Pillars(width: 8)` rather than `Pillars((width: 8))`.

@@ -22,8 +22,8 @@ use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::OutputError;
 use super::geometry::{Backdrop, Bounds, CellShape, Pt, Rect, substrate_floor};
+use super::{DrawError, OutputError};
 use crate::fem::Domain;
 use crate::physics::Phases;
 use crate::record::Observables;
@@ -322,7 +322,7 @@ const TIME_X_LABELS: u32 = 60;
 pub fn draw_time_plot<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     plot: &TimePlot,
-) -> Result<(), String> {
+) -> Result<(), DrawError> {
     draw_time_plot_on(area, plot, value_range(plot))
 }
 
@@ -332,8 +332,7 @@ pub fn draw_time_plot_on<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     plot: &TimePlot,
     range: (f64, f64),
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     let t_max = if plot.t_max > 0.0 { plot.t_max } else { 1.0 };
     // 3 % of room after the end, so marks at the end time are not cut.
     let t_axis_end = 1.03 * t_max;
@@ -344,11 +343,9 @@ pub fn draw_time_plot_on<DB: DrawingBackend>(
         draw_curve(&mut chart, c)?;
     }
     // The lines joining the paper's values to ours, under the marks.
-    chart
-        .draw_series(plot.links.iter().map(|&(t, a, b)| {
-            PathElement::new(vec![(t, a), (t, b)], RGBColor(90, 90, 90).stroke_width(2))
-        }))
-        .map_err(e)?;
+    chart.draw_series(plot.links.iter().map(|&(t, a, b)| {
+        PathElement::new(vec![(t, a), (t, b)], RGBColor(90, 90, 90).stroke_width(2))
+    }))?;
     for m in &plot.marks {
         draw_marks(&mut chart, m)?;
     }
@@ -363,8 +360,7 @@ fn time_chart<'a, DB: DrawingBackend>(
     y_desc: &str,
     t_axis_end: f64,
     (lo, hi): (f64, f64),
-) -> Result<Chart<'a, DB>, String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<Chart<'a, DB>, DrawError> {
     let mut builder = ChartBuilder::on(area);
     if !title.is_empty() {
         builder.caption(title, (FONT, 28));
@@ -374,8 +370,7 @@ fn time_chart<'a, DB: DrawingBackend>(
         .margin_right(44)
         .x_label_area_size(TIME_X_LABELS)
         .y_label_area_size(90)
-        .build_cartesian_2d(0.0..t_axis_end, lo..hi)
-        .map_err(e)?;
+        .build_cartesian_2d(0.0..t_axis_end, lo..hi)?;
     let fmt_t = |v: &f64| group_thousands(*v);
     chart
         .configure_mesh()
@@ -385,8 +380,7 @@ fn time_chart<'a, DB: DrawingBackend>(
         .axis_desc_style((FONT, 22))
         .label_style((FONT, 18))
         .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(e)?;
+        .draw()?;
     Ok(chart)
 }
 
@@ -396,29 +390,24 @@ fn draw_phases<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     plot: &TimePlot,
     (lo, hi): (f64, f64),
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     let grey = RGBColor(110, 110, 110);
     for (a, b, name) in phase_intervals(plot) {
         if a > 0.0 {
-            chart
-                .draw_series(DashedLineSeries::new(
-                    vec![(a, lo), (a, hi)],
-                    8,
-                    6,
-                    grey.stroke_width(2),
-                ))
-                .map_err(e)?;
+            chart.draw_series(DashedLineSeries::new(
+                vec![(a, lo), (a, hi)],
+                8,
+                6,
+                grey.stroke_width(2),
+            ))?;
         }
         let mid = 0.5 * (a + b);
         let style = anchored_text(18, HPos::Center, VPos::Top).color(&grey);
-        chart
-            .draw_series(std::iter::once(Text::new(
-                name,
-                (mid, hi - 0.01 * (hi - lo)),
-                style,
-            )))
-            .map_err(e)?;
+        chart.draw_series(std::iter::once(Text::new(
+            name,
+            (mid, hi - 0.01 * (hi - lo)),
+            style,
+        )))?;
     }
     Ok(())
 }
@@ -432,32 +421,27 @@ fn draw_notes<DB: DrawingBackend>(
     (lo, hi): (f64, f64),
     t_max: f64,
     t_axis_end: f64,
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     for (k, n) in notes.iter().enumerate() {
         let span = hi - lo;
         let y_text = hi - (0.055 + 0.09 * k as f64) * span;
         let y_line = y_text - 0.045 * span;
         let tick = 0.015 * span;
         let (a, b) = (n.from.max(0.0), n.to.min(t_axis_end));
-        chart
-            .draw_series(std::iter::once(PathElement::new(
-                vec![
-                    (a, y_line - tick),
-                    (a, y_line),
-                    (b, y_line),
-                    (b, y_line - tick),
-                ],
-                BLACK.stroke_width(2),
-            )))
-            .map_err(e)?;
-        chart
-            .draw_series(std::iter::once(Text::new(
-                n.text.clone(),
-                (a + 0.01 * t_max, y_text),
-                anchored_text(18, HPos::Left, VPos::Top),
-            )))
-            .map_err(e)?;
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![
+                (a, y_line - tick),
+                (a, y_line),
+                (b, y_line),
+                (b, y_line - tick),
+            ],
+            BLACK.stroke_width(2),
+        )))?;
+        chart.draw_series(std::iter::once(Text::new(
+            n.text.clone(),
+            (a + 0.01 * t_max, y_text),
+            anchored_text(18, HPos::Left, VPos::Top),
+        )))?;
     }
     Ok(())
 }
@@ -467,18 +451,13 @@ fn draw_notes<DB: DrawingBackend>(
 fn draw_curve<'a, DB: DrawingBackend + 'a>(
     chart: &mut Chart<'a, DB>,
     c: &Curve,
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     let style = c.color.stroke_width(3);
     let pts = c.points.iter().copied();
     let anno = match c.stroke {
-        Stroke::Solid => chart.draw_series(LineSeries::new(pts, style)).map_err(e)?,
-        Stroke::Dashed => chart
-            .draw_series(DashedLineSeries::new(pts, 14, 8, style))
-            .map_err(e)?,
-        Stroke::Dotted => chart
-            .draw_series(DashedLineSeries::new(pts, 3, 6, style))
-            .map_err(e)?,
+        Stroke::Solid => chart.draw_series(LineSeries::new(pts, style))?,
+        Stroke::Dashed => chart.draw_series(DashedLineSeries::new(pts, 14, 8, style))?,
+        Stroke::Dotted => chart.draw_series(DashedLineSeries::new(pts, 3, 6, style))?,
     };
     if c.label.is_empty() {
         return Ok(());
@@ -504,8 +483,7 @@ fn draw_curve<'a, DB: DrawingBackend + 'a>(
 fn draw_marks<'a, DB: DrawingBackend + 'a>(
     chart: &mut Chart<'a, DB>,
     m: &Marks,
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     let style = if m.filled {
         m.color.filled()
     } else {
@@ -513,16 +491,14 @@ fn draw_marks<'a, DB: DrawingBackend + 'a>(
     };
     let r = m.radius;
     let anno = match m.shape {
-        MarkShape::Circle => chart
-            .draw_series(m.points.iter().map(|&p| Circle::new(p, r, style)))
-            .map_err(e)?,
-        MarkShape::Square => chart
-            .draw_series(
-                m.points
-                    .iter()
-                    .map(|&p| EmptyElement::at(p) + Rectangle::new([(-r, -r), (r, r)], style)),
-            )
-            .map_err(e)?,
+        MarkShape::Circle => {
+            chart.draw_series(m.points.iter().map(|&p| Circle::new(p, r, style)))?
+        }
+        MarkShape::Square => chart.draw_series(
+            m.points
+                .iter()
+                .map(|&p| EmptyElement::at(p) + Rectangle::new([(-r, -r), (r, r)], style)),
+        )?,
     };
     if m.label.is_empty() {
         return Ok(());
@@ -544,8 +520,7 @@ fn draw_marks<'a, DB: DrawingBackend + 'a>(
 fn draw_time_legend<'a, DB: DrawingBackend + 'a>(
     chart: &mut Chart<'a, DB>,
     plot: &TimePlot,
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     // Upper legends start below the row of phase names and the notes.
     let position = match plot.legend {
         SeriesLabelPosition::UpperLeft => {
@@ -561,8 +536,7 @@ fn draw_time_legend<'a, DB: DrawingBackend + 'a>(
         .label_font((FONT, 18))
         .background_style(WHITE.mix(0.9))
         .border_style(BLACK)
-        .draw()
-        .map_err(e)?;
+        .draw()?;
     Ok(())
 }
 
@@ -815,7 +789,7 @@ pub fn displacement_figure(
         plot.notes.len(),
     );
     let root = BitMapBackend::new(path, TIME_SIZE).into_drawing_area();
-    let err = |x: String| OutputError::draw(path, x);
+    let err = |x: DrawError| OutputError::draw(path, x);
     root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
     let root = root
         .titled(
@@ -1037,7 +1011,7 @@ fn draw_maxima_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     columns: &[MaximumColumn],
     range: (f64, f64),
-) -> Result<(), String> {
+) -> Result<(), DrawError> {
     let mut chart = maxima_chart(area, columns, range)?;
     draw_maxima_key(&mut chart, columns.len().max(1), range)?;
     for (k, col) in columns.iter().enumerate() {
@@ -1052,8 +1026,7 @@ fn maxima_chart<'a, DB: DrawingBackend>(
     area: &'a DrawingArea<DB, Shift>,
     columns: &[MaximumColumn],
     (lo, hi): (f64, f64),
-) -> Result<Chart<'a, DB>, String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<Chart<'a, DB>, DrawError> {
     let n = columns.len().max(1);
     let mut chart = ChartBuilder::on(area)
         .margin(TIME_MARGIN)
@@ -1061,8 +1034,7 @@ fn maxima_chart<'a, DB: DrawingBackend>(
         .margin_right(12)
         .x_label_area_size(TIME_X_LABELS)
         .y_label_area_size(0)
-        .build_cartesian_2d(0.0..n as f64, lo..hi)
-        .map_err(e)?;
+        .build_cartesian_2d(0.0..n as f64, lo..hi)?;
     let names: Vec<String> = columns.iter().map(|c| c.name.clone()).collect();
     let fmt = |x: &f64| column_label(&names, *x);
     chart
@@ -1075,8 +1047,7 @@ fn maxima_chart<'a, DB: DrawingBackend>(
         .axis_desc_style((FONT, 22))
         .label_style((FONT, 18))
         .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(e)?;
+        .draw()?;
     Ok(chart)
 }
 
@@ -1120,8 +1091,7 @@ fn draw_maxima_key<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     n: usize,
     (lo, hi): (f64, f64),
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     let grey = RGBColor(90, 90, 90);
     let span = hi - lo;
     let x_text = 0.12 * n as f64;
@@ -1135,23 +1105,19 @@ fn draw_maxima_key<DB: DrawingBackend>(
         };
         let y_mark = y - 0.018 * span;
         match shape {
-            MarkShape::Circle => chart
-                .draw_series(std::iter::once(Circle::new((x_mark, y_mark), 6, style)))
-                .map_err(e)?,
-            MarkShape::Square => chart
-                .draw_series(std::iter::once(
-                    EmptyElement::at((x_mark, y_mark)) + Rectangle::new([(-5, -5), (5, 5)], style),
-                ))
-                .map_err(e)?,
+            MarkShape::Circle => {
+                chart.draw_series(std::iter::once(Circle::new((x_mark, y_mark), 6, style)))?
+            }
+            MarkShape::Square => chart.draw_series(std::iter::once(
+                EmptyElement::at((x_mark, y_mark)) + Rectangle::new([(-5, -5), (5, 5)], style),
+            ))?,
         };
         for (line, text) in [a, b].iter().enumerate() {
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    text.to_string(),
-                    (x_text, y - 0.036 * line as f64 * span),
-                    anchored_text(16, HPos::Left, VPos::Top).color(&grey),
-                )))
-                .map_err(e)?;
+            chart.draw_series(std::iter::once(Text::new(
+                text.to_string(),
+                (x_text, y - 0.036 * line as f64 * span),
+                anchored_text(16, HPos::Left, VPos::Top).color(&grey),
+            )))?;
         }
     }
     Ok(())
@@ -1163,50 +1129,39 @@ fn draw_maximum_column<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     k: usize,
     col: &MaximumColumn,
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     let m = col.compared;
     let color = &col.color;
     let x = k as f64 + 0.2;
-    chart
-        .draw_series(std::iter::once(PathElement::new(
-            vec![(x, m.paper), (x, m.ours)],
-            RGBColor(90, 90, 90).stroke_width(2),
-        )))
-        .map_err(e)?;
-    chart
-        .draw_series([
-            Circle::new((x, m.paper), 8, BLACK.stroke_width(3)),
-            Circle::new((x, m.ours), 6, color.filled()),
-        ])
-        .map_err(e)?;
+    chart.draw_series(std::iter::once(PathElement::new(
+        vec![(x, m.paper), (x, m.ours)],
+        RGBColor(90, 90, 90).stroke_width(2),
+    )))?;
+    chart.draw_series([
+        Circle::new((x, m.paper), 8, BLACK.stroke_width(3)),
+        Circle::new((x, m.ours), 6, color.filled()),
+    ])?;
     // Values beside the marks, the upper one above, the lower one below.
     let (up, down) = if m.paper >= m.ours {
         ((m.paper, &BLACK), (m.ours, color))
     } else {
         ((m.ours, color), (m.paper, &BLACK))
     };
-    chart
-        .draw_series([
-            value_text(up.0, x + 0.08, up.1, VPos::Bottom),
-            value_text(down.0, x + 0.08, down.1, VPos::Top),
-        ])
-        .map_err(e)?;
+    chart.draw_series([
+        value_text(up.0, x + 0.08, up.1, VPos::Bottom),
+        value_text(down.0, x + 0.08, down.1, VPos::Top),
+    ])?;
     if let Some(v) = col.top {
         let xs = k as f64 + 0.66;
-        chart
-            .draw_series(std::iter::once(
-                EmptyElement::at((xs, v)) + Rectangle::new([(-5, -5), (5, 5)], color.filled()),
-            ))
-            .map_err(e)?;
-        chart
-            .draw_series(std::iter::once(value_text(
-                v,
-                xs + 0.07,
-                color,
-                VPos::Center,
-            )))
-            .map_err(e)?;
+        chart.draw_series(std::iter::once(
+            EmptyElement::at((xs, v)) + Rectangle::new([(-5, -5), (5, 5)], color.filled()),
+        ))?;
+        chart.draw_series(std::iter::once(value_text(
+            v,
+            xs + 0.07,
+            color,
+            VPos::Center,
+        )))?;
     }
     Ok(())
 }
@@ -1356,7 +1311,7 @@ pub fn upside_down_figure(
         legend: SeriesLabelPosition::UpperLeft,
     };
     let root = BitMapBackend::new(path, UPSIDE_DOWN_SIZE).into_drawing_area();
-    let err = |x: String| OutputError::draw(path, x);
+    let err = |x: DrawError| OutputError::draw(path, x);
     root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
     let (a, b) = root.split_vertically(UPSIDE_DOWN_SIZE.1 * 3 / 5);
     draw_time_plot(&a, &top).map_err(err)?;
@@ -1388,7 +1343,7 @@ pub fn strain_bars_figure(
     paper_label: &str,
 ) -> Result<(), OutputError> {
     let root = BitMapBackend::new(path, TIME_SIZE).into_drawing_area();
-    let derr = |x: String| OutputError::draw(path, x);
+    let derr = |x: DrawError| OutputError::draw(path, x);
     root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
     let root = root
         .titled(
@@ -1453,8 +1408,7 @@ fn draw_bars<DB: DrawingBackend>(
     top: f64,
     ours_label: &str,
     paper_label: &str,
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     let n = bars.len().max(1);
     let names: Vec<String> = bars.iter().map(|b| b.scene.clone()).collect();
     let mut chart = ChartBuilder::on(area)
@@ -1462,8 +1416,7 @@ fn draw_bars<DB: DrawingBackend>(
         .margin(16)
         .x_label_area_size(50)
         .y_label_area_size(80)
-        .build_cartesian_2d(0.0..n as f64, 0.0..top)
-        .map_err(e)?;
+        .build_cartesian_2d(0.0..n as f64, 0.0..top)?;
     let fmt = |x: &f64| column_label(&names, *x);
     chart
         .configure_mesh()
@@ -1474,8 +1427,7 @@ fn draw_bars<DB: DrawingBackend>(
         .axis_desc_style((FONT, 22))
         .label_style((FONT, 20))
         .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(e)?;
+        .draw()?;
     let paper_color = RGBColor(170, 170, 170);
     let ours_color = RGBColor(31, 119, 180);
     let mut paper_rects = Vec::new();
@@ -1503,18 +1455,15 @@ fn draw_bars<DB: DrawingBackend>(
         (&ours_rects, ours_color, ours_label),
     ] {
         chart
-            .draw_series(rects.iter().map(|r| Rectangle::new(*r, color.filled())))
-            .map_err(e)?
+            .draw_series(rects.iter().map(|r| Rectangle::new(*r, color.filled())))?
             .label(label)
             .legend(move |(x, y)| Rectangle::new([(x, y - 8), (x + 24, y + 8)], color.filled()));
     }
-    chart
-        .draw_series(
-            texts
-                .into_iter()
-                .map(|(s, p)| Text::new(s, p, anchored_text(18, HPos::Center, VPos::Bottom))),
-        )
-        .map_err(e)?;
+    chart.draw_series(
+        texts
+            .into_iter()
+            .map(|(s, p)| Text::new(s, p, anchored_text(18, HPos::Center, VPos::Bottom))),
+    )?;
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::UpperLeft)
@@ -1522,8 +1471,7 @@ fn draw_bars<DB: DrawingBackend>(
         .label_font((FONT, 18))
         .background_style(WHITE.mix(0.9))
         .border_style(BLACK)
-        .draw()
-        .map_err(e)?;
+        .draw()?;
     Ok(())
 }
 
@@ -1641,16 +1589,20 @@ fn xy(points: &[Pt]) -> Vec<(f64, f64)> {
 pub(crate) fn check_displacements<const D: usize>(
     u: &[[f64; D]],
     nodes: usize,
-) -> Result<(), String> {
+) -> Result<(), DrawError> {
     if u.len() != nodes {
-        return Err(format!("{} displacements for {} nodes", u.len(), nodes));
+        return Err(DrawError(format!(
+            "{} displacements for {} nodes",
+            u.len(),
+            nodes
+        )));
     }
     Ok(())
 }
 
 /// The substrate and the fibronectin layer as [`draw_in_plane`] draws them, computed for
 /// one view: the 2-D [`Backdrop`] and a 3-D section's
-/// [`super::figures3::SectionBackdrop`].
+/// [`super::cell_views::SectionBackdrop`].
 pub(crate) trait PlaneBackdrop {
     /// The fibronectin layer as column rectangles.
     fn layer(&self) -> &[Rect];
@@ -1684,7 +1636,7 @@ impl PlaneBackdrop for Backdrop {
 }
 
 /// What [`draw_in_plane`] draws: the deformed full cell in a drawing plane, borrowed from
-/// the 2-D [`CellShape`] or a 3-D [`super::figures3::SectionShape`] (mirrored), and what
+/// the 2-D [`CellShape`] or a 3-D [`super::cell_views::SectionShape`] (mirrored), and what
 /// else differs between the two drawings.
 pub(crate) struct PlaneDrawing<'a> {
     /// Label of the horizontal axis.
@@ -1706,7 +1658,7 @@ pub(crate) struct PlaneDrawing<'a> {
 /// axis so 1 µm has the same length in pixels on both. The substrate drawing is
 /// `backdrop_for(cached, final view [x0, x1, y0, y1], plotting area width in pixels)`,
 /// `cached` taken from `backdrop`, which keeps the one drawn. What [`draw_shape`] and
-/// [`super::figures3::draw_section`] share.
+/// [`super::cell_views::draw_section`] share.
 pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
     area: &DrawingArea<DB, Shift>,
     cell: &PlaneDrawing<'_>,
@@ -1714,12 +1666,9 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
     opts: &ShapeStyleOptions,
     backdrop: &mut Option<B>,
     backdrop_for: impl FnOnce(Option<B>, [f64; 4], usize) -> B,
-) -> Result<ShapeScale, String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<ShapeScale, DrawError> {
     let fs = opts.font as f64;
-    let area = area
-        .titled(&opts.title, (FONT, opts.font as i32))
-        .map_err(e)?;
+    let area = area.titled(&opts.title, (FONT, opts.font as i32))?;
     let (mut chart, key, columns) = equal_aspect_chart(&area, view, cell.x_label, fs)?;
     // Substrate and fibronectin layer, one strip per pixel column (computed once per
     // view: a movie reuses it for every frame).
@@ -1736,12 +1685,11 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
                 .markers
                 .iter()
                 .map(|p| Circle::new((p[0], p[1]), 4, BLACK.filled())),
-        )
-        .map_err(e)?
+        )?
         .label("p_t, c, p_b")
         .legend(|(x, y)| Circle::new((x + 11, y), 4, BLACK.filled()));
     if let Some(g) = &opts.gravity {
-        draw_gravity(&chart.plotting_area().strip_coord_spec(), g, fs).map_err(e)?;
+        draw_gravity(&chart.plotting_area().strip_coord_spec(), g, fs)?;
     }
     if opts.legend {
         chart
@@ -1751,8 +1699,7 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
             .label_font((FONT, (0.65 * fs) as i32))
             .background_style(WHITE.mix(0.9))
             .border_style(BLACK)
-            .draw()
-            .map_err(e)?;
+            .draw()?;
     }
     let o = chart.backend_coord(&(0.0, 0.0));
     let px = chart.backend_coord(&(10.0, 0.0));
@@ -1772,8 +1719,7 @@ fn equal_aspect_chart<'a, DB: DrawingBackend>(
     view: Bounds,
     x_label: &str,
     fs: f64,
-) -> Result<(Chart<'a, DB>, [f64; 4], usize), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(Chart<'a, DB>, [f64; 4], usize), DrawError> {
     let label_x = (2.6 * fs) as u32;
     let label_y = (3.2 * fs) as u32;
     let margin = (0.6 * fs) as u32;
@@ -1783,8 +1729,7 @@ fn equal_aspect_chart<'a, DB: DrawingBackend>(
             .margin(margin)
             .x_label_area_size(label_x)
             .y_label_area_size(label_y)
-            .build_cartesian_2d(view.x_min..view.x_max, view.y_min..view.y_max)
-            .map_err(e)?;
+            .build_cartesian_2d(view.x_min..view.x_max, view.y_min..view.y_max)?;
         chart.plotting_area().dim_in_pixel()
     };
     let (w, h) = (view.x_max - view.x_min, view.y_max - view.y_min);
@@ -1799,8 +1744,7 @@ fn equal_aspect_chart<'a, DB: DrawingBackend>(
         .margin(margin)
         .x_label_area_size(label_x)
         .y_label_area_size(label_y)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(e)?;
+        .build_cartesian_2d(x0..x1, y0..y1)?;
     chart
         .configure_mesh()
         .x_desc(x_label)
@@ -1809,8 +1753,7 @@ fn equal_aspect_chart<'a, DB: DrawingBackend>(
         .label_style((FONT, (0.65 * fs) as i32))
         .light_line_style(RGBColor(238, 238, 238))
         .bold_line_style(RGBColor(215, 215, 215))
-        .draw()
-        .map_err(e)?;
+        .draw()?;
     Ok((chart, [x0, x1, y0, y1], pw as usize))
 }
 
@@ -1825,13 +1768,11 @@ fn draw_backdrop<DB: DrawingBackend, B: PlaneBackdrop>(
     chart: &mut Chart<'_, DB>,
     back: &B,
     cell: &PlaneDrawing<'_>,
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     let rect = |r: &Rect, c: RGBColor| Rectangle::new([(r[0], r[3]), (r[1], r[2])], c.filled());
     if cell.layer {
         chart
-            .draw_series(back.layer().iter().map(|r| rect(r, LAYER)))
-            .map_err(e)?
+            .draw_series(back.layer().iter().map(|r| rect(r, LAYER)))?
             .label("fibronectin layer")
             .legend(|p| swatch(LAYER, p));
         // The layer's edge under the cell: the cell hides it where it lies in the layer.
@@ -1839,14 +1780,12 @@ fn draw_backdrop<DB: DrawingBackend, B: PlaneBackdrop>(
     }
     if !back.foot().is_empty() {
         chart
-            .draw_series(back.foot().iter().map(|r| rect(r, FOOT)))
-            .map_err(e)?
+            .draw_series(back.foot().iter().map(|r| rect(r, FOOT)))?
             .label("pillar foot (not substrate in the model)")
             .legend(|p| swatch(FOOT, p));
     }
     chart
-        .draw_series(back.substrate().iter().map(|r| rect(r, SUBSTRATE)))
-        .map_err(e)?
+        .draw_series(back.substrate().iter().map(|r| rect(r, SUBSTRATE)))?
         .label(cell.substrate_label.as_str())
         .legend(|p| swatch(SUBSTRATE, p));
     Ok(())
@@ -1858,8 +1797,7 @@ fn draw_cell_fills<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     cell: &PlaneDrawing<'_>,
     mesh_lines: bool,
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     for d in Domain::ALL {
         let color = domain_color(d);
         let edge = darker(color, 0.82);
@@ -1871,8 +1809,7 @@ fn draw_cell_fills<DB: DrawingBackend>(
             .map(|(_, p)| p)
             .collect();
         chart
-            .draw_series(polys.iter().map(|p| Polygon::new(xy(p), color.filled())))
-            .map_err(e)?
+            .draw_series(polys.iter().map(|p| Polygon::new(xy(p), color.filled())))?
             .label(d.to_string())
             .legend(move |p| swatch(color, p));
         // Each piece's outline closes the hairline gaps between neighbouring fills; in the
@@ -1882,24 +1819,20 @@ fn draw_cell_fills<DB: DrawingBackend>(
         } else {
             color
         };
-        chart
-            .draw_series(polys.iter().map(|p| {
-                let mut v = xy(p);
-                if let Some(f) = v.first().copied() {
-                    v.push(f);
-                }
-                PathElement::new(v, line_color.stroke_width(1))
-            }))
-            .map_err(e)?;
+        chart.draw_series(polys.iter().map(|p| {
+            let mut v = xy(p);
+            if let Some(f) = v.first().copied() {
+                v.push(f);
+            }
+            PathElement::new(v, line_color.stroke_width(1))
+        }))?;
         if let (true, Some(lines)) = (mesh_lines, cell.mesh_lines) {
-            chart
-                .draw_series(
-                    lines
-                        .iter()
-                        .filter(|(dd, _)| *dd == d)
-                        .map(|(_, l)| PathElement::new(xy(l), edge.stroke_width(1))),
-                )
-                .map_err(e)?;
+            chart.draw_series(
+                lines
+                    .iter()
+                    .filter(|(dd, _)| *dd == d)
+                    .map(|(_, l)| PathElement::new(xy(l), edge.stroke_width(1))),
+            )?;
         }
     }
     Ok(())
@@ -1910,7 +1843,7 @@ fn draw_cell_fills<DB: DrawingBackend>(
 fn draw_cell_lines<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     shape: &CellShape,
-) -> Result<(), String> {
+) -> Result<(), DrawError> {
     draw_paths(
         chart,
         &shape.interfaces,
@@ -1939,14 +1872,14 @@ fn draw_paths<'c, 'a, DB: DrawingBackend, L: AsRef<[Pt]>>(
     chart: &'c mut Chart<'a, DB>,
     lines: &[L],
     style: ShapeStyle,
-) -> Result<&'c mut SeriesAnno<'a, DB>, String> {
+) -> Result<&'c mut SeriesAnno<'a, DB>, DrawError> {
     chart
         .draw_series(
             lines
                 .iter()
                 .map(|l| PathElement::new(xy(l.as_ref()), style)),
         )
-        .map_err(|x| x.to_string())
+        .map_err(DrawError::from)
 }
 
 /// Draws the deformed full cell of `mesh` displaced by `u` into `area` over `view`, with
@@ -1960,7 +1893,7 @@ pub fn draw_shape<DB: DrawingBackend>(
     view: Bounds,
     opts: &ShapeStyleOptions,
     backdrop: &mut Option<Backdrop>,
-) -> Result<ShapeScale, String> {
+) -> Result<ShapeScale, DrawError> {
     check_displacements(u, mesh.nodes.len())?;
     // The cell, mirrored to the full cell.
     let shape = CellShape::new(mesh, u).mirrored();
@@ -2128,7 +2061,7 @@ pub fn compare_runs(runs: &[&RunData], out: &Path) -> Result<Vec<PathBuf>, Outpu
 
 /// All of one run's figures into `out`: `contact-radius.png` (both frames), `displacement.png`
 /// (p_t, c, p_b and the nucleus's lowest point), `strain.png` (mean ‖E‖ over time) and `shape-<phase>.png` for each
-/// state file written; for a 3-D run, [`super::figures3::plot_run3`]'s instead of the shapes. Works on partial runs (fewer rows, missing states). Returns the
+/// state file written; for a 3-D run, [`super::cell_views::plot_run3`]'s instead of the shapes. Works on partial runs (fewer rows, missing states). Returns the
 /// files written.
 pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> {
     super::create_dir(out)?;
@@ -2197,7 +2130,7 @@ pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> 
         written.push(p);
     }
     if let Some(r3) = &run.three_d {
-        written.extend(super::figures3::plot_run3(run, r3, out)?);
+        written.extend(super::cell_views::plot_run3(run, r3, out)?);
     }
     Ok(written)
 }

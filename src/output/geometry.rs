@@ -110,7 +110,7 @@ impl ActiveRegion {
 }
 
 /// The deformed half cell, ready to draw; in 3-D, a section of it
-/// ([`super::figures3::SectionShape`]).
+/// ([`super::cell_views::SectionShape`]).
 #[derive(Debug, Clone, Default)]
 pub struct CellShape {
     /// Each element's domain and deformed boundary polygon.

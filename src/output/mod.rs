@@ -13,28 +13,26 @@
 //! - [`geometry`]: the deformed cell as polygons (curved P2 edges), active-region outlines,
 //!   substrate and fibronectin-layer profiles — pure geometry, no drawing;
 //! - [`figures`]: the PNG figures (time series, strain bars, shapes);
-//! - [`vtu`]: `.vtu` files (quadratic triangles) and the `.pvd` collection;
-//! - [`movie`]: the deformation as an animated GIF;
-//! - [`vtu3`], [`figures3`], [`movie3`]: the same for the 3-D quarter cell (a
-//!   [`crate::record::Mesh3File`] and its [`crate::record::Snapshot3`]s): ParaView files of
-//!   quadratic tetrahedra, sections through the axis and a shaded view of the whole cell,
-//!   the GIF;
+//! - [`cell_views`]: the figures of the 3-D quarter cell (a [`crate::record::Mesh3File`]
+//!   and its [`crate::record::Snapshot3`]s): sections through the axis and a shaded view
+//!   of the whole cell;
+//! - [`vtu`]: `.vtu` files (quadratic triangles or tetrahedra) and the `.pvd` collection,
+//!   for either model;
+//! - [`movie`]: the deformation as an animated GIF, for either model;
 //! - [`snapshot`]: what the run loop hands over at each output time, and the writer that
 //!   feeds [`vtu`] and [`movie`];
 //! - [`paper`]: `cellsim paper` — the five scenes, the paper's reported values and the
 //!   comparison table;
 //! - [`table`]: `cellsim table` — a markdown row per run from its summary.
 
+pub mod cell_views;
 pub mod figures;
-pub mod figures3;
 pub mod geometry;
 pub mod movie;
-pub mod movie3;
 pub mod paper;
 pub mod snapshot;
 pub mod table;
 pub mod vtu;
-pub mod vtu3;
 
 pub use crate::record::RunData;
 pub use snapshot::{FrameSink, SnapshotOptions, SnapshotWriter, SnapshotWriter3, SnapshotWriterOf};
@@ -88,6 +86,21 @@ impl OutputError {
             path: path.display().to_string(),
             message: e.to_string(),
         }
+    }
+}
+
+/// Why a figure could not be drawn into its drawing area: the backend's message (plotters'
+/// errors are generic over the backend, so the message is what is kept) or a mismatch
+/// between the state drawn and its mesh.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct DrawError(pub String);
+
+impl<E: std::error::Error + Send + Sync> From<plotters::drawing::DrawingAreaErrorKind<E>>
+    for DrawError
+{
+    fn from(e: plotters::drawing::DrawingAreaErrorKind<E>) -> Self {
+        DrawError(e.to_string())
     }
 }
 

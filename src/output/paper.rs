@@ -41,33 +41,24 @@ pub struct Scene {
     pub text: &'static str,
 }
 
+/// The [`Scene`] named `name`: its case file `cases/<name>.ron`, compiled in.
+macro_rules! scene {
+    ($name:literal) => {
+        Scene {
+            name: $name,
+            file: concat!("cases/", $name, ".ron"),
+            text: include_str!(concat!("../../cases/", $name, ".ron")),
+        }
+    };
+}
+
 /// The five scenes of MODEL.md §7, in the paper's order.
 pub const SCENES: [Scene; 5] = [
-    Scene {
-        name: "flat",
-        file: "cases/flat.ron",
-        text: include_str!("../../cases/flat.ron"),
-    },
-    Scene {
-        name: "pillars-push",
-        file: "cases/pillars-push.ron",
-        text: include_str!("../../cases/pillars-push.ron"),
-    },
-    Scene {
-        name: "pillars-pull",
-        file: "cases/pillars-pull.ron",
-        text: include_str!("../../cases/pillars-pull.ron"),
-    },
-    Scene {
-        name: "pillars-push-pull",
-        file: "cases/pillars-push-pull.ron",
-        text: include_str!("../../cases/pillars-push-pull.ron"),
-    },
-    Scene {
-        name: "upside-down",
-        file: "cases/upside-down.ron",
-        text: include_str!("../../cases/upside-down.ron"),
-    },
+    scene!("flat"),
+    scene!("pillars-push"),
+    scene!("pillars-pull"),
+    scene!("pillars-push-pull"),
+    scene!("upside-down"),
 ];
 
 /// Name of the control run of the upside-down comparison.
@@ -386,10 +377,38 @@ pub fn cytoplasm_alone(o: &Observables, a_cp: f64, a_m: f64) -> f64 {
     (o.strain_cytoplasm * (a_cp + a_m) - o.strain_membrane * a_m) / a_cp
 }
 
+/// Why a run's files give no value of a reported quantity.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum NoValue {
+    /// The run stopped before the time the value is taken at.
+    #[error("the run stopped at t = {} s, before t = {} s", fmt_num(*.stopped, 0), fmt_num(*.needed, 0))]
+    Stopped {
+        /// The run's last time [s].
+        stopped: f64,
+        /// The time the value is taken at [s].
+        needed: f64,
+    },
+    /// The measure asked for a largest displacement is not a displacement.
+    #[error("not a displacement measure")]
+    NotADisplacement,
+    /// The run has no finite row.
+    #[error("no rows")]
+    NoRows,
+    /// No control run (for the upside-down difference).
+    #[error("no control run")]
+    NoControl,
+    /// The control run stopped before the time the value is taken at.
+    #[error("control did not reach t = {} s", fmt_num(*.0, 0))]
+    ControlStopped(f64),
+    /// The scene was not run.
+    #[error("no run")]
+    NoRun,
+}
+
 /// Our value of `q` from a run's files with the measure the comparison uses
 /// ([`Quantity::measures`]), or why there is none. `control` is needed for
 /// [`Quantity::UpsideDownDifference`].
-pub fn our_value(q: Quantity, run: &RunData, control: Option<&RunData>) -> Result<f64, String> {
+pub fn our_value(q: Quantity, run: &RunData, control: Option<&RunData>) -> Result<f64, NoValue> {
     measure_value(q, q.measures().0, run, control)
 }
 
@@ -400,15 +419,12 @@ pub fn measure_value(
     m: Measure,
     run: &RunData,
     control: Option<&RunData>,
-) -> Result<f64, String> {
+) -> Result<f64, NoValue> {
     let [tg, tas, _, t_end] = run.mesh.phase_times;
     let at = |t: f64| {
-        run.at(t).ok_or_else(|| {
-            format!(
-                "the run stopped at t = {} s, before t = {} s",
-                fmt_num(run.t_last(), 0),
-                fmt_num(t, 0)
-            )
+        run.at(t).ok_or_else(|| NoValue::Stopped {
+            stopped: run.t_last(),
+            needed: t,
         })
     };
     let time = |w: When| match w {
@@ -421,19 +437,15 @@ pub fn measure_value(
         Quantity::ContactRadius(w) => Ok(value(&at(time(w))?)),
         Quantity::NucleusDisplacement(When::End) => {
             at(t_end)?;
-            let uy = m.uy().ok_or("not a displacement measure")?;
-            lowest(run, uy)
-                .map(|(_, v)| -v)
-                .ok_or_else(|| "no rows".to_string())
+            let uy = m.uy().ok_or(NoValue::NotADisplacement)?;
+            lowest(run, uy).map(|(_, v)| -v).ok_or(NoValue::NoRows)
         }
         Quantity::NucleusDisplacement(w) => Ok(-value(&at(time(w))?)),
         Quantity::StrainNucleus | Quantity::StrainCytoplasm => Ok(value(&at(t_end)?)),
         Quantity::UpsideDownDifference => {
-            let c = control.ok_or("no control run")?;
+            let c = control.ok_or(NoValue::NoControl)?;
             let mine = at(t_end)?;
-            let theirs = c
-                .at(t_end)
-                .ok_or_else(|| format!("control did not reach t = {} s", fmt_num(t_end, 0)))?;
+            let theirs = c.at(t_end).ok_or(NoValue::ControlStopped(t_end))?;
             Ok((value(&mine) - m.in_row(&theirs, &c.mesh)).abs())
         }
     }
@@ -837,7 +849,7 @@ pub fn comparison_markdown(runs: &[SceneOutcome], data: &[(String, RunData)]) ->
         let (primary, others) = r.quantity.measures();
         let value = |m: Measure| match get(r.scene) {
             Some(run) => measure_value(r.quantity, m, run, get(CONTROL)),
-            None => Err("no run".into()),
+            None => Err(NoValue::NoRun),
         };
         let diff = |v: f64| format!("{:+.1} %", 100.0 * (v - r.value) / r.value);
         let (ours_s, diff_s) = match value(primary) {

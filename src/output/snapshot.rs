@@ -9,9 +9,9 @@ use std::path::{Path, PathBuf};
 
 use super::OutputError;
 use super::movie::Movie;
-use super::movie3::Movie3;
+use super::movie::Movie3;
 use super::vtu::VtuSeries;
-use super::vtu3::VtuSeries3;
+use super::vtu::VtuSeries3;
 use crate::record::{Mesh3File, MeshFile, Snapshot, Snapshot3};
 
 /// Which per-output-time files a run writes besides its CSV row.
@@ -112,7 +112,7 @@ pub struct SnapshotWriterOf<S, V, M> {
 /// The writer of the half-plane models.
 pub type SnapshotWriter = SnapshotWriterOf<Snapshot, VtuSeries, Movie>;
 /// The writer of the 3-D model: quadratic tetrahedra and the section z = 0
-/// ([`super::vtu3`], [`super::movie3`]).
+/// ([`super::vtu`], [`super::movie`]).
 pub type SnapshotWriter3 = SnapshotWriterOf<Snapshot3, VtuSeries3, Movie3>;
 
 /// The GIF of the run `name` in `out`.

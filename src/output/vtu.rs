@@ -1,7 +1,7 @@
-//! ParaView output: one `.vtu` (VTK XML unstructured grid) per output time and a `.pvd`
+//! ParaView output of either model: one `.vtu` (VTK XML unstructured grid) per output time and a `.pvd`
 //! collection that lists them with their times, written through vtkio.
 //!
-//! Each file holds the **reference** mesh — points (X, Y, 0) in µm, the six-node P2
+//! **The 2-D cell.** Each file holds the **reference** mesh — points (X, Y, 0) in µm, the six-node P2
 //! triangles as VTK quadratic triangles (cell type 22, whose node order — three corners
 //! counter-clockwise, then the mid-sides of edges 0–1, 1–2, 2–0 — is ours) — with
 //! - point data `displacement` (u_x, u_y, 0) [µm] (ParaView: *Warp By Vector* on it shows
@@ -12,6 +12,23 @@
 //!
 //! The `.pvd` is rewritten after each file, so it lists every file written even when the
 //! run stops early.
+//!
+//! **The 3-D quarter cell.** Each file holds the **reference** quarter mesh — points (X, Y, Z) in µm, the ten-node
+//! tetrahedra as VTK quadratic tetrahedra (cell type 24) — with the arrays of the 2-D file
+//! under the same names, so a ParaView state made for a 2-D run works on a 3-D one:
+//! - point data `displacement` (u_x, u_y, u_z) [µm] (*Warp By Vector* on it shows the
+//!   deformed cell; *Reflect* about x = 0 and then z = 0 gives the whole cell),
+//!   `velocity` [µm/s] (the v unknowns with inertia, u̇ without), `mu_as` [pN/µm³] (0 off
+//!   the membrane, where it is not an unknown, as in 2-D);
+//! - cell data `domain` (0 nucleus, 1 cytoplasm, 2 membrane), `mean_E_norm` (the element's
+//!   reference-volume mean of ‖E‖_F) and `det_F` (its mean det F).
+//!
+//! **Node order.** The mesh is in gmsh's order ([`crate::fem::tet10`]): vertices 0–3, then
+//! the mid-edge nodes of (0,1), (1,2), (0,2), (0,3), (2,3), (1,3). VTK's quadratic
+//! tetrahedron has the same vertices and the mid-edge nodes of (0,1), (1,2), (2,0), (0,3),
+//! (1,3), (2,3): gmsh's nodes 8 and 9 are swapped ([`GMSH_OF_VTK`]). Both take a
+//! tetrahedron as positive when vertex 3 lies on the side of the face (0, 1, 2) its
+//! right-hand normal points to, so the orientation carries over unchanged.
 
 use std::path::{Path, PathBuf};
 
@@ -22,11 +39,47 @@ use vtkio::model::{
 
 use super::OutputError;
 use crate::fem::Domain;
-use crate::record::MeshFile;
-use crate::record::Snapshot;
+use crate::record::{Mesh3File, MeshFile, Snapshot, Snapshot3, Timed};
 
 /// The VTK cell type of a six-node triangle.
 pub const QUADRATIC_TRIANGLE: u8 = 22;
+
+/// The VTK cell type of a ten-node tetrahedron (VTK_QUADRATIC_TETRA).
+pub const QUADRATIC_TETRA: u8 = 24;
+
+/// VTK's local node `a` of a quadratic tetrahedron is gmsh's local node `GMSH_OF_VTK[a]`.
+pub const GMSH_OF_VTK: [usize; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 9, 8];
+
+/// Why a snapshot's arrays do not fit its mesh.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SnapshotMismatch {
+    /// `u`, `v` or `mu_as` has not one entry per node.
+    #[error("snapshot has per-node arrays of the wrong length ({nodes} nodes)")]
+    PerNode {
+        /// Nodes of the mesh.
+        nodes: usize,
+    },
+    /// `element_strain` or `element_jacobian` has not one entry per element.
+    #[error("snapshot has per-element arrays of the wrong length ({elements} elements)")]
+    PerElement {
+        /// Elements of the mesh.
+        elements: usize,
+    },
+    /// The mesh has not one domain per element (checked on 3-D meshes).
+    #[error("mesh has {domains} domains for {elements} elements")]
+    Domains {
+        /// Domains listed.
+        domains: usize,
+        /// Elements of the mesh.
+        elements: usize,
+    },
+}
+
+impl From<SnapshotMismatch> for super::DrawError {
+    fn from(e: SnapshotMismatch) -> Self {
+        super::DrawError(e.to_string())
+    }
+}
 
 /// Integer code of a domain in the `domain` cell array.
 pub fn domain_code(d: Domain) -> i32 {
@@ -37,40 +90,17 @@ pub fn domain_code(d: Domain) -> i32 {
     }
 }
 
-/// A [`OutputError::Vtk`] for `path` (shared by [`super::vtu3`]).
-pub(crate) fn vtk_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
+/// A [`OutputError::Vtk`] for `path`.
+fn vtk_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
     OutputError::Vtk {
         path: path.display().to_string(),
         message: e.to_string(),
     }
 }
 
-/// Checks that a snapshot's per-node arrays (the lengths of `u`, `v` and `mu_as`) have
-/// one entry per node of the mesh (`nodes`) and its per-element arrays (the lengths of
-/// `element_strain` and `element_jacobian`) one per element (`elements`). Shared by both
-/// models ([`super::vtu3::check_snapshot3`]).
-pub(crate) fn check_lengths(
-    nodes: usize,
-    elements: usize,
-    per_node: [usize; 3],
-    per_element: [usize; 2],
-) -> Result<(), String> {
-    if per_node.iter().any(|&n| n != nodes) {
-        return Err(format!(
-            "snapshot has per-node arrays of the wrong length ({nodes} nodes)"
-        ));
-    }
-    if per_element.iter().any(|&n| n != elements) {
-        return Err(format!(
-            "snapshot has per-element arrays of the wrong length ({elements} elements)"
-        ));
-    }
-    Ok(())
-}
-
 /// One output time of either model as the `.vtu` holds it: a mesh whose points have `D`
 /// coordinates and whose elements have `N` nodes, and a snapshot on it (arrays already
-/// checked against the mesh). What [`vtk_model`] and [`super::vtu3::vtk_model3`] share.
+/// checked against the mesh): what [`VtuMesh::grid`] hands to [`vtk_model`].
 pub(crate) struct GridData<'a, const D: usize, const N: usize> {
     /// Reference node coordinates [µm] (z = 0 when `D` is 2).
     pub nodes: &'a [[f64; D]],
@@ -148,58 +178,108 @@ impl<const D: usize, const N: usize> GridData<'_, D, N> {
     }
 }
 
-/// The VTK model of one output time (see the module documentation for its arrays).
-pub fn vtk_model(mesh: &MeshFile, s: &Snapshot) -> Result<Vtk, String> {
-    check_lengths(
-        mesh.nodes.len(),
-        mesh.elements.len(),
-        [s.u.len(), s.v.len(), s.mu_as.len()],
-        [s.element_strain.len(), s.element_jacobian.len()],
-    )?;
-    Ok(GridData {
-        nodes: &mesh.nodes,
-        elements: &mesh.elements,
-        // Our node order is VTK's (see the module documentation).
-        vtk_order: [0, 1, 2, 3, 4, 5],
-        cell_type: CellType::QuadraticTriangle,
-        domains: &mesh.domains,
-        u: &s.u,
-        v: &s.v,
-        mu_as: &s.mu_as,
-        element_strain: &s.element_strain,
-        element_jacobian: &s.element_jacobian,
-        title: format!("cellsim t = {} s", s.t),
-    }
-    .into_vtk())
-}
-
 /// A mesh whose output times are written as `.vtu` files: the 2-D [`MeshFile`] with its
-/// [`Snapshot`]s, the 3-D [`Mesh3File`](crate::record::Mesh3File) with its
-/// [`Snapshot3`](crate::record::Snapshot3)s ([`super::vtu3`]).
+/// [`Snapshot`]s, the 3-D [`Mesh3File`] with its [`Snapshot3`]s.
 pub trait VtuMesh: Clone {
     /// The state of one output time on this mesh.
-    type Snapshot;
-    /// The time of `s` [s].
-    fn time(s: &Self::Snapshot) -> f64;
-    /// The VTK model of `s` ([`vtk_model`], [`super::vtu3::vtk_model3`]); an error if its
-    /// arrays do not fit the mesh.
-    fn vtk_model(&self, s: &Self::Snapshot) -> Result<Vtk, String>;
+    type Snapshot: Timed;
+    /// Checks that the arrays of `s` fit the mesh.
+    fn check(&self, s: &Self::Snapshot) -> Result<(), SnapshotMismatch>;
+    /// The VTK model of `s`, its arrays already checked ([`GridData::into_vtk`]).
+    fn grid(&self, s: &Self::Snapshot) -> Vtk;
 }
 
-impl VtuMesh for MeshFile {
-    type Snapshot = Snapshot;
-    fn time(s: &Snapshot) -> f64 {
-        s.t
-    }
-    fn vtk_model(&self, s: &Snapshot) -> Result<Vtk, String> {
-        vtk_model(self, s)
-    }
+/// Implements [`VtuMesh`] for a mesh file and its snapshot: the VTK node order and cell
+/// type of its elements, the title of its files, whether its domains are checked too.
+macro_rules! vtu_mesh {
+    ($mesh:ty, $snapshot:ty, $order:expr, $cell:expr, $title:literal, $domains:literal) => {
+        impl VtuMesh for $mesh {
+            type Snapshot = $snapshot;
+
+            fn check(&self, s: &$snapshot) -> Result<(), SnapshotMismatch> {
+                let (nodes, elements) = (self.nodes.len(), self.elements.len());
+                if [s.u.len(), s.v.len(), s.mu_as.len()]
+                    .iter()
+                    .any(|&n| n != nodes)
+                {
+                    return Err(SnapshotMismatch::PerNode { nodes });
+                }
+                let per_element = [s.element_strain.len(), s.element_jacobian.len()];
+                if per_element.iter().any(|&n| n != elements) {
+                    return Err(SnapshotMismatch::PerElement { elements });
+                }
+                if $domains && self.domains.len() != elements {
+                    let domains = self.domains.len();
+                    return Err(SnapshotMismatch::Domains { domains, elements });
+                }
+                Ok(())
+            }
+
+            fn grid(&self, s: &$snapshot) -> Vtk {
+                GridData {
+                    nodes: &self.nodes,
+                    elements: &self.elements,
+                    vtk_order: $order,
+                    cell_type: $cell,
+                    domains: &self.domains,
+                    u: &s.u,
+                    v: &s.v,
+                    mu_as: &s.mu_as,
+                    element_strain: &s.element_strain,
+                    element_jacobian: &s.element_jacobian,
+                    title: format!($title, s.t),
+                }
+                .into_vtk()
+            }
+        }
+    };
+}
+
+// Our triangles' node order is VTK's (see the module documentation).
+vtu_mesh!(
+    MeshFile,
+    Snapshot,
+    [0, 1, 2, 3, 4, 5],
+    CellType::QuadraticTriangle,
+    "cellsim t = {} s",
+    false
+);
+vtu_mesh!(
+    Mesh3File,
+    Snapshot3,
+    GMSH_OF_VTK,
+    CellType::QuadraticTetra,
+    "cellsim 3-D t = {} s",
+    true
+);
+
+/// The VTK model of one output time of either model (see the module documentation for
+/// its arrays); an error if the snapshot's arrays do not fit the mesh.
+pub fn vtk_model<M: VtuMesh>(mesh: &M, s: &M::Snapshot) -> Result<Vtk, SnapshotMismatch> {
+    mesh.check(s)?;
+    Ok(mesh.grid(s))
+}
+
+/// The VTK model of one output time of the 3-D cell ([`vtk_model`] on a [`Mesh3File`]).
+pub fn vtk_model3(mesh: &Mesh3File, s: &Snapshot3) -> Result<Vtk, SnapshotMismatch> {
+    vtk_model(mesh, s)
+}
+
+/// Checks that the 3-D snapshot's arrays fit the mesh.
+pub fn check_snapshot3(mesh: &Mesh3File, s: &Snapshot3) -> Result<(), SnapshotMismatch> {
+    mesh.check(s)
 }
 
 /// Writes the `.vtu` of one output time at `path` (of either model: [`VtuMesh`]).
 pub fn write_vtu<M: VtuMesh>(path: &Path, mesh: &M, s: &M::Snapshot) -> Result<(), OutputError> {
-    let vtk = mesh.vtk_model(s).map_err(|m| vtk_err(path, m))?;
+    let vtk = vtk_model(mesh, s).map_err(|m| vtk_err(path, m))?;
     vtk.export(path).map_err(|e| vtk_err(path, e))
+}
+
+/// Writes the `.vtu` of one output time of the 3-D cell at `path` ([`write_vtu`] on a
+/// [`Mesh3File`]).
+pub fn write_vtu3(path: &Path, mesh: &Mesh3File, s: &Snapshot3) -> Result<(), OutputError> {
+    write_vtu(path, mesh, s)
 }
 
 /// What a `.vtu` read back holds, for checks.
@@ -220,8 +300,8 @@ pub struct VtuSummary {
 }
 
 /// The first piece of the unstructured grid in the `.vtu` at `path`, with its data loaded
-/// (shared by [`super::vtu3::read_vtu_grid`]).
-pub(crate) fn load_piece(path: &Path) -> Result<UnstructuredGridPiece, OutputError> {
+/// (shared by [`read_vtu_grid`]).
+fn load_piece(path: &Path) -> Result<UnstructuredGridPiece, OutputError> {
     let vtk = Vtk::import(path).map_err(|e| vtk_err(path, e))?;
     let DataSet::UnstructuredGrid { pieces, .. } = vtk.data else {
         return Err(vtk_err(path, "not an unstructured grid"));
@@ -235,7 +315,7 @@ pub(crate) fn load_piece(path: &Path) -> Result<UnstructuredGridPiece, OutputErr
 }
 
 /// The [`VtuSummary`] of a piece read back.
-pub(crate) fn summarise(piece: &UnstructuredGridPiece) -> VtuSummary {
+fn summarise(piece: &UnstructuredGridPiece) -> VtuSummary {
     let name = |a: &Attribute| a.name().to_string();
     let displacement = piece.data.point.iter().find_map(|a| match a {
         Attribute::DataArray(d) if d.name == "displacement" => d.data.clone().cast_into::<f64>(),
@@ -256,6 +336,50 @@ pub fn read_vtu(path: &Path) -> Result<VtuSummary, OutputError> {
     Ok(summarise(&load_piece(path)?))
 }
 
+/// A `.vtu` read back with its geometry, for checks.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VtuGrid {
+    /// Counts, cell types, array names and the displacement.
+    pub summary: VtuSummary,
+    /// The points [µm].
+    pub points: Vec<[f64; 3]>,
+    /// Each cell's point indices, in the file's (VTK's) order.
+    pub cells: Vec<Vec<usize>>,
+}
+
+/// Reads a `.vtu` back through vtkio: its [`VtuSummary`] (as [`read_vtu`]),
+/// points and connectivity.
+pub fn read_vtu_grid(path: &Path) -> Result<VtuGrid, OutputError> {
+    let piece = load_piece(path)?;
+    let summary = summarise(&piece);
+    let coords: Vec<f64> = piece
+        .points
+        .cast_into::<f64>()
+        .ok_or_else(|| vtk_err(path, "points are not numbers"))?;
+    let points = coords.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
+    let (connectivity, offsets) = piece.cells.cell_verts.into_xml();
+    let mut cells = Vec::with_capacity(offsets.len());
+    let mut start = 0usize;
+    for &end in &offsets {
+        let end = end as usize;
+        if end < start || end > connectivity.len() {
+            return Err(vtk_err(path, "cell offsets out of range"));
+        }
+        cells.push(
+            connectivity[start..end]
+                .iter()
+                .map(|&i| i as usize)
+                .collect(),
+        );
+        start = end;
+    }
+    Ok(VtuGrid {
+        summary,
+        points,
+        cells,
+    })
+}
+
 /// The `.vtu` files of one run on a mesh `M` ([`VtuMesh`]: either model) and their `.pvd`
 /// collection.
 pub struct VtuSeriesOf<M> {
@@ -268,6 +392,9 @@ pub struct VtuSeriesOf<M> {
 
 /// The `.vtu` files of one 2-D run and their `.pvd` collection.
 pub type VtuSeries = VtuSeriesOf<MeshFile>;
+
+/// The `.vtu` files of one 3-D run and their `.pvd` collection.
+pub type VtuSeries3 = VtuSeriesOf<Mesh3File>;
 
 impl<M: VtuMesh> VtuSeriesOf<M> {
     /// A series written into `out/vtu/<name>_NNNNN.vtu`, collected in `out/<name>.pvd`.
@@ -293,7 +420,7 @@ impl<M: VtuMesh> VtuSeriesOf<M> {
         let file = format!("{}_{:05}.vtu", self.name, self.entries.len());
         let path = self.dir.join(&file);
         write_vtu(&path, &self.mesh, s)?;
-        self.entries.push((M::time(s), format!("vtu/{file}")));
+        self.entries.push((s.time(), format!("vtu/{file}")));
         write_pvd(&self.pvd, &self.entries)?;
         Ok(path)
     }

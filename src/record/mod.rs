@@ -395,6 +395,25 @@ pub struct Snapshot {
     pub element_jacobian: Vec<f64>,
 }
 
+/// The state of one output time of either model ([`Snapshot`], [`Snapshot3`]), as the
+/// per-output-time writers see it.
+pub trait Timed: Clone {
+    /// Time [s].
+    fn time(&self) -> f64;
+}
+
+impl Timed for Snapshot {
+    fn time(&self) -> f64 {
+        self.t
+    }
+}
+
+impl Timed for Snapshot3 {
+    fn time(&self) -> f64 {
+        self.t
+    }
+}
+
 /// What the mesh file of a 3-D run (`mesh3.json`) records: the quarter cell's ten-node
 /// tetrahedra and its outer surface, with what the figures draw beside it.
 #[derive(Debug, Clone, Serialize, Deserialize)]

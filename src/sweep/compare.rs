@@ -194,20 +194,72 @@ pub fn markers(name: &str) -> (String, String) {
     )
 }
 
-/// `text` with the block between the markers replaced by `block`; the message says what
+/// What is wrong with a document's markers ([`markers`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum MarkerError {
+    /// The begin or the end marker is missing or given more than once.
+    #[error("needs the line `{begin}` once and then the line `{end}` once")]
+    Count {
+        /// The begin marker.
+        begin: String,
+        /// The end marker.
+        end: String,
+    },
+    /// The end marker comes first.
+    #[error("`{end}` comes before `{begin}`")]
+    Order {
+        /// The begin marker.
+        begin: String,
+        /// The end marker.
+        end: String,
+    },
+}
+
+/// Why a sweep's `table` does not fit its design or its documents.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum TableSpecError {
+    /// The design is not a Grid of two axes.
+    #[error("table: needs a Grid of two axes (rows and columns)")]
+    NotAGrid,
+    /// `rows` names no axis.
+    #[error("table: rows = {0:?} is not an axis")]
+    Rows(String),
+    /// A group has no columns, or there is no group.
+    #[error("table: no columns (every group needs one)")]
+    NoColumns,
+    /// A column is wrong.
+    #[error("table: column `{key}`: {problem}")]
+    Column {
+        /// The column's key.
+        key: String,
+        /// What is wrong.
+        problem: String,
+    },
+    /// `summary` names no column.
+    #[error("table: summary names `{0}`, which is no column's key")]
+    Summary(String),
+    /// A document cannot be read or its markers are wrong.
+    #[error("table: document {path}: {problem}")]
+    Document {
+        /// The document.
+        path: String,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+/// `text` with the block between the markers replaced by `block`; the error says what
 /// is wrong with the markers.
-pub fn splice(text: &str, name: &str, block: &str) -> Result<String, String> {
+pub fn splice(text: &str, name: &str, block: &str) -> Result<String, MarkerError> {
     let (begin, end) = markers(name);
     let count = |m: &str| text.lines().filter(|l| l.trim() == m).count();
     if count(&begin) != 1 || count(&end) != 1 {
-        return Err(format!(
-            "needs the line `{begin}` once and then the line `{end}` once"
-        ));
+        return Err(MarkerError::Count { begin, end });
     }
     let b = text.find(&begin).unwrap_or(0);
     let e = text.find(&end).unwrap_or(0);
     if e < b {
-        return Err(format!("`{end}` comes before `{begin}`"));
+        return Err(MarkerError::Order { begin, end });
     }
     let head = &text[..b + begin.len()];
     let tail = &text[e..];
@@ -222,20 +274,30 @@ impl TableSpec {
 
     /// Checks the table against the design; resolves the documents' paths against
     /// `dir` (the sweep file's directory) and checks their markers.
-    pub fn resolve(mut self, design: &Design, name: &str, dir: &Path) -> Result<Self, String> {
+    pub fn resolve(
+        mut self,
+        design: &Design,
+        name: &str,
+        dir: &Path,
+    ) -> Result<Self, TableSpecError> {
         if design.kind != Kind::Grid || design.axes.len() != 2 {
-            return Err("table: needs a Grid of two axes (rows and columns)".into());
+            return Err(TableSpecError::NotAGrid);
         }
         let Some(r) = design.axes.iter().position(|a| a.path == self.rows) else {
-            return Err(format!("table: rows = {:?} is not an axis", self.rows));
+            return Err(TableSpecError::Rows(self.rows));
         };
         let other = &design.axes[1 - r];
         if self.groups.is_empty() || self.groups.iter().any(|g| g.columns.is_empty()) {
-            return Err("table: no columns (every group needs one)".into());
+            return Err(TableSpecError::NoColumns);
         }
         let mut keys: Vec<&str> = Vec::new();
         for c in self.columns() {
-            let bad = |m: String| Err(format!("table: column `{}`: {m}", c.key));
+            let bad = |problem: String| {
+                Err(TableSpecError::Column {
+                    key: c.key.clone(),
+                    problem,
+                })
+            };
             if c.key.trim().is_empty() || c.key.contains([',', '"', '\n']) {
                 return bad("key must be one word (no comma or quote)".into());
             }
@@ -272,16 +334,16 @@ impl TableSpec {
             }
         }
         if let Some(k) = self.summary.iter().find(|k| !keys.contains(&k.as_str())) {
-            return Err(format!(
-                "table: summary names `{k}`, which is no column's key"
-            ));
+            return Err(TableSpecError::Summary(k.clone()));
         }
         for d in &mut self.documents {
             let path = dir.join(&d.path);
-            let text = std::fs::read_to_string(&path)
-                .map_err(|e| format!("table: document {}: {e}", path.display()))?;
-            splice(&text, name, "")
-                .map_err(|m| format!("table: document {}: {m}", path.display()))?;
+            let bad = |problem: String| TableSpecError::Document {
+                path: path.display().to_string(),
+                problem,
+            };
+            let text = std::fs::read_to_string(&path).map_err(|e| bad(e.to_string()))?;
+            splice(&text, name, "").map_err(|m| bad(m.to_string()))?;
             d.path = path.display().to_string();
         }
         Ok(self)
@@ -980,7 +1042,12 @@ mod tests {
     #[test]
     fn a_table_that_does_not_fit_the_design_is_refused() {
         let d = design();
-        let err = |text: &str| spec(text).resolve(&d, "t", Path::new(".")).unwrap_err();
+        let err = |text: &str| {
+            spec(text)
+                .resolve(&d, "t", Path::new("."))
+                .unwrap_err()
+                .to_string()
+        };
         let one =
             |col: &str| format!(r#"(rows: "reading", groups: [(title: "G", columns: [{col}])])"#);
         assert!(
@@ -1019,6 +1086,7 @@ mod tests {
             s.clone()
                 .resolve(&d, "t", Path::new("."))
                 .unwrap_err()
+                .to_string()
                 .contains("summary names `nope`")
         );
         s.summary.clear();
@@ -1029,6 +1097,7 @@ mod tests {
         assert!(
             s.resolve(&d, "t", Path::new("."))
                 .unwrap_err()
+                .to_string()
                 .contains("no-such-document.md")
         );
         // Only a Grid of two axes has rows and columns.
@@ -1037,7 +1106,7 @@ mod tests {
             .unwrap();
         let d1 = Design::from_spec(&spec1).unwrap();
         let e = spec(SPEC).resolve(&d1, "t", Path::new(".")).unwrap_err();
-        assert!(e.contains("Grid of two axes"), "{e}");
+        assert!(e.to_string().contains("Grid of two axes"), "{e}");
     }
 
     #[test]
@@ -1053,7 +1122,12 @@ mod tests {
         let twice = format!("{text}<!-- cellsim sweep s: begin -->\n");
         assert!(splice(&twice, "s", "x").is_err());
         let reversed = "<!-- cellsim sweep s: end -->\n<!-- cellsim sweep s: begin -->\n";
-        assert!(splice(reversed, "s", "x").unwrap_err().contains("before"));
+        assert!(
+            splice(reversed, "s", "x")
+                .unwrap_err()
+                .to_string()
+                .contains("before")
+        );
     }
 
     #[test]

@@ -370,41 +370,49 @@ impl Axis {
     }
 }
 
+/// Why a design cannot be resolved: the message names the axis and what is wrong.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct DesignError(pub String);
+
 impl Design {
     /// Resolves the axes' values; the message names the axis and what is wrong.
-    pub fn from_spec(spec: &DesignSpec) -> Result<Design, String> {
+    pub fn from_spec(spec: &DesignSpec) -> Result<Design, DesignError> {
         let (kind, axes, sample) = match spec {
             DesignSpec::Grid(a) => (Kind::Grid, a, None),
             DesignSpec::Zip(a) => (Kind::Zip, a, None),
             DesignSpec::OneAtATime(a) => (Kind::OneAtATime, a, None),
             DesignSpec::LatinHypercube { n, seed, axes } => {
                 if *n == 0 {
-                    return Err("LatinHypercube: n = 0 (must satisfy n >= 1)".into());
+                    return Err(DesignError(
+                        "LatinHypercube: n = 0 (must satisfy n >= 1)".into(),
+                    ));
                 }
                 (Kind::LatinHypercube, axes, Some((*n, *seed)))
             }
         };
         if axes.is_empty() {
-            return Err("the design has no axes".into());
+            return Err(DesignError("the design has no axes".into()));
         }
         let axes: Vec<Axis> = axes
             .iter()
             .map(|a| resolve_axis(a, kind == Kind::LatinHypercube))
-            .collect::<Result<_, _>>()?;
+            .collect::<Result<_, _>>()
+            .map_err(DesignError)?;
         for (k, a) in axes.iter().enumerate() {
             if axes[..k].iter().any(|b| b.path == a.path) {
-                return Err(format!("axis `{}` is given twice", a.path));
+                return Err(DesignError(format!("axis `{}` is given twice", a.path)));
             }
         }
         if kind == Kind::Zip {
             let n = axes[0].values.len();
             if let Some(a) = axes.iter().find(|a| a.values.len() != n) {
-                return Err(format!(
+                return Err(DesignError(format!(
                     "Zip: axis `{}` has {} values, axis `{}` has {n}: a Zip needs axes of equal length",
                     a.path,
                     a.values.len(),
                     axes[0].path
-                ));
+                )));
             }
         }
         Ok(Design { kind, axes, sample })
@@ -557,7 +565,7 @@ mod tests {
         let spec: DesignSpec = ron::Options::default()
             .from_str(text)
             .map_err(|e| e.to_string())?;
-        Design::from_spec(&spec)
+        Design::from_spec(&spec).map_err(|e| e.to_string())
     }
 
     #[test]

@@ -466,7 +466,8 @@ fn resolve_plan(sweep_file: &Path, spec: SweepFile) -> Result<Plan, String> {
         .table
         .clone()
         .map(|t| t.resolve(&design, &spec.name, dir))
-        .transpose()?;
+        .transpose()
+        .map_err(|e| e.to_string())?;
     let base = Base::new(base_text, &base_path, &set);
     let mut points = design
         .points()
@@ -859,9 +860,14 @@ fn in_shard(k: usize, shard: Option<(usize, usize)>) -> bool {
     shard.is_none_or(|(i, n)| k % n == i)
 }
 
+/// A `--shard` value that is not `i/K` with 0 ≤ i < K.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("--shard `{0}` is not i/K with 0 <= i < K (e.g. 0/4)")]
+pub struct ShardError(pub String);
+
 /// Parses `i/K` (0 ≤ i < K).
-pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
-    let err = || format!("--shard `{s}` is not i/K with 0 <= i < K (e.g. 0/4)");
+pub fn parse_shard(s: &str) -> Result<(usize, usize), ShardError> {
+    let err = || ShardError(s.to_string());
     let (i, k) = s.split_once('/').ok_or_else(err)?;
     let (i, k): (usize, usize) = (
         i.trim().parse().map_err(|_| err())?,

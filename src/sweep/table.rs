@@ -210,27 +210,44 @@ fn split(line: &str) -> Vec<String> {
     out
 }
 
-/// Parses `sweep.csv`: the axis paths and the rows. The message names the line.
-pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), String> {
+/// What is wrong with a `sweep.csv`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum CsvError {
+    /// No header.
+    #[error("empty file (no header)")]
+    Empty,
+    /// A line (counted from 1) is wrong.
+    #[error("line {line}: {problem}")]
+    Line {
+        /// The line.
+        line: usize,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+/// Parses `sweep.csv`: the axis paths and the rows. The error names the line.
+pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), CsvError> {
     let mut lines = text
         .lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty());
-    let (_, head) = lines.next().ok_or("empty file (no header)")?;
+    let (_, head) = lines.next().ok_or(CsvError::Empty)?;
     let head = split(head);
+    let header = |problem: String| CsvError::Line { line: 1, problem };
     let status_at = head
         .iter()
         .position(|h| h == "status")
-        .ok_or("line 1: no `status` column")?;
+        .ok_or_else(|| header("no `status` column".into()))?;
     if head.first().map(String::as_str) != Some("id") {
-        return Err("line 1: the first column is not `id`".into());
+        return Err(header("the first column is not `id`".into()));
     }
     let axes: Vec<String> = head[1..status_at].to_vec();
     let expected = status_at + 1 + N_COLUMNS + 4;
     if head.len() != expected {
         let older = !head.iter().any(|h| h == COLUMNS[N_COLUMNS - 1]);
-        return Err(format!(
-            "line 1: {} columns, expected {expected}{}",
+        return Err(header(format!(
+            "{} columns, expected {expected}{}",
             head.len(),
             if older {
                 format!(
@@ -241,16 +258,19 @@ pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), String> {
             } else {
                 String::new()
             }
-        ));
+        )));
     }
     let mut rows = Vec::new();
     for (k, l) in lines {
         let f = split(l);
-        let bad = |m: String| format!("line {}: {m}", k + 1);
+        let bad = |problem: String| CsvError::Line {
+            line: k + 1,
+            problem,
+        };
         if f.len() != expected {
             return Err(bad(format!("{} fields, expected {expected}", f.len())));
         }
-        let number = |s: &str| -> Result<Option<f64>, String> {
+        let number = |s: &str| -> Result<Option<f64>, CsvError> {
             if s.is_empty() {
                 Ok(None)
             } else {
@@ -340,7 +360,7 @@ mod tests {
         // A sweep.csv written before those columns existed: refused, saying why.
         let old = "id,status,t,contact_radius,uy_top,uy_centre,uy_bottom,strain_nucleus,\
                    strain_cytoplasm,penetration_depth,wall_seconds,steps,reason\n";
-        let err = parse(old).unwrap_err();
+        let err = parse(old).unwrap_err().to_string();
         assert!(err.contains("older cellsim"), "{err}");
     }
 

@@ -1,5 +1,6 @@
-//! The figures of the 3-D quarter cell (MODEL.md §10), drawn from a [`Mesh3File`] and a
-//! [`Snapshot3`] only, in the colours and styles of the 2-D figures ([`super::figures`]).
+//! The figures of the 3-D quarter cell (MODEL.md §10) — sections through its axis and the
+//! shaded surface view — drawn from a [`Mesh3File`] and a [`Snapshot3`] only, in the
+//! colours and styles of the 2-D figures ([`super::figures`]).
 //!
 //! **Sections** ([`section_figure`]): the deformed cell cut by a vertical plane through its
 //! axis, mirrored to both sides as the 2-D shape figures are — nucleus red, cytoplasm
@@ -55,7 +56,6 @@ use nalgebra::Vector3;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::OutputError;
 use super::figures::{
     FONT, GravityMark, MEMBRANE, PlaneBackdrop, PlaneDrawing, SHAPE_SIZE, SUBSTRATE, ShapeScale,
     ShapeStyleOptions, check_displacements, draw_in_plane,
@@ -63,7 +63,8 @@ use super::figures::{
 use super::geometry::{
     ACTIVE_LEVEL, Bounds, CellShape, Pt, Rect, contour, element_polygon, intervals,
 };
-use super::vtu3::check_snapshot3;
+use super::vtu::check_snapshot3;
+use super::{DrawError, OutputError};
 use crate::fem::{Domain, tet10 as tet, tri6 as p2};
 use crate::physics::{ActiveStrain, Substrate, Substrate3, smooth_step};
 use crate::record::read::Run3Data;
@@ -859,7 +860,7 @@ pub fn draw_section<DB: DrawingBackend>(
     view: Bounds,
     opts: &ShapeStyleOptions,
     backdrop: &mut Option<SectionBackdrop>,
-) -> Result<ShapeScale, String> {
+) -> Result<ShapeScale, DrawError> {
     check_displacements(u, mesh.nodes.len())?;
     let shape = SectionShape::new(mesh, u, plane).mirrored();
     let cell = PlaneDrawing {
@@ -1461,8 +1462,7 @@ fn draw_panel<DB: DrawingBackend>(
     panel: &Panel,
     axes: bool,
     fs: f64,
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     let Panel {
         camera,
         screen,
@@ -1471,12 +1471,12 @@ fn draw_panel<DB: DrawingBackend>(
     } = *panel;
     let (pw, ph) = area.dim_in_pixel();
     if pw < 8 || ph < 8 {
-        return Err("drawing area too small".into());
+        return Err(DrawError("drawing area too small".into()));
     }
     let bytes = render(tris, camera, screen, (pw as usize, ph as usize), strength);
     let image = BitMapElement::<(i32, i32)>::with_owned_buffer((0, 0), (pw, ph), bytes)
-        .ok_or("the rendered picture has the wrong size")?;
-    area.draw(&image).map_err(e)?;
+        .ok_or_else(|| DrawError("the rendered picture has the wrong size".into()))?;
+    area.draw(&image)?;
     if axes {
         let [right, up, _] = camera.basis();
         let origin = ((2.4 * fs) as i32, ph as i32 - (2.6 * fs) as i32);
@@ -1486,8 +1486,7 @@ fn draw_panel<DB: DrawingBackend>(
             unit[k] = 1.0;
             let (dx, dy) = (dot(unit, right) * len, -dot(unit, up) * len);
             let tip = (origin.0 + dx as i32, origin.1 + dy as i32);
-            area.draw(&PathElement::new(vec![origin, tip], BLACK.stroke_width(2)))
-                .map_err(e)?;
+            area.draw(&PathElement::new(vec![origin, tip], BLACK.stroke_width(2)))?;
             area.draw(&Text::new(
                 name.to_string(),
                 (
@@ -1495,8 +1494,7 @@ fn draw_panel<DB: DrawingBackend>(
                     origin.1 + (1.25 * dy) as i32 - (0.35 * fs) as i32,
                 ),
                 scaled_text(0.6, fs),
-            ))
-            .map_err(e)?;
+            ))?;
         }
     }
     if let Some(l) = label {
@@ -1504,8 +1502,7 @@ fn draw_panel<DB: DrawingBackend>(
             l.to_string(),
             ((0.6 * fs) as i32, (0.4 * fs) as i32),
             scaled_text(0.65, fs),
-        ))
-        .map_err(e)?;
+        ))?;
     }
     Ok(())
 }
@@ -1519,7 +1516,7 @@ pub fn draw_surface<DB: DrawingBackend>(
     s: &Snapshot3,
     frame: &SurfaceFrame,
     opts: &SurfaceStyleOptions,
-) -> Result<(), String> {
+) -> Result<(), DrawError> {
     check_snapshot3(mesh, s)?;
     let fs = opts.font as f64;
     let areas = SurfaceAreas::new(area, opts, fs)?;
@@ -1566,11 +1563,8 @@ impl<DB: DrawingBackend> SurfaceAreas<DB> {
         area: &DrawingArea<DB, Shift>,
         opts: &SurfaceStyleOptions,
         fs: f64,
-    ) -> Result<Self, String> {
-        let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-        let area = area
-            .titled(&opts.title, (FONT, opts.font as i32))
-            .map_err(e)?;
+    ) -> Result<Self, DrawError> {
+        let area = area.titled(&opts.title, (FONT, opts.font as i32))?;
         let (aw, ah) = area.dim_in_pixel();
         let bar_w = match opts.coloring {
             Coloring::Strain => (5.5 * fs) as u32,
@@ -1599,7 +1593,7 @@ fn draw_surface_panels<DB: DrawingBackend>(
     frame: &SurfaceFrame,
     opts: &SurfaceStyleOptions,
     fs: f64,
-) -> Result<(), String> {
+) -> Result<(), DrawError> {
     let cam = frame.camera;
     match opts.coloring {
         Coloring::Domain => {
@@ -1639,7 +1633,7 @@ fn draw_surface_caption<DB: DrawingBackend>(
     cam: Camera,
     coloring: Coloring,
     fs: f64,
-) -> Result<(), String> {
+) -> Result<(), DrawError> {
     let seen = match coloring {
         Coloring::Domain => format!(
             "seen from elevation {}°, azimuth {}°",
@@ -1658,7 +1652,7 @@ fn draw_surface_caption<DB: DrawingBackend>(
             ((0.6 * fs) as i32, (0.3 * fs) as i32),
             scaled_text(0.5, fs),
         ))
-        .map_err(|x| x.to_string())
+        .map_err(DrawError::from)
 }
 
 /// The legend of the domain colouring in the upper right corner of `pic` (`pw` wide): the
@@ -1668,8 +1662,7 @@ fn draw_surface_legend<DB: DrawingBackend>(
     pw: u32,
     pillars: bool,
     fs: f64,
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     let entries: Vec<(RGBColor, &str)> = [
         (MEMBRANE, "membrane (the cell's outer surface)"),
         (SUBSTRATE, "pillars"),
@@ -1683,7 +1676,7 @@ fn draw_surface_legend<DB: DrawingBackend>(
     let line = (0.9 * fs) as i32;
     let mut text_w = 0;
     for (_, name) in &entries {
-        text_w = text_w.max(pic.estimate_text_size(name, &style).map_err(e)?.0 as i32);
+        text_w = text_w.max(pic.estimate_text_size(name, &style)?.0 as i32);
     }
     let box_w = 2 * sz + 24 + text_w;
     let x1 = pw as i32 - (0.4 * fs) as i32;
@@ -1693,23 +1686,19 @@ fn draw_surface_legend<DB: DrawingBackend>(
     pic.draw(&Rectangle::new(
         [(x0, y0), (x1, y0 + box_h)],
         WHITE.mix(0.9).filled(),
-    ))
-    .map_err(e)?;
-    pic.draw(&Rectangle::new([(x0, y0), (x1, y0 + box_h)], BLACK))
-        .map_err(e)?;
+    ))?;
+    pic.draw(&Rectangle::new([(x0, y0), (x1, y0 + box_h)], BLACK))?;
     for (k, (c, name)) in entries.iter().enumerate() {
         let y = y0 + (0.3 * fs) as i32 + k as i32 * line;
         pic.draw(&Rectangle::new(
             [(x0 + 8, y + 2), (x0 + 8 + 2 * sz, y + 2 + sz)],
             c.filled(),
-        ))
-        .map_err(e)?;
+        ))?;
         pic.draw(&Text::new(
             name.to_string(),
             (x0 + 2 * sz + 16, y),
             style.clone(),
-        ))
-        .map_err(e)?;
+        ))?;
     }
     Ok(())
 }
@@ -1720,15 +1709,13 @@ fn draw_strain_bar<DB: DrawingBackend>(
     bar: &DrawingArea<DB, Shift>,
     strain_max: f64,
     fs: f64,
-) -> Result<(), String> {
-    let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
+) -> Result<(), DrawError> {
     let mut chart = ChartBuilder::on(bar)
         .margin_top((1.0 * fs) as u32)
         .margin_bottom((1.0 * fs) as u32)
         .margin_right((0.4 * fs) as u32)
         .y_label_area_size((3.2 * fs) as u32)
-        .build_cartesian_2d(0.0..1.0, 0.0..strain_max)
-        .map_err(e)?;
+        .build_cartesian_2d(0.0..1.0, 0.0..strain_max)?;
     chart
         .configure_mesh()
         .disable_x_mesh()
@@ -1737,20 +1724,17 @@ fn draw_strain_bar<DB: DrawingBackend>(
         .y_desc("element mean ‖E‖")
         .axis_desc_style((FONT, (0.6 * fs) as i32))
         .label_style((FONT, (0.5 * fs) as i32))
-        .draw()
-        .map_err(e)?;
+        .draw()?;
     let steps = 200;
-    chart
-        .draw_series((0..steps).map(|k| {
-            let (v0, v1) = (
-                strain_max * k as f64 / steps as f64,
-                strain_max * (k + 1) as f64 / steps as f64,
-            );
-            let c: RGBColor =
-                ViridisRGB.get_color_normalized((0.5 * (v0 + v1)) as f32, 0.0, strain_max as f32);
-            Rectangle::new([(0.0, v0), (1.0, v1)], c.filled())
-        }))
-        .map_err(e)?;
+    chart.draw_series((0..steps).map(|k| {
+        let (v0, v1) = (
+            strain_max * k as f64 / steps as f64,
+            strain_max * (k + 1) as f64 / steps as f64,
+        );
+        let c: RGBColor =
+            ViridisRGB.get_color_normalized((0.5 * (v0 + v1)) as f32, 0.0, strain_max as f32);
+        Rectangle::new([(0.0, v0), (1.0, v1)], c.filled())
+    }))?;
     Ok(())
 }
 
