@@ -736,6 +736,22 @@ unsafe extern "C" fn jacobian_trampoline<D: Dae>(
     _t3: sys::N_Vector,
 ) -> c_int {
     // SAFETY: as for the residual; the values live in the same boxed UserData.
+    unsafe { jacobian_into_values::<D>(t, cj, yy, yp, user_data) }
+}
+
+/// Fills the iteration matrix's values at (t, y, ẏ, cj) by [`Dae::jacobian`]: the status
+/// of [`dae_code`].
+///
+/// # Safety
+/// `user_data` is the boxed `UserData<D>`; `yy` and `yp` are valid serial vectors.
+unsafe fn jacobian_into_values<D: Dae>(
+    t: f64,
+    cj: f64,
+    yy: sys::N_Vector,
+    yp: sys::N_Vector,
+    user_data: *mut c_void,
+) -> c_int {
+    // SAFETY: per the contract.
     unsafe {
         let user = &mut *(user_data as *mut UserData<D>);
         let (y, ypv) = (view(yy), view(yp));
@@ -765,18 +781,11 @@ unsafe extern "C" fn prec_setup<D: Dae>(
 ) -> c_int {
     // SAFETY: as for the Jacobian: user_data is the boxed UserData<D>, the vectors valid.
     unsafe {
-        let user = &mut *(user_data as *mut UserData<D>);
-        let (y, ypv) = (view(yy), view(yp));
-        let UserData { dae, ls, .. } = user;
-        let out = guard(|| {
-            timing::time(Phase::Jacobian, || {
-                dae.jacobian(t, y, ypv, cj, &mut ls.values)
-            })
-        });
-        let code = dae_code(user, out, "jacobian");
+        let code = jacobian_into_values::<D>(t, cj, yy, yp, user_data);
         if code != 0 {
             return prec_code(code);
         }
+        let user = &mut *(user_data as *mut UserData<D>);
         prec_code(factorize(&mut user.ls))
     }
 }
