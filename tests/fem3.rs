@@ -10,9 +10,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use cellsim::case::{Case, terms};
+use cellsim::fem::element::Lagrange;
 use cellsim::fem::mesh::quarter_cell::Generated;
 use cellsim::fem::tet10::{self as tet, TET_FACES};
-use cellsim::fem::tri6 as p2;
+use cellsim::fem::tri6::{self as p2, Tri6};
 use cellsim::fem::{
     Domain, EdgeRule, Mesh, Mesh3, Mesh3Params, MeshError, TetRule, TetTabulation, TriangleRule,
 };
@@ -713,7 +714,7 @@ fn extruded_slab_contains_the_2d_space() {
             // The 2-D reference point of (x, y), by Newton on the curved triangle.
             let mut xi = [1.0 / 3.0, 1.0 / 3.0];
             for _ in 0..30 {
-                let (p, jac, _) = p2::map(&x2, xi);
+                let (p, jac, _) = Tri6::map(&x2, xi);
                 let r = nalgebra::Vector2::new(p[0] - pt[0], p[1] - pt[1]);
                 let d = jac.lu().solve(&r).expect("regular");
                 xi = [xi[0] - d[0], xi[1] - d[1]];
@@ -721,8 +722,8 @@ fn extruded_slab_contains_the_2d_space() {
                     break;
                 }
             }
-            let (_, jac, det) = p2::map(&x2, xi);
-            let g2 = p2::physical_gradients(&jac, det, &p2::grad_shape(xi));
+            let (_, jac, det) = Tri6::map(&x2, xi);
+            let g2 = p2::physical_gradients(&jac, det, &Tri6::grad_shape(xi));
             let n2v = p2::shape(xi);
             let tri_nodes = m2.elements[tri];
             let v2: f64 = (0..6).map(|a| n2v[a] * f2[tri_nodes[a]]).sum();

@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use cellsim::case::{self, Case};
-use cellsim::fem::tet10 as tet;
+use cellsim::fem::element::Lagrange;
+use cellsim::fem::tet10::Tet10;
 use cellsim::fem::{Domain, Mesh3, TetRule};
 use cellsim::output::cell_views::{
     self, Coloring, FIGURE_SIZE, Section, SectionShape, section_figure, surface_figure,
@@ -175,7 +176,7 @@ fn vtu3_reads_back_with_quadratic_tetrahedra_in_vtk_order() {
             .points
             .iter()
             .zip(&rule.weights)
-            .map(|(xi, w)| w * tet::map(&xe, *xi).2)
+            .map(|(xi, w)| w * Tet10::map(&xe, *xi).2)
             .sum();
         assert!(
             (vol - own).abs() < 1e-12 * own,

@@ -2,8 +2,9 @@
 //! written once for the six-node triangles of the half cell ([`super::Mesh`],
 //! [`super::tri6`]) and the ten-node tetrahedra of the quarter cell ([`super::Mesh3`],
 //! [`super::tet10`]): `D` the spatial dimension, `N` the nodes per element. An element is a
-//! [`Lagrange`] type (its shape functions and quadrature rules); the tabulation at
-//! quadrature points, the isoparametric Jacobian and the element geometry are generic.
+//! [`Lagrange`] type (its edges and quadrature rules; the quadratic shape functions are
+//! written once); the tabulation at quadrature points, the isoparametric Jacobian and the
+//! element geometry are generic.
 
 use std::marker::PhantomData;
 
@@ -13,17 +14,62 @@ use thiserror::Error;
 use super::quadrature::Rule;
 use super::{Domain, Mesh, Mesh3, NamedPoints};
 
-/// An isoparametric Lagrange element on the reference simplex of dimension `D` with `N`
-/// nodes.
+/// An isoparametric quadratic (P2) Lagrange element on the reference simplex of dimension
+/// `D` with `N` nodes: the `D + 1` vertices, then one mid-node per edge of
+/// [`Lagrange::EDGES`]. With the barycentric coordinates λ₀ = 1 − Σ ξ, λₖ = ξₖ₋₁, the shape
+/// functions are λᵢ(2λᵢ − 1) at vertex i and 4λᵢλⱼ at the mid-node of edge i–j.
 pub trait Lagrange<const D: usize, const N: usize>: Send + Sync {
+    /// The vertex pairs of the edges: edge k carries local node `D + 1 + k`.
+    const EDGES: &'static [[usize; 2]];
+    /// The reference simplex's rule exact to a degree.
+    const RULE: fn(usize) -> Rule<[f64; D]>;
+    /// A rule applied on each sub-simplex of `levels` regular refinements.
+    const SUBDIVIDED: fn(&Rule<[f64; D]>, u32) -> Rule<[f64; D]>;
+
     /// Shape function values at reference point ξ.
-    fn shape(xi: [f64; D]) -> [f64; N];
-    /// Reference gradients ∇_ξ Nₐ at ξ.
-    fn grad_shape(xi: [f64; D]) -> [[f64; D]; N];
-    /// The reference simplex's rule exact to `degree`.
-    fn rule(degree: usize) -> Rule<[f64; D]>;
-    /// `rule` on each sub-simplex of `levels` regular refinements.
-    fn subdivided(rule: &Rule<[f64; D]>, levels: u32) -> Rule<[f64; D]>;
+    #[inline]
+    fn shape(xi: [f64; D]) -> [f64; N] {
+        let l0 = xi.iter().fold(1.0, |s, x| s - x);
+        let l = |k: usize| if k == 0 { l0 } else { xi[k - 1] };
+        std::array::from_fn(|a| {
+            if a <= D {
+                l(a) * (2.0 * l(a) - 1.0)
+            } else {
+                let [i, j] = Self::EDGES[a - D - 1];
+                4.0 * l(i) * l(j)
+            }
+        })
+    }
+
+    /// Reference gradients ∇_ξ Nₐ at ξ (∂λ₀ = (−1, …, −1), ∂λₖ = eₖ); they sum to zero
+    /// over a.
+    #[inline]
+    fn grad_shape(xi: [f64; D]) -> [[f64; D]; N] {
+        let l0 = xi.iter().fold(1.0, |s, x| s - x);
+        let l = |k: usize| if k == 0 { l0 } else { xi[k - 1] };
+        std::array::from_fn(|a| {
+            std::array::from_fn(|c| match a {
+                // d/dλ₀ of λ₀(2λ₀ − 1) is 4λ₀ − 1, times ∂λ₀ = −1.
+                0 => 1.0 - 4.0 * l0,
+                _ if a <= D => {
+                    if a == c + 1 {
+                        4.0 * l(a) - 1.0
+                    } else {
+                        0.0
+                    }
+                }
+                _ => match Self::EDGES[a - D - 1] {
+                    // 4λ₀λₒ: 4(λ₀ − λₒ) along ξ of λₒ, −4λₒ along the others.
+                    [0, o] | [o, 0] if c + 1 == o => 4.0 * (l0 - l(o)),
+                    [0, o] | [o, 0] => -4.0 * l(o),
+                    // 4λᵢλⱼ, i, j ≠ 0: 4λⱼ along ξ of λᵢ, 4λᵢ along that of λⱼ.
+                    [i, j] if c + 1 == i => 4.0 * l(j),
+                    [i, j] if c + 1 == j => 4.0 * l(i),
+                    _ => 0.0,
+                },
+            })
+        })
+    }
 
     /// The isoparametric map of an element with nodal coordinates `x` at reference point
     /// ξ: the physical point x(ξ), J = ∂x/∂ξ and det J.
@@ -293,11 +339,11 @@ where
     ElementGeometryError: From<JacobianError<D>>,
 {
     fn on_rule(degree: usize, levels: u32) -> Self {
-        let rule = E::rule(degree);
+        let rule = E::RULE(degree);
         Self::new(&if levels == 0 {
             rule
         } else {
-            E::subdivided(&rule, levels)
+            E::SUBDIVIDED(&rule, levels)
         })
     }
     fn values(&self) -> &[[f64; N]] {
@@ -364,6 +410,46 @@ pub(crate) mod checks {
                         g[a][j]
                     );
                 }
+            }
+        }
+    }
+
+    /// At ξ on the element with nodes `x`: the point x(ξ), J, and the interpolant of the
+    /// nodal values `nodal` with its physical gradient.
+    #[allow(clippy::type_complexity)]
+    pub fn interpolant<E: Lagrange<D, N>, const D: usize, const N: usize>(
+        x: &[[f64; D]; N],
+        nodal: &[f64],
+        xi: [f64; D],
+    ) -> ([f64; D], SMatrix<f64, D, D>, f64, [f64; D])
+    where
+        SMatrix<f64, D, D>: JacobianMatrix<D>,
+    {
+        let (p, jac, det) = E::map(x, xi);
+        let n = E::shape(xi);
+        let g = jac.inverse_transpose(det, &E::grad_shape(xi));
+        let val = (0..N).map(|a| n[a] * nodal[a]).sum();
+        let grad = std::array::from_fn(|i| (0..N).map(|a| g[a][i] * nodal[a]).sum());
+        (p, jac, val, grad)
+    }
+
+    /// The field `c₀ + c · x`, linear in the physical coordinates, is interpolated
+    /// exactly, with its gradient `c`, at the `points` of the (curved) element `x`.
+    pub fn linear_fields_exact<E: Lagrange<D, N>, const D: usize, const N: usize>(
+        x: &[[f64; D]; N],
+        points: &[[f64; D]],
+        c0: f64,
+        c: [f64; D],
+    ) where
+        SMatrix<f64, D, D>: JacobianMatrix<D>,
+    {
+        let f = |p: [f64; D]| c0 + (0..D).map(|i| c[i] * p[i]).sum::<f64>();
+        let nodal = x.map(f);
+        for &xi in points {
+            let (p, _, val, grad) = interpolant::<E, D, N>(x, &nodal, xi);
+            assert!((val - f(p)).abs() < 1e-13);
+            for i in 0..D {
+                assert!((grad[i] - c[i]).abs() < 1e-12, "{} vs {}", grad[i], c[i]);
             }
         }
     }

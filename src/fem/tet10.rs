@@ -26,7 +26,7 @@ use nalgebra::Matrix3;
 use super::element::{GeometryOf, JacobianError, JacobianMatrix, Lagrange, Tabulation};
 pub use super::element::{jacobian, physical_gradients};
 use super::quadrature::TetRule;
-use super::tri6;
+use super::tri6::Tri6;
 
 /// Reference coordinates (ξ, η, ζ) of the ten local nodes.
 pub const REFERENCE_NODES: [[f64; 3]; 10] = [
@@ -78,71 +78,16 @@ pub struct Tet10;
 /// Errors of the tetrahedron's geometry.
 pub type TetError = JacobianError<3>;
 
-/// Shape function values N₀ … N₉ at reference point ξ = (ξ, η, ζ).
+impl Lagrange<3, 10> for Tet10 {
+    const EDGES: &'static [[usize; 2]] = &TET_EDGES;
+    const RULE: fn(usize) -> TetRule = TetRule::degree;
+    const SUBDIVIDED: fn(&TetRule, u32) -> TetRule = TetRule::subdivided;
+}
+
+/// Shape function values N₀ … N₉ at reference point ξ = (ξ, η, ζ) ([`Lagrange::shape`]).
 #[inline]
 pub fn shape(xi: [f64; 3]) -> [f64; 10] {
-    let [l1, l2, l3] = xi;
-    let l0 = 1.0 - l1 - l2 - l3;
-    [
-        l0 * (2.0 * l0 - 1.0),
-        l1 * (2.0 * l1 - 1.0),
-        l2 * (2.0 * l2 - 1.0),
-        l3 * (2.0 * l3 - 1.0),
-        4.0 * l0 * l1,
-        4.0 * l1 * l2,
-        4.0 * l0 * l2,
-        4.0 * l0 * l3,
-        4.0 * l2 * l3,
-        4.0 * l1 * l3,
-    ]
-}
-
-/// Reference gradients ∇_ξ Nₐ = (∂/∂ξ, ∂/∂η, ∂/∂ζ) at ξ; they sum to zero over a.
-#[inline]
-pub fn grad_shape(xi: [f64; 3]) -> [[f64; 3]; 10] {
-    let [l1, l2, l3] = xi;
-    let l0 = 1.0 - l1 - l2 - l3;
-    // ∂λ₀ = (−1, −1, −1), ∂λ₁ = e₁, ∂λ₂ = e₂, ∂λ₃ = e₃.
-    let d0 = 1.0 - 4.0 * l0;
-    [
-        [d0, d0, d0],
-        [4.0 * l1 - 1.0, 0.0, 0.0],
-        [0.0, 4.0 * l2 - 1.0, 0.0],
-        [0.0, 0.0, 4.0 * l3 - 1.0],
-        // 4λ₀λ₁
-        [4.0 * (l0 - l1), -4.0 * l1, -4.0 * l1],
-        // 4λ₁λ₂
-        [4.0 * l2, 4.0 * l1, 0.0],
-        // 4λ₀λ₂
-        [-4.0 * l2, 4.0 * (l0 - l2), -4.0 * l2],
-        // 4λ₀λ₃
-        [-4.0 * l3, -4.0 * l3, 4.0 * (l0 - l3)],
-        // 4λ₂λ₃
-        [0.0, 4.0 * l3, 4.0 * l2],
-        // 4λ₁λ₃
-        [4.0 * l3, 0.0, 4.0 * l1],
-    ]
-}
-
-impl Lagrange<3, 10> for Tet10 {
-    fn shape(xi: [f64; 3]) -> [f64; 10] {
-        shape(xi)
-    }
-    fn grad_shape(xi: [f64; 3]) -> [[f64; 3]; 10] {
-        grad_shape(xi)
-    }
-    fn rule(degree: usize) -> TetRule {
-        TetRule::degree(degree)
-    }
-    fn subdivided(rule: &TetRule, levels: u32) -> TetRule {
-        rule.subdivided(levels)
-    }
-}
-
-/// The isoparametric map at reference point ξ: x(ξ), J = ∂x/∂ξ and det J ([`Lagrange::map`]).
-#[inline]
-pub fn map(x: &[[f64; 3]; 10], xi: [f64; 3]) -> ([f64; 3], Matrix3<f64>, f64) {
-    Tet10::map(x, xi)
+    Tet10::shape(xi)
 }
 
 impl JacobianMatrix<3> for Matrix3<f64> {
@@ -186,8 +131,8 @@ impl JacobianMatrix<3> for Matrix3<f64> {
 /// area-weighted normal ∂x/∂ξ × ∂x/∂η (its length is the area element: dA = |n| dξ dη).
 #[inline]
 pub fn face_map(x: &[[f64; 3]; 6], xi: [f64; 2]) -> ([f64; 3], [f64; 3]) {
-    let n = tri6::shape(xi);
-    let g = tri6::grad_shape(xi);
+    let n = Tri6::shape(xi);
+    let g = Tri6::grad_shape(xi);
     let mut p = [0.0; 3];
     let mut t = [[0.0; 3]; 2];
     for a in 0..6 {
@@ -212,6 +157,7 @@ pub type TetTabulation = Tabulation<Tet10, 3, 10>;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fem::element::checks;
 
     /// A curved element: an irregular tetrahedron with some mid-nodes moved off their
     /// edges' midpoints (as on a sphere).
@@ -237,7 +183,6 @@ mod tests {
 
     #[test]
     fn shape_functions_and_map() {
-        use crate::fem::element::checks;
         let points = sample_points();
         checks::partition_of_unity::<Tet10, 3, 10>(&points);
         checks::kronecker::<Tet10, 3, 10>(&REFERENCE_NODES);
@@ -312,10 +257,10 @@ mod tests {
         for p in monomials {
             let nodal: Vec<f64> = REFERENCE_NODES.iter().map(|s| p(*s)).collect();
             for xi in sample_points() {
-                let n = shape(xi);
+                let n = Tet10::shape(xi);
                 let v: f64 = (0..10).map(|a| n[a] * nodal[a]).sum();
                 assert!((v - p(xi)).abs() < 1e-14);
-                let g = grad_shape(xi);
+                let g = Tet10::grad_shape(xi);
                 for j in 0..3 {
                     let gv: f64 = (0..10).map(|a| g[a][j] * nodal[a]).sum();
                     let (mut xp, mut xm) = (xi, xi);
@@ -333,28 +278,20 @@ mod tests {
     #[test]
     fn physical_gradients_invert_the_jacobian_and_linear_fields_are_exact() {
         let x = curved();
-        let f = |p: [f64; 3]| 0.7 - 1.3 * p[0] + 2.1 * p[1] - 0.4 * p[2];
-        let nodal: Vec<f64> = x.iter().map(|p| f(*p)).collect();
         for xi in sample_points() {
-            let (p, jac, det) = Tet10::map(&x, xi);
-            let g = physical_gradients(&jac, det, &grad_shape(xi));
+            let (_, jac, det) = Tet10::map(&x, xi);
+            let rg = Tet10::grad_shape(xi);
+            let g = physical_gradients(&jac, det, &rg);
             let inv_t = jac.try_inverse().expect("regular").transpose();
-            let rg = grad_shape(xi);
             for a in 0..10 {
                 for i in 0..3 {
                     let e: f64 = (0..3).map(|j| inv_t[(i, j)] * rg[a][j]).sum();
                     assert!((g[a][i] - e).abs() < 1e-12);
                 }
             }
-            let n = shape(xi);
-            let v: f64 = (0..10).map(|a| n[a] * nodal[a]).sum();
-            assert!((v - f(p)).abs() < 1e-13);
-            let ge = [-1.3, 2.1, -0.4];
-            for i in 0..3 {
-                let gi: f64 = (0..10).map(|a| g[a][i] * nodal[a]).sum();
-                assert!((gi - ge[i]).abs() < 1e-12, "{gi} vs {}", ge[i]);
-            }
         }
+        let points = sample_points();
+        checks::linear_fields_exact::<Tet10, 3, 10>(&x, &points, 0.7, [-1.3, 2.1, -0.4]);
     }
 
     /// The tabulated geometry integrates the volume of the curved element as the

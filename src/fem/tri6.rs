@@ -43,59 +43,16 @@ pub struct Tri6;
 /// Errors of the triangle's geometry.
 pub type P2Error = JacobianError<2>;
 
-/// Shape function values N₀ … N₅ at reference point ξ = (ξ, η).
+impl Lagrange<2, 6> for Tri6 {
+    const EDGES: &'static [[usize; 2]] = &[[0, 1], [1, 2], [2, 0]];
+    const RULE: fn(usize) -> TriangleRule = TriangleRule::degree;
+    const SUBDIVIDED: fn(&TriangleRule, u32) -> TriangleRule = TriangleRule::subdivided;
+}
+
+/// Shape function values N₀ … N₅ at reference point ξ = (ξ, η) ([`Lagrange::shape`]).
 #[inline]
 pub fn shape(xi: [f64; 2]) -> [f64; 6] {
-    let l1 = xi[0];
-    let l2 = xi[1];
-    let l0 = 1.0 - l1 - l2;
-    [
-        l0 * (2.0 * l0 - 1.0),
-        l1 * (2.0 * l1 - 1.0),
-        l2 * (2.0 * l2 - 1.0),
-        4.0 * l0 * l1,
-        4.0 * l1 * l2,
-        4.0 * l2 * l0,
-    ]
-}
-
-/// Reference gradients (∂Nₐ/∂ξ, ∂Nₐ/∂η) at ξ; they sum to zero over a.
-#[inline]
-pub fn grad_shape(xi: [f64; 2]) -> [[f64; 2]; 6] {
-    let l1 = xi[0];
-    let l2 = xi[1];
-    let l0 = 1.0 - l1 - l2;
-    // ∂λ₀ = (−1, −1), ∂λ₁ = (1, 0), ∂λ₂ = (0, 1).
-    let d0 = 1.0 - 4.0 * l0; // d/dλ₀ of λ₀(2λ₀ − 1) is 4λ₀ − 1, times ∂λ₀ = −1
-    [
-        [d0, d0],
-        [4.0 * l1 - 1.0, 0.0],
-        [0.0, 4.0 * l2 - 1.0],
-        [4.0 * (l0 - l1), -4.0 * l1],
-        [4.0 * l2, 4.0 * l1],
-        [-4.0 * l2, 4.0 * (l0 - l2)],
-    ]
-}
-
-impl Lagrange<2, 6> for Tri6 {
-    fn shape(xi: [f64; 2]) -> [f64; 6] {
-        shape(xi)
-    }
-    fn grad_shape(xi: [f64; 2]) -> [[f64; 2]; 6] {
-        grad_shape(xi)
-    }
-    fn rule(degree: usize) -> TriangleRule {
-        TriangleRule::degree(degree)
-    }
-    fn subdivided(rule: &TriangleRule, levels: u32) -> TriangleRule {
-        rule.subdivided(levels)
-    }
-}
-
-/// The isoparametric map at reference point ξ: x(ξ), J = ∂x/∂ξ and det J ([`Lagrange::map`]).
-#[inline]
-pub fn map(x: &[[f64; 2]; 6], xi: [f64; 2]) -> ([f64; 2], Matrix2<f64>, f64) {
-    Tri6::map(x, xi)
+    Tri6::shape(xi)
 }
 
 impl JacobianMatrix<2> for Matrix2<f64> {
@@ -157,6 +114,7 @@ pub type ElementGeometry = GeometryOf<2, 6>;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fem::element::checks;
 
     /// A curved element: vertices (0,0), (2,0.2), (0.3,1.5) with the mid-node of edge 1–2
     /// pushed outward (as on a circle) and the mid-node of edge 0–1 pulled inward.
@@ -178,7 +136,6 @@ mod tests {
 
     #[test]
     fn shape_functions_and_map() {
-        use crate::fem::element::checks;
         let points = sample_points();
         checks::partition_of_unity::<Tri6, 2, 6>(&points);
         checks::kronecker::<Tri6, 2, 6>(&REFERENCE_NODES);
@@ -214,19 +171,7 @@ mod tests {
     /// fields quadratic in ξ below.
     #[test]
     fn linear_physical_fields_exact_on_curved_element() {
-        let x = curved();
-        let f = |p: [f64; 2]| 0.7 - 1.3 * p[0] + 2.1 * p[1];
-        let nodal: Vec<f64> = x.iter().map(|p| f(*p)).collect();
-        for xi in sample_points() {
-            let (p, jac, det) = Tri6::map(&x, xi);
-            let n = shape(xi);
-            let g = physical_gradients(&jac, det, &grad_shape(xi));
-            let val: f64 = (0..6).map(|a| n[a] * nodal[a]).sum();
-            let gx: f64 = (0..6).map(|a| g[a][0] * nodal[a]).sum();
-            let gy: f64 = (0..6).map(|a| g[a][1] * nodal[a]).sum();
-            assert!((val - f(p)).abs() < 1e-13);
-            assert!((gx + 1.3).abs() < 1e-12 && (gy - 2.1).abs() < 1e-12);
-        }
+        checks::linear_fields_exact::<Tri6, 2, 6>(&curved(), &sample_points(), 0.7, [-1.3, 2.1]);
     }
 
     #[test]
@@ -245,17 +190,12 @@ mod tests {
             1.0 + p[0] - 2.0 * p[1] + 3.0 * p[0] * p[0] - p[0] * p[1] + 0.5 * p[1] * p[1]
         };
         let grad = |p: [f64; 2]| [1.0 + 6.0 * p[0] - p[1], -2.0 - p[0] + p[1]];
-        let nodal: Vec<f64> = x.iter().map(|p| f(*p)).collect();
+        let nodal = x.map(f);
         for xi in sample_points() {
-            let (p, jac, det) = Tri6::map(&x, xi);
-            let n = shape(xi);
-            let g = physical_gradients(&jac, det, &grad_shape(xi));
-            let val: f64 = (0..6).map(|a| n[a] * nodal[a]).sum();
-            let gx: f64 = (0..6).map(|a| g[a][0] * nodal[a]).sum();
-            let gy: f64 = (0..6).map(|a| g[a][1] * nodal[a]).sum();
+            let (p, _, val, g) = checks::interpolant::<Tri6, 2, 6>(&x, &nodal, xi);
             let ge = grad(p);
             assert!((val - f(p)).abs() < 1e-12);
-            assert!((gx - ge[0]).abs() < 1e-11 && (gy - ge[1]).abs() < 1e-11);
+            assert!((g[0] - ge[0]).abs() < 1e-11 && (g[1] - ge[1]).abs() < 1e-11);
         }
     }
 
@@ -273,12 +213,9 @@ mod tests {
                 2.0 - 0.7 * s[0] + 1.8 * s[1],
             ]
         };
-        let nodal: Vec<f64> = REFERENCE_NODES.iter().map(|s| q(*s)).collect();
+        let nodal = REFERENCE_NODES.map(q);
         for xi in sample_points() {
-            let (_, jac, det) = Tri6::map(&x, xi);
-            let n = shape(xi);
-            let g = physical_gradients(&jac, det, &grad_shape(xi));
-            let val: f64 = (0..6).map(|a| n[a] * nodal[a]).sum();
+            let (_, jac, val, g) = checks::interpolant::<Tri6, 2, 6>(&x, &nodal, xi);
             assert!((val - q(xi)).abs() < 1e-13);
             let d = dq(xi);
             let inv_t = jac.try_inverse().expect("regular Jacobian").transpose();
@@ -286,9 +223,7 @@ mod tests {
                 inv_t[(0, 0)] * d[0] + inv_t[(0, 1)] * d[1],
                 inv_t[(1, 0)] * d[0] + inv_t[(1, 1)] * d[1],
             ];
-            let gx: f64 = (0..6).map(|k| g[k][0] * nodal[k]).sum();
-            let gy: f64 = (0..6).map(|k| g[k][1] * nodal[k]).sum();
-            assert!((gx - expect[0]).abs() < 1e-12 && (gy - expect[1]).abs() < 1e-12);
+            assert!((g[0] - expect[0]).abs() < 1e-12 && (g[1] - expect[1]).abs() < 1e-12);
         }
     }
 

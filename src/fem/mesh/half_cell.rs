@@ -54,8 +54,9 @@ use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
 };
 
+use super::super::element::Lagrange;
 use super::super::quadrature::TriangleRule;
-use super::super::tri6::{self, EDGES, P2Tabulation, REFERENCE_NODES};
+use super::super::tri6::{self, EDGES, P2Tabulation, REFERENCE_NODES, Tri6};
 use super::{MeshError, NamedPoints};
 
 /// The three material sub-domains of the cell (defined with the physics it selects).
@@ -110,39 +111,9 @@ const MEMBRANE_ASPECT: f64 = 2.0;
 impl MeshParams {
     /// Checks every field; the error names the field and the rule it breaks.
     pub fn validate(&self) -> Result<(), MeshError> {
-        let bad = |field: &'static str, value: f64, rule: &'static str| {
-            Err(MeshError::InvalidParam { field, value, rule })
-        };
-        for (i, v) in self.center.iter().enumerate() {
-            if !v.is_finite() {
-                return bad(
-                    if i == 0 { "center[0]" } else { "center[1]" },
-                    *v,
-                    "must be finite",
-                );
-            }
-        }
-        let positive = [
-            ("r_n", self.r_n),
-            ("r_cp", self.r_cp),
-            ("r_c", self.r_c),
-            ("h_bottom", self.h_bottom),
-            ("h_nucleus", self.h_nucleus),
-            ("refine", self.refine),
-        ];
-        for (field, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return bad(field, v, "must be finite and > 0");
-            }
-        }
-        if self.r_cp <= self.r_n {
-            return bad("r_cp", self.r_cp, "must exceed r_n");
-        }
-        if self.r_c <= self.r_cp {
-            return bad("r_c", self.r_c, "must exceed r_cp");
-        }
+        super::check_cell(&self.center, self)?;
         if !(self.min_angle_deg > 0.0 && self.min_angle_deg <= 33.0) {
-            return bad(
+            return super::invalid(
                 "min_angle_deg",
                 self.min_angle_deg,
                 "must lie in (0, 33] (larger limits need not terminate)",
@@ -908,7 +879,7 @@ impl Mesh {
     pub fn jacobian_range(&self, e: usize) -> (f64, f64, [f64; 2]) {
         let x = self.element_coords(e);
         let vals: [f64; 6] =
-            std::array::from_fn(|a| tri6::jacobian(&x, &tri6::grad_shape(REFERENCE_NODES[a])).1);
+            std::array::from_fn(|a| tri6::jacobian(&x, &Tri6::grad_shape(REFERENCE_NODES[a])).1);
         let q = |xi: [f64; 2]| {
             let n = tri6::shape(xi);
             (0..6).map(|a| n[a] * vals[a]).sum::<f64>()
@@ -1120,8 +1091,6 @@ impl Mesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::element::Lagrange;
-    use crate::fem::tri6::Tri6;
 
     fn mesh(refine: f64) -> Mesh {
         Mesh::generate(&params(refine)).expect("mesh generation")
