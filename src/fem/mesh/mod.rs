@@ -150,6 +150,46 @@ pub(crate) fn check_jacobians<X>(
     Ok(())
 }
 
+/// Fails with [`MeshError::InvalidParam`]: `field` = `value` breaks `rule`.
+pub(crate) fn invalid(
+    field: &'static str,
+    value: f64,
+    rule: &'static str,
+) -> Result<(), MeshError> {
+    Err(MeshError::InvalidParam { field, value, rule })
+}
+
+/// The checks both meshers' parameters begin with: every coordinate of `center` finite,
+/// the radii, sizes and refinement of the section `p` finite and positive, and
+/// r_n < r_cp < r_c.
+pub(crate) fn check_cell(center: &[f64], p: &MeshParams) -> Result<(), MeshError> {
+    for (v, name) in center.iter().zip(["center[0]", "center[1]", "center[2]"]) {
+        if !v.is_finite() {
+            return invalid(name, *v, "must be finite");
+        }
+    }
+    let positive = [
+        ("r_n", p.r_n),
+        ("r_cp", p.r_cp),
+        ("r_c", p.r_c),
+        ("h_bottom", p.h_bottom),
+        ("h_nucleus", p.h_nucleus),
+        ("refine", p.refine),
+    ];
+    for (field, v) in positive {
+        if !(v.is_finite() && v > 0.0) {
+            return invalid(field, v, "must be finite and > 0");
+        }
+    }
+    if p.r_cp <= p.r_n {
+        return invalid("r_cp", p.r_cp, "must exceed r_n");
+    }
+    if p.r_c <= p.r_cp {
+        return invalid("r_c", p.r_c, "must exceed r_cp");
+    }
+    Ok(())
+}
+
 /// The checks both meshers' parameters end with: the finest element size `h_min` not lost
 /// in the round-off of coordinates as far as `far` from the origin, and at most `limit`
 /// elements in the `estimate`.

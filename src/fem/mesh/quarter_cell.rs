@@ -148,37 +148,8 @@ impl Mesh3Params {
 
     /// Checks every field; the error names the field and the rule it breaks.
     pub fn validate(&self) -> Result<(), MeshError> {
-        let bad = |field: &'static str, value: f64, rule: &'static str| {
-            Err(MeshError::InvalidParam { field, value, rule })
-        };
-        for (v, name) in self
-            .center
-            .iter()
-            .zip(["center[0]", "center[1]", "center[2]"])
-        {
-            if !v.is_finite() {
-                return bad(name, *v, "must be finite");
-            }
-        }
-        let positive = [
-            ("r_n", self.r_n),
-            ("r_cp", self.r_cp),
-            ("r_c", self.r_c),
-            ("h_bottom", self.h_bottom),
-            ("h_nucleus", self.h_nucleus),
-            ("refine", self.refine),
-        ];
-        for (field, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return bad(field, v, "must be finite and > 0");
-            }
-        }
-        if self.r_cp <= self.r_n {
-            return bad("r_cp", self.r_cp, "must exceed r_n");
-        }
-        if self.r_c <= self.r_cp {
-            return bad("r_c", self.r_c, "must exceed r_cp");
-        }
+        super::check_cell(&self.center, &self.section())?;
+        let bad = super::invalid;
         let layer_rule = "layers thinner than 1e-3 µm are below the geometry kernel's tolerance";
         if self.r_n < MIN_LAYER {
             return bad("r_n", self.r_n, layer_rule);
