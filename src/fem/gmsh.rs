@@ -120,8 +120,8 @@ type TaggedTriangle = ([usize; 6], Domain, usize);
 type PhysicalName = (u32, i64, String, Option<Domain>);
 
 impl<'a> MshFile<'a> {
-    /// Splits `text` into `$Name … $EndName` sections.
-    fn split(text: &'a str, path: &'a str) -> Result<Self, MeshError> {
+    /// Splits `text` into `$Name … $EndName` sections and checks its format.
+    fn open(text: &'a str, path: &'a str) -> Result<Self, MeshError> {
         let err = |line: usize, message: String| MeshError::Format {
             path: path.to_string(),
             line,
@@ -152,7 +152,9 @@ impl<'a> MshFile<'a> {
         if let Some(s) = cur {
             return Err(err(0, format!("section ${} not closed", s.name)));
         }
-        Ok(MshFile { path, sections })
+        let file = MshFile { path, sections };
+        file.check_format()?;
+        Ok(file)
     }
 
     fn err(&self, line: usize, message: String) -> MeshError {
@@ -228,158 +230,33 @@ impl<'a> MshFile<'a> {
         Ok(phys_domain)
     }
 
-    /// `$Entities`: surface tag → domain (through its physical tags).
-    fn surface_domains(
-        &self,
-        phys_domain: &HashMap<i64, Domain>,
-    ) -> Result<HashMap<i64, Domain>, MeshError> {
-        let ent = self
-            .find("Entities")
-            .ok_or_else(|| self.err(0, "no $Entities".into()))?;
-        let mut t = Tokens::new(self.path, ent);
-        let counts: [usize; 4] = [
-            t.next("the number of points")?,
-            t.next("the number of curves")?,
-            t.next("the number of surfaces")?,
-            t.next("the number of volumes")?,
-        ];
-        let mut surface_domain: HashMap<i64, Domain> = HashMap::new();
-        for (dim, &n) in counts.iter().enumerate().take(3) {
-            for _ in 0..n {
-                let line = t.line();
-                let tag: i64 = t.next("an entity tag")?;
-                let n_coords = if dim == 0 { 3 } else { 6 };
-                for _ in 0..n_coords {
-                    t.next::<f64>("an entity coordinate")?;
-                }
-                let n_phys: usize = t.next("the number of physical tags")?;
-                let mut doms = Vec::new();
-                for _ in 0..n_phys {
-                    let p: i64 = t.next("a physical tag")?;
-                    if let Some(d) = phys_domain.get(&p) {
-                        doms.push(*d);
-                    }
-                }
-                if dim > 0 {
-                    let n_b: usize = t.next("the number of bounding entities")?;
-                    for _ in 0..n_b {
-                        t.next::<i64>("a bounding entity tag")?;
-                    }
-                }
-                if dim == 2 {
-                    match doms.as_slice() {
-                        [d] => {
-                            surface_domain.insert(tag, *d);
-                        }
-                        [] => {}
-                        _ => {
-                            return Err(self.err(
-                                line,
-                                format!("surface {tag} is in more than one cell domain"),
-                            ));
-                        }
-                    }
-                }
-            }
-        }
-        Ok(surface_domain)
-    }
-
-    /// `$Nodes`: node tag → (x, y).
-    fn node_coordinates(&self) -> Result<HashMap<usize, [f64; 2]>, MeshError> {
-        let sec = self
-            .find("Nodes")
-            .ok_or_else(|| self.err(0, "no $Nodes".into()))?;
-        let mut t = Tokens::new(self.path, sec);
-        let n_blocks: usize = t.next("the number of node blocks")?;
-        let _n_nodes: usize = t.next("the number of nodes")?;
-        let _min_tag: usize = t.next("the minimum node tag")?;
-        let _max_tag: usize = t.next("the maximum node tag")?;
-        let mut coord: HashMap<usize, [f64; 2]> = HashMap::new();
-        for _ in 0..n_blocks {
-            let _dim: u32 = t.next("a block's entity dimension")?;
-            let _tag: i64 = t.next("a block's entity tag")?;
-            let parametric: u32 = t.next("the parametric flag")?;
-            let n: usize = t.next("a block's node count")?;
-            let mut tags = Vec::with_capacity(n);
-            for _ in 0..n {
-                tags.push(t.next::<usize>("a node tag")?);
-            }
-            for tag in tags {
-                let x: f64 = t.next("a node x")?;
-                let y: f64 = t.next("a node y")?;
-                let _z: f64 = t.next("a node z")?;
-                if parametric == 1 {
-                    return Err(self.err(t.line(), "parametric nodes are not supported".into()));
-                }
-                if !(x.is_finite() && y.is_finite()) {
-                    return Err(
-                        self.err(t.line(), format!("node {tag} has a non-finite coordinate"))
-                    );
-                }
-                coord.insert(tag, [x, y]);
-            }
-        }
-        Ok(coord)
-    }
-
     /// `$Elements`: the 6-node triangles on cell surfaces.
     fn cell_triangles(
         &self,
         surface_domain: &HashMap<i64, Domain>,
     ) -> Result<Vec<TaggedTriangle>, MeshError> {
-        let sec = self
-            .find("Elements")
-            .ok_or_else(|| self.err(0, "no $Elements".into()))?;
-        let mut t = Tokens::new(self.path, sec);
-        let n_blocks: usize = t.next("the number of element blocks")?;
-        for _ in 0..3 {
-            t.next::<usize>("an element count or tag")?;
-        }
-        let mut tri_tags: Vec<([usize; 6], Domain, usize)> = Vec::new();
-        for _ in 0..n_blocks {
-            let line = t.line();
-            let dim: u32 = t.next("a block's entity dimension")?;
-            let tag: i64 = t.next("a block's entity tag")?;
-            let etype: u32 = t.next("a block's element type")?;
-            let n: usize = t.next("a block's element count")?;
-            let per = match etype {
-                1 => 2,
-                2 => 3,
-                3 => 4,
-                8 => 3,
-                9 => 6,
-                15 => 1,
-                _ => return Err(self.err(line, format!("unsupported element type {etype}"))),
-            };
+        let mut tri_tags: Vec<TaggedTriangle> = Vec::new();
+        let block = |dim: u32, tag: i64, etype: u32, line: usize| {
+            if !matches!(etype, 1 | 2 | 3 | 8 | 9 | 15) {
+                return Err(self.err(line, format!("unsupported element type {etype}")));
+            }
             if etype == TRIANGLE3 {
                 return Err(self.err(line, "3-node triangles: the model needs 6-node (P2)".into()));
             }
-            let dom = if dim == 2 && etype == TRIANGLE6 {
-                Some(*surface_domain.get(&tag).ok_or_else(|| {
-                    self.err(
-                        line,
-                        format!("surface {tag} is in no cell domain physical group"),
-                    )
-                })?)
-            } else {
-                None
-            };
-            for _ in 0..n {
-                let eline = t.line();
-                let _etag: usize = t.next("an element tag")?;
-                let mut nodes = [0usize; 6];
-                for k in 0..per {
-                    let v: usize = t.next("an element node")?;
-                    if let Some(slot) = nodes.get_mut(k) {
-                        *slot = v;
-                    }
-                }
-                if let Some(d) = dom {
-                    tri_tags.push((nodes, d, eline));
-                }
+            if dim != 2 || etype != TRIANGLE6 {
+                return Ok(None);
             }
-        }
+            let d = surface_domain.get(&tag).ok_or_else(|| {
+                self.err(
+                    line,
+                    format!("surface {tag} is in no cell domain physical group"),
+                )
+            })?;
+            Ok(Some(*d))
+        };
+        self.elements(block, |d: &Domain, nodes, line| {
+            tri_tags.push((std::array::from_fn(|k| nodes[k]), *d, line));
+        })?;
         if tri_tags.is_empty() {
             return Err(self.err(0, "no 6-node triangles".into()));
         }
@@ -469,9 +346,9 @@ impl<'a> MshFile<'a> {
         Ok((domains, outer))
     }
 
-    /// `$Entities` of all four dimensions: for each dimension, entity tag → its physical
-    /// tags.
-    fn entity_physicals(&self) -> Result<[HashMap<i64, Vec<i64>>; 4], MeshError> {
+    /// `$Entities` of all four dimensions: for each dimension, in file order, the entities'
+    /// tags, their physical tags and their lines.
+    fn entity_physicals(&self) -> Result<[Vec<(i64, Vec<i64>, usize)>; 4], MeshError> {
         let ent = self
             .find("Entities")
             .ok_or_else(|| self.err(0, "no $Entities".into()))?;
@@ -482,9 +359,10 @@ impl<'a> MshFile<'a> {
             t.next("the number of surfaces")?,
             t.next("the number of volumes")?,
         ];
-        let mut out: [HashMap<i64, Vec<i64>>; 4] = Default::default();
+        let mut out: [Vec<(i64, Vec<i64>, usize)>; 4] = Default::default();
         for (dim, &n) in counts.iter().enumerate() {
             for _ in 0..n {
+                let line = t.line();
                 let tag: i64 = t.next("an entity tag")?;
                 let n_coords = if dim == 0 { 3 } else { 6 };
                 for _ in 0..n_coords {
@@ -501,7 +379,35 @@ impl<'a> MshFile<'a> {
                         t.next::<i64>("a bounding entity tag")?;
                     }
                 }
-                out[dim].insert(tag, phys);
+                out[dim].push((tag, phys, line));
+            }
+        }
+        Ok(out)
+    }
+
+    /// The cell domain of each entity of `entities` (one dimension's, from
+    /// [`MshFile::entity_physicals`]) through its physical tags `phys_domain`; an entity in
+    /// two domains is refused (`what` names the entities in the message).
+    fn entity_domains(
+        &self,
+        entities: &[(i64, Vec<i64>, usize)],
+        phys_domain: &HashMap<i64, Domain>,
+        what: &str,
+    ) -> Result<HashMap<i64, Domain>, MeshError> {
+        let mut out = HashMap::new();
+        for (tag, phys, line) in entities {
+            let doms: HashSet<Domain> = phys
+                .iter()
+                .filter_map(|p| phys_domain.get(p))
+                .copied()
+                .collect();
+            match doms.len() {
+                0 => {}
+                1 => out.extend(doms.into_iter().map(|d| (*tag, d))),
+                _ => {
+                    let message = format!("{what} {tag} is in more than one cell domain");
+                    return Err(self.err(*line, message));
+                }
             }
         }
         Ok(out)
@@ -553,24 +459,10 @@ impl<'a> MshFile<'a> {
         volume_domain: &HashMap<i64, Domain>,
         outer_surfaces: &HashSet<i64>,
     ) -> Result<(Vec<TaggedTet>, Vec<TaggedFace>), MeshError> {
-        let sec = self
-            .find("Elements")
-            .ok_or_else(|| self.err(0, "no $Elements".into()))?;
-        let mut t = Tokens::new(self.path, sec);
-        let n_blocks: usize = t.next("the number of element blocks")?;
-        for _ in 0..3 {
-            t.next::<usize>("an element count or tag")?;
-        }
         let mut tets: Vec<TaggedTet> = Vec::new();
         let mut faces: Vec<TaggedFace> = Vec::new();
-        for _ in 0..n_blocks {
-            let line = t.line();
-            let dim: u32 = t.next("a block's entity dimension")?;
-            let tag: i64 = t.next("a block's entity tag")?;
-            let etype: u32 = t.next("a block's element type")?;
-            let n: usize = t.next("a block's element count")?;
-            let per = element_nodes(etype)
-                .ok_or_else(|| self.err(line, format!("unsupported element type {etype}")))?;
+        // Some(domain) for the tetrahedra of a cell volume, None for an outer surface.
+        let block = |dim: u32, tag: i64, etype: u32, line: usize| {
             let dom = if dim == 3 {
                 volume_domain.get(&tag).copied()
             } else {
@@ -588,11 +480,53 @@ impl<'a> MshFile<'a> {
                     "4-node tetrahedra: the model needs 10-node (P2)".into(),
                 ));
             }
-            let is_tet = dom.is_some() && etype == TET10;
             let is_face = dim == 2 && etype == TRIANGLE6 && outer_surfaces.contains(&tag);
             if dim == 2 && etype == TRIANGLE3 && outer_surfaces.contains(&tag) {
                 return Err(self.err(line, "3-node triangles: the model needs 6-node (P2)".into()));
             }
+            Ok(match dom {
+                Some(d) if etype == TET10 => Some(Some(d)),
+                _ => is_face.then_some(None),
+            })
+        };
+        self.elements(block, |dom: &Option<Domain>, nodes, line| match dom {
+            Some(d) => tets.push((nodes, *d, line)),
+            None => faces.push((std::array::from_fn(|k| nodes[k]), line)),
+        })?;
+        if tets.is_empty() {
+            return Err(self.err(0, "no 10-node tetrahedra in the cell volumes".into()));
+        }
+        if faces.is_empty() {
+            return Err(self.err(0, "no 6-node triangles in the outer surface".into()));
+        }
+        Ok((tets, faces))
+    }
+
+    /// `$Elements`, block by block: `block(dimension, entity tag, element type, line)`
+    /// refuses the block, or says whether its elements are wanted and as what (`K`); each
+    /// wanted element's first ten node tags go to `element(kind, nodes, line)`.
+    fn elements<K>(
+        &self,
+        mut block: impl FnMut(u32, i64, u32, usize) -> Result<Option<K>, MeshError>,
+        mut element: impl FnMut(&K, [usize; 10], usize),
+    ) -> Result<(), MeshError> {
+        let sec = self
+            .find("Elements")
+            .ok_or_else(|| self.err(0, "no $Elements".into()))?;
+        let mut t = Tokens::new(self.path, sec);
+        let n_blocks: usize = t.next("the number of element blocks")?;
+        for _ in 0..3 {
+            t.next::<usize>("an element count or tag")?;
+        }
+        for _ in 0..n_blocks {
+            let line = t.line();
+            let dim: u32 = t.next("a block's entity dimension")?;
+            let tag: i64 = t.next("a block's entity tag")?;
+            let etype: u32 = t.next("a block's element type")?;
+            let n: usize = t.next("a block's element count")?;
+            let per = element_nodes(etype)
+                .ok_or_else(|| self.err(line, format!("unsupported element type {etype}")))?;
+            let kind = block(dim, tag, etype, line)?;
             for _ in 0..n {
                 let eline = t.line();
                 let _etag: usize = t.next("an element tag")?;
@@ -603,30 +537,26 @@ impl<'a> MshFile<'a> {
                         *slot = v;
                     }
                 }
-                if let (true, Some(d)) = (is_tet, dom) {
-                    tets.push((nodes, d, eline));
-                } else if is_face {
-                    let mut f = [0usize; 6];
-                    f.copy_from_slice(&nodes[..6]);
-                    faces.push((f, eline));
+                if let Some(kind) = &kind {
+                    element(kind, nodes, eline);
                 }
             }
         }
-        if tets.is_empty() {
-            return Err(self.err(0, "no 10-node tetrahedra in the cell volumes".into()));
-        }
-        if faces.is_empty() {
-            return Err(self.err(0, "no 6-node triangles in the outer surface".into()));
-        }
-        Ok((tets, faces))
+        Ok(())
     }
 }
 
-/// The text of the file at `path` and its name for messages.
-fn read_text(path: &Path) -> Result<(String, String), MeshError> {
+/// Once the parameters' `validation` passed, the file at `path` parsed by
+/// `parse(text, name for messages)`.
+fn read_file<M>(
+    path: &Path,
+    validation: Result<(), MeshError>,
+    parse: impl FnOnce(&str, &str) -> Result<M, MeshError>,
+) -> Result<M, MeshError> {
+    validation?;
     let pstr = path.display().to_string();
     match std::fs::read_to_string(path) {
-        Ok(text) => Ok((text, pstr)),
+        Ok(text) => parse(&text, &pstr),
         Err(source) => Err(MeshError::Io { path: pstr, source }),
     }
 }
@@ -637,40 +567,21 @@ impl Mesh3 {
     /// `outer`, and completes it for the cell `params` (see [`super::mesh::quarter_cell`]: the checks
     /// against the cell, the symmetry planes, the named points, the Jacobians).
     pub fn read_gmsh(path: &Path, params: &Mesh3Params) -> Result<Mesh3, MeshError> {
-        params.validate()?;
-        let (text, pstr) = read_text(path)?;
-        Self::parse_gmsh(&text, &pstr, params)
+        read_file(path, params.validate(), |text, name| {
+            Self::parse_gmsh(text, name, params)
+        })
     }
 
     /// As [`Mesh3::read_gmsh`], from the file's text (`path` is only used in messages).
     pub fn parse_gmsh(text: &str, path: &str, params: &Mesh3Params) -> Result<Mesh3, MeshError> {
-        let file = MshFile::split(text, path)?;
-        file.check_format()?;
+        let file = MshFile::open(text, path)?;
         let (phys_domain, phys_outer) = file.physical_groups3()?;
         let entities = file.entity_physicals()?;
-        let mut volume_domain: HashMap<i64, Domain> = HashMap::new();
-        for (tag, phys) in &entities[3] {
-            let doms: HashSet<Domain> = phys
-                .iter()
-                .filter_map(|p| phys_domain.get(p))
-                .copied()
-                .collect();
-            match doms.len() {
-                0 => {}
-                1 => {
-                    volume_domain.extend(doms.into_iter().map(|d| (*tag, d)));
-                }
-                _ => {
-                    return Err(
-                        file.err(0, format!("volume {tag} is in more than one cell domain"))
-                    );
-                }
-            }
-        }
+        let volume_domain = file.entity_domains(&entities[3], &phys_domain, "volume")?;
         let outer_surfaces: HashSet<i64> = entities[2]
             .iter()
-            .filter(|(_, phys)| phys.iter().any(|p| phys_outer.contains(p)))
-            .map(|(tag, _)| *tag)
+            .filter(|(_, phys, _)| phys.iter().any(|p| phys_outer.contains(p)))
+            .map(|(tag, _, _)| *tag)
             .collect();
         let coords = file.nodes3()?;
         let (tets, faces) = file.cell_tets(&volume_domain, &outer_surfaces)?;
@@ -734,17 +645,22 @@ impl Mesh {
     /// vertices within that tolerance of their positions. Elements given clockwise are
     /// reordered; every element's Jacobian is checked.
     pub fn read_gmsh(path: &Path, params: &MeshParams) -> Result<Mesh, MeshError> {
-        params.validate()?;
-        let (text, pstr) = read_text(path)?;
-        Self::parse_gmsh(&text, &pstr, params)
+        read_file(path, params.validate(), |text, name| {
+            Self::parse_gmsh(text, name, params)
+        })
     }
 
     /// As [`Mesh::read_gmsh`], from the file's text (`path` is only used in messages).
     pub fn parse_gmsh(text: &str, path: &str, params: &MeshParams) -> Result<Mesh, MeshError> {
-        let file = MshFile::split(text, path)?;
-        file.check_format()?;
-        let surface_domain = file.surface_domains(&file.physical_domains()?)?;
-        let coord = file.node_coordinates()?;
+        let file = MshFile::open(text, path)?;
+        let entities = file.entity_physicals()?;
+        let surface_domain =
+            file.entity_domains(&entities[2], &file.physical_domains()?, "surface")?;
+        let coord: HashMap<usize, [f64; 2]> = file
+            .nodes3()?
+            .into_iter()
+            .map(|(tag, p)| (tag, [p[0], p[1]]))
+            .collect();
         let triangles = file.cell_triangles(&surface_domain)?;
         let (nodes, n_vertices, elements, domains) = file.renumber(&triangles, &coord)?;
         Self::assemble_from_elements(params, nodes, n_vertices, elements, domains, path)
