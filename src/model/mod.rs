@@ -64,7 +64,7 @@ use kernels::{Formulation, Switches};
 use kinematics::NodalOf;
 pub(crate) use kinematics::deformation;
 use plan::{PlanOf, TangentOf};
-pub use shape::{Constraints, HalfPlane, Quarter, Shape};
+pub use shape::{Constraints, Evaluation, HalfPlane, Quarter, Shape, State};
 pub use switch::Restart;
 
 /// Physical parameters of a scene in solver units (µm, s, pN).
@@ -481,13 +481,31 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         st
     }
 
-    /// The switches at `t` and the caps of state `y` ([`Self::fill_caps`]) in the scratch
-    /// vector, taken until the residual or Jacobian puts it back.
-    fn switches_and_caps(&mut self, t: f64, y: &[f64]) -> (Switches, Vec<(f64, f64)>) {
+    /// The element loop of a residual or a Jacobian at time `t` in state `y` with the
+    /// switches `sw`: the caps of `y` ([`Self::fill_caps`], in the scratch vector), then
+    /// [`in_blocks`] on the buffers `buf` with `compute(cell, caps, e, out)` and
+    /// `scatter(plan, e, out)`. Errors carry the time `t`.
+    fn element_loop<T: Send>(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        sw: &Switches,
+        buf: &mut [(T, Result<(), DaeError>)],
+        compute: impl Fn(&Self, &[(f64, f64)], usize, &mut T) -> Result<(), DaeError> + Sync,
+        mut scatter: impl FnMut(&PlanOf<D, N, E>, usize, &T),
+    ) -> Result<(), DaeError> {
         let mut caps = std::mem::take(&mut self.scratch.caps);
-        let sw = Switches::at(&self.params, t);
         self.fill_caps(y, sw.t_as, &mut caps);
-        (sw, caps)
+        let cell = &*self;
+        let result = in_blocks(
+            cell.elements.len(),
+            cell.parallel,
+            buf,
+            |e, out| compute(cell, &caps, e, out),
+            |e, out| scatter(&cell.plan, e, out),
+        );
+        self.scratch.caps = caps;
+        result.map_err(|e| at_time(e, t))
     }
 
     /// The solid's inputs on element `e` in state `st` at the active-strain ramp `t_a`.
@@ -593,109 +611,107 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         xs.iter().any(|x| self.substrate.eval(x).0 > -reach)
     }
 
-    /// The residual with the kernels of the kinematic model `K` ([`Dae::residual`]).
-    pub(crate) fn residual_of<K: Formulation<D, N, E>>(
+    /// The residual or the iteration matrix with the kernels of the kinematic model `K`.
+    pub(crate) fn evaluate_with<K: Formulation<D, N, E>>(
         &mut self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
+        what: Evaluation,
+    ) -> Result<(), DaeError> {
+        match what {
+            Evaluation::Residual(at, r) => self.residual_of::<K>(at, r),
+            Evaluation::Jacobian(at, cj, v) => self.jacobian_of::<K>(at, cj, v),
+        }
+    }
+
+    /// The residual with the kernels of the kinematic model `K` ([`Dae::residual`]).
+    fn residual_of<K: Formulation<D, N, E>>(
+        &mut self,
+        at: State,
         r: &mut [f64],
     ) -> Result<(), DaeError> {
-        let mut buf = self.scratch.take_vectors();
-        let (sw, caps) = self.switches_and_caps(t, y);
+        let State { t, y, yp } = at;
+        let sw = Switches::at(&self.params, t);
         r.fill(0.0);
-        let p = &self.params;
-        let inertia = self.dofs.inertia;
-        if inertia {
+        if self.dofs.inertia {
             let n_u = self.dofs.n_u;
             for k in 0..n_u {
                 r[k] = yp[k] - y[n_u + k];
             }
         }
-        let g_now = p.gravity * sw.s_g * sw.t_g;
-        let element = |e: usize, fe: &mut NodalOf<D, N>| -> Result<(), DaeError> {
-            let el = &self.elements[e];
-            let st = self.gather(el, y, yp);
+        let g_now = self.params.gravity * sw.s_g * sw.t_g;
+        let element = |cell: &Self, caps: &[(f64, f64)], e: usize, fe: &mut NodalOf<D, N>| {
+            let (el, p) = (&cell.elements[e], &cell.params);
+            let st = cell.gather(el, y, yp);
             *fe = [[0.0f64; D]; N];
-            K::solid_residual(&self.solid(e, &st, sw.t_a), fe)?;
-            kernels::mass_residual(el, g_now, inertia, p.drag, &st, fe);
-            if self.in_reach(el, &st.u) {
-                let mue = self.gather_mu(el, &caps, sw.t_as).map(|m| m.0);
-                let band = self.band(el, &st, mue.as_ref(), sw.t_as);
+            K::solid_residual(&cell.solid(e, &st, sw.t_a), fe)?;
+            kernels::mass_residual(el, g_now, cell.dofs.inertia, p.drag, &st, fe);
+            if cell.in_reach(el, &st.u) {
+                let mue = cell.gather_mu(el, caps, sw.t_as).map(|m| m.0);
+                let band = cell.band(el, &st, mue.as_ref(), sw.t_as);
                 kernels::band_residual::<S, K, D, N, E>(e, &band, fe)?;
             }
             Ok(())
         };
-        let result = in_blocks(
-            self.elements.len(),
-            self.parallel,
-            &mut buf,
-            element,
-            |e, fe| self.plan.scatter_residual(e, fe, r),
-        );
+        let mut buf = self.scratch.take_vectors();
+        let result = self.element_loop(t, y, &sw, &mut buf, element, |plan, e, fe| {
+            plan.scatter_residual(e, fe, r)
+        });
         self.scratch.vectors = buf;
-        self.scratch.caps = caps;
-        result.map_err(|e| at_time(e, t))?;
+        result?;
         let mu_off = self.dofs.mu_offset();
         for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
             let row = mu_off + k;
             let x = self.position(y, i);
-            r[row] = kernels::mu_rate_residual::<S, D, N, E>(p, &self.substrate, &x, yp[row]);
+            r[row] =
+                kernels::mu_rate_residual::<S, D, N, E>(&self.params, &self.substrate, &x, yp[row]);
         }
         all_finite(r, "residual")
     }
 
     /// The iteration matrix with the kernels of the kinematic model `K` ([`Dae::jacobian`]).
-    pub(crate) fn jacobian_of<K: Formulation<D, N, E>>(
+    fn jacobian_of<K: Formulation<D, N, E>>(
         &mut self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
+        at: State,
         cj: f64,
         v: &mut [f64],
     ) -> Result<(), DaeError> {
-        let mut buf = self.scratch.take_tangents();
-        let (sw, caps) = self.switches_and_caps(t, y);
+        let State { t, y, yp } = at;
+        let sw = Switches::at(&self.params, t);
         v.fill(0.0);
-        let p = &self.params;
-        let inertia = self.dofs.inertia;
         self.plan.add_kinematic(cj, v);
-        let element = |e: usize, tan: &mut Box<TangentOf<E, N>>| -> Result<(), DaeError> {
-            let el = &self.elements[e];
-            let st = self.gather(el, y, yp);
-            tan.reset(el.with_mu);
-            K::solid_tangent(&self.solid(e, &st, sw.t_a), tan)?;
-            kernels::mass_tangent(el, cj, inertia, p.drag, tan);
-            if self.in_reach(el, &st.u) {
-                let mue = self.gather_mu(el, &caps, sw.t_as);
-                let mu = mue.map(|m| m.0);
-                let band = self.band(el, &st, mu.as_ref(), sw.t_as);
-                kernels::band_tangent::<S, K, D, N, E>(&band, tan);
-                // The unknown is the exposure A: ∂f/∂A_b = ∂f/∂μ_b dμ_b/dA_b.
-                if let Some((_, g)) = mue {
-                    for row in tan.b.iter_mut() {
-                        for (b, gb) in row.iter_mut().zip(g) {
-                            *b *= gb;
+        let element =
+            |cell: &Self, caps: &[(f64, f64)], e: usize, tan: &mut Box<TangentOf<E, N>>| {
+                let (el, p) = (&cell.elements[e], &cell.params);
+                let st = cell.gather(el, y, yp);
+                tan.reset(el.with_mu);
+                K::solid_tangent(&cell.solid(e, &st, sw.t_a), tan)?;
+                kernels::mass_tangent(el, cj, cell.dofs.inertia, p.drag, tan);
+                if cell.in_reach(el, &st.u) {
+                    let mue = cell.gather_mu(el, caps, sw.t_as);
+                    let mu = mue.map(|m| m.0);
+                    let band = cell.band(el, &st, mu.as_ref(), sw.t_as);
+                    kernels::band_tangent::<S, K, D, N, E>(&band, tan);
+                    // The unknown is the exposure A: ∂f/∂A_b = ∂f/∂μ_b dμ_b/dA_b.
+                    if let Some((_, g)) = mue {
+                        for row in tan.b.iter_mut() {
+                            for (b, gb) in row.iter_mut().zip(g) {
+                                *b *= gb;
+                            }
                         }
                     }
                 }
-            }
-            Ok(())
-        };
-        let result = in_blocks(
-            self.elements.len(),
-            self.parallel,
-            &mut buf,
-            element,
-            |e, tan| self.plan.scatter_tangent(e, tan, cj, v),
-        );
+                Ok(())
+            };
+        let mut buf = self.scratch.take_tangents();
+        let result = self.element_loop(t, y, &sw, &mut buf, element, |plan, e, tan| {
+            plan.scatter_tangent(e, tan, cj, v)
+        });
         self.scratch.tangents = buf;
-        self.scratch.caps = caps;
-        result.map_err(|e| at_time(e, t))?;
-        if p.adhesion.is_some() {
+        result?;
+        if self.params.adhesion.is_some() {
             for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
                 let x = self.position(y, i);
-                let (dx, da) = kernels::mu_rate_tangent::<S, D, N, E>(p, &self.substrate, &x);
+                let (dx, da) =
+                    kernels::mu_rate_tangent::<S, D, N, E>(&self.params, &self.substrate, &x);
                 let (own, on_u) = &self.plan.mu_rate[k];
                 v[*own] += cj - da;
                 for c in 0..D {
@@ -718,7 +734,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> Dae for 
     /// scattered into the momentum rows, then the adhesion rows; the kernels of the case's
     /// kinematic model.
     fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
-        S::residual(self, t, y, yp, r)
+        S::evaluate(self, Evaluation::Residual(State { t, y, yp }, r))
     }
 
     fn pattern(&self) -> &Pattern {
@@ -734,7 +750,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> Dae for 
         cj: f64,
         v: &mut [f64],
     ) -> Result<(), DaeError> {
-        S::jacobian(self, t, y, yp, cj, v)
+        S::evaluate(self, Evaluation::Jacobian(State { t, y, yp }, cj, v))
     }
 
     fn differential(&self) -> Vec<bool> {

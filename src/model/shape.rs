@@ -109,23 +109,29 @@ pub trait Shape<const D: usize, const N: usize, const E: usize>:
     /// The contact radius in state `y`: the length of the contour in contact in the plane
     /// z = 0, `(deformed, reference)` [µm].
     fn contact_lengths(cell: &CellOf<Self, D, N, E>, y: &[f64]) -> (f64, f64);
-    /// The residual with the formulation of the case's kinematic model.
-    fn residual(
-        cell: &mut CellOf<Self, D, N, E>,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        r: &mut [f64],
-    ) -> Result<(), DaeError>;
-    /// The iteration matrix with the formulation of the case's kinematic model.
-    fn jacobian(
-        cell: &mut CellOf<Self, D, N, E>,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        cj: f64,
-        v: &mut [f64],
-    ) -> Result<(), DaeError>;
+    /// The residual or the iteration matrix with the formulation of the case's kinematic
+    /// model.
+    fn evaluate(cell: &mut CellOf<Self, D, N, E>, what: Evaluation) -> Result<(), DaeError>;
+}
+
+/// A state (t, y, ẏ) of the cell's DAE.
+#[derive(Debug, Clone, Copy)]
+pub struct State<'a> {
+    /// Time.
+    pub t: f64,
+    /// y.
+    pub y: &'a [f64],
+    /// ẏ.
+    pub yp: &'a [f64],
+}
+
+/// One evaluation of the cell's DAE.
+pub enum Evaluation<'a> {
+    /// The residual `F(t, y, ẏ)` into the slice.
+    Residual(State<'a>, &'a mut [f64]),
+    /// The iteration matrix `J = ∂F/∂y + cj ∂F/∂ẏ` for `cj` (the number) into the slice
+    /// (the pattern's order).
+    Jacobian(State<'a>, f64, &'a mut [f64]),
 }
 
 /// The half cell's six-node triangles (plane strain and axisymmetric).
@@ -146,19 +152,6 @@ fn mark<const D: usize>(mut out: Vec<[bool; D]>, nodes: &[usize], c: usize) -> V
         out[i][c] = true;
     }
     out
-}
-
-/// `cell.method::<K>(args)` with `K` the formulation of the half-plane case's kinematic
-/// model.
-macro_rules! by_kinematics {
-    ($cell:ident . $method:ident ( $($arg:expr),* )) => {{
-        use super::kinematics::{Axisymmetric, PlaneStrain};
-        match $cell.params.kinematics {
-            KinematicModel::PlaneStrain => $cell.$method::<PlaneStrain>($($arg),*),
-            KinematicModel::Axisymmetric => $cell.$method::<Axisymmetric>($($arg),*),
-            KinematicModel::ThreeD => Err(DaeError::Fatal(THREE_D.into())),
-        }
-    }};
 }
 
 impl Shape<2, 6, 12> for HalfPlane {
@@ -196,25 +189,13 @@ impl Shape<2, 6, 12> for HalfPlane {
         cell.contact_lengths(y)
     }
 
-    fn residual(
-        cell: &mut CellOf<Self, 2, 6, 12>,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        r: &mut [f64],
-    ) -> Result<(), DaeError> {
-        by_kinematics!(cell.residual_of(t, y, yp, r))
-    }
-
-    fn jacobian(
-        cell: &mut CellOf<Self, 2, 6, 12>,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        cj: f64,
-        v: &mut [f64],
-    ) -> Result<(), DaeError> {
-        by_kinematics!(cell.jacobian_of(t, y, yp, cj, v))
+    fn evaluate(cell: &mut CellOf<Self, 2, 6, 12>, what: Evaluation) -> Result<(), DaeError> {
+        use super::kinematics::{Axisymmetric, PlaneStrain};
+        match cell.params.kinematics {
+            KinematicModel::PlaneStrain => cell.evaluate_with::<PlaneStrain>(what),
+            KinematicModel::Axisymmetric => cell.evaluate_with::<Axisymmetric>(what),
+            KinematicModel::ThreeD => Err(DaeError::Fatal(THREE_D.into())),
+        }
     }
 }
 
@@ -263,24 +244,7 @@ impl Shape<3, 10, 30> for Quarter {
         cell.meridian_contact_lengths(y)
     }
 
-    fn residual(
-        cell: &mut CellOf<Self, 3, 10, 30>,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        r: &mut [f64],
-    ) -> Result<(), DaeError> {
-        cell.residual_of::<super::kinematics::ThreeD>(t, y, yp, r)
-    }
-
-    fn jacobian(
-        cell: &mut CellOf<Self, 3, 10, 30>,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        cj: f64,
-        v: &mut [f64],
-    ) -> Result<(), DaeError> {
-        cell.jacobian_of::<super::kinematics::ThreeD>(t, y, yp, cj, v)
+    fn evaluate(cell: &mut CellOf<Self, 3, 10, 30>, what: Evaluation) -> Result<(), DaeError> {
+        cell.evaluate_with::<super::kinematics::ThreeD>(what)
     }
 }
