@@ -11,7 +11,7 @@ use std::marker::PhantomData;
 use nalgebra::SMatrix;
 use thiserror::Error;
 
-use super::quadrature::Rule;
+use super::quadrature::{Rule, Subdivision};
 use super::{Domain, Mesh, Mesh3, NamedPoints};
 
 /// An isoparametric quadratic (P2) Lagrange element on the reference simplex of dimension
@@ -24,7 +24,7 @@ pub trait Lagrange<const D: usize, const N: usize>: Send + Sync {
     /// The reference simplex's rule exact to a degree.
     const RULE: fn(usize) -> Rule<[f64; D]>;
     /// A rule applied on each sub-simplex of `levels` regular refinements.
-    const SUBDIVIDED: fn(&Rule<[f64; D]>, u32) -> Rule<[f64; D]>;
+    const SUBDIVIDED: Subdivision<[f64; D]>;
 
     /// Shape function values at reference point ξ.
     #[inline]

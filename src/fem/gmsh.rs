@@ -116,6 +116,9 @@ struct MshFile<'a> {
 /// A cell triangle as read: its six node tags, its domain and the line it is on.
 type TaggedTriangle = ([usize; 6], Domain, usize);
 
+/// An entity of `$Entities`: its tag, its physical tags and its line.
+type Entity = (i64, Vec<i64>, usize);
+
 /// A physical group: dimension, tag, name (lower case) and the cell domain it names.
 type PhysicalName = (u32, i64, String, Option<Domain>);
 
@@ -348,7 +351,7 @@ impl<'a> MshFile<'a> {
 
     /// `$Entities` of all four dimensions: for each dimension, in file order, the entities'
     /// tags, their physical tags and their lines.
-    fn entity_physicals(&self) -> Result<[Vec<(i64, Vec<i64>, usize)>; 4], MeshError> {
+    fn entity_physicals(&self) -> Result<[Vec<Entity>; 4], MeshError> {
         let ent = self
             .find("Entities")
             .ok_or_else(|| self.err(0, "no $Entities".into()))?;
@@ -359,7 +362,7 @@ impl<'a> MshFile<'a> {
             t.next("the number of surfaces")?,
             t.next("the number of volumes")?,
         ];
-        let mut out: [Vec<(i64, Vec<i64>, usize)>; 4] = Default::default();
+        let mut out: [Vec<Entity>; 4] = Default::default();
         for (dim, &n) in counts.iter().enumerate() {
             for _ in 0..n {
                 let line = t.line();
@@ -390,7 +393,7 @@ impl<'a> MshFile<'a> {
     /// two domains is refused (`what` names the entities in the message).
     fn entity_domains(
         &self,
-        entities: &[(i64, Vec<i64>, usize)],
+        entities: &[Entity],
         phys_domain: &HashMap<i64, Domain>,
         what: &str,
     ) -> Result<HashMap<i64, Domain>, MeshError> {

@@ -88,6 +88,10 @@ impl<P> Rule<P> {
     }
 }
 
+/// A rule's refinement: the rule applied on each sub-domain of a number of regular
+/// refinements (e.g. [`TriangleRule::subdivided`]).
+pub type Subdivision<P> = fn(&Rule<P>, u32) -> Rule<P>;
+
 /// A quadrature rule on the reference triangle with vertices (0,0), (1,0), (0,1):
 /// ∫_T̂ f dξ ≈ Σ_q w_q f(ξ_q), points ξ_q = (ξ, η); the weights sum to the triangle's
 /// area ½.
@@ -501,42 +505,118 @@ fn tet_degree5_orbits() -> [f64; 6] {
 mod tests {
     use super::*;
 
-    /// ∫_T̂ ξ^i η^j = i! j! / (i + j + 2)!.
-    fn exact_monomial(i: u32, j: u32) -> f64 {
+    /// Relative error of `rule` on the monomial ∏ ξᵢ^aᵢ, whose integral over the reference
+    /// simplex is ∏ aᵢ! / (Σ aᵢ + D)!.
+    fn monomial_error<const D: usize>(rule: &Rule<[f64; D]>, a: [u32; D]) -> f64 {
         let f = |n: u32| (1..=n).map(f64::from).product::<f64>();
-        f(i) * f(j) / f(i + j + 2)
-    }
-
-    fn rule_error(rule: &TriangleRule, i: u32, j: u32) -> f64 {
+        let exact = a.iter().map(|&k| f(k)).product::<f64>() / f(a.iter().sum::<u32>() + D as u32);
         let q: f64 = rule
             .points
             .iter()
             .zip(&rule.weights)
-            .map(|(p, w)| w * p[0].powi(i as i32) * p[1].powi(j as i32))
+            .map(|(p, w)| w * (0..D).map(|i| p[i].powi(a[i] as i32)).product::<f64>())
             .sum();
-        let e = exact_monomial(i, j);
-        (q - e).abs() / e
+        (q - exact).abs() / exact
     }
 
     /// Largest relative error over all monomials of total degree exactly `d`.
-    fn max_error_at_degree(rule: &TriangleRule, d: u32) -> f64 {
-        (0..=d)
-            .map(|i| rule_error(rule, i, d - i))
-            .fold(0.0, f64::max)
+    fn max_error_at_degree<const D: usize>(rule: &Rule<[f64; D]>, d: u32) -> f64 {
+        let mut worst: f64 = 0.0;
+        // The exponents of the first D − 1 coordinates as the digits of k in base d + 1.
+        for k in 0..(d + 1).pow(D as u32 - 1) {
+            let mut a = [0u32; D];
+            let mut rest = k;
+            for ai in a.iter_mut().take(D - 1) {
+                *ai = rest % (d + 1);
+                rest /= d + 1;
+            }
+            let first: u32 = a.iter().sum();
+            if first <= d {
+                a[D - 1] = d - first;
+                worst = worst.max(monomial_error(rule, a));
+            }
+        }
+        worst
     }
 
-    fn assert_positive_inside(rule: &TriangleRule) {
+    /// Positive weights summing to the simplex's measure 1/D!, all points strictly inside.
+    fn assert_positive_inside<const D: usize>(rule: &Rule<[f64; D]>) {
         assert!(!rule.is_empty());
         assert_eq!(rule.points.len(), rule.weights.len());
         for (p, w) in rule.points.iter().zip(&rule.weights) {
             assert!(*w > 0.0, "non-positive weight {w}");
             assert!(
-                p[0] > 0.0 && p[1] > 0.0 && p[0] + p[1] < 1.0,
+                p.iter().all(|x| *x > 0.0) && p.iter().sum::<f64>() < 1.0,
                 "point {p:?} not strictly inside"
             );
         }
         let s: f64 = rule.weights.iter().sum();
-        assert!((s - 0.5).abs() < 1e-14, "weights sum {s}");
+        let measure = 1.0 / (1..=D).map(|k| k as f64).product::<f64>();
+        assert!((s - measure).abs() < 1e-14, "weights sum {s}");
+    }
+
+    /// The rules `degree(d)` for d ≤ `max` are exact to degree d and positive inside.
+    fn rules_exact_to_claimed_degree<const D: usize>(
+        degree: fn(usize) -> Rule<[f64; D]>,
+        max: usize,
+    ) {
+        for d in 0..=max {
+            let rule = degree(d);
+            assert_positive_inside(&rule);
+            for k in 0..=d as u32 {
+                let e = max_error_at_degree(&rule, k);
+                assert!(e < 1e-13, "degree {d} rule, monomials of degree {k}: {e}");
+            }
+        }
+    }
+
+    /// Each rule `degree(d)` of `sharp` = (d, s) is exact to degree s and no further: some
+    /// monomial of degree s + 1 is not integrated.
+    fn rules_fail_above<const D: usize>(
+        degree: fn(usize) -> Rule<[f64; D]>,
+        sharp: &[(usize, u32)],
+    ) {
+        for &(d, s) in sharp {
+            let e = max_error_at_degree(&degree(d), s + 1);
+            assert!(
+                e > 1e-11,
+                "degree {d} rule integrates degree {} exactly ({e:e})",
+                s + 1
+            );
+        }
+    }
+
+    /// The rules `degree(d)` subdivided `levels` times keep their degree and stay inside,
+    /// with (2^D)^levels times the points, for each (d, levels) of `cases`.
+    fn subdivided_rules_exact_and_inside<const D: usize>(
+        degree: fn(usize) -> Rule<[f64; D]>,
+        subdivided: Subdivision<[f64; D]>,
+        cases: &[(usize, u32)],
+    ) {
+        for &(d, levels) in cases {
+            let base = degree(d);
+            let rule = subdivided(&base, levels);
+            assert_eq!(rule.len(), base.len() * (1usize << D).pow(levels));
+            assert_positive_inside(&rule);
+            for k in 0..=d as u32 {
+                let e = max_error_at_degree(&rule, k);
+                assert!(e < 1e-13, "d={d} levels={levels} k={k}: {e}");
+            }
+            assert!(max_error_at_degree(&rule, d as u32 + 2) > 1e-10);
+        }
+        let base = degree(5);
+        assert_eq!(subdivided(&base, 0), base);
+    }
+
+    /// The error of `rule` on the kinked f = |ξ − a| whose integral is `exact`.
+    fn kink_error<const D: usize>(rule: &Rule<[f64; D]>, a: f64, exact: f64) -> f64 {
+        let q: f64 = rule
+            .points
+            .iter()
+            .zip(&rule.weights)
+            .map(|(p, w)| w * (p[0] - a).abs())
+            .sum();
+        (q - exact).abs()
     }
 
     #[test]
@@ -574,14 +654,7 @@ mod tests {
 
     #[test]
     fn triangle_rules_exact_to_claimed_degree() {
-        for d in 0..=20usize {
-            let rule = TriangleRule::degree(d);
-            assert_positive_inside(&rule);
-            for k in 0..=d as u32 {
-                let e = max_error_at_degree(&rule, k);
-                assert!(e < 1e-13, "degree {d} rule, monomials of degree {k}: {e}");
-            }
-        }
+        rules_exact_to_claimed_degree(TriangleRule::degree, 20);
     }
 
     #[test]
@@ -595,9 +668,8 @@ mod tests {
 
     #[test]
     fn rules_fail_one_degree_above() {
-        // Each rule's degree is sharp: some monomial of degree d + 1 is not integrated.
         // (d = 3 uses the degree-4 rule, so its sharp degree is 4.)
-        for (d, sharp) in [
+        let sharp = [
             (1, 1),
             (2, 2),
             (3, 4),
@@ -606,15 +678,8 @@ mod tests {
             (6, 6),
             (10, 10),
             (15, 15),
-        ] {
-            let rule = TriangleRule::degree(d);
-            let e = max_error_at_degree(&rule, sharp + 1);
-            assert!(
-                e > 1e-11,
-                "degree {d} rule integrates degree {} exactly",
-                sharp + 1
-            );
-        }
+        ];
+        rules_fail_above(TriangleRule::degree, &sharp);
     }
 
     #[test]
@@ -629,22 +694,9 @@ mod tests {
     }
 
     #[test]
-    fn subdivided_rules_exact_and_inside() {
-        for (d, levels) in [(2usize, 1u32), (4, 2), (5, 3), (10, 2)] {
-            let base = TriangleRule::degree(d);
-            let rule = base.subdivided(levels);
-            assert_eq!(rule.len(), base.len() * 4usize.pow(levels));
-            assert_positive_inside(&rule);
-            for k in 0..=d as u32 {
-                let e = max_error_at_degree(&rule, k);
-                assert!(e < 1e-13, "d={d} levels={levels} k={k}: {e}");
-            }
-            assert!(max_error_at_degree(&rule, d as u32 + 2) > 1e-10);
-        }
-        assert_eq!(
-            TriangleRule::degree(4).subdivided(0),
-            TriangleRule::degree(4)
-        );
+    fn triangle_subdivided_rules_exact_and_inside() {
+        let cases = [(2, 1), (4, 2), (5, 3), (10, 2)];
+        subdivided_rules_exact_and_inside(TriangleRule::degree, TriangleRule::subdivided, &cases);
     }
 
     #[test]
@@ -659,15 +711,7 @@ mod tests {
             let f2 = b * b * b / 6.0;
             f1 + f2
         };
-        let err = |r: &TriangleRule| {
-            let q: f64 = r
-                .points
-                .iter()
-                .zip(&r.weights)
-                .map(|(p, w)| w * (p[0] - a).abs())
-                .sum();
-            (q - exact).abs()
-        };
+        let err = |r: &TriangleRule| kink_error(r, a, exact);
         let base = TriangleRule::degree(4);
         let e0 = err(&base);
         let e3 = err(&base.subdivided(3));
@@ -694,58 +738,9 @@ mod tests {
         }
     }
 
-    /// ∫_T̂ ξ^a η^b ζ^c over the reference tetrahedron = a! b! c! / (a + b + c + 3)!.
-    fn exact_monomial3(a: u32, b: u32, c: u32) -> f64 {
-        let f = |n: u32| (1..=n).map(f64::from).product::<f64>();
-        f(a) * f(b) * f(c) / f(a + b + c + 3)
-    }
-
-    /// Largest relative error of `rule` over all monomials ξ^a η^b ζ^c of total degree
-    /// exactly `d`.
-    fn tet_max_error_at_degree(rule: &TetRule, d: u32) -> f64 {
-        let mut worst: f64 = 0.0;
-        for a in 0..=d {
-            for b in 0..=d - a {
-                let c = d - a - b;
-                let q: f64 = rule
-                    .points
-                    .iter()
-                    .zip(&rule.weights)
-                    .map(|(p, w)| {
-                        w * p[0].powi(a as i32) * p[1].powi(b as i32) * p[2].powi(c as i32)
-                    })
-                    .sum();
-                let e = exact_monomial3(a, b, c);
-                worst = worst.max((q - e).abs() / e);
-            }
-        }
-        worst
-    }
-
-    fn assert_tet_positive_inside(rule: &TetRule) {
-        assert!(!rule.is_empty());
-        assert_eq!(rule.points.len(), rule.weights.len());
-        for (p, w) in rule.points.iter().zip(&rule.weights) {
-            assert!(*w > 0.0, "non-positive weight {w}");
-            assert!(
-                p[0] > 0.0 && p[1] > 0.0 && p[2] > 0.0 && p[0] + p[1] + p[2] < 1.0,
-                "point {p:?} not strictly inside"
-            );
-        }
-        let s: f64 = rule.weights.iter().sum();
-        assert!((s - 1.0 / 6.0).abs() < 1e-14, "weights sum {s}");
-    }
-
     #[test]
     fn tet_rules_exact_to_claimed_degree() {
-        for d in 0..=14usize {
-            let rule = TetRule::degree(d);
-            assert_tet_positive_inside(&rule);
-            for k in 0..=d as u32 {
-                let e = tet_max_error_at_degree(&rule, k);
-                assert!(e < 1e-13, "degree {d} rule, monomials of degree {k}: {e}");
-            }
-        }
+        rules_exact_to_claimed_degree(TetRule::degree, 14);
     }
 
     #[test]
@@ -761,9 +756,8 @@ mod tests {
 
     #[test]
     fn tet_rules_fail_one_degree_above() {
-        // Each rule's degree is sharp: some monomial of degree d + 1 is not integrated.
         // (d = 3, 4 use the degree-5 rule, so their sharp degree is 5.)
-        for (d, sharp) in [
+        let sharp = [
             (1, 1),
             (2, 2),
             (3, 5),
@@ -773,15 +767,8 @@ mod tests {
             (7, 7),
             (10, 10),
             (13, 13),
-        ] {
-            let rule = TetRule::degree(d);
-            let e = tet_max_error_at_degree(&rule, sharp + 1);
-            assert!(
-                e > 1e-11,
-                "degree {d} rule integrates degree {} exactly ({e:e})",
-                sharp + 1
-            );
-        }
+        ];
+        rules_fail_above(TetRule::degree, &sharp);
     }
 
     /// The Newton solution is the known positive 14-point rule (two S₃₁ orbits and one S₂₂
@@ -810,18 +797,8 @@ mod tests {
 
     #[test]
     fn tet_subdivided_rules_exact_and_inside() {
-        for (d, levels) in [(1usize, 1u32), (2, 1), (5, 1), (5, 2), (6, 1), (2, 3)] {
-            let base = TetRule::degree(d);
-            let rule = base.subdivided(levels);
-            assert_eq!(rule.len(), base.len() * 8usize.pow(levels));
-            assert_tet_positive_inside(&rule);
-            for k in 0..=d as u32 {
-                let e = tet_max_error_at_degree(&rule, k);
-                assert!(e < 1e-13, "d={d} levels={levels} k={k}: {e}");
-            }
-            assert!(tet_max_error_at_degree(&rule, d as u32 + 2) > 1e-10);
-        }
-        assert_eq!(TetRule::degree(5).subdivided(0), TetRule::degree(5));
+        let cases = [(1, 1), (2, 1), (5, 1), (5, 2), (6, 1), (2, 3)];
+        subdivided_rules_exact_and_inside(TetRule::degree, TetRule::subdivided, &cases);
     }
 
     /// Bey's children tile the parent: equal volumes ⅛ of it, and together they integrate
@@ -848,15 +825,7 @@ mod tests {
             let b = 1.0 - a;
             f1 + b * b * b * b / 24.0 // ∫_a^1 (ξ − a)(1 − ξ)²/2 with s = 1 − ξ
         };
-        let err = |r: &TetRule| {
-            let q: f64 = r
-                .points
-                .iter()
-                .zip(&r.weights)
-                .map(|(p, w)| w * (p[0] - a).abs())
-                .sum();
-            (q - exact).abs()
-        };
+        let err = |r: &TetRule| kink_error(r, a, exact);
         let base = TetRule::degree(5);
         let (e0, e2) = (err(&base), err(&base.subdivided(2)));
         assert!(e2 < e0 / 10.0, "{e0} → {e2}");
