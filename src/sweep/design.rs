@@ -37,16 +37,16 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 pub struct AxisSpec {
     /// Dotted path into the case (as for `--set`).
-    #[serde(default, deserialize_with = "present_string")]
+    #[serde(default, deserialize_with = "super::present")]
     pub path: Option<String>,
     /// A list of RON values, or `Range(...)` / `LogRange(...)`.
-    #[serde(default, deserialize_with = "present_raw")]
+    #[serde(default, deserialize_with = "super::present")]
     pub values: Option<Box<RawValue>>,
     /// Name of a variant axis (its column in `sweep.csv`).
-    #[serde(default, deserialize_with = "present_string")]
+    #[serde(default, deserialize_with = "super::present")]
     pub name: Option<String>,
     /// The variants of a variant axis.
-    #[serde(default, deserialize_with = "present_variants")]
+    #[serde(default, deserialize_with = "super::present")]
     pub variants: Option<Vec<Variant>>,
 }
 
@@ -59,21 +59,6 @@ pub struct Variant {
     /// Overrides applied together, in order.
     #[serde(default)]
     pub set: Vec<String>,
-}
-
-/// A field written without `Some(...)`: present means `Some`.
-fn present_raw<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Box<RawValue>>, D::Error> {
-    Box::<RawValue>::deserialize(d).map(Some)
-}
-
-fn present_string<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<String>, D::Error> {
-    String::deserialize(d).map(Some)
-}
-
-fn present_variants<'de, D: serde::Deserializer<'de>>(
-    d: D,
-) -> Result<Option<Vec<Variant>>, D::Error> {
-    Vec::<Variant>::deserialize(d).map(Some)
 }
 
 /// The design as written in the sweep file.
