@@ -506,13 +506,17 @@ pub fn value_at(text: &str, path: &str) -> Option<String> {
 /// The value at `path` in a case as a number, if it is one: a number, or `Some(number)`.
 pub fn number_at(case: &Case, path: &str) -> Option<f64> {
     let text = case.to_ron().ok()?;
-    let v = value_at(&text, path)?;
-    let v = v.trim();
-    let inner = v
+    parse_number(&value_at(&text, path)?)
+}
+
+/// A number from RON text: `1.5`, `Some(1.5)`.
+pub fn parse_number(text: &str) -> Option<f64> {
+    let t = text.trim();
+    let t = t
         .strip_prefix("Some(")
         .and_then(|s| s.strip_suffix(')'))
-        .unwrap_or(v);
-    inner.trim().parse().ok()
+        .unwrap_or(t);
+    t.trim().parse().ok()
 }
 
 // ---------------------------------------------------------------------------------------
