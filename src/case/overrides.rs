@@ -506,13 +506,17 @@ pub fn value_at(text: &str, path: &str) -> Option<String> {
 /// The value at `path` in a case as a number, if it is one: a number, or `Some(number)`.
 pub fn number_at(case: &Case, path: &str) -> Option<f64> {
     let text = case.to_ron().ok()?;
-    let v = value_at(&text, path)?;
-    let v = v.trim();
-    let inner = v
+    parse_number(&value_at(&text, path)?)
+}
+
+/// A number from RON text: `1.5`, `Some(1.5)`.
+pub fn parse_number(text: &str) -> Option<f64> {
+    let t = text.trim();
+    let t = t
         .strip_prefix("Some(")
         .and_then(|s| s.strip_suffix(')'))
-        .unwrap_or(v);
-    inner.trim().parse().ok()
+        .unwrap_or(t);
+    t.trim().parse().ok()
 }
 
 // ---------------------------------------------------------------------------------------
@@ -814,6 +818,18 @@ mod tests {
         Case::from_str_with_overrides(BASE, "base.ron", &set(args))
     }
 
+    /// The message refusing `text` (labelled `label`) with `overrides`.
+    fn refusal_of(text: &str, label: &str, overrides: &[Override]) -> String {
+        Case::from_str_with_overrides(text, label, overrides)
+            .unwrap_err()
+            .to_string()
+    }
+
+    /// The message refusing the base case with the overrides `args`.
+    fn refusal(args: &[&str]) -> String {
+        refusal_of(BASE, "base.ron", &set(args))
+    }
+
     fn pillars(c: &Case) -> &crate::case::Pillars {
         match &c.substrate {
             Substrate::Pillars(p) => p,
@@ -897,20 +913,16 @@ mod tests {
         .unwrap();
         assert!(c.active.pac.unwrap().clip_to_cell);
         // Without clip_to_cell those axes leave the cell: refused, pointing at the switch.
-        let e = load(&[
+        let e = refusal(&[
             "active.pac.inner_semi_axes=(10.0, 9.0)",
             "active.pac.outer_semi_axes=(15.0, 14.0)",
-        ])
-        .unwrap_err()
-        .to_string();
+        ]);
         assert!(
             e.contains("outer_semi_axes") && e.contains("clip_to_cell"),
             "{e}"
         );
         // A misspelt reading lists the valid ones.
-        let e = load(&["adhesion.direction=Normal"])
-            .unwrap_err()
-            .to_string();
+        let e = refusal(&["adhesion.direction=Normal"]);
         assert!(e.contains("Cofactor") && e.contains("Unit"), "{e}");
     }
 
@@ -941,11 +953,11 @@ mod tests {
             "{msg}"
         );
         assert!(matches!(e, CaseError::Override { .. }));
-        let e = load(&["output.n_times=4.5"]).unwrap_err().to_string();
+        let e = refusal(&["output.n_times=4.5"]);
         assert!(e.starts_with("--set output.n_times=4.5: "), "{e}");
         assert!(e.contains("expected an integer"), "{e}");
         // Out of range: the validation rule, attributed to the override.
-        let e = load(&["materials.nucleus.nu=0.5"]).unwrap_err().to_string();
+        let e = refusal(&["materials.nucleus.nu=0.5"]);
         assert_eq!(
             e,
             "--set materials.nucleus.nu=0.5: materials.nucleus.nu = 0.5 is out of range \
@@ -956,17 +968,13 @@ mod tests {
     #[test]
     fn errors_in_the_file_keep_their_file_positions() {
         let text = BASE.replace("phases: (t_end: 600.0)", "phases: (t_end: -1.0)");
-        let e = Case::from_str_with_overrides(&text, "base.ron", &set(&["substrate.width=6.0"]))
-            .unwrap_err()
-            .to_string();
+        let e = refusal_of(&text, "base.ron", &set(&["substrate.width=6.0"]));
         let plain = Case::from_str(&text, "base.ron").unwrap_err().to_string();
         assert_eq!(e, plain);
         assert!(e.starts_with("base.ron:7:"), "{e}");
         // A syntax error in the file is the file's, whatever the overrides.
         let text = BASE.replace("spacing: 8.0,", "spacing: 8.0,,");
-        let e = Case::from_str_with_overrides(&text, "base.ron", &set(&["substrate.width=6.0"]))
-            .unwrap_err()
-            .to_string();
+        let e = refusal_of(&text, "base.ron", &set(&["substrate.width=6.0"]));
         assert!(e.starts_with("base.ron:4:"), "{e}");
         // A file error after an override on an earlier, longer line.
         let text = BASE.replace("(mode: OffAfter(0.5))", "(mode: OffAfter(0.5), nope: 1)");
@@ -983,20 +991,18 @@ mod tests {
 
     #[test]
     fn unknown_fields_list_the_valid_names_at_their_level() {
-        let e = load(&["substrate.widht=6.0"]).unwrap_err().to_string();
+        let e = refusal(&["substrate.widht=6.0"]);
         assert!(e.starts_with("--set substrate.widht=6.0: "), "{e}");
         assert!(
             e.contains("unknown field `widht`") && e.contains("`width`") && e.contains("`gap`"),
             "{e}"
         );
-        let e = load(&["solvr.rtol=1e-3"]).unwrap_err().to_string();
+        let e = refusal(&["solvr.rtol=1e-3"]);
         assert!(
             e.contains("unknown field `solvr`") && e.contains("`solver`"),
             "{e}"
         );
-        let e = load(&["materials.nucleus.young=1"])
-            .unwrap_err()
-            .to_string();
+        let e = refusal(&["materials.nucleus.young=1"]);
         assert!(
             e.contains("unknown field `young`") && e.contains("`e`"),
             "{e}"
@@ -1006,15 +1012,13 @@ mod tests {
             "Pillars(width: 8.0, spacing: 8.0, first_center: 0.0)",
             "Flat(y_s: -2.0)",
         );
-        let e = Case::from_str_with_overrides(&flat, "f.ron", &set(&["substrate.width=6.0"]))
-            .unwrap_err()
-            .to_string();
+        let e = refusal_of(&flat, "f.ron", &set(&["substrate.width=6.0"]));
         assert!(
             e.contains("unknown field `width`") && e.contains("`y_s`"),
             "{e}"
         );
         // Below a plain value.
-        let e = load(&["name.first=1"]).unwrap_err().to_string();
+        let e = refusal(&["name.first=1"]);
         assert_eq!(
             e,
             "--set name.first=1: name.first: `name` is `\"t\"` in the file, a value without \

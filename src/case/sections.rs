@@ -546,67 +546,46 @@ fn is_zero(k: &f64) -> bool {
     *k == 0.0
 }
 
-impl From<SubstrateRepr> for Substrate {
-    fn from(r: SubstrateRepr) -> Self {
-        match r {
-            SubstrateRepr::Flat { y_s } => Substrate::Flat(Flat { y_s }),
-            SubstrateRepr::Pillars {
-                width,
-                spacing,
-                height,
-                first_center,
-                q,
-                gap,
-                lattice,
-                y_top,
-                foot,
-                fillet,
-            } => Substrate::Pillars(Pillars {
-                width,
-                spacing,
-                height,
-                first_center,
-                q,
-                gap,
-                lattice,
-                y_top,
-                foot,
-                fillet,
-            }),
+/// The conversions between [`Substrate`] and its file form [`SubstrateRepr`], field for
+/// field, the pillars' fields listed once.
+macro_rules! substrate_repr_conversions {
+    ($($field:ident),* $(,)?) => {
+        impl From<SubstrateRepr> for Substrate {
+            fn from(r: SubstrateRepr) -> Self {
+                match r {
+                    SubstrateRepr::Flat { y_s } => Substrate::Flat(Flat { y_s }),
+                    SubstrateRepr::Pillars { $($field),* } => {
+                        Substrate::Pillars(Pillars { $($field),* })
+                    }
+                }
+            }
         }
-    }
+
+        impl From<Substrate> for SubstrateRepr {
+            fn from(s: Substrate) -> Self {
+                match s {
+                    Substrate::Flat(Flat { y_s }) => SubstrateRepr::Flat { y_s },
+                    Substrate::Pillars(Pillars { $($field),* }) => {
+                        SubstrateRepr::Pillars { $($field),* }
+                    }
+                }
+            }
+        }
+    };
 }
 
-impl From<Substrate> for SubstrateRepr {
-    fn from(s: Substrate) -> Self {
-        match s {
-            Substrate::Flat(Flat { y_s }) => SubstrateRepr::Flat { y_s },
-            Substrate::Pillars(Pillars {
-                width,
-                spacing,
-                height,
-                first_center,
-                q,
-                gap,
-                lattice,
-                y_top,
-                foot,
-                fillet,
-            }) => SubstrateRepr::Pillars {
-                width,
-                spacing,
-                height,
-                first_center,
-                q,
-                gap,
-                lattice,
-                y_top,
-                foot,
-                fillet,
-            },
-        }
-    }
-}
+substrate_repr_conversions!(
+    width,
+    spacing,
+    height,
+    first_center,
+    q,
+    gap,
+    lattice,
+    y_top,
+    foot,
+    fillet,
+);
 
 // ---------------------------------------------------------------------------------------
 // Contact

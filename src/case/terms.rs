@@ -218,19 +218,23 @@ fn field(path: impl Into<String>, value: f64) -> Option<(String, String)> {
     Some((path.into(), case::num(value)))
 }
 
-/// Turns a physics validator's error into a [`Refusal`]; `to_case` maps the validator's
-/// parameter name to the case field, else the refusal names `section`.
-fn physics_refusal(
-    e: physics::PhysicsError,
+/// A physics validator's verdict `checked`, its error turned into a [`Refusal`]: `to_case`
+/// maps the validator's parameter name to the case field, else the refusal names `section`.
+fn physics_refusal<T>(
+    checked: Result<T, physics::PhysicsError>,
     section: &str,
     to_case: impl Fn(&str) -> Option<(String, String)>,
-) -> Refusal {
+) -> Result<(), Refusal> {
+    let e = match checked {
+        Ok(_) => return Ok(()),
+        Err(e) => e,
+    };
     let physics::PhysicsError::InvalidParameter { name, value, .. } = &e;
     let fields = vec![to_case(name).unwrap_or_else(|| (section.to_string(), case::num(*value)))];
-    Refusal {
+    Err(Refusal {
         fields,
         message: e.to_string(),
-    }
+    })
 }
 
 /// The case fields the mesh is made from.
@@ -299,39 +303,34 @@ fn material_refusal(
     domain: &str,
     mat: &case::Material,
 ) -> Result<(), Refusal> {
-    Yeoh::from_engineering(mat.e, mat.nu, m.gamma, m.beta_fraction)
-        .map(drop)
-        .map_err(|e| {
-            physics_refusal(e, &format!("materials.{domain}"), |name| match name {
-                "E" => field(format!("materials.{domain}.e"), mat.e),
-                "nu" => field(format!("materials.{domain}.nu"), mat.nu),
-                "gamma" => field("materials.gamma", m.gamma),
-                "beta_fraction" => field("materials.beta_fraction", m.beta_fraction),
-                _ => None,
-            })
-        })
+    let law = Yeoh::from_engineering(mat.e, mat.nu, m.gamma, m.beta_fraction);
+    physics_refusal(law, &format!("materials.{domain}"), |name| match name {
+        "E" => field(format!("materials.{domain}.e"), mat.e),
+        "nu" => field(format!("materials.{domain}.nu"), mat.nu),
+        "gamma" => field("materials.gamma", m.gamma),
+        "beta_fraction" => field("materials.beta_fraction", m.beta_fraction),
+        _ => None,
+    })
 }
 
 /// The phase switches' check ([`Phases::validate`]), its error traced back to the case
 /// fields.
 fn phases_refusal(case: &Case) -> Result<(), Refusal> {
     let ph = &case.phases;
-    phases(case).validate().map_err(|e| {
-        physics_refusal(e, "phases", |name| match name {
-            "t_g0" => field("phases.t_g0", ph.t_g0),
-            "t_as0" => field("phases.t_as0", ph.t_as0),
-            "t_a0" | "flip.start" => field("phases.t_a0", ph.t_a0),
-            "flip.duration" => field("gravity.flip_duration", case.gravity.flip_duration),
-            _ => None,
-        })
+    physics_refusal(phases(case).validate(), "phases", |name| match name {
+        "t_g0" => field("phases.t_g0", ph.t_g0),
+        "t_as0" => field("phases.t_as0", ph.t_as0),
+        "t_a0" | "flip.start" => field("phases.t_a0", ph.t_a0),
+        "flip.duration" => field("gravity.flip_duration", case.gravity.flip_duration),
+        _ => None,
     })
 }
 
 /// The substrate model's check ([`Substrate::validate`]), its error traced back to the
 /// case fields.
 fn substrate_refusal(case: &Case) -> Result<(), Refusal> {
-    substrate(case).validate().map_err(|e| {
-        physics_refusal(e, "substrate", |name| match (&case.substrate, name) {
+    physics_refusal(substrate(case).validate(), "substrate", |name| {
+        match (&case.substrate, name) {
             (case::Substrate::Flat(f), "y_s") => field("substrate.y_s", f.y_s),
             (case::Substrate::Pillars(p), name) => match name {
                 "pillars.width" => field("substrate.width", p.width),
@@ -347,7 +346,7 @@ fn substrate_refusal(case: &Case) -> Result<(), Refusal> {
                 _ => None,
             },
             _ => None,
-        })
+        }
     })
 }
 
@@ -357,39 +356,33 @@ fn active_refusal(case: &Case) -> Result<(), Refusal> {
     let Some(a) = active(case) else {
         return Ok(());
     };
-    a.validate().map_err(|e| {
-        let (pac, bottom) = (case.active.pac.as_ref(), case.active.bottom.as_ref());
-        physics_refusal(e, "active", |name| match name {
-            "active.eps" => field("active.eps_a", case.active.eps_a),
-            "active.center" => field("geometry.centre_y", case.geometry.centre_y),
-            "pac.e" => pac.and_then(|p| field("active.pac.e", p.e)),
-            "pac.theta_deg" => pac.and_then(|p| field("active.pac.theta_deg", p.theta_deg)),
-            "pac.inner_axes" => pac.map(|p| {
-                let v = case::axes(p.inner_semi_axes);
-                ("active.pac.inner_semi_axes".to_string(), v)
-            }),
-            "pac.outer_axes" => pac.map(|p| {
-                let v = case::axes(p.outer_semi_axes);
-                ("active.pac.outer_semi_axes".to_string(), v)
-            }),
-            "bottom.e" => bottom.and_then(|b| field("active.bottom.e", b.e)),
-            "bottom.theta_deg" => {
-                bottom.and_then(|b| field("active.bottom.theta_deg", b.theta_deg))
-            }
-            _ => None,
-        })
+    let (pac, bottom) = (case.active.pac.as_ref(), case.active.bottom.as_ref());
+    physics_refusal(a.validate(), "active", |name| match name {
+        "active.eps" => field("active.eps_a", case.active.eps_a),
+        "active.center" => field("geometry.centre_y", case.geometry.centre_y),
+        "pac.e" => pac.and_then(|p| field("active.pac.e", p.e)),
+        "pac.theta_deg" => pac.and_then(|p| field("active.pac.theta_deg", p.theta_deg)),
+        "pac.inner_axes" => pac.map(|p| {
+            let v = case::axes(p.inner_semi_axes);
+            ("active.pac.inner_semi_axes".to_string(), v)
+        }),
+        "pac.outer_axes" => pac.map(|p| {
+            let v = case::axes(p.outer_semi_axes);
+            ("active.pac.outer_semi_axes".to_string(), v)
+        }),
+        "bottom.e" => bottom.and_then(|b| field("active.bottom.e", b.e)),
+        "bottom.theta_deg" => bottom.and_then(|b| field("active.bottom.theta_deg", b.theta_deg)),
+        _ => None,
     })
 }
 
 /// The contact model's check ([`physics::Contact::validate`]), its error traced back to
 /// the case fields.
 fn contact_refusal(case: &Case) -> Result<(), Refusal> {
-    contact(case).validate().map_err(|e| {
-        physics_refusal(e, "contact", |name| match name {
-            "contact.mu_ct" => field("contact.mu_ct_n_m3", case.contact.mu_ct_n_m3),
-            "contact.eps" => field("contact.eps_ct", case.contact.eps_ct),
-            _ => None,
-        })
+    physics_refusal(contact(case).validate(), "contact", |name| match name {
+        "contact.mu_ct" => field("contact.mu_ct_n_m3", case.contact.mu_ct_n_m3),
+        "contact.eps" => field("contact.eps_ct", case.contact.eps_ct),
+        _ => None,
     })
 }
 
@@ -399,27 +392,23 @@ fn adhesion_refusal(case: &Case) -> Result<(), Refusal> {
     let (Some(a), Some(written)) = (adhesion(case), case.adhesion.as_ref()) else {
         return Ok(());
     };
-    a.validate().map_err(|e| {
-        physics_refusal(e, "adhesion", |name| match name {
-            "adhesion.e_f" => field("adhesion.e_f", written.e_f),
-            "adhesion.eps" => field("adhesion.eps", written.eps),
-            "adhesion.mu_as0" => field("adhesion.mu_as0_n_m3s", written.mu_as0_n_m3s),
-            "adhesion.mu_as_max" => field("adhesion.mu_as_max_n_m3", written.mu_as_max_n_m3),
-            "adhesion.exclude_substrate" => field("contact.eps_ct", case.contact.eps_ct),
-            _ => None,
-        })
+    physics_refusal(a.validate(), "adhesion", |name| match name {
+        "adhesion.e_f" => field("adhesion.e_f", written.e_f),
+        "adhesion.eps" => field("adhesion.eps", written.eps),
+        "adhesion.mu_as0" => field("adhesion.mu_as0_n_m3s", written.mu_as0_n_m3s),
+        "adhesion.mu_as_max" => field("adhesion.mu_as_max_n_m3", written.mu_as_max_n_m3),
+        "adhesion.exclude_substrate" => field("contact.eps_ct", case.contact.eps_ct),
+        _ => None,
     })
 }
 
 /// The viscosity model's check ([`Viscosity::validate`]), its error traced back to the
 /// case fields.
 fn viscosity_refusal(case: &Case) -> Result<(), Refusal> {
-    viscosity(case).validate().map_err(|e| {
-        physics_refusal(e, "viscosity", |name| match name {
-            "lambda_f" => field("viscosity.lambda_f", case.viscosity.lambda_f),
-            "mu_f" => field("viscosity.mu_f", case.viscosity.mu_f),
-            _ => None,
-        })
+    physics_refusal(viscosity(case).validate(), "viscosity", |name| match name {
+        "lambda_f" => field("viscosity.lambda_f", case.viscosity.lambda_f),
+        "mu_f" => field("viscosity.mu_f", case.viscosity.mu_f),
+        _ => None,
     })
 }
 

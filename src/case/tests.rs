@@ -4,6 +4,13 @@ use std::path::{Path, PathBuf};
 
 use super::*;
 
+/// A table of test rows, one row a line: `a => b => c;` is the tuple `(a, b, c)` of a `Vec`.
+macro_rules! rows {
+    ($($a:expr => $b:expr => $c:expr;)*) => {
+        vec![$(($a, $b, $c)),*]
+    };
+}
+
 fn cases_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("cases")
 }
@@ -457,114 +464,49 @@ fn case_malformed_texts_give_errors_not_panics() {
         .unwrap_or(0);
     let truncated = &flat[..cut];
     // (what, text, field the error must name, if any)
-    let malformed: Vec<(&str, String, Option<&str>)> = vec![
-        ("empty file", String::new(), None),
-        ("only a comment", "// nothing\n".into(), None),
-        ("truncated file", truncated.to_string(), None),
-        ("open bracket", "(".into(), None),
-        ("a list, not a struct", "[1, 2]".into(), None),
-        (
-            "string for a number",
-            with("geometry: (r_n: \"five\")"),
-            Some("geometry.r_n"),
-        ),
-        (
-            "number for a string",
-            "(name: 5, substrate: Flat(), phases: (t_end: 1.0))".into(),
-            Some("name"),
-        ),
-        (
-            "bool for a number",
-            with("contact: (eps_ct: true)"),
-            Some("contact.eps_ct"),
-        ),
-        (
-            "float for an integer",
-            with("solver: (max_order: 2.5)"),
-            Some("solver.max_order"),
-        ),
-        (
-            "negative integer",
-            with("output: (n_times: -3)"),
-            Some("output.n_times"),
-        ),
-        (
-            "unknown variant",
-            with("inertia: (mode: Sometimes)"),
-            Some("inertia.mode"),
-        ),
-        (
-            "unknown section",
-            with("thermostat: (t: 37.0)"),
-            Some("thermostat"),
-        ),
-        (
-            "duplicate field",
-            with("mesh: (refine: 1.0, refine: 2.0)"),
-            Some("mesh.refine"),
-        ),
-        (
-            "missing substrate",
-            "(name: \"x\", phases: (t_end: 1.0))".into(),
-            Some("substrate"),
-        ),
-        (
-            "missing phases",
-            "(name: \"x\", substrate: Flat())".into(),
-            Some("phases"),
-        ),
-        (
-            "variant without brackets",
-            "(name: \"x\", substrate: Flat, phases: (t_end: 1.0))".into(),
-            Some("substrate"),
-        ),
-        (
-            "None for a material value",
-            with("materials: (nucleus: (e: None))"),
-            Some("materials.nucleus.e"),
-        ),
-        (
-            "three semi-axes",
-            with("active: (pac: (inner_semi_axes: (1, 2, 3)))"),
-            Some("active.pac.inner_semi_axes"),
-        ),
-        ("trailing garbage", format!("{} )", with("")), None),
-        (
-            "infinite",
-            with("gravity: (g_m_s2: inf)"),
-            Some("gravity.g_m_s2"),
-        ),
-        (
-            "not a number",
-            "(name: \"x\", substrate: Flat(), phases: (t_end: NaN))".into(),
-            Some("phases.t_end"),
-        ),
-        (
-            "empty name",
-            "(name: \" \", substrate: Flat(), phases: (t_end: 1.0))".into(),
-            Some("name"),
-        ),
-        (
-            "zero width",
-            "(name: \"x\", substrate: Pillars(width: 0), phases: (t_end: 1.0))".into(),
-            Some("substrate.width"),
-        ),
-        (
-            "pillars not symmetric",
-            "(name: \"x\", substrate: Pillars(first_center: 3.0), phases: (t_end: 1.0))".into(),
-            Some("substrate.first_center"),
-        ),
-        (
-            "pillars into the cell",
-            "(name: \"x\", substrate: Pillars(y_top: 1.0), phases: (t_end: 1.0))".into(),
-            Some("substrate.y_top"),
-        ),
-        (
-            "deep nesting",
-            format!("(name: \"x\", geometry: {}", "(".repeat(10_000)),
-            Some("geometry"),
-        ),
-        ("binary junk", "\u{0}\u{1}(\u{7f}é\"".into(), None),
+    let malformed: Vec<(&str, String, Option<&str>)> = rows![
+        "empty file" => String::new() => None;
+        "only a comment" => "// nothing\n".into() => None;
+        "truncated file" => truncated.to_string() => None;
+        "open bracket" => "(".into() => None;
+        "a list, not a struct" => "[1, 2]".into() => None;
+        "string for a number" => with("geometry: (r_n: \"five\")") => Some("geometry.r_n");
+        "number for a string"
+            => "(name: 5, substrate: Flat(), phases: (t_end: 1.0))".into() => Some("name");
+        "bool for a number" => with("contact: (eps_ct: true)") => Some("contact.eps_ct");
+        "float for an integer" => with("solver: (max_order: 2.5)") => Some("solver.max_order");
+        "negative integer" => with("output: (n_times: -3)") => Some("output.n_times");
+        "unknown variant" => with("inertia: (mode: Sometimes)") => Some("inertia.mode");
+        "unknown section" => with("thermostat: (t: 37.0)") => Some("thermostat");
+        "duplicate field" => with("mesh: (refine: 1.0, refine: 2.0)") => Some("mesh.refine");
+        "missing substrate" => "(name: \"x\", phases: (t_end: 1.0))".into() => Some("substrate");
+        "missing phases" => "(name: \"x\", substrate: Flat())".into() => Some("phases");
+        "variant without brackets"
+            => "(name: \"x\", substrate: Flat, phases: (t_end: 1.0))".into() => Some("substrate");
+        "None for a material value"
+            => with("materials: (nucleus: (e: None))") => Some("materials.nucleus.e");
+        "three semi-axes"
+            => with("active: (pac: (inner_semi_axes: (1, 2, 3)))")
+            => Some("active.pac.inner_semi_axes");
+        "trailing garbage" => format!("{} )", with("")) => None;
+        "infinite" => with("gravity: (g_m_s2: inf)") => Some("gravity.g_m_s2");
+        "not a number"
+            => "(name: \"x\", substrate: Flat(), phases: (t_end: NaN))".into()
+            => Some("phases.t_end");
+        "empty name"
+            => "(name: \" \", substrate: Flat(), phases: (t_end: 1.0))".into() => Some("name");
+        "zero width"
+            => "(name: \"x\", substrate: Pillars(width: 0), phases: (t_end: 1.0))".into()
+            => Some("substrate.width");
+        "pillars not symmetric"
+            => "(name: \"x\", substrate: Pillars(first_center: 3.0), phases: (t_end: 1.0))".into()
+            => Some("substrate.first_center");
+        "pillars into the cell"
+            => "(name: \"x\", substrate: Pillars(y_top: 1.0), phases: (t_end: 1.0))".into()
+            => Some("substrate.y_top");
+        "deep nesting"
+            => format!("(name: \"x\", geometry: {}", "(".repeat(10_000)) => Some("geometry");
+        "binary junk" => "\u{0}\u{1}(\u{7f}é\"".into() => None;
     ];
     for (what, text, field) in &malformed {
         let r = Case::from_str(text, "malformed.ron");
@@ -686,43 +628,20 @@ fn case_read_error_names_the_file() {
 #[test]
 fn case_check_finds_what_the_run_refuses() {
     // Refused only by the lower layers before this check existed.
-    for (text, field, needle) in [
-        (
-            with("mesh: (refine: 1e6)"),
-            "mesh.refine",
-            "mesh too fine: about 4223696789826277 elements estimated, limit 4000000",
-        ),
+    for (text, field, needle) in rows![
+        with("mesh: (refine: 1e6)")
+            => "mesh.refine"
+            => "mesh too fine: about 4223696789826277 elements estimated, limit 4000000";
         // The finer of the written sizes is blamed, not the default refine.
-        (
-            with("mesh: (h_bottom: 1e-5)"),
-            "mesh.h_bottom",
-            "limit 4000000",
-        ),
-        (
-            with("mesh: (h_nucleus: 1e-4, refine: 2.0)"),
-            "mesh.h_nucleus",
-            "limit 4000000",
-        ),
-        (
-            with("geometry: (centre_y: 1e12)").replace("Flat()", "Flat(y_s: -1e13)"),
-            "geometry.centre_y",
-            "too far from the origin",
-        ),
-        (
-            with("geometry: (r_c: inf)"),
-            "geometry.r_c",
-            "must satisfy r_cp < r_c, and be finite",
-        ),
-        (
-            with("").replace("(t_end: 100.0)", "(t_as0: inf, t_a0: inf, t_end: 100.0)"),
-            "phases.t_as0",
-            "must satisfy t_g0 < t_as0, and be finite",
-        ),
-        (
-            with("").replace("(t_end: 100.0)", "(t_a0: NaN, t_end: 100.0)"),
-            "phases.t_a0",
-            "and be finite",
-        ),
+        with("mesh: (h_bottom: 1e-5)") => "mesh.h_bottom" => "limit 4000000";
+        with("mesh: (h_nucleus: 1e-4, refine: 2.0)") => "mesh.h_nucleus" => "limit 4000000";
+        with("geometry: (centre_y: 1e12)").replace("Flat()", "Flat(y_s: -1e13)")
+            => "geometry.centre_y" => "too far from the origin";
+        with("geometry: (r_c: inf)") => "geometry.r_c" => "must satisfy r_cp < r_c, and be finite";
+        with("").replace("(t_end: 100.0)", "(t_as0: inf, t_a0: inf, t_end: 100.0)")
+            => "phases.t_as0" => "must satisfy t_g0 < t_as0, and be finite";
+        with("").replace("(t_end: 100.0)", "(t_a0: NaN, t_end: 100.0)")
+            => "phases.t_a0" => "and be finite";
     ] {
         let e = error_of(&text);
         assert_eq!(e.field(), Some(field), "{text}: {e}");

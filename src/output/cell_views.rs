@@ -57,14 +57,15 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::figures::{
-    FONT, GravityMark, MEMBRANE, PlaneBackdrop, PlaneDrawing, SHAPE_SIZE, SUBSTRATE, ShapeScale,
+    FONT, GravityMark, MEMBRANE, PlaneDrawing, SHAPE_SIZE, SUBSTRATE, ShapeScale,
     ShapeStyleOptions, check_displacements, draw_in_plane,
 };
 use super::geometry::{
-    ACTIVE_LEVEL, Bounds, CellShape, Pt, Rect, contour, element_polygon, intervals,
+    ACTIVE_LEVEL, ActiveRegion, Backdrop, Bounds, CellShape, Pt, contour, element_polygon,
+    intervals,
 };
 use super::vtu::check_snapshot3;
-use super::{DrawError, OutputError};
+use super::{DrawError, OutputError, draw_png};
 use crate::fem::{Domain, tet10 as tet, tri6 as p2};
 use crate::physics::{ActiveStrain, Substrate, Substrate3, smooth_step};
 use crate::record::read::Run3Data;
@@ -192,35 +193,14 @@ impl Interface {
     }
 }
 
-/// Which active-strain region a curve outlines.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Region {
-    Pac,
-    Bottom,
-}
-
-impl Region {
-    fn chi(self, a: &ActiveStrain, x: [f64; 3], c_z: f64) -> f64 {
-        let v = Vector3::from(x);
-        match self {
-            Region::Pac => a.chi_pac3(&v, c_z),
-            Region::Bottom => a.chi_bottom3(&v, c_z),
-        }
-    }
-
-    /// Whether the region may extend into elements of `d` (MODEL.md §6).
-    fn allowed(self, d: Domain) -> bool {
-        match self {
-            Region::Pac => d == Domain::Cytoplasm,
-            Region::Bottom => d != Domain::Nucleus,
-        }
-    }
-
-    fn present(self, a: &ActiveStrain) -> bool {
-        match self {
-            Region::Pac => a.pac.is_some(),
-            Region::Bottom => a.bottom.is_some(),
-        }
+/// The indicator χ of `region` at reference point `x` of a cell centred at height `c_z`,
+/// without the domain restriction (the 3-D counterpart of the 2-D one in
+/// [`super::geometry`]).
+fn chi3(region: ActiveRegion, a: &ActiveStrain, x: [f64; 3], c_z: f64) -> f64 {
+    let v = Vector3::from(x);
+    match region {
+        ActiveRegion::Pac => a.chi_pac3(&v, c_z),
+        ActiveRegion::Bottom => a.chi_bottom3(&v, c_z),
     }
 }
 
@@ -266,23 +246,11 @@ fn outer_set(mesh: &Mesh3File) -> HashSet<[usize; 3]> {
         .collect()
 }
 
-/// The P2 point of a six-node face (node values `v`) at ξ.
-fn face_point<const D: usize>(v: &[[f64; D]; 6], xi: [f64; 2]) -> [f64; D] {
-    let n = p2::shape(xi);
+/// The point of a P2 element (a six-node face or a ten-node tetrahedron) whose node values
+/// are `v`, at the local point where its shape functions are `n`.
+fn p2_point<const N: usize, const D: usize>(n: [f64; N], v: &[[f64; D]; N]) -> [f64; D] {
     let mut out = [0.0; D];
-    for a in 0..6 {
-        for k in 0..D {
-            out[k] += n[a] * v[a][k];
-        }
-    }
-    out
-}
-
-/// The P2 point of a ten-node tetrahedron (node values `v`) at ξ.
-fn tet_point<const D: usize>(v: &[[f64; D]; 10], xi: [f64; 3]) -> [f64; D] {
-    let n = tet::shape(xi);
-    let mut out = [0.0; D];
-    for a in 0..10 {
+    for a in 0..N {
         for k in 0..D {
             out[k] += n[a] * v[a][k];
         }
@@ -362,9 +330,10 @@ fn collect_z0(mesh: &Mesh3File, pos: &[Pt]) -> Collected {
         let n = CONTOUR_DIVISIONS;
         let at = |i: usize, j: usize| {
             let xi = [i as f64 / n as f64, j as f64 / n as f64];
+            let shape = p2::shape(xi);
             SPt {
-                x: face_point(&xr, xi),
-                p: face_point(&xd, xi),
+                x: p2_point(shape, &xr),
+                p: p2_point(shape, &xd),
             }
         };
         for i in 0..n {
@@ -501,9 +470,10 @@ fn collect_diagonal(mesh: &Mesh3File, pos: &[Pt]) -> Collected {
         let cross = |a: usize, b: usize| -> SPt {
             let w = vals[a] / (vals[a] - vals[b]);
             let xi = [0, 1, 2].map(|k| xis[a][k] + w * (xis[b][k] - xis[a][k]));
+            let shape = tet::shape(xi);
             SPt {
-                x: tet_point(&xr, xi),
-                p: tet_point(&xd, xi),
+                x: p2_point(shape, &xr),
+                p: p2_point(shape, &xd),
             }
         };
         // What the tetrahedron's face opposite vertex m is: outer, interface, inner.
@@ -586,7 +556,12 @@ fn deformed3(mesh: &Mesh3File, u: &[[f64; 3]]) -> Vec<[f64; 3]> {
 
 /// Segments of the level χ = ½ inside the pieces the region may occupy, and the parts of
 /// the bounding lines where χ ≥ ½.
-fn active_outline(col: &Collected, a: &ActiveStrain, region: Region, c_z: f64) -> Vec<[Pt; 2]> {
+fn active_outline(
+    col: &Collected,
+    a: &ActiveStrain,
+    region: ActiveRegion,
+    c_z: f64,
+) -> Vec<[Pt; 2]> {
     let mut segs = Vec::new();
     for (d, piece) in &col.pieces {
         if !region.allowed(*d) {
@@ -594,7 +569,7 @@ fn active_outline(col: &Collected, a: &ActiveStrain, region: Region, c_z: f64) -
         }
         let v: Vec<f64> = piece
             .iter()
-            .map(|s| region.chi(a, s.x, c_z) - ACTIVE_LEVEL)
+            .map(|s| chi3(region, a, s.x, c_z) - ACTIVE_LEVEL)
             .collect();
         let mut cuts = Vec::with_capacity(4);
         for k in 0..piece.len() {
@@ -609,8 +584,8 @@ fn active_outline(col: &Collected, a: &ActiveStrain, region: Region, c_z: f64) -
         }
     }
     let bounding: Vec<&Vec<SPt>> = match region {
-        Region::Pac => col.interfaces.iter().map(|(_, l)| l).collect(),
-        Region::Bottom => col
+        ActiveRegion::Pac => col.interfaces.iter().map(|(_, l)| l).collect(),
+        ActiveRegion::Bottom => col
             .interfaces
             .iter()
             .filter(|(k, _)| *k == Interface::Nucleus)
@@ -621,8 +596,8 @@ fn active_outline(col: &Collected, a: &ActiveStrain, region: Region, c_z: f64) -
     for line in bounding {
         for w in line.windows(2) {
             let (v0, v1) = (
-                region.chi(a, w[0].x, c_z) - ACTIVE_LEVEL,
-                region.chi(a, w[1].x, c_z) - ACTIVE_LEVEL,
+                chi3(region, a, w[0].x, c_z) - ACTIVE_LEVEL,
+                chi3(region, a, w[1].x, c_z) - ACTIVE_LEVEL,
             );
             let at = |s: f64| lerp(&w[0], &w[1], s).p;
             match (v0 >= 0.0, v1 >= 0.0) {
@@ -649,11 +624,11 @@ impl SectionShape {
         };
         let (mut pac, mut bottom) = (Vec::new(), Vec::new());
         if let Some(a) = &mesh.active {
-            if Region::Pac.present(a) {
-                pac = active_outline(&col, a, Region::Pac, c[2]);
+            if ActiveRegion::Pac.present(a) {
+                pac = active_outline(&col, a, ActiveRegion::Pac, c[2]);
             }
-            if Region::Bottom.present(a) {
-                bottom = active_outline(&col, a, Region::Bottom, c[2]);
+            if ActiveRegion::Bottom.present(a) {
+                bottom = active_outline(&col, a, ActiveRegion::Bottom, c[2]);
             }
         }
         let plain = |l: &Vec<SPt>| l.iter().map(|s| s.p).collect::<Vec<Pt>>();
@@ -730,16 +705,11 @@ fn markers(mesh: &Mesh3File, x: &[[f64; 3]], plane: Section) -> Vec<Pt> {
 pub struct SectionBackdrop {
     /// The plane.
     pub plane: Section,
-    /// The view (h0, h1, y0, y1) it was computed for [µm].
-    pub view: [f64; 4],
-    /// The substrate as column rectangles from the view's bottom to the surface height.
-    pub substrate: Vec<Rect>,
-    /// The fibronectin layer `{d_sub ≥ −e_f}` as column rectangles.
-    pub layer: Vec<Rect>,
-    /// The layer's upper edge `d_sub = −e_f` (segments).
-    pub layer_edge: Vec<[Pt; 2]>,
-    /// The substrate's surface line along the section.
-    pub surface: Vec<Pt>,
+    /// The drawing in the plane's coordinates (h, y), over the view (h0, h1, y0, y1) it
+    /// was computed for: the substrate as column rectangles from the view's bottom to the
+    /// surface height, the fibronectin layer `{d_sub ≥ −e_f}` and its upper edge, the
+    /// substrate's surface line along the section (one polyline); no pillar feet.
+    pub backdrop: Backdrop,
 }
 
 impl SectionBackdrop {
@@ -764,13 +734,10 @@ impl SectionBackdrop {
             let (x, z) = plane.line_point(h, c);
             sub.eval(&Vector3::new(x, y, z)).0
         };
-        let mut b = SectionBackdrop {
-            plane,
+        let mut b = Backdrop {
             view,
             substrate: Vec::with_capacity(n),
-            layer: Vec::new(),
-            layer_edge: Vec::new(),
-            surface: Vec::with_capacity(n + 1),
+            ..Default::default()
         };
         for k in 0..n {
             let (ha, hb) = (h0 + k as f64 * dh, h0 + (k + 1) as f64 * dh);
@@ -785,37 +752,27 @@ impl SectionBackdrop {
                 }
             }
         }
-        b.surface = (0..=n)
-            .map(|k| {
-                let h = h0 + k as f64 * dh;
-                [h, height(h)]
-            })
-            .collect();
+        b.surface = vec![
+            (0..=n)
+                .map(|k| {
+                    let h = h0 + k as f64 * dh;
+                    [h, height(h)]
+                })
+                .collect(),
+        ];
         if let Some(e) = e_f {
             b.layer_edge = match sub.plane {
                 Substrate::Flat { y_s } => vec![[[h0, y_s + e], [h1, y_s + e]]],
                 Substrate::Pillars(_) => contour(|h, y| depth(h, y) + e, view, LAYER_STEP),
             };
         }
-        b
+        SectionBackdrop { plane, backdrop: b }
     }
 }
 
-impl PlaneBackdrop for SectionBackdrop {
-    fn layer(&self) -> &[Rect] {
-        &self.layer
-    }
-    fn layer_edge(&self) -> &[[Pt; 2]] {
-        &self.layer_edge
-    }
-    fn foot(&self) -> &[Rect] {
-        &[]
-    }
-    fn substrate(&self) -> &[Rect] {
-        &self.substrate
-    }
-    fn surface(&self) -> &[Vec<Pt>] {
-        std::slice::from_ref(&self.surface)
+impl AsRef<Backdrop> for SectionBackdrop {
+    fn as_ref(&self) -> &Backdrop {
+        &self.backdrop
     }
 }
 
@@ -877,7 +834,7 @@ pub fn draw_section<DB: DrawingBackend>(
         opts,
         backdrop,
         |cached, key, columns| match cached {
-            Some(b) if b.view == key && b.plane == plane => b,
+            Some(b) if b.backdrop.view == key && b.plane == plane => b,
             _ => SectionBackdrop::new(
                 &mesh.substrate,
                 mesh.layer_thickness,
@@ -902,8 +859,6 @@ pub fn section_figure(
 ) -> Result<(), OutputError> {
     check_snapshot3(mesh, s).map_err(|m| OutputError::draw(path, m))?;
     let view = section_view(mesh, &[s], plane);
-    let root = BitMapBackend::new(path, FIGURE_SIZE).into_drawing_area();
-    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
     let opts = ShapeStyleOptions {
         title: title.to_string(),
         legend: true,
@@ -911,9 +866,9 @@ pub fn section_figure(
         mesh_lines: true,
         gravity: Some(gravity_at(mesh, s.t)),
     };
-    draw_section(&root, mesh, &s.u, plane, view, &opts, &mut None)
-        .map_err(|x| OutputError::draw(path, x))?;
-    root.present().map_err(|x| OutputError::draw(path, x))
+    draw_png(path, FIGURE_SIZE, |root| {
+        draw_section(root, mesh, &s.u, plane, view, &opts, &mut None).map(|_| ())
+    })
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1299,35 +1254,18 @@ impl Raster {
         if area.abs() < 1e-12 {
             return;
         }
-        let xmin = s
-            .iter()
-            .map(|p| p[0])
-            .fold(f64::INFINITY, f64::min)
-            .floor()
-            .max(0.0) as usize;
-        let ymin = s
-            .iter()
-            .map(|p| p[1])
-            .fold(f64::INFINITY, f64::min)
-            .floor()
-            .max(0.0) as usize;
-        let xmax = (s
-            .iter()
-            .map(|p| p[0])
-            .fold(f64::NEG_INFINITY, f64::max)
-            .ceil() as usize)
-            .min(self.w);
-        let ymax = (s
-            .iter()
-            .map(|p| p[1])
-            .fold(f64::NEG_INFINITY, f64::max)
-            .ceil() as usize)
-            .min(self.h);
+        // The pixels the triangle's bounding box covers along screen axis k (`len` of them).
+        let pixels = |k: usize, len: usize| {
+            let lo = s.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
+            let hi = s.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
+            (lo.floor().max(0.0) as usize)..(hi.ceil() as usize).min(len)
+        };
+        let (xs, ys) = (pixels(0, self.w), pixels(1, self.h));
         let edge = |a: [f64; 3], b: [f64; 3], x: f64, y: f64| {
             (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
         };
-        for py in ymin..ymax {
-            for px in xmin..xmax {
+        for py in ys {
+            for px in xs.clone() {
                 let (x, y) = (px as f64 + 0.5, py as f64 + 0.5);
                 let w0 = edge(s[1], s[2], x, y) / area;
                 let w1 = edge(s[2], s[0], x, y) / area;
@@ -1749,16 +1687,15 @@ pub fn surface_figure(
 ) -> Result<(), OutputError> {
     check_snapshot3(mesh, s).map_err(|m| OutputError::draw(path, m))?;
     let frame = SurfaceFrame::new(mesh, &[s], Camera::DEFAULT);
-    let root = BitMapBackend::new(path, FIGURE_SIZE).into_drawing_area();
-    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
     let opts = SurfaceStyleOptions {
         title: title.to_string(),
         coloring,
         font: 28,
         legend: true,
     };
-    draw_surface(&root, mesh, s, &frame, &opts).map_err(|x| OutputError::draw(path, x))?;
-    root.present().map_err(|x| OutputError::draw(path, x))
+    draw_png(path, FIGURE_SIZE, |root| {
+        draw_surface(root, mesh, s, &frame, &opts)
+    })
 }
 
 /// A 3-D run's own figures into `out` (besides the time plots of its 2-D columns, which

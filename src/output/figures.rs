@@ -23,7 +23,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::geometry::{Backdrop, Bounds, CellShape, Pt, Rect, substrate_floor};
-use super::{DrawError, OutputError};
+use super::{DrawError, OutputError, draw_png};
 use crate::fem::Domain;
 use crate::physics::Phases;
 use crate::record::Observables;
@@ -542,10 +542,7 @@ fn draw_time_legend<'a, DB: DrawingBackend + 'a>(
 
 /// Draws a [`TimePlot`] into a PNG at `path` of [`TIME_SIZE`].
 pub fn time_figure(path: &Path, plot: &TimePlot) -> Result<(), OutputError> {
-    let root = BitMapBackend::new(path, TIME_SIZE).into_drawing_area();
-    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
-    draw_time_plot(&root, plot).map_err(|x| OutputError::draw(path, x))?;
-    root.present().map_err(|x| OutputError::draw(path, x))
+    draw_png(path, TIME_SIZE, |root| draw_time_plot(root, plot))
 }
 
 /// (t, value) points of one quantity.
@@ -788,25 +785,20 @@ pub fn displacement_figure(
         false,
         plot.notes.len(),
     );
-    let root = BitMapBackend::new(path, TIME_SIZE).into_drawing_area();
-    let err = |x: DrawError| OutputError::draw(path, x);
-    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
-    let root = root
-        .titled(
+    draw_png(path, TIME_SIZE, |root| {
+        let root = root.titled(
             "Vertical displacement of the nucleus (top p_t, lowest point) and the cell centre c",
             (FONT, 28),
-        )
-        .map_err(|x| OutputError::draw(path, x))?;
-    if columns.is_empty() {
-        draw_time_plot_on(&root, &plot, range).map_err(err)?;
-    } else {
+        )?;
+        if columns.is_empty() {
+            return draw_time_plot_on(&root, &plot, range);
+        }
         let w = root.dim_in_pixel().0;
         let (left, right) =
             root.split_horizontally((w as f64 * (1.0 - MAX_PANEL_SHARE)).round() as u32);
-        draw_time_plot_on(&left, &plot, range).map_err(err)?;
-        draw_maxima_panel(&right, &columns, range).map_err(err)?;
-    }
-    root.present().map_err(|x| OutputError::draw(path, x))
+        draw_time_plot_on(&left, &plot, range)?;
+        draw_maxima_panel(&right, &columns, range)
+    })
 }
 
 /// The time plot of [`displacement_figure`] (no title: the figure has one) and the
@@ -1310,13 +1302,11 @@ pub fn upside_down_figure(
         t_max,
         legend: SeriesLabelPosition::UpperLeft,
     };
-    let root = BitMapBackend::new(path, UPSIDE_DOWN_SIZE).into_drawing_area();
-    let err = |x: DrawError| OutputError::draw(path, x);
-    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
-    let (a, b) = root.split_vertically(UPSIDE_DOWN_SIZE.1 * 3 / 5);
-    draw_time_plot(&a, &top).map_err(err)?;
-    draw_time_plot(&b, &bottom).map_err(err)?;
-    root.present().map_err(|x| OutputError::draw(path, x))
+    draw_png(path, UPSIDE_DOWN_SIZE, |root| {
+        let (a, b) = root.split_vertically(UPSIDE_DOWN_SIZE.1 * 3 / 5);
+        draw_time_plot(&a, &top)?;
+        draw_time_plot(&b, &bottom)
+    })
 }
 
 /// One scene's strain norms for [`strain_bars_figure`] (fractions; `None` = no value).
@@ -1342,41 +1332,25 @@ pub fn strain_bars_figure(
     ours_label: &str,
     paper_label: &str,
 ) -> Result<(), OutputError> {
-    let root = BitMapBackend::new(path, TIME_SIZE).into_drawing_area();
-    let derr = |x: DrawError| OutputError::draw(path, x);
-    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
-    let root = root
-        .titled(
-            "Mean Green-Lagrange strain norm at the end of the active phase (one scale)",
-            (FONT, 28),
-        )
-        .map_err(|x| OutputError::draw(path, x))?;
-    let (left, right) = root.split_horizontally(TIME_SIZE.0 / 2);
     let pick_n = |b: &StrainBars| (b.paper_nucleus, b.ours_nucleus);
     let pick_c = |b: &StrainBars| (b.paper_cytoplasm, b.ours_cytoplasm);
     // One scale for both panels, so a bar's height compares across them.
     let top = strain_bars_top(bars);
-    draw_bars(
-        &left,
-        "nucleus",
-        bars,
-        &pick_n,
-        top,
-        ours_label,
-        paper_label,
-    )
-    .map_err(derr)?;
-    draw_bars(
-        &right,
-        CYTOPLASM_LABEL,
-        bars,
-        &pick_c,
-        top,
-        ours_label,
-        paper_label,
-    )
-    .map_err(derr)?;
-    root.present().map_err(|x| OutputError::draw(path, x))
+    draw_png(path, TIME_SIZE, |root| {
+        let root = root.titled(
+            "Mean Green-Lagrange strain norm at the end of the active phase (one scale)",
+            (FONT, 28),
+        )?;
+        let (left, right) = root.split_horizontally(TIME_SIZE.0 / 2);
+        let panels: [(_, _, BarPick<'_>); 2] = [
+            (left, "nucleus", &pick_n),
+            (right, CYTOPLASM_LABEL, &pick_c),
+        ];
+        for (area, title, pick) in panels {
+            draw_bars(&area, title, bars, pick, top, ours_label, paper_label)?;
+        }
+        Ok(())
+    })
 }
 
 /// The top of the value axis (%) shared by both panels of [`strain_bars_figure`]: 1.3 ×
@@ -1600,41 +1574,6 @@ pub(crate) fn check_displacements<const D: usize>(
     Ok(())
 }
 
-/// The substrate and the fibronectin layer as [`draw_in_plane`] draws them, computed for
-/// one view: the 2-D [`Backdrop`] and a 3-D section's
-/// [`super::cell_views::SectionBackdrop`].
-pub(crate) trait PlaneBackdrop {
-    /// The fibronectin layer as column rectangles.
-    fn layer(&self) -> &[Rect];
-    /// The layer's upper edge (segments).
-    fn layer_edge(&self) -> &[[Pt; 2]];
-    /// The pillars' feet as column rectangles, drawn under the substrate (none in a
-    /// section).
-    fn foot(&self) -> &[Rect];
-    /// The substrate as column rectangles.
-    fn substrate(&self) -> &[Rect];
-    /// The substrate's surface line (polylines).
-    fn surface(&self) -> &[Vec<Pt>];
-}
-
-impl PlaneBackdrop for Backdrop {
-    fn layer(&self) -> &[Rect] {
-        &self.layer
-    }
-    fn layer_edge(&self) -> &[[Pt; 2]] {
-        &self.layer_edge
-    }
-    fn foot(&self) -> &[Rect] {
-        &self.foot
-    }
-    fn substrate(&self) -> &[Rect] {
-        &self.substrate
-    }
-    fn surface(&self) -> &[Vec<Pt>] {
-        &self.surface
-    }
-}
-
 /// What [`draw_in_plane`] draws: the deformed full cell in a drawing plane, borrowed from
 /// the 2-D [`CellShape`] or a 3-D [`super::cell_views::SectionShape`] (mirrored), and what
 /// else differs between the two drawings.
@@ -1657,9 +1596,11 @@ pub(crate) struct PlaneDrawing<'a> {
 /// Draws `cell` into `area` over `view`, with equal aspect: the view is widened along one
 /// axis so 1 µm has the same length in pixels on both. The substrate drawing is
 /// `backdrop_for(cached, final view [x0, x1, y0, y1], plotting area width in pixels)`,
-/// `cached` taken from `backdrop`, which keeps the one drawn. What [`draw_shape`] and
+/// `cached` taken from `backdrop`, which keeps the one drawn: a 2-D [`Backdrop`], or a 3-D
+/// section's [`super::cell_views::SectionBackdrop`] (a [`Backdrop`] in the plane's
+/// coordinates, with its plane). What [`draw_shape`] and
 /// [`super::cell_views::draw_section`] share.
-pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
+pub(crate) fn draw_in_plane<DB: DrawingBackend, B: AsRef<Backdrop>>(
     area: &DrawingArea<DB, Shift>,
     cell: &PlaneDrawing<'_>,
     view: Bounds,
@@ -1673,11 +1614,11 @@ pub(crate) fn draw_in_plane<DB: DrawingBackend, B: PlaneBackdrop>(
     // Substrate and fibronectin layer, one strip per pixel column (computed once per
     // view: a movie reuses it for every frame).
     let back = backdrop_for(backdrop.take(), key, columns);
-    draw_backdrop(&mut chart, &back, cell)?;
+    draw_backdrop(&mut chart, back.as_ref(), cell)?;
     draw_cell_fills(&mut chart, cell, opts.mesh_lines)?;
     draw_cell_lines(&mut chart, cell.shape)?;
     // The substrate's surface on top, as the paper's black line.
-    draw_paths(&mut chart, back.surface(), BLACK.stroke_width(2))?;
+    draw_paths(&mut chart, &back.as_ref().surface, BLACK.stroke_width(2))?;
     *backdrop = Some(back);
     chart
         .draw_series(
@@ -1764,28 +1705,28 @@ fn swatch(color: RGBColor, (x, y): (i32, i32)) -> Rectangle<(i32, i32)> {
 
 /// The substrate drawing `back` under `cell`: the fibronectin layer and its edge (if the
 /// substrate carries one), the pillars' feet and the substrate, with legend entries.
-fn draw_backdrop<DB: DrawingBackend, B: PlaneBackdrop>(
+fn draw_backdrop<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
-    back: &B,
+    back: &Backdrop,
     cell: &PlaneDrawing<'_>,
 ) -> Result<(), DrawError> {
     let rect = |r: &Rect, c: RGBColor| Rectangle::new([(r[0], r[3]), (r[1], r[2])], c.filled());
     if cell.layer {
         chart
-            .draw_series(back.layer().iter().map(|r| rect(r, LAYER)))?
+            .draw_series(back.layer.iter().map(|r| rect(r, LAYER)))?
             .label("fibronectin layer")
             .legend(|p| swatch(LAYER, p));
         // The layer's edge under the cell: the cell hides it where it lies in the layer.
-        draw_paths(chart, back.layer_edge(), LAYER_EDGE.stroke_width(2))?;
+        draw_paths(chart, &back.layer_edge, LAYER_EDGE.stroke_width(2))?;
     }
-    if !back.foot().is_empty() {
+    if !back.foot.is_empty() {
         chart
-            .draw_series(back.foot().iter().map(|r| rect(r, FOOT)))?
+            .draw_series(back.foot.iter().map(|r| rect(r, FOOT)))?
             .label("pillar foot (not substrate in the model)")
             .legend(|p| swatch(FOOT, p));
     }
     chart
-        .draw_series(back.substrate().iter().map(|r| rect(r, SUBSTRATE)))?
+        .draw_series(back.substrate.iter().map(|r| rect(r, SUBSTRATE)))?
         .label(cell.substrate_label.as_str())
         .legend(|p| swatch(SUBSTRATE, p));
     Ok(())
@@ -2003,8 +1944,6 @@ pub fn shape_figure_cached(
     cache: &Mutex<Option<Backdrop>>,
 ) -> Result<ShapeScale, OutputError> {
     let mut backdrop = cache.lock().ok().and_then(|c| c.clone());
-    let root = BitMapBackend::new(path, SHAPE_SIZE).into_drawing_area();
-    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
     let opts = ShapeStyleOptions {
         title: format!(
             "{name}: {}, t = {} s",
@@ -2016,9 +1955,9 @@ pub fn shape_figure_cached(
         mesh_lines: true,
         gravity: phases.map(|p| GravityMark::at(p, state.t)),
     };
-    let scale = draw_shape(&root, mesh, &state.u, view, &opts, &mut backdrop)
-        .map_err(|x| OutputError::draw(path, x))?;
-    root.present().map_err(|x| OutputError::draw(path, x))?;
+    let scale = draw_png(path, SHAPE_SIZE, |root| {
+        draw_shape(root, mesh, &state.u, view, &opts, &mut backdrop)
+    })?;
     if let Ok(mut c) = cache.lock() {
         if c.is_none() {
             *c = backdrop;

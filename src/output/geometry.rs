@@ -93,7 +93,7 @@ impl ActiveRegion {
     }
 
     /// Whether the region may extend into elements of `d` (MODEL.md §6).
-    fn allowed(self, d: Domain) -> bool {
+    pub(crate) fn allowed(self, d: Domain) -> bool {
         match self {
             ActiveRegion::Pac => d == Domain::Cytoplasm,
             ActiveRegion::Bottom => d != Domain::Nucleus,
@@ -101,7 +101,7 @@ impl ActiveRegion {
     }
 
     /// Whether the scene has this region.
-    fn present(self, a: &ActiveStrain) -> bool {
+    pub(crate) fn present(self, a: &ActiveStrain) -> bool {
         match self {
             ActiveRegion::Pac => a.pac.is_some(),
             ActiveRegion::Bottom => a.bottom.is_some(),
@@ -573,6 +573,12 @@ impl Backdrop {
             }
         }
         b
+    }
+}
+
+impl AsRef<Backdrop> for Backdrop {
+    fn as_ref(&self) -> &Backdrop {
+        self
     }
 }
 

@@ -39,6 +39,9 @@ pub use snapshot::{FrameSink, SnapshotOptions, SnapshotWriter, SnapshotWriter3, 
 
 use std::path::Path;
 
+use plotters::coord::Shift;
+use plotters::prelude::{BitMapBackend, DrawingArea, IntoDrawingArea, WHITE};
+
 /// Why an output could not be read, drawn or written. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
@@ -107,4 +110,21 @@ impl<E: std::error::Error + Send + Sync> From<plotters::drawing::DrawingAreaErro
 /// Creates `dir` (and its parents) if needed.
 pub fn create_dir(dir: &Path) -> Result<(), OutputError> {
     std::fs::create_dir_all(dir).map_err(|e| OutputError::write(dir, e))
+}
+
+/// The drawing area of a PNG figure.
+pub type PngArea<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+
+/// Draws a PNG of `size` pixels at `path`: `draw` paints on a white canvas, which is then
+/// written; whatever fails is an [`OutputError::Draw`] naming the file.
+pub fn draw_png<T>(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&PngArea<'_>) -> Result<T, DrawError>,
+) -> Result<T, OutputError> {
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| OutputError::draw(path, x))?;
+    let value = draw(&root).map_err(|x| OutputError::draw(path, x))?;
+    root.present().map_err(|x| OutputError::draw(path, x))?;
+    Ok(value)
 }

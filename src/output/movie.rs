@@ -44,9 +44,15 @@ const QUANT_SPEED_SURFACE: i32 = 10;
 
 /// What draws the frames of a [`MovieOf`]: the 2-D cell ([`ShapePainter`]) or a view of
 /// the 3-D cell ([`View3Painter`]).
-pub trait FramePainter {
+pub trait FramePainter: Sized {
     /// The state of one output time.
     type State: Timed;
+    /// The mesh of the run drawn.
+    type Mesh;
+    /// The painter of a run on `mesh` when no other view is asked for (the 2-D cell, the
+    /// 3-D cell's section z = 0), with the run's phase end times T_g0, T_as0, T_a0 and the
+    /// end time.
+    fn for_run(mesh: &Self::Mesh) -> (Self, [f64; 4]);
     /// NeuQuant speed of the colour quantisation of a frame (1 best … 30 fastest).
     fn quant_speed(&self) -> i32;
     /// Draws `s` with the title `title` into the frame `area` (filled white).
@@ -84,6 +90,16 @@ pub struct ShapePainter {
 
 impl FramePainter for ShapePainter {
     type State = Snapshot;
+    type Mesh = MeshFile;
+
+    fn for_run(mesh: &MeshFile) -> (Self, [f64; 4]) {
+        let painter = ShapePainter {
+            mesh: mesh.clone(),
+            view: movie_view(mesh),
+            backdrop: None,
+        };
+        (painter, mesh.phase_times)
+    }
 
     fn quant_speed(&self) -> i32 {
         QUANT_SPEED
@@ -139,24 +155,20 @@ fn gif_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
     }
 }
 
-impl Movie {
-    /// Starts a GIF at `path`; `outputs` is the number of output times expected.
+impl<P: FramePainter> MovieOf<P> {
+    /// Starts a GIF at `path` of the run `name` on `mesh`, drawn by its default painter
+    /// ([`FramePainter::for_run`]: the 2-D cell, the 3-D section z = 0); `outputs` is the
+    /// number of output times expected.
     pub fn new(
         path: &Path,
         name: &str,
-        mesh: &MeshFile,
+        mesh: &P::Mesh,
         outputs: usize,
     ) -> Result<Self, OutputError> {
-        let painter = ShapePainter {
-            mesh: mesh.clone(),
-            view: movie_view(mesh),
-            backdrop: None,
-        };
-        Self::start(path, name, mesh.phase_times, outputs, painter)
+        let (painter, phase_times) = P::for_run(mesh);
+        Self::start(path, name, phase_times, outputs, painter)
     }
-}
 
-impl<P: FramePainter> MovieOf<P> {
     /// Starts a GIF at `path` whose frames `painter` draws, titled with the run's `name`,
     /// the time and its phase (from `phase_times`: T_g0, T_as0, T_a0, the end time);
     /// `outputs` is the number of output times expected.
@@ -278,8 +290,33 @@ pub struct View3Painter {
     backdrop: Option<SectionBackdrop>,
 }
 
+impl View3Painter {
+    /// The painter of `view` of the cell on `mesh`. A surface view is framed on the
+    /// substrate around the cell and the reference cell ([`SurfaceFrame::new`]).
+    fn with_view(mesh: &Mesh3File, view: MovieView) -> Self {
+        let framing = match view {
+            MovieView::Section(plane) => Framing::Section(plane, movie_view3(mesh)),
+            MovieView::Surface(coloring) => Framing::Surface(
+                coloring,
+                Box::new(SurfaceFrame::new(mesh, &[], Camera::DEFAULT)),
+            ),
+        };
+        View3Painter {
+            mesh: mesh.clone(),
+            framing,
+            backdrop: None,
+        }
+    }
+}
+
 impl FramePainter for View3Painter {
     type State = Snapshot3;
+    type Mesh = Mesh3File;
+
+    fn for_run(mesh: &Mesh3File) -> (Self, [f64; 4]) {
+        let painter = View3Painter::with_view(mesh, MovieView::Section(Section::Z0));
+        (painter, mesh.phase_times)
+    }
 
     fn quant_speed(&self) -> i32 {
         match self.framing {
@@ -341,17 +378,6 @@ pub fn movie_view3(mesh: &Mesh3File) -> Bounds {
 }
 
 impl Movie3 {
-    /// Starts a GIF of the section z = 0 at `path`; `outputs` is the number of output times
-    /// expected.
-    pub fn new(
-        path: &Path,
-        name: &str,
-        mesh: &Mesh3File,
-        outputs: usize,
-    ) -> Result<Self, OutputError> {
-        Self::with_view(path, name, mesh, outputs, MovieView::Section(Section::Z0))
-    }
-
     /// Starts a GIF at `path` whose frames show `view`. A surface movie is framed on the
     /// substrate around the cell and the reference cell ([`SurfaceFrame::new`]).
     pub fn with_view(
@@ -361,18 +387,7 @@ impl Movie3 {
         outputs: usize,
         view: MovieView,
     ) -> Result<Self, OutputError> {
-        let framing = match view {
-            MovieView::Section(plane) => Framing::Section(plane, movie_view3(mesh)),
-            MovieView::Surface(coloring) => Framing::Surface(
-                coloring,
-                Box::new(SurfaceFrame::new(mesh, &[], Camera::DEFAULT)),
-            ),
-        };
-        let painter = View3Painter {
-            mesh: mesh.clone(),
-            framing,
-            backdrop: None,
-        };
+        let painter = View3Painter::with_view(mesh, view);
         Self::start(path, name, mesh.phase_times, outputs, painter)
     }
 }

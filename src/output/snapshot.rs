@@ -8,11 +8,9 @@ use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
 
 use super::OutputError;
-use super::movie::Movie;
-use super::movie::Movie3;
-use super::vtu::VtuSeries;
-use super::vtu::VtuSeries3;
-use crate::record::{Mesh3File, MeshFile, Snapshot, Snapshot3};
+use super::movie::{FramePainter, Movie, Movie3, MovieOf};
+use super::vtu::{VtuMesh, VtuSeries, VtuSeries3, VtuSeriesOf};
+use crate::record::{Snapshot, Snapshot3};
 
 /// Which per-output-time files a run writes besides its CSV row.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -44,12 +42,12 @@ pub trait FrameSink<S>: Sized {
     fn close(self) -> Result<PathBuf, OutputError>;
 }
 
-impl FrameSink<Snapshot> for VtuSeries {
-    type Mesh = MeshFile;
-    fn open(out: &Path, name: &str, mesh: &MeshFile, _outputs: usize) -> Result<Self, OutputError> {
+impl<M: VtuMesh> FrameSink<M::Snapshot> for VtuSeriesOf<M> {
+    type Mesh = M;
+    fn open(out: &Path, name: &str, mesh: &M, _outputs: usize) -> Result<Self, OutputError> {
         Self::new(out, name, mesh)
     }
-    fn add(&mut self, s: &Snapshot) -> Result<(), OutputError> {
+    fn add(&mut self, s: &M::Snapshot) -> Result<(), OutputError> {
         self.write(s).map(|_| ())
     }
     fn close(self) -> Result<PathBuf, OutputError> {
@@ -57,43 +55,12 @@ impl FrameSink<Snapshot> for VtuSeries {
     }
 }
 
-impl FrameSink<Snapshot3> for VtuSeries3 {
-    type Mesh = Mesh3File;
-    fn open(
-        out: &Path,
-        name: &str,
-        mesh: &Mesh3File,
-        _outputs: usize,
-    ) -> Result<Self, OutputError> {
-        Self::new(out, name, mesh)
-    }
-    fn add(&mut self, s: &Snapshot3) -> Result<(), OutputError> {
-        self.write(s).map(|_| ())
-    }
-    fn close(self) -> Result<PathBuf, OutputError> {
-        Ok(self.pvd_path().to_path_buf())
-    }
-}
-
-impl FrameSink<Snapshot> for Movie {
-    type Mesh = MeshFile;
-    fn open(out: &Path, name: &str, mesh: &MeshFile, outputs: usize) -> Result<Self, OutputError> {
+impl<P: FramePainter> FrameSink<P::State> for MovieOf<P> {
+    type Mesh = P::Mesh;
+    fn open(out: &Path, name: &str, mesh: &P::Mesh, outputs: usize) -> Result<Self, OutputError> {
         Self::new(&gif_path(out, name), name, mesh, outputs)
     }
-    fn add(&mut self, s: &Snapshot) -> Result<(), OutputError> {
-        self.frame(s)
-    }
-    fn close(self) -> Result<PathBuf, OutputError> {
-        self.finish()
-    }
-}
-
-impl FrameSink<Snapshot3> for Movie3 {
-    type Mesh = Mesh3File;
-    fn open(out: &Path, name: &str, mesh: &Mesh3File, outputs: usize) -> Result<Self, OutputError> {
-        Self::new(&gif_path(out, name), name, mesh, outputs)
-    }
-    fn add(&mut self, s: &Snapshot3) -> Result<(), OutputError> {
+    fn add(&mut self, s: &P::State) -> Result<(), OutputError> {
         self.frame(s)
     }
     fn close(self) -> Result<PathBuf, OutputError> {

@@ -2,27 +2,15 @@
 //!
 //! The model computes the values ([`crate::model::CellModel::observe`]); this module owns
 //! their file format: the column names and order, a row's text, parsing a row back, and
-//! interpolation between rows. A new column is added here once (field, [`COLUMNS`],
-//! [`Observables::values`], [`Observables::from_values`]) and every reader follows.
+//! interpolation between rows. A new column is added here once, to the `columns!` list
+//! (which declares the field, [`COLUMNS`], [`Observables::values`] and
+//! [`Observables::from_values`]) and to [`Observables::CSV_HEADER`], and every reader
+//! follows.
 
 use serde::{Deserialize, Serialize};
 
 /// Number of columns of `timeseries.csv`.
 pub const N_COLUMNS: usize = 10;
-
-/// The column names of `timeseries.csv`, in order.
-pub const COLUMNS: [&str; N_COLUMNS] = [
-    "t",
-    "contact_radius",
-    "uy_top",
-    "uy_centre",
-    "uy_bottom",
-    "strain_nucleus",
-    "strain_cytoplasm",
-    "contact_radius_ref",
-    "strain_membrane",
-    "uy_nucleus_max",
-];
 
 /// The header of `timeseries.csv` before the paper's measures were added (cellsim before
 /// `contact_radius_ref`, `strain_membrane` and `uy_nucleus_max`; its `strain_cytoplasm`
@@ -30,85 +18,68 @@ pub const COLUMNS: [&str; N_COLUMNS] = [
 pub const OLD_CSV_HEADER: &str =
     "t,contact_radius,uy_top,uy_centre,uy_bottom,strain_nucleus,strain_cytoplasm";
 
-/// The quantities of one output row, in the units of `timeseries.csv`.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-pub struct Observables {
+/// Declares [`Observables`] with one `f64` field per column of `timeseries.csv`, in column
+/// order, together with [`COLUMNS`] and the conversions to and from a row of values, so
+/// that the column list is written once.
+macro_rules! columns {
+    ($($(#[$doc:meta])* $field:ident,)*) => {
+        /// The column names of `timeseries.csv`, in order.
+        pub const COLUMNS: [&str; N_COLUMNS] = [$(stringify!($field)),*];
+
+        /// The quantities of one output row, in the units of `timeseries.csv`.
+        #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+        pub struct Observables {
+            $($(#[$doc])* pub $field: f64,)*
+        }
+
+        impl Observables {
+            /// The values in CSV column order.
+            pub fn values(&self) -> [f64; N_COLUMNS] {
+                [$(self.$field),*]
+            }
+
+            /// The row whose values in CSV column order are `v` (inverse of [`Self::values`]).
+            pub fn from_values(v: [f64; N_COLUMNS]) -> Self {
+                let [$($field),*] = v;
+                Observables { $($field),* }
+            }
+        }
+    };
+}
+
+columns! {
     /// Time [s].
-    pub t: f64,
+    t,
     /// Deformed length of the cell boundary within ε_ct of the substrate [µm] (half cell).
-    pub contact_radius: f64,
+    contact_radius,
     /// Vertical displacement of the nucleus top p_t [µm] (negative = down).
-    pub uy_top: f64,
+    uy_top,
     /// Vertical displacement of the cell centre c [µm].
-    pub uy_centre: f64,
+    uy_centre,
     /// Vertical displacement of the nucleus bottom p_b [µm].
-    pub uy_bottom: f64,
+    uy_bottom,
     /// Reference-area mean of ‖E‖_F over the nucleus (fraction).
-    pub strain_nucleus: f64,
+    strain_nucleus,
     /// Reference-area mean of ‖E‖_F over the paper's cytoplasm, which includes the
     /// membrane (Sect. 2.1): cytoplasm and membrane together (fraction). Before the
     /// paper's measures were added this column was the cytoplasm without the membrane.
-    pub strain_cytoplasm: f64,
+    strain_cytoplasm,
     /// Length along the reference contour of the part of the boundary in contact (the
     /// material of [`Self::contact_radius`]: same criterion, measured in the reference
     /// frame, as the paper's COMSOL does) [µm] (half cell).
-    pub contact_radius_ref: f64,
+    contact_radius_ref,
     /// Reference-area mean of ‖E‖_F over the membrane alone (fraction).
-    pub strain_membrane: f64,
+    strain_membrane,
     /// Largest downward displacement of the nucleus: the smallest u_y over every node
     /// (vertices and mid-side nodes) of the nucleus elements [µm] (negative = down, as
     /// `uy_top`; never above `uy_top` and `uy_bottom`, which are nucleus nodes).
-    pub uy_nucleus_max: f64,
+    uy_nucleus_max,
 }
 
 impl Observables {
     /// The CSV header, exactly as the run writes it ([`COLUMNS`] joined by commas).
     pub const CSV_HEADER: &'static str = "t,contact_radius,uy_top,uy_centre,uy_bottom,\
          strain_nucleus,strain_cytoplasm,contact_radius_ref,strain_membrane,uy_nucleus_max";
-
-    /// The values in CSV column order.
-    pub fn values(&self) -> [f64; N_COLUMNS] {
-        [
-            self.t,
-            self.contact_radius,
-            self.uy_top,
-            self.uy_centre,
-            self.uy_bottom,
-            self.strain_nucleus,
-            self.strain_cytoplasm,
-            self.contact_radius_ref,
-            self.strain_membrane,
-            self.uy_nucleus_max,
-        ]
-    }
-
-    /// The row whose values in CSV column order are `v` (inverse of [`Self::values`]).
-    pub fn from_values(v: [f64; N_COLUMNS]) -> Self {
-        let [
-            t,
-            contact_radius,
-            uy_top,
-            uy_centre,
-            uy_bottom,
-            strain_nucleus,
-            strain_cytoplasm,
-            contact_radius_ref,
-            strain_membrane,
-            uy_nucleus_max,
-        ] = v;
-        Observables {
-            t,
-            contact_radius,
-            uy_top,
-            uy_centre,
-            uy_bottom,
-            strain_nucleus,
-            strain_cytoplasm,
-            contact_radius_ref,
-            strain_membrane,
-            uy_nucleus_max,
-        }
-    }
 
     /// The value of column `name`, if it is one of [`COLUMNS`].
     pub fn get(&self, name: &str) -> Option<f64> {

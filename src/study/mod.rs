@@ -162,6 +162,24 @@ fn scaled_settings(case: &Case, integrator: case::Integrator, rtol: f64) -> RunS
     s
 }
 
+/// What every run of a study shares: the case, its file and the study's options.
+#[derive(Clone, Copy)]
+struct Study<'a> {
+    case: &'a Case,
+    file: &'a str,
+    opts: &'a StudyOptions,
+}
+
+impl Study<'_> {
+    /// The case's settings for `integrator` scaled to `rtol` ([`scaled_settings`]), with
+    /// the study's wall budget per run.
+    fn settings(&self, integrator: case::Integrator, rtol: f64) -> RunSettings {
+        let mut s = scaled_settings(self.case, integrator, rtol);
+        s.max_wall_seconds = self.opts.settings.max_wall;
+        s
+    }
+}
+
 /// A run's outcome, as read back from its files.
 struct Outcome {
     row: StudyRow,
@@ -170,13 +188,12 @@ struct Outcome {
 
 /// Runs (or reuses) one run of the study.
 fn one_run(
-    case: &Case,
-    file: &str,
-    opts: &StudyOptions,
+    study: Study<'_>,
     role: Role,
     label: String,
     settings: RunSettings,
 ) -> Result<Outcome, StudyError> {
+    let Study { case, file, opts } = study;
     let dir = opts.out.join("runs").join(&label);
     let mut summary: Option<Summary> = None;
     let mut reused = false;
@@ -310,11 +327,12 @@ pub fn run_study(case: &Case, file: &str, opts: &StudyOptions) -> Result<StudyRe
     std::fs::create_dir_all(&opts.out).map_err(io_err(&opts.out))?;
     let csv = CsvWriter::create(opts.out.join("study.csv"), &opts.settings.quantities)?;
     // 1. The reference.
-    let (mut runs, failed_attempts) = reference_run(case, file, opts, csv)?;
+    let study = Study { case, file, opts };
+    let (mut runs, failed_attempts) = reference_run(study, csv)?;
     // 2. The BDF2 ladder, from the largest dt that converges down.
-    bdf2_ladder(case, file, opts, &mut runs)?;
+    bdf2_ladder(study, &mut runs)?;
     // 3. The IDA ladder.
-    ida_ladder(case, file, opts, &mut runs)?;
+    ida_ladder(study, &mut runs)?;
     let Runs {
         csv, rows, series, ..
     } = runs;
@@ -374,22 +392,16 @@ impl Runs {
 /// [`REF_ATTEMPTS`] tries. Returns the runs with it first, and the tolerances that failed
 /// with why.
 fn reference_run(
-    case: &Case,
-    file: &str,
-    opts: &StudyOptions,
+    study: Study<'_>,
     mut csv: CsvWriter,
 ) -> Result<(Runs, Vec<(f64, String)>), StudyError> {
-    let set = &opts.settings;
+    let opts = study.opts;
     let mut failed_attempts = Vec::new();
-    let mut rtol = set.ref_rtol;
+    let mut rtol = opts.settings.ref_rtol;
     for _ in 0..REF_ATTEMPTS {
-        let settings = {
-            let mut s = scaled_settings(case, case::Integrator::Ida, rtol);
-            s.max_wall_seconds = set.max_wall;
-            s
-        };
+        let settings = study.settings(case::Integrator::Ida, rtol);
         let label = format!("ref-ida-rtol{}", fmt_rtol(rtol));
-        let mut o = one_run(case, file, opts, Role::Reference, label, settings)?;
+        let mut o = one_run(study, Role::Reference, label, settings)?;
         if o.row.finished {
             o.row.errors = errors_against(&Quantity::ALL, &o.series, &o.series, true);
             progress_line(&o.row);
@@ -426,24 +438,18 @@ fn reference_run(
 
 /// Runs the BDF2 ladder: dt halved from `dt_max` until `rungs` rungs from the largest dt
 /// that converges down (giving up after [`MAX_LEADING_FAILURES`] failures first).
-fn bdf2_ladder(
-    case: &Case,
-    file: &str,
-    opts: &StudyOptions,
-    runs: &mut Runs,
-) -> Result<(), StudyError> {
-    let set = &opts.settings;
+fn bdf2_ladder(study: Study<'_>, runs: &mut Runs) -> Result<(), StudyError> {
+    let (opts, set) = (study.opts, &study.opts.settings);
     let mut dt = set.dt_max;
     let mut dt_inertia = set.dt_inertia;
     let mut counted = 0;
     let mut leading_failures = 0;
     while counted < set.rungs && !opts.interrupt.is_set() {
-        let mut settings = scaled_settings(case, case::Integrator::Bdf2, set.bdf2_rtol);
+        let mut settings = study.settings(case::Integrator::Bdf2, set.bdf2_rtol);
         settings.dt = dt;
         settings.dt_inertia = dt_inertia;
-        settings.max_wall_seconds = set.max_wall;
         let label = format!("bdf2-dt{}", fmt_num(dt));
-        let o = one_run(case, file, opts, Role::Bdf2, label, settings)?;
+        let o = one_run(study, Role::Bdf2, label, settings)?;
         let row = runs.record(o)?;
         if row.finished || counted > 0 {
             counted += 1;
@@ -471,21 +477,14 @@ fn bdf2_ladder(
 }
 
 /// Runs the IDA ladder: IDA at each of `rtols`.
-fn ida_ladder(
-    case: &Case,
-    file: &str,
-    opts: &StudyOptions,
-    runs: &mut Runs,
-) -> Result<(), StudyError> {
-    let set = &opts.settings;
-    for &r in &set.rtols {
-        if opts.interrupt.is_set() {
+fn ida_ladder(study: Study<'_>, runs: &mut Runs) -> Result<(), StudyError> {
+    for &r in &study.opts.settings.rtols {
+        if study.opts.interrupt.is_set() {
             break;
         }
-        let mut settings = scaled_settings(case, case::Integrator::Ida, r);
-        settings.max_wall_seconds = set.max_wall;
+        let settings = study.settings(case::Integrator::Ida, r);
         let label = format!("ida-rtol{}", fmt_rtol(r));
-        let o = one_run(case, file, opts, Role::Ida, label, settings)?;
+        let o = one_run(study, Role::Ida, label, settings)?;
         runs.record(o)?;
     }
     Ok(())

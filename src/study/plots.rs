@@ -14,8 +14,8 @@ use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-use crate::output::OutputError;
 use crate::output::figures::PALETTE;
+use crate::output::{DrawError, OutputError, draw_png};
 use crate::study::{
     LogLogFit, ORDER_QUANTITY, Quantity, Role, StudyReport, StudyRow, TARGET_ERROR, fit_loglog,
     ladder_points, work_points,
@@ -224,99 +224,99 @@ pub fn work_precision_figure(path: &Path, report: &StudyReport) -> Result<(), Ou
     let qs = &report.settings.quantities;
     let (nr, nc) = grid(qs.len());
     let size = (PANEL.0 * nc as u32, PANEL.1 * nr as u32 + 50);
-    let root = BitMapBackend::new(path, size).into_drawing_area();
-    let d = |x: String| OutputError::draw(path, x);
-    root.fill(&WHITE).map_err(|x| d(x.to_string()))?;
-    let title = format!(
-        "Work-precision, {}: relative error against the reference (IDA, rtol {:.0e}) vs wall time",
-        report.case, report.reference.rtol
-    );
-    let root = root
-        .titled(&title, (FONT, 26))
-        .map_err(|x| d(x.to_string()))?;
-    let panels = root.split_evenly((nr, nc));
-    for (k, &q) in qs.iter().enumerate() {
-        let rows = &report.runs;
-        let (bp, bl) = labelled_work(rows, Role::Bdf2, q);
-        let (ip, il) = labelled_work(rows, Role::Ida, q);
-        let x = log_range_from_decade(bp.iter().chain(&ip).map(|p| p.1));
-        let mut ys: Vec<f64> = bp.iter().chain(&ip).map(|p| p.0).collect();
-        // The errors at which the speed-up was measured on this quantity: the final uy_top
-        // at the target, the curve at each error both ladders reach.
-        let measured: Vec<f64> = match q {
-            Quantity::UyTop if report.ida_speedup.is_some() => vec![TARGET_ERROR],
-            Quantity::UyTopCurve => report
-                .speedup_curve
-                .iter()
-                .filter(|p| p.ratio.is_some())
-                .map(|p| p.error)
-                .collect(),
-            _ => Vec::new(),
-        };
-        ys.extend(&measured);
-        let y = log_range(ys.into_iter());
-        // Headroom above the data for the legend.
-        let y = (y.0, y.1 * 30.0);
-        // Error on x is conventional in SciML's work-precision diagrams; here the wall
-        // time is on x so that "cheaper" is left and "more accurate" is down.
-        let mut chart = log_chart(
-            &panels[k],
-            &format!("error of the {}", q.title()),
-            x,
-            y,
-            "wall time of the integration (s)",
-            "relative error (–)",
-        )
-        .map_err(d)?;
-        if !measured.is_empty() {
-            let at = measured
-                .iter()
-                .map(|t| format!("{t:.0e}"))
-                .collect::<Vec<_>>()
-                .join(", ");
-            chart
-                .draw_series(measured.iter().map(|&t| {
-                    DashedPathElement::new(vec![(x.0, t), (x.1, t)], 8, 6, GREY.stroke_width(2))
-                }))
-                .map_err(|x| d(x.to_string()))?
-                .label(format!("speed-up measured at {at}"))
-                .legend(|(x, y)| {
-                    DashedPathElement::new(vec![(x, y), (x + 30, y)], 6, 4, GREY.stroke_width(2))
-                });
+    draw_png(path, size, |root| {
+        let title = format!(
+            "Work-precision, {}: relative error against the reference (IDA, rtol {:.0e}) vs wall time",
+            report.case, report.reference.rtol
+        );
+        let root = root.titled(&title, (FONT, 26))?;
+        let panels = root.split_evenly((nr, nc));
+        for (k, &q) in qs.iter().enumerate() {
+            let rows = &report.runs;
+            let (bp, bl) = labelled_work(rows, Role::Bdf2, q);
+            let (ip, il) = labelled_work(rows, Role::Ida, q);
+            let x = log_range_from_decade(bp.iter().chain(&ip).map(|p| p.1));
+            let mut ys: Vec<f64> = bp.iter().chain(&ip).map(|p| p.0).collect();
+            // The errors at which the speed-up was measured on this quantity: the final uy_top
+            // at the target, the curve at each error both ladders reach.
+            let measured: Vec<f64> = match q {
+                Quantity::UyTop if report.ida_speedup.is_some() => vec![TARGET_ERROR],
+                Quantity::UyTopCurve => report
+                    .speedup_curve
+                    .iter()
+                    .filter(|p| p.ratio.is_some())
+                    .map(|p| p.error)
+                    .collect(),
+                _ => Vec::new(),
+            };
+            ys.extend(&measured);
+            let y = log_range(ys.into_iter());
+            // Headroom above the data for the legend.
+            let y = (y.0, y.1 * 30.0);
+            // Error on x is conventional in SciML's work-precision diagrams; here the wall
+            // time is on x so that "cheaper" is left and "more accurate" is down.
+            let mut chart = log_chart(
+                &panels[k],
+                &format!("error of the {}", q.title()),
+                x,
+                y,
+                "wall time of the integration (s)",
+                "relative error (–)",
+            )
+            .map_err(DrawError)?;
+            if !measured.is_empty() {
+                let at = measured
+                    .iter()
+                    .map(|t| format!("{t:.0e}"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                chart
+                    .draw_series(measured.iter().map(|&t| {
+                        DashedPathElement::new(vec![(x.0, t), (x.1, t)], 8, 6, GREY.stroke_width(2))
+                    }))?
+                    .label(format!("speed-up measured at {at}"))
+                    .legend(|(x, y)| {
+                        DashedPathElement::new(
+                            vec![(x, y), (x + 30, y)],
+                            6,
+                            4,
+                            GREY.stroke_width(2),
+                        )
+                    });
+            }
+            // Points as (wall, error).
+            let swap = |v: &[(f64, f64)]| v.iter().map(|p| (p.1, p.0)).collect::<Vec<_>>();
+            if !bp.is_empty() {
+                draw_line(&mut chart, &swap(&bp), BDF2_COLOR, false, "BDF2 (fixed dt)")
+                    .map_err(DrawError)?;
+                draw_point_labels(&mut chart, &swap(&bp), &bl, BDF2_COLOR).map_err(DrawError)?;
+            }
+            if !ip.is_empty() {
+                draw_line(&mut chart, &swap(&ip), IDA_COLOR, true, "IDA (rtol ladder)")
+                    .map_err(DrawError)?;
+                draw_point_labels(&mut chart, &swap(&ip), &il, IDA_COLOR).map_err(DrawError)?;
+            }
+            legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(DrawError)?;
         }
-        // Points as (wall, error).
-        let swap = |v: &[(f64, f64)]| v.iter().map(|p| (p.1, p.0)).collect::<Vec<_>>();
-        if !bp.is_empty() {
-            draw_line(&mut chart, &swap(&bp), BDF2_COLOR, false, "BDF2 (fixed dt)").map_err(d)?;
-            draw_point_labels(&mut chart, &swap(&bp), &bl, BDF2_COLOR).map_err(d)?;
-        }
-        if !ip.is_empty() {
-            draw_line(&mut chart, &swap(&ip), IDA_COLOR, true, "IDA (rtol ladder)").map_err(d)?;
-            draw_point_labels(&mut chart, &swap(&ip), &il, IDA_COLOR).map_err(d)?;
-        }
-        legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(d)?;
-    }
-    root.present().map_err(|x| d(x.to_string()))
+        Ok(())
+    })
 }
 
 /// Draws `dt-sensitivity.png`.
 pub fn dt_sensitivity_figure(path: &Path, report: &StudyReport) -> Result<(), OutputError> {
     let size = (PANEL.0 * 2 + 120, PANEL.1 + 100);
-    let root = BitMapBackend::new(path, size).into_drawing_area();
-    let d = |x: String| OutputError::draw(path, x);
-    root.fill(&WHITE).map_err(|x| d(x.to_string()))?;
-    let title = format!(
-        "Time-step sensitivity, {}: relative error against the reference (IDA, rtol {:.0e})",
-        report.case, report.reference.rtol
-    );
-    let root = root
-        .titled(&title, (FONT, 26))
-        .map_err(|x| d(x.to_string()))?;
-    let panels = root.split_evenly((1, 2));
-    for (k, role) in [Role::Bdf2, Role::Ida].into_iter().enumerate() {
-        ladder_panel(&panels[k], report, role).map_err(d)?;
-    }
-    root.present().map_err(|x| d(x.to_string()))
+    draw_png(path, size, |root| {
+        let title = format!(
+            "Time-step sensitivity, {}: relative error against the reference (IDA, rtol {:.0e})",
+            report.case, report.reference.rtol
+        );
+        let root = root.titled(&title, (FONT, 26))?;
+        let panels = root.split_evenly((1, 2));
+        for (k, role) in [Role::Bdf2, Role::Ida].into_iter().enumerate() {
+            ladder_panel(&panels[k], report, role).map_err(DrawError)?;
+        }
+        Ok(())
+    })
 }
 
 /// The title and x axis label of the panel of `role`'s ladder (BDF2's with its order).
@@ -486,42 +486,37 @@ pub struct LogLogPanel {
 pub fn loglog_figure(path: &Path, title: &str, panels: &[LogLogPanel]) -> Result<(), OutputError> {
     let n = panels.len().max(1);
     let size = (PANEL.0 * n as u32, PANEL.1 + 50);
-    let root = BitMapBackend::new(path, size).into_drawing_area();
-    let d = |x: String| OutputError::draw(path, x);
-    root.fill(&WHITE).map_err(|x| d(x.to_string()))?;
-    let root = root
-        .titled(title, (FONT, 24))
-        .map_err(|x| d(x.to_string()))?;
-    let areas = root.split_evenly((1, n));
-    for (panel, area) in panels.iter().zip(&areas) {
-        let all = || panel.series.iter().flat_map(|s| s.points.iter());
-        let x = log_range_from_decade(all().map(|p| p.0));
-        let y = log_range(all().map(|p| p.1));
-        // Headroom above the data for the legend.
-        let y = (y.0, y.1 * 8.0);
-        let mut chart =
-            log_chart(area, &panel.title, x, y, &panel.x_desc, &panel.y_desc).map_err(d)?;
-        for (k, s) in panel.series.iter().enumerate() {
-            let color = PALETTE[k % PALETTE.len()];
-            let fit = if s.fit { fit_loglog(&s.points) } else { None };
-            let label = match &fit {
-                Some(f) => format!("{} (fit: ∝ n^{:.2})", s.label, f.slope),
-                None => s.label.clone(),
-            };
-            draw_line(&mut chart, &s.points, color, k % 2 == 1, &label).map_err(d)?;
-            if let Some(f) = fit {
-                let ends = [x.0, x.1].map(|v| (v, (f.intercept + f.slope * v.ln()).exp()));
-                chart
-                    .draw_series(std::iter::once(DashedPathElement::new(
+    draw_png(path, size, |root| {
+        let root = root.titled(title, (FONT, 24))?;
+        let areas = root.split_evenly((1, n));
+        for (panel, area) in panels.iter().zip(&areas) {
+            let all = || panel.series.iter().flat_map(|s| s.points.iter());
+            let x = log_range_from_decade(all().map(|p| p.0));
+            let y = log_range(all().map(|p| p.1));
+            // Headroom above the data for the legend.
+            let y = (y.0, y.1 * 8.0);
+            let mut chart = log_chart(area, &panel.title, x, y, &panel.x_desc, &panel.y_desc)
+                .map_err(DrawError)?;
+            for (k, s) in panel.series.iter().enumerate() {
+                let color = PALETTE[k % PALETTE.len()];
+                let fit = if s.fit { fit_loglog(&s.points) } else { None };
+                let label = match &fit {
+                    Some(f) => format!("{} (fit: ∝ n^{:.2})", s.label, f.slope),
+                    None => s.label.clone(),
+                };
+                draw_line(&mut chart, &s.points, color, k % 2 == 1, &label).map_err(DrawError)?;
+                if let Some(f) = fit {
+                    let ends = [x.0, x.1].map(|v| (v, (f.intercept + f.slope * v.ln()).exp()));
+                    chart.draw_series(std::iter::once(DashedPathElement::new(
                         ends.to_vec(),
                         8,
                         6,
                         color.stroke_width(1),
-                    )))
-                    .map_err(|x| d(x.to_string()))?;
+                    )))?;
+                }
             }
+            legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(DrawError)?;
         }
-        legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(d)?;
-    }
-    root.present().map_err(|x| d(x.to_string()))
+        Ok(())
+    })
 }

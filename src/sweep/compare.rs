@@ -33,7 +33,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Deserializer, Serialize};
+use serde::{Deserialize, Serialize};
 
 use super::design::{Design, Kind};
 use super::table::{Row, Status};
@@ -73,7 +73,7 @@ pub struct Column {
     /// Shorter header for the closeness and summary tables (default: `label`).
     #[serde(
         default,
-        deserialize_with = "present",
+        deserialize_with = "super::present",
         skip_serializing_if = "Option::is_none"
     )]
     pub short: Option<String>,
@@ -91,7 +91,7 @@ pub struct Column {
     /// subtracted.
     #[serde(
         default,
-        deserialize_with = "present",
+        deserialize_with = "super::present",
         skip_serializing_if = "Option::is_none"
     )]
     pub minus: Option<String>,
@@ -101,7 +101,7 @@ pub struct Column {
     /// The reported value, in the column's (scaled) unit.
     #[serde(
         default,
-        deserialize_with = "present",
+        deserialize_with = "super::present",
         skip_serializing_if = "Option::is_none"
     )]
     pub reference: Option<f64>,
@@ -162,10 +162,6 @@ pub struct TableSpec {
     /// Documents that receive the table.
     #[serde(default)]
     pub documents: Vec<Document>,
-}
-
-fn present<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<Option<T>, D::Error> {
-    T::deserialize(d).map(Some)
 }
 
 fn one() -> f64 {
@@ -878,6 +874,27 @@ mod tests {
     use crate::sweep::design::DesignSpec;
     use crate::sweep::{RecordPoint, Settings};
 
+    /// The record of the sweep "t" of `design` with `points` and the table `table`.
+    fn record(design: Design, points: Vec<RecordPoint>, table: TableSpec) -> Record {
+        Record {
+            name: "t".into(),
+            sweep_file: "t.ron".into(),
+            base: "b.ron".into(),
+            design,
+            set: vec![],
+            derive: vec![],
+            points,
+            settings: Settings {
+                jobs: 1,
+                retry_failed: false,
+                max_wall: None,
+                shards: None,
+            },
+            cellsim_version: "0".into(),
+            table: Some(table),
+        }
+    }
+
     fn design() -> Design {
         let spec: DesignSpec = ron::Options::default()
             .from_str(
@@ -990,23 +1007,7 @@ mod tests {
         assert_eq!(t.unfinished[0].0, "g1_1");
         // The markdown says the same, with the paper's row, the closeness and the
         // overrides.
-        let record = Record {
-            name: "t".into(),
-            sweep_file: "t.ron".into(),
-            base: "b.ron".into(),
-            design: d.clone(),
-            set: vec![],
-            derive: vec![],
-            points: vec![],
-            settings: Settings {
-                jobs: 1,
-                retry_failed: false,
-                max_wall: None,
-                shards: None,
-            },
-            cellsim_version: "0".into(),
-            table: Some(s.clone()),
-        };
+        let record = record(d.clone(), vec![], s.clone());
         let md = full_markdown(&record, &s, &t, "out");
         assert!(
             md.contains("| reading | radius at T_g0 | largest down | b - a |"),
@@ -1183,23 +1184,7 @@ mod tests {
                 overrides: vec![],
             });
         }
-        let record = Record {
-            name: "t".into(),
-            sweep_file: "t.ron".into(),
-            base: "b.ron".into(),
-            design: d,
-            set: vec![],
-            derive: vec![],
-            points,
-            settings: Settings {
-                jobs: 1,
-                retry_failed: false,
-                max_wall: None,
-                shards: None,
-            },
-            cellsim_version: "0".into(),
-            table: Some(s),
-        };
+        let record = record(d, points, s);
         let written = write(&dir, &record, &rows).unwrap();
         assert_eq!(written.len(), 3);
         let csv = std::fs::read_to_string(dir.join("table.csv")).unwrap();

@@ -37,16 +37,16 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 pub struct AxisSpec {
     /// Dotted path into the case (as for `--set`).
-    #[serde(default, deserialize_with = "present_string")]
+    #[serde(default, deserialize_with = "super::present")]
     pub path: Option<String>,
     /// A list of RON values, or `Range(...)` / `LogRange(...)`.
-    #[serde(default, deserialize_with = "present_raw")]
+    #[serde(default, deserialize_with = "super::present")]
     pub values: Option<Box<RawValue>>,
     /// Name of a variant axis (its column in `sweep.csv`).
-    #[serde(default, deserialize_with = "present_string")]
+    #[serde(default, deserialize_with = "super::present")]
     pub name: Option<String>,
     /// The variants of a variant axis.
-    #[serde(default, deserialize_with = "present_variants")]
+    #[serde(default, deserialize_with = "super::present")]
     pub variants: Option<Vec<Variant>>,
 }
 
@@ -59,21 +59,6 @@ pub struct Variant {
     /// Overrides applied together, in order.
     #[serde(default)]
     pub set: Vec<String>,
-}
-
-/// A field written without `Some(...)`: present means `Some`.
-fn present_raw<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<Box<RawValue>>, D::Error> {
-    Box::<RawValue>::deserialize(d).map(Some)
-}
-
-fn present_string<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<String>, D::Error> {
-    String::deserialize(d).map(Some)
-}
-
-fn present_variants<'de, D: serde::Deserializer<'de>>(
-    d: D,
-) -> Result<Option<Vec<Variant>>, D::Error> {
-    Vec::<Variant>::deserialize(d).map(Some)
 }
 
 /// The design as written in the sweep file.
@@ -568,15 +553,23 @@ mod tests {
         Design::from_spec(&spec).map_err(|e| e.to_string())
     }
 
+    /// The design of `text`, which must be valid.
+    fn valid(text: &str) -> Design {
+        design(text).unwrap()
+    }
+
+    /// Why the design of `text` is refused.
+    fn refused(text: &str) -> String {
+        design(text).unwrap_err()
+    }
+
     #[test]
     fn ranges_give_rounded_values() {
-        let d =
-            design(r#"Grid([(path: "a.b", values: Range(start: 0.1, stop: 0.9, n: 5))])"#).unwrap();
+        let d = valid(r#"Grid([(path: "a.b", values: Range(start: 0.1, stop: 0.9, n: 5))])"#);
         assert_eq!(d.axes[0].values, ["0.1", "0.3", "0.5", "0.7", "0.9"]);
-        let d = design(r#"Grid([(path: "a", values: LogRange(start: 1e3, stop: 1e5, n: 3))])"#)
-            .unwrap();
+        let d = valid(r#"Grid([(path: "a", values: LogRange(start: 1e3, stop: 1e5, n: 3))])"#);
         assert_eq!(d.axes[0].values, ["1000.0", "10000.0", "100000.0"]);
-        let d = design(r#"Grid([(path: "a", values: [On, OffAfter(9.0), 4])])"#).unwrap();
+        let d = valid(r#"Grid([(path: "a", values: [On, OffAfter(9.0), 4])])"#);
         assert_eq!(d.axes[0].values, ["On", "OffAfter(9.0)", "4"]);
         assert_eq!(fmt_number(4.0), "4.0");
         assert_eq!(fmt_number(1e-7), "0.0000001");
@@ -584,41 +577,35 @@ mod tests {
 
     #[test]
     fn grid_zip_and_one_at_a_time_points() {
-        let d = design(
+        let p = valid(
             r#"Grid([(path: "a", values: [1.0, 2.0]), (path: "b", values: Range(start: 0.0, stop: 10.0, n: 11))])"#,
         )
-        .unwrap();
-        let p = d.points();
+        .points();
         assert_eq!(p.len(), 22);
         assert_eq!(p[0].id, "g0_00");
         assert_eq!(p[12].id, "g1_01");
         assert_eq!(p[12].values, [Some("2.0".into()), Some("1.0".into())]);
-        let d = design(r#"Zip([(path: "a", values: [1.0, 2.0]), (path: "b", values: [3, 4])])"#)
-            .unwrap();
+        let d = valid(r#"Zip([(path: "a", values: [1.0, 2.0]), (path: "b", values: [3, 4])])"#);
         let p = d.points();
         assert_eq!(
             (p[1].id.as_str(), p[1].values.clone()),
             ("z1", vec![Some("2.0".into()), Some("4".into())])
         );
-        let e = design(r#"Zip([(path: "a", values: [1.0, 2.0]), (path: "b", values: [3])])"#)
-            .unwrap_err();
+        let e = refused(r#"Zip([(path: "a", values: [1.0, 2.0]), (path: "b", values: [3])])"#);
         assert!(e.contains("equal length"), "{e}");
-        let d =
-            design(r#"OneAtATime([(path: "a", values: [1.0, 2.0]), (path: "b", values: [3])])"#)
-                .unwrap();
+        let d = valid(r#"OneAtATime([(path: "a", values: [1.0, 2.0]), (path: "b", values: [3])])"#);
         let ids: Vec<_> = d.points().into_iter().map(|p| p.id).collect();
         assert_eq!(ids, ["base", "o0_0", "o0_1", "o1_0"]);
     }
 
     #[test]
     fn variant_axes_are_named_sets_of_overrides() {
-        let d = design(
+        let d = valid(
             r#"Grid([
                 (name: "reading", variants: [(name: "base"), (name: "unit", set: ["adhesion.direction=Unit", "adhesion.e_f=1.0"])]),
                 (path: "materials.gamma", values: [0.1, 0.2]),
             ])"#,
-        )
-        .unwrap();
+        );
         assert_eq!(d.axes[0].path, "reading");
         assert_eq!(d.axes[0].values, ["base", "unit"]);
         assert!(d.axes[0].is_variants() && !d.axes[1].is_variants());
@@ -638,34 +625,34 @@ mod tests {
         assert_eq!(json.matches("\"sets\"").count(), 1, "{json}");
         assert_eq!(serde_json::from_str::<Design>(&json).unwrap(), d);
         // Mistakes.
-        let e = |t: &str| design(t).unwrap_err();
         assert!(
-            e(r#"Grid([(name: "r", variants: [(name: "a"), (name: "a")])])"#)
+            refused(r#"Grid([(name: "r", variants: [(name: "a"), (name: "a")])])"#)
                 .contains("given twice")
         );
-        assert!(e(r#"Grid([(name: "r", variants: [])])"#).contains("no variants"));
-        assert!(e(r#"Grid([(name: "r", variants: [(name: " ")])])"#).contains("not empty"));
+        assert!(refused(r#"Grid([(name: "r", variants: [])])"#).contains("no variants"));
+        assert!(refused(r#"Grid([(name: "r", variants: [(name: " ")])])"#).contains("not empty"));
         assert!(
-            e(r#"Grid([(name: "r", variants: [(name: "a", set: ["noequals"])])])"#)
+            refused(r#"Grid([(name: "r", variants: [(name: "a", set: ["noequals"])])])"#)
                 .contains("variant `a`")
         );
         assert!(
-            e(r#"Grid([(name: "r", path: "a.b", variants: [(name: "a")])])"#)
+            refused(r#"Grid([(name: "r", path: "a.b", variants: [(name: "a")])])"#)
                 .contains("an axis is")
         );
-        assert!(e(r#"Grid([(path: "a.b")])"#).contains("an axis is"));
+        assert!(refused(r#"Grid([(path: "a.b")])"#).contains("an axis is"));
         assert!(
-            e(r#"LatinHypercube(n: 2, seed: 1, axes: [(name: "r", variants: [(name: "a")])])"#)
-                .contains("not variants")
+            refused(
+                r#"LatinHypercube(n: 2, seed: 1, axes: [(name: "r", variants: [(name: "a")])])"#
+            )
+            .contains("not variants")
         );
     }
 
     #[test]
     fn latin_hypercube_stratifies_each_axis_and_is_reproducible() {
-        let d = design(
+        let d = valid(
             r#"LatinHypercube(n: 8, seed: 3, axes: [(path: "a", values: Range(start: 0.0, stop: 8.0)), (path: "b", values: LogRange(start: 1.0, stop: 100.0))])"#,
-        )
-        .unwrap();
+        );
         let p = d.points();
         assert_eq!(p.len(), 8);
         let mut strata: Vec<usize> = p
@@ -675,12 +662,11 @@ mod tests {
         strata.sort();
         assert_eq!(strata, (0..8).collect::<Vec<_>>());
         assert_eq!(p, d.points());
-        let e = design(r#"LatinHypercube(n: 8, seed: 3, axes: [(path: "a", values: [1.0])])"#)
-            .unwrap_err();
+        let e = refused(r#"LatinHypercube(n: 8, seed: 3, axes: [(path: "a", values: [1.0])])"#);
         assert!(e.contains("samples ranges"), "{e}");
-        let e = design(r#"Grid([(path: "a", values: Range(start: 0.0, stop: 1.0))])"#).unwrap_err();
+        let e = refused(r#"Grid([(path: "a", values: Range(start: 0.0, stop: 1.0))])"#);
         assert!(e.contains("needs `n`"), "{e}");
-        let e = design(r#"Grid([(path: "a..b", values: [1])])"#).unwrap_err();
+        let e = refused(r#"Grid([(path: "a..b", values: [1])])"#);
         assert!(e.contains("not a field name"), "{e}");
     }
 }

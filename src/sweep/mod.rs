@@ -48,7 +48,7 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 
-use crate::case::overrides::{self, value_at};
+use crate::case::overrides::{self, parse_number, value_at};
 use crate::case::{Case, CaseError, Override, Substrate};
 use crate::output::OutputError;
 use crate::record::{FailureKind, RunSettings};
@@ -124,12 +124,16 @@ pub struct SweepFile {
     #[serde(default)]
     pub derive: Vec<Derived>,
     /// The comparison table ([`compare`]), for a Grid of two axes.
-    #[serde(default, deserialize_with = "present_table")]
+    #[serde(default, deserialize_with = "present")]
     pub table: Option<TableSpec>,
 }
 
-fn present_table<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<TableSpec>, D::Error> {
-    TableSpec::deserialize(d).map(Some)
+/// A field of a sweep file written without `Some(...)`: present means `Some` (the
+/// design's axes, the table and its columns).
+fn present<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(
+    d: D,
+) -> Result<Option<T>, D::Error> {
+    T::deserialize(d).map(Some)
 }
 
 /// One point, resolved.
@@ -252,16 +256,6 @@ fn located(file: &Path, e: &ron::error::SpannedError) -> String {
         e.span.start.col,
         e.code
     )
-}
-
-/// A number from RON text: `1.5`, `Some(1.5)`.
-fn parse_number(text: &str) -> Option<f64> {
-    let t = text.trim();
-    let t = t
-        .strip_prefix("Some(")
-        .and_then(|s| s.strip_suffix(')'))
-        .unwrap_or(t);
-    t.trim().parse().ok()
 }
 
 /// Evaluates `expr` with `lookup` giving the value of a dotted path.
