@@ -109,16 +109,11 @@ fn main() {
         case.inertia.mode = cellsim::case::InertiaMode::Off;
         case.inertia.drag = d;
     }
-    let g = case.geometry.clone();
-    let c = g.centre();
     let mp = Mesh3Params {
-        center: [c[0], c[1], 0.0],
-        r_n: g.r_n,
-        r_cp: g.r_cp,
-        r_c: g.r_c,
         h_bottom: args.h_bottom.unwrap_or(case.mesh.h_bottom),
         h_nucleus: args.h_nucleus.unwrap_or(case.mesh.h_nucleus),
         refine: args.refine.unwrap_or(case.mesh.refine),
+        ..cellsim::case::terms::mesh3_params(&case)
     };
     let t0 = Instant::now();
     let mesh = Mesh3::generate(&mp).expect("mesh");

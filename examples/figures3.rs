@@ -307,6 +307,7 @@ fn integrate_flat_gravity() -> (Mesh3File, Snapshot3) {
     let centre = g.centre();
     let mesh = Mesh3::generate(&Mesh3Params {
         center: [centre[0], centre[1], 0.0],
+        wedge: cellsim::fem::Wedge::Quarter,
         r_n: g.r_n,
         r_cp: g.r_cp,
         r_c: g.r_c,

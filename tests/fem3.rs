@@ -16,6 +16,7 @@ use cellsim::fem::tet10::{self as tet, TET_FACES};
 use cellsim::fem::tri6::{self as p2, Tri6};
 use cellsim::fem::{
     Domain, EdgeRule, Mesh, Mesh3, Mesh3Params, MeshError, TetRule, TetTabulation, TriangleRule,
+    Wedge,
 };
 
 /// The cache root of these tests (under the target directory, kept across runs).
@@ -38,6 +39,7 @@ fn generate(p: &Mesh3Params) -> Generated {
 fn params(refine: f64) -> Mesh3Params {
     Mesh3Params {
         refine,
+        wedge: Wedge::Quarter,
         ..cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())
     }
 }
@@ -50,7 +52,7 @@ fn norm(a: [f64; 3]) -> f64 {
     (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
-/// Volumes of the balls r_n, r_cp, r_c (quarter) from a mesh: nucleus, nucleus +
+/// Volumes of the balls r_n, r_cp, r_c (of the wedge) from a mesh: nucleus, nucleus +
 /// cytoplasm, everything. Each has one curved boundary.
 fn ball_volumes(m: &Mesh3) -> [f64; 3] {
     let n = m.volume(Some(Domain::Nucleus));
@@ -346,6 +348,7 @@ fn other_cells_mesh_with_their_planes_points_and_volumes() {
     let cases = [
         Mesh3Params {
             center: [1.5, -2.0, 0.7],
+            wedge: Wedge::Eighth,
             r_n: 3.0,
             r_cp: 6.0,
             r_c: 7.0,
@@ -761,5 +764,58 @@ fn print_quality() {
             p.estimated_tets(),
         );
         let _ = std::fs::remove_dir_all(&root);
+    }
+}
+
+/// The eighth cell 0 ≤ z − c_z ≤ x − c_x: every node in the wedge, the symmetry sets exactly
+/// the nodes on their planes (u_x = 0 only on the axis), half the quarter's volumes and
+/// area to the P2 geometry's error, and about half its tetrahedra.
+#[test]
+fn the_eighth_mesh_is_half_the_quarter() {
+    let quarter = generate(&params(1.0)).mesh;
+    let m = generate(&Mesh3Params {
+        wedge: Wedge::Eighth,
+        ..params(1.0)
+    })
+    .mesh;
+    let q = m.quality();
+    println!("{q}");
+    let ratio = q.tets as f64 / quarter.elements.len() as f64;
+    assert!((0.4..0.6).contains(&ratio), "{ratio}");
+    assert!(q.min_radius_ratio > 0.1 && q.min_dihedral_deg > 8.0, "{q}");
+    assert!(q.elements_through_membrane >= 1, "{q}");
+    for (v, e) in q.volumes.iter().zip(q.exact_volumes) {
+        assert!((v / e - 1.0).abs() < 1e-3, "{q}");
+    }
+    assert!((q.outer_area / q.exact_outer_area - 1.0).abs() < 1e-3, "{q}");
+    let half = |a: f64, b: f64| (a / (0.5 * b) - 1.0).abs() < 1e-9;
+    assert!(half(q.exact_outer_area, quarter.quality().exact_outer_area));
+    let est = m.params.estimated_tets();
+    assert!((est / q.tets as f64 - 1.0).abs() < 0.25, "estimate {est} vs {}", q.tets);
+    let c = m.params.center;
+    for n in 0..m.n_nodes() {
+        let (x, z) = (m.nodes[n][0] - c[0], m.nodes[n][2] - c[2]);
+        assert!(z >= 0.0 && x >= z, "node {n} outside the eighth");
+        // No node near a plane without being on it.
+        assert!(z == 0.0 || z > 1e-3, "node {n}: z {z}");
+        assert!(x == z || x - z > 1e-3, "node {n}: x − z {}", x - z);
+    }
+    let on = |f: &dyn Fn(f64, f64) -> bool| -> Vec<usize> {
+        (0..m.n_nodes())
+            .filter(|&n| f(m.nodes[n][0] - c[0], m.nodes[n][2] - c[2]))
+            .collect()
+    };
+    assert_eq!(m.symmetry_z, on(&|_, z| z == 0.0));
+    assert_eq!(m.symmetry_x, on(&|x, z| x == 0.0 && z == 0.0));
+    assert_eq!(m.symmetry_diagonal, on(&|x, z| x == z && x != 0.0));
+    assert!(m.symmetry_x.len() >= 10, "{} nodes on the axis", m.symmetry_x.len());
+    assert!(m.symmetry_diagonal.len() > 100);
+    assert_eq!(
+        q.displacement_unknowns,
+        3 * q.nodes - m.symmetry_x.len() - m.symmetry_z.len() - m.symmetry_diagonal.len()
+    );
+    // The named points on the axis, as in the quarter.
+    for n in [m.points.centre, m.points.nucleus_bottom, m.points.cell_bottom] {
+        assert!(m.symmetry_x.contains(&n));
     }
 }

@@ -5,7 +5,7 @@
 use cellsim::case::{self, Case};
 use cellsim::dae::{Atol, Dae, Integrator};
 use cellsim::fem::tet10::{TET_FACES, face_map};
-use cellsim::fem::{Domain, Mesh, Mesh3, Mesh3Params, MeshParams, TriangleRule};
+use cellsim::fem::{Domain, Mesh, Mesh3, Mesh3Params, MeshParams, TriangleRule, Wedge};
 use cellsim::model::{Cell3, Constraints};
 use cellsim::model::{CellModel, ModelParams};
 use cellsim::physics::{KinematicModel, Lattice, Substrate, Viscosity, Yeoh, piola_total3};
@@ -15,10 +15,16 @@ use nalgebra::{Matrix3, Vector3};
 
 /// The quarter cell's mesh at the given sizes (µm) for the reference cell.
 pub fn mesh3(h_bottom: f64, h_nucleus: f64) -> Mesh3 {
+    wedge_mesh(h_bottom, h_nucleus, Wedge::Quarter)
+}
+
+/// The mesh of `wedge` at the given sizes (µm) for the reference cell.
+pub fn wedge_mesh(h_bottom: f64, h_nucleus: f64, wedge: Wedge) -> Mesh3 {
     let g = Case::reference().geometry;
     let c = g.centre();
     Mesh3::generate(&Mesh3Params {
         center: [c[0], c[1], 0.0],
+        wedge,
         r_n: g.r_n,
         r_cp: g.r_cp,
         r_c: g.r_c,
@@ -26,12 +32,17 @@ pub fn mesh3(h_bottom: f64, h_nucleus: f64) -> Mesh3 {
         h_nucleus,
         refine: 1.0,
     })
-    .expect("the quarter cell meshes")
+    .expect("the cell meshes")
 }
 
 /// A coarse quarter cell (fast tests).
 pub fn coarse3() -> Mesh3 {
     mesh3(0.6, 1.5)
+}
+
+/// A coarse eighth cell (fast tests).
+pub fn coarse8() -> Mesh3 {
+    wedge_mesh(0.6, 1.5, Wedge::Eighth)
 }
 
 /// The parameters of a half-plane case made the 3-D cell's (over four pillars).
@@ -45,19 +56,24 @@ fn params3(plane: ModelParams) -> ModelParams {
 
 use crate::fd::deformed_state;
 
-/// Finite-difference step on an exposure A (~1e3): the B block is small beside the
-/// membrane's internal forces, so round-off dominates small steps (worst column error
-/// 6.4e-5 at 1e-3, 7.6e-6 at 1e-2, below 1e-6 at 0.1 and 1: the Richardson-extrapolated
-/// truncation error is negligible at these steps).
+/// Smallest finite-difference step on an exposure A (~1e3); [`crate::fd::jacobian_fd_error`]
+/// also tries 10× and 100× it.
 const MU_STEP: f64 = 1e-1;
 
 #[test]
 fn jacobian_of_the_quarter_cell_matches_finite_differences() {
     // Pillars (the cell above the centre of four), contact, adhesion with its exposure
     // unknowns and both active regions, with inertia and without (medium drag): every
-    // block of J. t in the active phase, the cell sunk 0.5 µm into the bands.
-    let mesh = coarse3();
-    for (inertia, lattice) in [(false, Lattice::Gap), (true, Lattice::FourPillars)] {
+    // block of J. t in the active phase, the cell sunk 0.5 µm into the bands. The eighth
+    // cell too, whose nodes on the diagonal plane carry one unknown for u_x = u_z: the u
+    // and v unknowns of every such node in the lower half are columns.
+    let (quarter, eighth) = (coarse3(), coarse8());
+    for (inertia, lattice, mesh) in [
+        (false, Lattice::Gap, &quarter),
+        (true, Lattice::FourPillars, &quarter),
+        (true, Lattice::FourPillars, &eighth),
+    ] {
+        let wedge = mesh.params.wedge;
         let mut c = Case::reference_active();
         c.substrate = case::Substrate::pillars();
         let mut p = scene::model_params(&c, "pillars-3d", inertia).expect("a valid case");
@@ -81,7 +97,16 @@ fn jacobian_of_the_quarter_cell_matches_finite_differences() {
         assert!(f.y > 1e-3, "no contact in the test state (force {f:?})");
         // 60 random columns and every unknown of 40 of the lowest nodes (in contact),
         // velocities and exposures included.
-        let cols = crate::fd::contact_columns(&m, 60, Some(40));
+        let mut cols = crate::fd::contact_columns(&m, 60, Some(40));
+        for &i in &m.mesh.symmetry_diagonal {
+            assert_eq!(m.dofs.u[i][0], m.dofs.u[i][2], "u_z is u_x on the diagonal");
+            if m.mesh.nodes[i][1] < 0.0 {
+                // The tie is in u and v; μ_as is one unknown per node either way.
+                cols.extend(m.dofs.u[i].iter().chain(&m.dofs.v[i]));
+            }
+        }
+        cols.retain(|&c| c != usize::MAX);
+        assert_eq!(m.mesh.symmetry_diagonal.is_empty(), wedge == Wedge::Quarter);
         for cj in [0.0, 37.0] {
             let off = m.dofs.mu_offset();
             let (err, j) =
@@ -91,7 +116,7 @@ fn jacobian_of_the_quarter_cell_matches_finite_differences() {
             });
             assert!(
                 err < 1e-6,
-                "{lattice:?}, inertia {inertia}, cj {cj}: relative column error {err:.2e} \
+                "{wedge:?}, {lattice:?}, inertia {inertia}, cj {cj}: relative column error {err:.2e} \
                  (column {j}, node {node:?} at {:?})",
                 node.map(|i| m.mesh.nodes[i])
             );
@@ -203,12 +228,18 @@ fn patch_test_homogeneous_deformation_gives_exact_internal_forces() {
 }
 
 #[test]
-fn weight_and_volumes_of_the_quarter_cell() {
-    // The quarter of the ball's volume and weight, from the elements' mass, to the P2
-    // geometry's error.
-    let m = Cell3::new(params3(scene::reference_params()), coarse3()).unwrap();
+fn weight_and_volumes_of_the_quarter_and_the_eighth_cell() {
+    // The quarter (the eighth) of the ball's volume and weight, from the elements' mass,
+    // to the P2 geometry's error.
+    for (mesh, share) in [(coarse3(), 0.25), (coarse8(), 0.125)] {
+        weight_and_volumes(mesh, share);
+    }
+}
+
+fn weight_and_volumes(mesh: Mesh3, share: f64) {
+    let m = Cell3::new(params3(scene::reference_params()), mesh).unwrap();
     let g = Case::reference().geometry;
-    let ball = |r: f64| std::f64::consts::PI * r.powi(3) / 3.0;
+    let ball = |r: f64| share * 4.0 * std::f64::consts::PI * r.powi(3) / 3.0;
     let v = m.volume(None);
     assert!(
         (v / ball(g.r_c) - 1.0).abs() < 1e-3,
@@ -270,49 +301,53 @@ fn flat_gravity_phase_in_3d_agrees_with_the_axisymmetric_model() {
     // u_y(p_t) and the contact radius agree with the axisymmetric model's to 1 %.
     // Measured on this coarse 3-D mesh (3 320 tets) against the default 2-D mesh:
     // u_y(p_t) −0.61832 against −0.61932 µm, contact radius 1.8827 against 1.8854 µm.
+    // The eighth cell (0 ≤ z ≤ x, 1 804 tets) within the same 1 %.
     let t_end = 150.0;
     let p = quasi_static_flat(t_end);
-    let m3 = Cell3::new(params3(p.clone()), coarse3()).unwrap();
-    let atol3 = m3.atol_vector(1e-7);
-    let ida3 = ida_to(m3, atol3, t_end);
-    let (m3, y3) = (ida3.dae(), ida3.y());
-    let (w, f) = (m3.weight(), m3.contact_force_total(y3));
-    assert!(
-        (f.y - w).abs() < 1e-3 * w,
-        "contact force {f:?} against weight {w}"
-    );
-    assert!(f.x.abs() < 1e-6 * w && f.z.abs() < 1e-6 * w, "{f:?}");
-    let o3 = m3.observe(t_end, y3);
-
-    let mut pa = p;
+    let mut pa = p.clone();
     pa.kinematics = cellsim::physics::KinematicModel::Axisymmetric;
     let mesh2 = Mesh::generate(&case::terms::mesh_params(&Case::reference())).unwrap();
     let ma = CellModel::new(pa, mesh2).unwrap();
     let atola = ma.atol_vector(1e-7);
     let idaa = ida_to(ma, atola, t_end);
     let oa = idaa.dae().observe(t_end, idaa.y());
-    eprintln!(
-        "3-D: uy_top {:.5}, contact radius {:.4} (ref {:.4}); axisymmetric: {:.5}, {:.4} ({:.4})",
-        o3.uy_top,
-        o3.contact_radius,
-        o3.contact_radius_ref,
-        oa.uy_top,
-        oa.contact_radius,
-        oa.contact_radius_ref
-    );
-    let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
-    assert!(
-        rel(o3.uy_top, oa.uy_top) < 0.01,
-        "uy_top {} against {}",
-        o3.uy_top,
-        oa.uy_top
-    );
-    assert!(
-        rel(o3.contact_radius, oa.contact_radius) < 0.01,
-        "contact radius {} against {}",
-        o3.contact_radius,
-        oa.contact_radius
-    );
+    for mesh in [coarse3(), coarse8()] {
+        let wedge = mesh.params.wedge;
+        let m3 = Cell3::new(params3(p.clone()), mesh).unwrap();
+        let atol3 = m3.atol_vector(1e-7);
+        let ida3 = ida_to(m3, atol3, t_end);
+        let (m3, y3) = (ida3.dae(), ida3.y());
+        let (w, f) = (m3.weight(), m3.contact_force_total(y3));
+        assert!(
+            (f.y - w).abs() < 1e-3 * w,
+            "{wedge:?}: contact force {f:?} against weight {w}"
+        );
+        assert!(f.x.abs() < 1e-6 * w && f.z.abs() < 1e-6 * w, "{f:?}");
+        let o3 = m3.observe(t_end, y3);
+        eprintln!(
+            "3-D {wedge:?}: uy_top {:.5}, contact radius {:.4} (ref {:.4}); axisymmetric: \
+             {:.5}, {:.4} ({:.4})",
+            o3.uy_top,
+            o3.contact_radius,
+            o3.contact_radius_ref,
+            oa.uy_top,
+            oa.contact_radius,
+            oa.contact_radius_ref
+        );
+        let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
+        assert!(
+            rel(o3.uy_top, oa.uy_top) < 0.01,
+            "{wedge:?}: uy_top {} against {}",
+            o3.uy_top,
+            oa.uy_top
+        );
+        assert!(
+            rel(o3.contact_radius, oa.contact_radius) < 0.01,
+            "{wedge:?}: contact radius {} against {}",
+            o3.contact_radius,
+            oa.contact_radius
+        );
+    }
 }
 
 #[test]

@@ -52,6 +52,34 @@ pub struct Geometry {
     /// Cell radius r_c (µm); the membrane is the ring r_cp < r < r_c. Default 10.
     /// Valid: r_c > r_cp.
     pub r_c: f64,
+    /// `ThreeD` only: the part of the cell that is computed, bounded by mirror planes of
+    /// the problem. `Quarter`: x ≥ 0, z ≥ 0. `Eighth`: 0 ≤ z ≤ x, half the quarter's
+    /// unknowns; the diagonal plane x = z must then be a mirror of the substrate too: a
+    /// `Flat` substrate, or `Pillars` on the `FourPillars` lattice with the cell centre
+    /// above a gap (`first_center` an odd multiple of half the period). `Auto` (default):
+    /// `Eighth` where the substrate allows it, else `Quarter`. The output files hold the
+    /// quarter either way (the eighth and its mirror image).
+    #[serde(skip_serializing_if = "WedgeChoice::is_auto")]
+    pub wedge: WedgeChoice,
+}
+
+/// Which wedge of the 3-D cell is computed ([`Geometry::wedge`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum WedgeChoice {
+    /// The eighth where the substrate is symmetric about the plane x = z, else the quarter.
+    #[default]
+    Auto,
+    /// The quarter x ≥ 0, z ≥ 0.
+    Quarter,
+    /// The eighth 0 ≤ z ≤ x.
+    Eighth,
+}
+
+impl WedgeChoice {
+    /// Whether this is the default (left out when a case is written).
+    pub fn is_auto(&self) -> bool {
+        *self == WedgeChoice::Auto
+    }
 }
 
 impl Default for Geometry {
@@ -62,6 +90,7 @@ impl Default for Geometry {
             r_n: 5.0,
             r_cp: 9.75,
             r_c: 10.0,
+            wedge: WedgeChoice::Auto,
         }
     }
 }

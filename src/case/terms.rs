@@ -5,7 +5,7 @@
 //! (The model's full parameters are built one layer up, by [`crate::scene`].)
 
 use super::{self as case, Case};
-use crate::fem::{Mesh3Params, MeshError, MeshParams};
+use crate::fem::{Mesh3Params, MeshError, MeshParams, Wedge};
 use crate::physics::{self, ActiveStrain, Flip, Phases, Substrate, Viscosity, Yeoh};
 
 /// Mesh parameters of a case.
@@ -27,7 +27,32 @@ pub fn mesh_params(case: &Case) -> MeshParams {
 /// [`Case::reference`]: c = (0, 8.5, 0), r_n 5, r_cp 9.75, r_c 10 µm, h_bottom 0.3 µm,
 /// h_nucleus 1 µm, ≈ 10 000 tetrahedra and ≈ 44 000 displacement unknowns.
 pub fn mesh3_params(case: &Case) -> Mesh3Params {
-    Mesh3Params::from_section(&mesh_params(case), 0.0)
+    let wedge = match case.geometry.wedge {
+        case::WedgeChoice::Quarter => Wedge::Quarter,
+        case::WedgeChoice::Eighth => Wedge::Eighth,
+        case::WedgeChoice::Auto if diagonal_mirror(&case.substrate) => Wedge::Eighth,
+        case::WedgeChoice::Auto => Wedge::Quarter,
+    };
+    Mesh3Params {
+        wedge,
+        ..Mesh3Params::from_section(&mesh_params(case), 0.0)
+    }
+}
+
+/// Whether the plane x = z through the cell's axis is a mirror of the 3-D substrate: flat,
+/// or pillars on the four-pillar lattice whose axes lie at the same offsets in x as in z
+/// (`first_center` an odd multiple of half the period: the centre above a gap).
+pub fn diagonal_mirror(substrate: &case::Substrate) -> bool {
+    match substrate {
+        case::Substrate::Flat(_) => true,
+        case::Substrate::Pillars(p) => {
+            let halves = p.first_center / (0.5 * p.period());
+            let nearest = halves.round();
+            p.lattice == physics::Lattice::FourPillars
+                && (halves - nearest).abs() <= 1e-9 * halves.abs().max(1.0)
+                && nearest.rem_euclid(2.0) == 1.0
+        }
+    }
 }
 
 /// The mesh a case's model is built on: the half-plane mesh of six-node triangles (plane

@@ -380,6 +380,22 @@ impl Checker<'_> {
                 ),
             );
         }
+        if g.wedge == super::WedgeChoice::Eighth
+            && (g.model != KinematicModel::ThreeD || !super::terms::diagonal_mirror(substrate))
+        {
+            self.report(
+                "geometry.wedge",
+                &["geometry.model", "substrate"],
+                "Eighth".into(),
+                Rule::Conflict(
+                    "the eighth cell 0 ≤ z ≤ x needs the ThreeD model and a substrate that \
+                     the plane x = z mirrors: Flat, or Pillars on the FourPillars lattice \
+                     with first_center an odd multiple of half the period; use Quarter \
+                     (or Auto)"
+                        .into(),
+                ),
+            );
+        }
         match substrate {
             Substrate::Flat(f) => {
                 let bottom = g.bottom_y();

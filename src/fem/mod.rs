@@ -27,7 +27,7 @@ pub mod tet10;
 pub mod tri6;
 
 pub use element::{CellMesh, ElementGeometryError, ElementTabulation, GeometryOf};
-pub use mesh::{Domain, Mesh, Mesh3, Mesh3Params, Mesh3Quality, MeshError, MeshParams};
+pub use mesh::{Domain, Mesh, Mesh3, Mesh3Params, Mesh3Quality, MeshError, MeshParams, Wedge};
 pub use mesh::{MeshQuality, NamedPoints};
 pub use quadrature::{EdgeRule, TetRule, TriangleRule, gauss_legendre};
 pub use tet10::{TetError, TetGeometry, TetTabulation};

@@ -2,7 +2,9 @@
 //!
 //! - u: D displacement components per node, except those a symmetry eliminates (in the
 //!   half-plane models u_x on the symmetry line x = 0, so u_x = v_x = 0 there; in the 3-D
-//!   quarter cell u_x on x = 0 and u_z on z = 0);
+//!   quarter cell u_x on x = 0 and u_z on z = 0) or ties to another component of the same
+//!   node (the 3-D eighth cell's diagonal mirror plane, u_z = u_x: both components are the
+//!   one unknown, so the assembly adds both components' rows and columns into it);
 //! - v: the same layout again when inertia is modelled (offset `n_u`);
 //! - μ_as: one value per node of the membrane elements, when adhesion is modelled.
 //!
@@ -34,11 +36,14 @@ pub struct DofMapOf<const D: usize> {
 
 impl<const D: usize> DofMapOf<D> {
     /// Numbers the unknowns of `n_nodes` nodes: u node by node, component by component,
-    /// leaving out the components where `eliminated(node, component)`; then v if
-    /// `inertia`; then μ_as at the nodes where `membrane` is true if `adhesion`.
+    /// leaving out the components where `eliminated(node, component)` and giving a
+    /// component where `tied(node, component) = Some(k)` (k < component) the unknown of
+    /// component k; then v if `inertia`; then μ_as at the nodes where `membrane` is true
+    /// if `adhesion`.
     pub fn numbered(
         n_nodes: usize,
         eliminated: impl Fn(usize, usize) -> bool,
+        tied: impl Fn(usize, usize) -> Option<usize>,
         membrane: &[bool],
         inertia: bool,
         adhesion: bool,
@@ -46,11 +51,16 @@ impl<const D: usize> DofMapOf<D> {
         let mut u = vec![[NONE; D]; n_nodes];
         let mut k = 0;
         for (i, ui) in u.iter_mut().enumerate() {
-            for (c, d) in ui.iter_mut().enumerate() {
+            for c in 0..D {
                 if eliminated(i, c) {
                     continue;
                 }
-                *d = k;
+                if let Some(j) = tied(i, c) {
+                    assert!(j < c, "a component is tied to one numbered before it");
+                    ui[c] = ui[j];
+                    continue;
+                }
+                ui[c] = k;
                 k += 1;
             }
         }

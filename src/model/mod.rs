@@ -319,9 +319,14 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
             });
         }
         let eliminated = S::eliminated(&mesh, constraints);
+        let mut tied = vec![false; mesh.nodes().len()];
+        for &i in S::tied(&mesh) {
+            tied[i] = true;
+        }
         let dofs = DofMapOf::<D>::numbered(
             mesh.nodes().len(),
             |i, c| eliminated[i][c],
+            |i, c| (tied[i] && c == D - 1).then_some(0),
             &mesh.nodes_of_domain(Domain::Membrane),
             params.inertia,
             adhesion_unknowns,

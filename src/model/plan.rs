@@ -128,12 +128,16 @@ impl<const D: usize, const N: usize, const E: usize> PlanOf<D, N, E> {
                 b.add_block(&d.rows, &d.mu);
             }
         }
+        // One kinematic row per u unknown (a tied component shares its row).
         let kinematic_pairs: Vec<(usize, usize)> = if inertia {
-            (0..dofs.u.len())
+            let mut pairs: Vec<(usize, usize)> = (0..dofs.u.len())
                 .flat_map(|i| (0..D).map(move |k| (i, k)))
                 .map(|(i, k)| (dofs.u[i][k], dofs.v[i][k]))
                 .filter(|&(uk, _)| uk != NONE)
-                .collect()
+                .collect();
+            pairs.sort_unstable();
+            pairs.dedup();
+            pairs
         } else {
             Vec::new()
         };

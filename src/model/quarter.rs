@@ -1,14 +1,18 @@
-//! What only the 3-D quarter cell reports (MODEL.md §7, §10): the contact radius along the
+//! What only the 3-D cell reports (MODEL.md §7, §10): the contact radius along the
 //! meridian in the plane z = 0 (the 2-D scene's measure), the contact area in both frames
-//! (whole cell, four quarters) and its equivalent radius, the penetration depth, and its
-//! records for the output files.
+//! (whole cell: four quarters or eight eighths) and its equivalent radius, the penetration
+//! depth, and its records for the output files.
+//!
+//! The records are always of the quarter x ≥ 0, z ≥ 0: an eighth cell (0 ≤ z ≤ x) is
+//! unfolded by its diagonal mirror x ↔ z ([`Unfold`]), so that every reader of the files
+//! (figures, VTU, movies) sees the same quarter whichever wedge was computed.
 
 use nalgebra::{Vector2, Vector3};
 
 use super::Cell3;
 use super::observe::add_band_lengths;
-use crate::fem::TriangleRule;
-use crate::fem::tet10::face_map;
+use crate::fem::tet10::{FLIP, face_map};
+use crate::fem::{Mesh3, TriangleRule, Wedge};
 use crate::physics::Substrate;
 use crate::record::{Mesh3File, Observables3, Snapshot3};
 
@@ -74,7 +78,8 @@ impl Cell3 {
     }
 
     /// Area of the cell surface in contact (current depth > −ε_ct), deformed and on the
-    /// reference sphere, whole cell (4 × the quarter) [µm²]: each P2 face sampled by a
+    /// reference sphere, whole cell (4 × the quarter, 8 × the eighth) [µm²]: each P2 face
+    /// sampled by a
     /// degree-2 rule on 4^[`FACE_LEVELS`] sub-triangles, a point counting with its area
     /// element where its current position is within the band.
     pub fn contact_areas(&self, y: &[f64]) -> (f64, f64) {
@@ -97,7 +102,8 @@ impl Cell3 {
                 a_ref += w * Vector3::from(n_ref).norm();
             }
         }
-        (4.0 * a, 4.0 * a_ref)
+        let copies = self.mesh.params.wedge.copies();
+        (copies * a, copies * a_ref)
     }
 
     /// The state at time `t` as the output writers take it (`t` within the integrator's
@@ -109,28 +115,32 @@ impl Cell3 {
         yp: &[f64],
     ) -> Result<Snapshot3, super::history::OutsideHistory> {
         let per_el = self.element_strain_and_jacobian(y);
+        let unfold = Unfold::new(&self.mesh);
         Ok(Snapshot3 {
             t,
-            u: (0..self.mesh.nodes.len())
-                .map(|i| self.dofs.node_u(y, i))
-                .collect(),
-            v: (0..self.mesh.nodes.len())
-                .map(|i| self.dofs.node_velocity(y, yp, i))
-                .collect(),
-            mu_as: self.nodal_mu_as(t, y)?,
-            element_strain: per_el.iter().map(|p| p.0).collect(),
-            element_jacobian: per_el.iter().map(|p| p.1).collect(),
+            u: unfold.vectors(
+                (0..self.mesh.nodes.len()).map(|i| self.dofs.node_u(y, i)),
+                [0.0; 3],
+            ),
+            v: unfold.vectors(
+                (0..self.mesh.nodes.len()).map(|i| self.dofs.node_velocity(y, yp, i)),
+                [0.0; 3],
+            ),
+            mu_as: unfold.nodal(self.nodal_mu_as(t, y)?),
+            element_strain: unfold.elemental(per_el.iter().map(|p| p.0).collect()),
+            element_jacobian: unfold.elemental(per_el.iter().map(|p| p.1).collect()),
         })
     }
 
     /// What `mesh3.json` records of this model, with the scene's phase end times.
     pub fn mesh_file(&self, phase_times: [f64; 4]) -> Mesh3File {
         let p = &self.params;
+        let unfold = Unfold::new(&self.mesh);
         Mesh3File {
-            nodes: self.mesh.nodes.clone(),
-            elements: self.mesh.elements.clone(),
-            domains: self.mesh.domains.clone(),
-            outer_faces: self.mesh.outer_faces.clone(),
+            nodes: unfold.vectors(self.mesh.nodes.iter().copied(), self.mesh.params.center),
+            elements: unfold.elements(&self.mesh.elements),
+            domains: unfold.elemental(self.mesh.domains.clone()),
+            outer_faces: unfold.faces(&self.mesh.outer_faces),
             substrate: self.substrate,
             active: p.active,
             contact_eps: p.contact.eps,
@@ -138,5 +148,92 @@ impl Cell3 {
             center: [p.center[0], p.center[1], 0.0],
             phase_times,
         }
+    }
+}
+
+/// The quarter cell from the eighth 0 ≤ z ≤ x and its mirror image under x ↔ z (the
+/// diagonal plane's nodes shared), as the records give it; nothing to do for the quarter.
+/// Mirror node `i` is `mirror[i]`: `i` itself on the diagonal, else a new node after the
+/// eighth's. Mirrored tetrahedra and faces are reversed to keep their orientation.
+struct Unfold {
+    /// Per node of the eighth, its mirror image's index (empty: the mesh is a quarter).
+    mirror: Vec<usize>,
+    /// The eighth's nodes off the diagonal, in order (the new nodes).
+    off: Vec<usize>,
+}
+
+impl Unfold {
+    fn new(mesh: &Mesh3) -> Self {
+        if mesh.params.wedge != Wedge::Eighth {
+            return Self {
+                mirror: Vec::new(),
+                off: Vec::new(),
+            };
+        }
+        let c = mesh.params.center;
+        let n = mesh.nodes.len();
+        let mut mirror = vec![0; n];
+        let mut off = Vec::new();
+        for (i, p) in mesh.nodes.iter().enumerate() {
+            if p[0] - c[0] == p[2] - c[2] {
+                mirror[i] = i;
+            } else {
+                mirror[i] = n + off.len();
+                off.push(i);
+            }
+        }
+        Self { mirror, off }
+    }
+
+    /// Nodal vectors: the mirror images have their x and z measured from `about` swapped
+    /// (positions about the centre; displacements and velocities about 0).
+    fn vectors(&self, v: impl Iterator<Item = [f64; 3]>, about: [f64; 3]) -> Vec<[f64; 3]> {
+        let mut v: Vec<[f64; 3]> = v.collect();
+        let [a, _, b] = about;
+        let images: Vec<[f64; 3]> = self
+            .off
+            .iter()
+            .map(|&i| [a + v[i][2] - b, v[i][1], b + v[i][0] - a])
+            .collect();
+        v.extend(images);
+        v
+    }
+
+    /// Nodal scalars: the mirror images carry the same values.
+    fn nodal<T: Clone>(&self, mut v: Vec<T>) -> Vec<T> {
+        let images: Vec<T> = self.off.iter().map(|&i| v[i].clone()).collect();
+        v.extend(images);
+        v
+    }
+
+    /// Per-element values: each element's image after all the elements.
+    fn elemental<T: Clone>(&self, mut v: Vec<T>) -> Vec<T> {
+        if !self.mirror.is_empty() {
+            v.extend_from_within(..);
+        }
+        v
+    }
+
+    /// The tetrahedra and their reversed mirror images.
+    fn elements(&self, elements: &[[usize; 10]]) -> Vec<[usize; 10]> {
+        let mut out = elements.to_vec();
+        if !self.mirror.is_empty() {
+            out.extend(elements.iter().map(|el| FLIP.map(|k| self.mirror[el[k]])));
+        }
+        out
+    }
+
+    /// The outer faces and their reversed mirror images (vertices 0, 2, 1; mid-nodes
+    /// (0, 2), (2, 1), (1, 0)).
+    fn faces(&self, faces: &[[usize; 6]]) -> Vec<[usize; 6]> {
+        let mut out = faces.to_vec();
+        if !self.mirror.is_empty() {
+            out.extend(
+                faces
+                    .iter()
+                    .map(|f| [0, 2, 1, 5, 4, 3].map(|k| self.mirror[f[k]])),
+            );
+        }
+        out
     }
 }

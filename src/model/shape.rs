@@ -106,6 +106,11 @@ pub trait Shape<const D: usize, const N: usize, const E: usize>:
     ) -> SMatrix<f64, D, D>;
     /// Whether component `c` of node `i` is eliminated by the symmetry, per node.
     fn eliminated(mesh: &Self::Mesh, constraints: Constraints) -> Vec<[bool; D]>;
+    /// The nodes on a diagonal mirror plane, whose last component is tied to the first
+    /// (u_z = u_x on the 3-D eighth cell's plane x − c_x = z − c_z).
+    fn tied(_mesh: &Self::Mesh) -> &[usize] {
+        &[]
+    }
     /// The contact radius in state `y`: the length of the contour in contact in the plane
     /// z = 0, `(deformed, reference)` [µm].
     fn contact_lengths(cell: &CellOf<Self, D, N, E>, y: &[f64]) -> (f64, f64);
@@ -238,6 +243,10 @@ impl Shape<3, 10, 30> for Quarter {
             0,
         );
         mark(out, &mesh.symmetry_z, 2)
+    }
+
+    fn tied(mesh: &Mesh3) -> &[usize] {
+        &mesh.symmetry_diagonal
     }
 
     fn contact_lengths(cell: &CellOf<Self, 3, 10, 30>, y: &[f64]) -> (f64, f64) {

@@ -10,7 +10,7 @@ pub mod quarter_cell;
 
 pub(crate) use half_cell::MeshParts;
 pub use half_cell::{Domain, MAX_ELEMENTS, MIN_ANGLE_DEG, Mesh, MeshParams, MeshQuality};
-pub use quarter_cell::{Mesh3, Mesh3Params, Mesh3Quality};
+pub use quarter_cell::{Mesh3, Mesh3Params, Mesh3Quality, Wedge};
 
 /// Errors of mesh generation and mesh input.
 #[derive(Debug, Error)]

@@ -81,7 +81,7 @@ use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 use std::time::Instant;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::super::quadrature::{TetRule, TriangleRule};
 use super::super::tet10::{self, FLIP, REFERENCE_NODES, TET_EDGES, TET_FACES, TetTabulation};
@@ -111,11 +111,41 @@ const GMSH_ARGS: [&str; 6] = ["-3", "-nt", "1", "-format", "msh41", "-v"];
 /// gmsh's verbosity (the argument of `-v`): errors, warnings and information.
 const GMSH_VERBOSITY: &str = "4";
 
-/// Geometry and mesh-size parameters of the quarter cell (µm).
+/// Which part of the balls is meshed: a wedge about the vertical axis through c, bounded
+/// by mirror planes of the problem.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Wedge {
+    /// The quarter x ≥ c_x, z ≥ c_z: mirror planes x = c_x (u_x = 0) and z = c_z (u_z = 0).
+    #[default]
+    Quarter,
+    /// The eighth 0 ≤ z − c_z ≤ x − c_x: mirror planes z = c_z (u_z = 0) and the diagonal
+    /// x − c_x = z − c_z (u · (1, 0, −1) = 0: u_z = u_x there), for a problem that is
+    /// also symmetric under x − c_x ↔ z − c_z (a flat substrate, the four-pillar lattice).
+    Eighth,
+}
+
+impl Wedge {
+    /// The wedge's opening angle about the vertical axis (radians).
+    pub fn angle(self) -> f64 {
+        match self {
+            Wedge::Quarter => 0.5 * PI,
+            Wedge::Eighth => 0.25 * PI,
+        }
+    }
+
+    /// How many copies of the wedge make the whole cell.
+    pub fn copies(self) -> f64 {
+        2.0 * PI / self.angle()
+    }
+}
+
+/// Geometry and mesh-size parameters of the 3-D cell's wedge (µm).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Mesh3Params {
-    /// Cell centre c; the symmetry planes are x = c_x and z = c_z, y is vertical.
+    /// Cell centre c; the symmetry planes pass through it (see [`Wedge`]), y is vertical.
     pub center: [f64; 3],
+    /// The part of the cell that is meshed.
+    pub wedge: Wedge,
     /// Nucleus radius r_n.
     pub r_n: f64,
     /// Inner radius of the membrane r_cp.
@@ -137,6 +167,7 @@ impl Mesh3Params {
     pub fn from_section(p: &MeshParams, c_z: f64) -> Self {
         Self {
             center: [p.center[0], p.center[1], c_z],
+            wedge: Wedge::Quarter,
             r_n: p.r_n,
             r_cp: p.r_cp,
             r_c: p.r_c,
@@ -186,10 +217,10 @@ impl Mesh3Params {
     }
 
     /// Estimated number of tetrahedra, from the sizes without meshing (within ±15 % of
-    /// gmsh's counts on the default cell): 5 · ∫ dV / h(y)³ over the quarter
+    /// gmsh's counts on the default cell): 5 · ∫ dV / h(y)³ over the wedge of the
     /// ball r_cp plus 7.4 · ∫ dV / (h² min(h, t)) over the membrane shell
     /// of thickness t = r_c − r_cp (a shell thinner than h still needs one layer of
-    /// elements), by the midpoint rule in y on the quarter-disk cross-sections.
+    /// elements), by the midpoint rule in y on the wedge's circular-sector cross-sections.
     /// [`Mesh3Params::validate`] refuses more than [`MAX_TETS`]. Meaningful for parameters
     /// that pass the other checks of `validate`.
     pub fn estimated_tets(&self) -> f64 {
@@ -197,13 +228,14 @@ impl Mesh3Params {
         let (cy, rc, rcp) = (self.center[1], self.r_c, self.r_cp);
         let t = rc - rcp;
         let dy = 2.0 * rc / N as f64;
-        let quarter_disk = |r: f64, y: f64| 0.25 * PI * (r * r - (y - cy) * (y - cy)).max(0.0);
+        let opening = 0.5 * self.wedge.angle();
+        let sector = |r: f64, y: f64| opening * (r * r - (y - cy) * (y - cy)).max(0.0);
         let mut acc = 0.0;
         for k in 0..N {
             let y = cy - rc + (k as f64 + 0.5) * dy;
             let h = self.size_at(y);
-            let inner = quarter_disk(rcp, y);
-            let shell = quarter_disk(rc, y) - inner;
+            let inner = sector(rcp, y);
+            let shell = sector(rc, y) - inner;
             acc +=
                 TETS_PER_H3 * inner / (h * h * h) + SHELL_TETS_PER_H2T * shell / (h * h * h.min(t));
         }
@@ -246,7 +278,12 @@ impl Mesh3Params {
             s.push_str(&l);
             s.push('\n');
         };
-        line("// cellsim: the quarter cell x >= c_x, z >= c_z (MODEL.md §10).".into());
+        line(match self.wedge {
+            Wedge::Quarter => "// cellsim: the quarter cell x >= c_x, z >= c_z (MODEL.md §10).".into(),
+            Wedge::Eighth => {
+                "// cellsim: the eighth cell 0 <= z - c_z <= x - c_x (MODEL.md §10).".into()
+            }
+        });
         line("SetFactory(\"OpenCASCADE\");".into());
         line("Geometry.OCCBooleanPreserveNumbering = 1;".into());
         line("General.NumThreads = 1;".into());
@@ -276,9 +313,43 @@ impl Mesh3Params {
                 f(2.0 * rc)
             ));
         }
-        line("BooleanIntersection(11) = { Volume{1}; Delete; }{ Volume{4}; Delete; };".into());
-        line("BooleanIntersection(12) = { Volume{2}; Delete; }{ Volume{5}; Delete; };".into());
-        line("BooleanIntersection(13) = { Volume{3}; Delete; }{ Volume{6}; Delete; };".into());
+        // The eighth: each box cut by the same box turned by π/4 about the vertical axis
+        // (14–16 = 4–6 ∩ 7–9, the wedge 0 ≤ z − c_z ≤ x − c_x).
+        let cut = if self.wedge == Wedge::Eighth {
+            for tag in 7..=9 {
+                line(format!(
+                    "Box({tag}) = {{{}, {}, {}, {}, {}, {}}};",
+                    f(cx),
+                    f(cy - 2.0 * rc),
+                    f(cz),
+                    f(2.0 * rc),
+                    f(4.0 * rc),
+                    f(2.0 * rc)
+                ));
+            }
+            line(format!(
+                "Rotate {{{{0, 1, 0}}, {{{}, {}, {}}}, Pi / 4}} {{ Volume{{7, 8, 9}}; }}",
+                f(cx),
+                f(cy),
+                f(cz)
+            ));
+            for tag in 4..=6 {
+                line(format!(
+                    "BooleanIntersection({}) = {{ Volume{{{tag}}}; Delete; }}{{ Volume{{{}}}; Delete; }};",
+                    tag + 10,
+                    tag + 3
+                ));
+            }
+            10
+        } else {
+            0
+        };
+        for (ball, tag) in [(1, 11), (2, 12), (3, 13)] {
+            line(format!(
+                "BooleanIntersection({tag}) = {{ Volume{{{ball}}}; Delete; }}{{ Volume{{{}}}; Delete; }};",
+                ball + 3 + cut
+            ));
+        }
         line("BooleanDifference(23) = { Volume{13}; Delete; }{ Volume{12}; };".into());
         line("BooleanDifference(22) = { Volume{12}; Delete; }{ Volume{11}; };".into());
         line(format!(
@@ -288,14 +359,24 @@ impl Mesh3Params {
             f(cz)
         ));
         line("BooleanFragments{ Volume{11, 22, 23}; Delete; }{ Point{1000}; Delete; }".into());
+        // The faces on the mirror plane x = c_x, or on the diagonal plane: the only faces
+        // of the membrane inside the box c_x ≤ x, c_z ≤ z ≤ r_c/√2 (the sphere and the
+        // face on z = c_z reach x = c_x + r_c).
+        let (sx_x1, sx_z1) = match self.wedge {
+            Wedge::Quarter => (cx + e, z1),
+            Wedge::Eighth => {
+                let d = rc * std::f64::consts::FRAC_1_SQRT_2;
+                (cx + d + e, cz + d + e)
+            }
+        };
         line(format!(
             "sx() = Surface In BoundingBox{{{}, {}, {}, {}, {}, {}}};",
             f(x0),
             f(y0),
             f(z0),
-            f(cx + e),
+            f(sx_x1),
             f(y1),
-            f(z1)
+            f(sx_z1)
         ));
         line(format!(
             "sz() = Surface In BoundingBox{{{}, {}, {}, {}, {}, {}}};",
@@ -354,10 +435,14 @@ pub struct Mesh3 {
     /// cylinder over the 2-D outer boundary), oriented outward ([`crate::fem::tet10::face_map`]'s
     /// normal points out of the cell).
     pub outer_faces: Vec<[usize; 6]>,
-    /// Nodes on the symmetry plane x = c_x (coordinate exactly c_x), ascending.
+    /// Nodes with x exactly c_x, ascending: u_x = 0 there (the mirror plane x = c_x of
+    /// the quarter; in the eighth the vertical axis through c).
     pub symmetry_x: Vec<usize>,
     /// Nodes on the symmetry plane z = c_z (coordinate exactly c_z), ascending.
     pub symmetry_z: Vec<usize>,
+    /// The eighth's nodes on the diagonal mirror plane x − c_x = z − c_z (exactly) off the
+    /// axis, ascending: u_z = u_x there. Empty for the quarter and the slab.
+    pub symmetry_diagonal: Vec<usize>,
     /// Reference points on the vertical axis through c (all mesh vertices; for the slab,
     /// those of the 2-D mesh on the face z = 0).
     pub points: NamedPoints,
@@ -409,11 +494,11 @@ pub struct Mesh3Quality {
     pub elements_through_membrane: usize,
     /// Volume of the nucleus, cytoplasm and membrane (P2 geometry, exact integration).
     pub volumes: [f64; 3],
-    /// The exact volumes of the three quarter-ball regions.
+    /// The exact volumes of the three regions of the wedge.
     pub exact_volumes: [f64; 3],
     /// Area of the outer faces (P2 geometry).
     pub outer_area: f64,
-    /// The exact area of the quarter sphere, π r_c².
+    /// The exact area of the wedge's sphere (π r_c² for the quarter).
     pub exact_outer_area: f64,
 }
 
@@ -757,19 +842,43 @@ fn fit_tolerance(params: &Mesh3Params) -> f64 {
     1e-6 * params.r_c
 }
 
-/// Snaps the nodes within 10⁻⁹ r_c of a symmetry plane x = c_x or z = c_z onto it (the
-/// symmetry sets are those exactly on it); refuses a node outside the quarter.
+/// Snaps the nodes within 10⁻⁹ r_c of a symmetry plane onto it (the symmetry sets are
+/// those exactly on it): x = c_x and z = c_z for the quarter; z = c_z and the diagonal
+/// x − c_x = z − c_z for the eighth (both: onto the axis). Refuses a node outside the wedge.
 fn snap_to_symmetry_planes(params: &Mesh3Params, nodes: &mut [[f64; 3]]) -> Result<(), String> {
     let c = params.center;
     let snap = 1e-9 * params.r_c;
     for (i, p) in nodes.iter_mut().enumerate() {
-        for k in [0, 2] {
-            if (p[k] - c[k]).abs() <= snap {
-                p[k] = c[k];
-            } else if p[k] < c[k] {
-                return Err(format!(
-                    "node {i} at {p:?} is outside the quarter x ≥ c_x, z ≥ c_z"
-                ));
+        let outside = |p: &[f64; 3], wedge: &str| {
+            Err(format!("node {i} at {p:?} is outside the {wedge}"))
+        };
+        match params.wedge {
+            Wedge::Quarter => {
+                for k in [0, 2] {
+                    if (p[k] - c[k]).abs() <= snap {
+                        p[k] = c[k];
+                    } else if p[k] < c[k] {
+                        return outside(p, "quarter x ≥ c_x, z ≥ c_z");
+                    }
+                }
+            }
+            Wedge::Eighth => {
+                let (dx, dz) = (p[0] - c[0], p[2] - c[2]);
+                let near_z = dz.abs() <= snap;
+                // Distance to the diagonal plane: |dx − dz| / √2.
+                let near_diagonal = (dx - dz).abs() <= snap * std::f64::consts::SQRT_2;
+                if near_z {
+                    p[2] = c[2];
+                }
+                if near_diagonal && near_z {
+                    p[0] = c[0];
+                } else if near_diagonal {
+                    let m = 0.5 * (dx + dz);
+                    p[0] = c[0] + m;
+                    p[2] = c[2] + m;
+                } else if dz < 0.0 || dx < dz {
+                    return outside(p, "eighth 0 ≤ z − c_z ≤ x − c_x");
+                }
             }
         }
     }
@@ -914,6 +1023,7 @@ impl Mesh3 {
             outer_faces: Vec::new(),
             symmetry_x: Vec::new(),
             symmetry_z: Vec::new(),
+            symmetry_diagonal: Vec::new(),
             points: NamedPoints {
                 centre: 0,
                 nucleus_top: 0,
@@ -932,15 +1042,25 @@ impl Mesh3 {
         Ok(mesh)
     }
 
-    /// The node sets on the symmetry planes (coordinates exactly c_x, c_z).
+    /// The node sets on the symmetry planes (coordinates exactly c_x, c_z, and for the
+    /// eighth x − c_x = z − c_z off the axis).
     fn set_symmetry_sets(&mut self) {
         let c = self.params.center;
-        self.symmetry_x = (0..self.nodes.len())
-            .filter(|&n| self.nodes[n][0] == c[0])
-            .collect();
-        self.symmetry_z = (0..self.nodes.len())
-            .filter(|&n| self.nodes[n][2] == c[2])
-            .collect();
+        let on = |k: usize| -> Vec<usize> {
+            (0..self.nodes.len())
+                .filter(|&n| self.nodes[n][k] == c[k])
+                .collect()
+        };
+        self.symmetry_x = on(0);
+        self.symmetry_z = on(2);
+        if self.params.wedge == Wedge::Eighth {
+            self.symmetry_diagonal = (0..self.nodes.len())
+                .filter(|&n| {
+                    let p = self.nodes[n];
+                    p[0] - c[0] == p[2] - c[2] && p[0] != c[0]
+                })
+                .collect();
+        }
     }
 
     /// The outer faces from a file's outer triangles `faces` (with their file lines): each
@@ -1129,7 +1249,10 @@ impl Mesh3 {
     /// Displacement unknowns: 3 per node minus u_x on `symmetry_x` and u_z on
     /// `symmetry_z`.
     pub fn displacement_unknowns(&self) -> usize {
-        3 * self.nodes.len() - self.symmetry_x.len() - self.symmetry_z.len()
+        3 * self.nodes.len()
+            - self.symmetry_x.len()
+            - self.symmetry_z.len()
+            - self.symmetry_diagonal.len()
     }
 
     /// Volume of domain `d` (or of the whole mesh with `None`), integrating det J of the
@@ -1217,7 +1340,9 @@ impl Mesh3 {
         }
         let count = |d: Domain| self.domains.iter().filter(|&&x| x == d).count();
         let prm = &self.params;
-        let ball = |r: f64| PI * r * r * r / 3.0;
+        // The wedge's share of a ball and of a sphere.
+        let share = 1.0 / prm.wedge.copies();
+        let ball = |r: f64| share * 4.0 * PI * r * r * r / 3.0;
         Mesh3Quality {
             tets: self.elements.len(),
             nodes: self.nodes.len(),
@@ -1238,12 +1363,13 @@ impl Mesh3 {
                 ball(prm.r_c) - ball(prm.r_cp),
             ],
             outer_area: self.outer_area(),
-            exact_outer_area: PI * prm.r_c * prm.r_c,
+            exact_outer_area: share * 4.0 * PI * prm.r_c * prm.r_c,
         }
     }
 
     /// Minimum over 12 vertical rays below the centre (horizontal distance ρ = 0.5, 1.5,
-    /// 2.5, 3.5 µm from the axis at azimuths π/8, π/4, 3π/8 from the x axis) of the number
+    /// 2.5, 3.5 µm from the axis at azimuths 1/4, 1/2 and 3/4 of the wedge's angle from the
+    /// x axis: π/8, π/4, 3π/8 in the quarter) of the number
     /// of distinct membrane tetrahedra (straight-sided) met by the ray where it crosses the
     /// shell r_cp ≤ r ≤ r_c, sampled at 64 heights. 0 if a ray misses the shell.
     pub fn elements_through_membrane(&self) -> usize {
@@ -1262,7 +1388,7 @@ impl Mesh3 {
             if rho >= prm.r_cp {
                 continue;
             }
-            for phi in [PI / 8.0, PI / 4.0, 3.0 * PI / 8.0] {
+            for phi in [0.25, 0.5, 0.75].map(|s| s * prm.wedge.angle()) {
                 let (x, z) = (c[0] + rho * phi.cos(), c[2] + rho * phi.sin());
                 let y_out = c[1] - (prm.r_c * prm.r_c - rho * rho).sqrt();
                 let y_in = c[1] - (prm.r_cp * prm.r_cp - rho * rho).sqrt();
@@ -1386,6 +1512,7 @@ impl Mesh3 {
             outer_faces,
             symmetry_x: Vec::new(),
             symmetry_z: Vec::new(),
+            symmetry_diagonal: Vec::new(),
             points: mesh.points,
         };
         out.set_symmetry_sets();
