@@ -92,7 +92,10 @@ pub fn jacobian_fd_error<M: Dae + ?Sized>(
                     .collect()
             };
             let (d1, d2) = (central(h), central(h / 2.0));
-            d1.iter().zip(&d2).map(|(a, b)| (4.0 * b - a) / 3.0).collect()
+            d1.iter()
+                .zip(&d2)
+                .map(|(a, b)| (4.0 * b - a) / 3.0)
+                .collect()
         };
         let fd = if j >= mu_offset {
             let r: Vec<Vec<f64>> = [100.0, 10.0, 1.0]

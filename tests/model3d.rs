@@ -5,7 +5,7 @@
 use cellsim::case::{self, Case};
 use cellsim::dae::{Atol, Dae, Integrator};
 use cellsim::fem::tet10::{TET_FACES, face_map};
-use cellsim::fem::{Domain, Mesh, Mesh3, Mesh3Params, MeshParams, TriangleRule, Wedge};
+use cellsim::fem::{Domain, Lagrange, Mesh, Mesh3, Mesh3Params, MeshParams, TriangleRule, Wedge};
 use cellsim::model::{Cell3, Constraints};
 use cellsim::model::{CellModel, ModelParams};
 use cellsim::physics::{KinematicModel, Lattice, Substrate, Viscosity, Yeoh, piola_total3};
@@ -200,7 +200,7 @@ fn patch_test_homogeneous_deformation_gives_exact_internal_forces() {
             for (xi, w) in rule.points.iter().zip(&rule.weights) {
                 let (_, nda) = face_map(&x, *xi);
                 let t = p * Vector3::from(nda) * sign;
-                let nv = cellsim::fem::tri6::shape(*xi);
+                let nv = cellsim::fem::Tri6::shape(*xi);
                 for a in 0..6 {
                     for k in 0..3 {
                         exact[nodes[a]][k] += w * nv[a] * t[k];

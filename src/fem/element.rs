@@ -8,11 +8,12 @@
 
 use std::marker::PhantomData;
 
-use nalgebra::SMatrix;
+use nalgebra::{Const, DimMin, SMatrix};
 use thiserror::Error;
 
 use super::quadrature::{Rule, Subdivision};
-use super::{Domain, Mesh, Mesh3, NamedPoints};
+use super::{Domain, Mesh, Mesh3, MeshError, NamedPoints};
+use crate::physics::cofactor;
 
 /// An isoparametric quadratic (P2) Lagrange element on the reference simplex of dimension
 /// `D` with `N` nodes: the `D + 1` vertices, then one mid-node per edge of
@@ -88,6 +89,24 @@ pub trait JacobianMatrix<const D: usize> {
     fn det(&self) -> f64;
     /// Physical gradients J⁻ᵀ gₐ of the reference gradients gₐ, given det J (non-zero).
     fn inverse_transpose<const N: usize>(&self, det: f64, grads: &[[f64; D]; N]) -> [[f64; D]; N];
+}
+
+impl<const D: usize> JacobianMatrix<D> for SMatrix<f64, D, D>
+where
+    Const<D>: DimMin<Const<D>, Output = Const<D>>,
+{
+    fn det(&self) -> f64 {
+        self.determinant()
+    }
+    /// J⁻ᵀ = cof(J)/det.
+    fn inverse_transpose<const N: usize>(&self, det: f64, grads: &[[f64; D]; N]) -> [[f64; D]; N] {
+        let (m, inv) = (cofactor(self), 1.0 / det);
+        grads.map(|g| {
+            std::array::from_fn(|i| {
+                inv * (1..D).fold(m[(i, 0)] * g[0], |s, k| s + m[(i, k)] * g[k])
+            })
+        })
+    }
 }
 
 /// Σₐ nₐ xₐ: the point with shape values `n` of the element with nodes `x`.
@@ -274,6 +293,39 @@ pub trait CellMesh<const D: usize, const N: usize>: Clone + Send + Sync {
     fn element_coords(&self, e: usize) -> [[f64; D]; N] {
         self.elements()[e].map(|i| self.nodes()[i])
     }
+
+    /// Minimum and maximum of det J over element `e`, and where the minimum is (reference
+    /// coordinates).
+    fn jacobian_range(&self, e: usize) -> (f64, f64, [f64; D]);
+
+    /// Fails with the first element whose det J is not positive everywhere it is checked.
+    fn check_jacobians(&self) -> Result<(), MeshError> {
+        for element in 0..self.elements().len() {
+            let (det, _, at) = self.jacobian_range(element);
+            if det <= 0.0 || det.is_nan() {
+                let xi = at.to_vec();
+                return Err(MeshError::NonPositiveJacobian { element, det, xi });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The smallest and largest of `f` over `points` (NaN counts as the smallest), and where
+/// the smallest is.
+pub(crate) fn extremes<P: Copy + Default>(
+    points: impl IntoIterator<Item = P>,
+    f: impl Fn(P) -> f64,
+) -> (f64, f64, P) {
+    let (mut min, mut max, mut at) = (f64::INFINITY, f64::NEG_INFINITY, P::default());
+    for p in points {
+        let v = f(p);
+        if v < min || v.is_nan() {
+            (min, at) = (v, p);
+        }
+        max = max.max(v);
+    }
+    (min, max, at)
 }
 
 /// The [`CellMesh`] of a mesh type with the fields `nodes`, `elements`, `domains`, `points`.
@@ -291,6 +343,9 @@ macro_rules! cell_mesh {
             }
             fn points(&self) -> &NamedPoints {
                 &self.points
+            }
+            fn jacobian_range(&self, e: usize) -> (f64, f64, [f64; $d]) {
+                <$mesh>::jacobian_range(self, e)
             }
         }
     };
@@ -364,6 +419,21 @@ where
 pub(crate) mod checks {
     use super::{JacobianMatrix, Lagrange};
     use nalgebra::SMatrix;
+
+    /// Every check below, for the element with reference nodes `nodes`, a curved physical
+    /// element `x` and sample `points`.
+    pub fn shape_functions_and_map<E: Lagrange<D, N>, const D: usize, const N: usize>(
+        nodes: &[[f64; D]; N],
+        x: &[[f64; D]; N],
+        points: &[[f64; D]],
+    ) where
+        SMatrix<f64, D, D>: JacobianMatrix<D>,
+    {
+        partition_of_unity::<E, D, N>(points);
+        kronecker::<E, D, N>(nodes);
+        gradients_are_derivatives::<E, D, N>(points);
+        map_interpolates_and_jacobian::<E, D, N>(nodes, x, points);
+    }
 
     /// Σ Nₐ = 1 and Σ ∇Nₐ = 0.
     pub fn partition_of_unity<E: Lagrange<D, N>, const D: usize, const N: usize>(

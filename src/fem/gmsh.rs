@@ -829,6 +829,7 @@ impl Mesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fem::CellMesh;
 
     #[test]
     fn round_trip_through_gmsh_text() {

@@ -26,12 +26,12 @@ pub mod quadrature;
 pub mod tet10;
 pub mod tri6;
 
-pub use element::{CellMesh, ElementGeometryError, ElementTabulation, GeometryOf};
+pub use element::{CellMesh, ElementGeometryError, ElementTabulation, GeometryOf, Lagrange};
 pub use mesh::{Domain, Mesh, Mesh3, Mesh3Params, Mesh3Quality, MeshError, MeshParams, Wedge};
 pub use mesh::{MeshQuality, NamedPoints};
 pub use quadrature::{EdgeRule, TetRule, TriangleRule, gauss_legendre};
-pub use tet10::{TetError, TetGeometry, TetTabulation};
-pub use tri6::{ElementGeometry, P2Error, P2Tabulation};
+pub use tet10::{Tet10, TetError, TetGeometry, TetTabulation};
+pub use tri6::{ElementGeometry, P2Error, P2Tabulation, Tri6};
 
 /// The paper's cell and mesh for this layer's tests, taken from the case schema (the one
 /// place the defaults live).

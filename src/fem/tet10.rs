@@ -21,9 +21,8 @@
 //! Element geometry at quadrature points is a [`TetGeometry`] = [`GeometryOf<3, 10>`], the
 //! 3-D twin of the triangle's [`super::tri6::ElementGeometry`].
 
-use nalgebra::Matrix3;
 
-use super::element::{GeometryOf, JacobianError, JacobianMatrix, Lagrange, Tabulation};
+use super::element::{GeometryOf, JacobianError, Lagrange, Tabulation};
 pub use super::element::{jacobian, physical_gradients};
 use super::quadrature::TetRule;
 use super::tri6::Tri6;
@@ -84,48 +83,6 @@ impl Lagrange<3, 10> for Tet10 {
     const SUBDIVIDED: fn(&TetRule, u32) -> TetRule = TetRule::subdivided;
 }
 
-/// Shape function values N₀ … N₉ at reference point ξ = (ξ, η, ζ) ([`Lagrange::shape`]).
-#[inline]
-pub fn shape(xi: [f64; 3]) -> [f64; 10] {
-    Tet10::shape(xi)
-}
-
-impl JacobianMatrix<3> for Matrix3<f64> {
-    fn det(&self) -> f64 {
-        self.determinant()
-    }
-    /// J⁻ᵀ = cof(J)/det.
-    fn inverse_transpose<const N: usize>(&self, det: f64, grads: &[[f64; 3]; N]) -> [[f64; 3]; N] {
-        let j = |r: usize, c: usize| self[(r, c)];
-        let inv = 1.0 / det;
-        // Cofactor matrix of J, scaled by 1/det: the inverse transpose.
-        let m = [
-            [
-                j(1, 1) * j(2, 2) - j(1, 2) * j(2, 1),
-                j(1, 2) * j(2, 0) - j(1, 0) * j(2, 2),
-                j(1, 0) * j(2, 1) - j(1, 1) * j(2, 0),
-            ],
-            [
-                j(0, 2) * j(2, 1) - j(0, 1) * j(2, 2),
-                j(0, 0) * j(2, 2) - j(0, 2) * j(2, 0),
-                j(0, 1) * j(2, 0) - j(0, 0) * j(2, 1),
-            ],
-            [
-                j(0, 1) * j(1, 2) - j(0, 2) * j(1, 1),
-                j(0, 2) * j(1, 0) - j(0, 0) * j(1, 2),
-                j(0, 0) * j(1, 1) - j(0, 1) * j(1, 0),
-            ],
-        ];
-        let mut out = [[0.0; 3]; N];
-        for (o, g) in out.iter_mut().zip(grads) {
-            for i in 0..3 {
-                o[i] = inv * (m[i][0] * g[0] + m[i][1] * g[1] + m[i][2] * g[2]);
-            }
-        }
-        out
-    }
-}
-
 /// The map of a six-node triangle embedded in 3-D (node order of [`super::tri6`]) at
 /// reference point ξ = (ξ, η) of the reference triangle: the point x(ξ) and the
 /// area-weighted normal ∂x/∂ξ × ∂x/∂η (its length is the area element: dA = |n| dξ dη).
@@ -184,10 +141,7 @@ mod tests {
     #[test]
     fn shape_functions_and_map() {
         let points = sample_points();
-        checks::partition_of_unity::<Tet10, 3, 10>(&points);
-        checks::kronecker::<Tet10, 3, 10>(&REFERENCE_NODES);
-        checks::gradients_are_derivatives::<Tet10, 3, 10>(&points);
-        checks::map_interpolates_and_jacobian::<Tet10, 3, 10>(&REFERENCE_NODES, &curved(), &points);
+        checks::shape_functions_and_map::<Tet10, 3, 10>(&REFERENCE_NODES, &curved(), &points);
     }
 
     fn sample_points() -> Vec<[f64; 3]> {

@@ -16,9 +16,8 @@
 //! mid-sides. The element map is x(ξ) = Σ Nₐ(ξ) xₐ; when a mid-node is not the midpoint of
 //! its edge (e.g. it lies on a circle), the edge is a parabola through the three nodes.
 
-use nalgebra::Matrix2;
 
-use super::element::{GeometryOf, JacobianError, JacobianMatrix, Lagrange, Tabulation};
+use super::element::{GeometryOf, JacobianError, Lagrange, Tabulation};
 pub use super::element::{jacobian, physical_gradients};
 use super::quadrature::TriangleRule;
 
@@ -47,28 +46,6 @@ impl Lagrange<2, 6> for Tri6 {
     const EDGES: &'static [[usize; 2]] = &[[0, 1], [1, 2], [2, 0]];
     const RULE: fn(usize) -> TriangleRule = TriangleRule::degree;
     const SUBDIVIDED: fn(&TriangleRule, u32) -> TriangleRule = TriangleRule::subdivided;
-}
-
-/// Shape function values N₀ … N₅ at reference point ξ = (ξ, η) ([`Lagrange::shape`]).
-#[inline]
-pub fn shape(xi: [f64; 2]) -> [f64; 6] {
-    Tri6::shape(xi)
-}
-
-impl JacobianMatrix<2> for Matrix2<f64> {
-    fn det(&self) -> f64 {
-        self.determinant()
-    }
-    fn inverse_transpose<const N: usize>(&self, det: f64, grads: &[[f64; 2]; N]) -> [[f64; 2]; N] {
-        // J⁻¹ = adj(J)/det; J⁻ᵀ g = (1/det) [ J₁₁ g₀ − J₁₀ g₁ , −J₀₁ g₀ + J₀₀ g₁ ].
-        let inv = 1.0 / det;
-        let mut out = [[0.0; 2]; N];
-        for (o, g) in out.iter_mut().zip(grads) {
-            o[0] = inv * (self[(1, 1)] * g[0] - self[(1, 0)] * g[1]);
-            o[1] = inv * (-self[(0, 1)] * g[0] + self[(0, 0)] * g[1]);
-        }
-        out
-    }
 }
 
 /// Shape functions of the 3-node quadratic edge (vertex a, mid-node m, vertex b) at
@@ -137,10 +114,7 @@ mod tests {
     #[test]
     fn shape_functions_and_map() {
         let points = sample_points();
-        checks::partition_of_unity::<Tri6, 2, 6>(&points);
-        checks::kronecker::<Tri6, 2, 6>(&REFERENCE_NODES);
-        checks::gradients_are_derivatives::<Tri6, 2, 6>(&points);
-        checks::map_interpolates_and_jacobian::<Tri6, 2, 6>(&REFERENCE_NODES, &curved(), &points);
+        checks::shape_functions_and_map::<Tri6, 2, 6>(&REFERENCE_NODES, &curved(), &points);
         for (b, s) in [0.0, 0.5, 1.0].iter().enumerate() {
             let n = edge_shape(*s);
             for (a, na) in n.iter().enumerate() {

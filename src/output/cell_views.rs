@@ -66,7 +66,7 @@ use super::geometry::{
 };
 use super::vtu::check_snapshot3;
 use super::{DrawError, OutputError, draw_png};
-use crate::fem::{Domain, tet10 as tet, tri6 as p2};
+use crate::fem::{Domain, Lagrange, Tet10, Tri6, tet10 as tet, tri6 as p2};
 use crate::physics::{ActiveStrain, Substrate, Substrate3, smooth_step};
 use crate::record::read::Run3Data;
 use crate::record::{Mesh3File, RunData, Snapshot3};
@@ -330,7 +330,7 @@ fn collect_z0(mesh: &Mesh3File, pos: &[Pt]) -> Collected {
         let n = CONTOUR_DIVISIONS;
         let at = |i: usize, j: usize| {
             let xi = [i as f64 / n as f64, j as f64 / n as f64];
-            let shape = p2::shape(xi);
+            let shape = Tri6::shape(xi);
             SPt {
                 x: p2_point(shape, &xr),
                 p: p2_point(shape, &xd),
@@ -448,7 +448,7 @@ fn collect_diagonal(mesh: &Mesh3File, pos: &[Pt]) -> Collected {
         .iter()
         .map(|p| [n - p[0] - p[1] - p[2], p[0], p[1], p[2]])
         .collect();
-    let shapes: Vec<[f64; 10]> = xis.iter().map(|&xi| tet::shape(xi)).collect();
+    let shapes: Vec<[f64; 10]> = xis.iter().map(|&xi| Tet10::shape(xi)).collect();
     let faces = face_map(mesh);
     let outer = outer_set(mesh);
     let mut out = Collected::default();
@@ -470,7 +470,7 @@ fn collect_diagonal(mesh: &Mesh3File, pos: &[Pt]) -> Collected {
         let cross = |a: usize, b: usize| -> SPt {
             let w = vals[a] / (vals[a] - vals[b]);
             let xi = [0, 1, 2].map(|k| xis[a][k] + w * (xis[b][k] - xis[a][k]));
-            let shape = tet::shape(xi);
+            let shape = Tet10::shape(xi);
             SPt {
                 x: p2_point(shape, &xr),
                 p: p2_point(shape, &xd),

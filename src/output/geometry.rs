@@ -5,7 +5,8 @@
 use nalgebra::Vector2;
 
 use crate::fem::Domain;
-use crate::fem::tri6::{EDGES, edge_shape, shape};
+use crate::fem::tri6::{EDGES, edge_shape};
+use crate::fem::{Lagrange, Tri6};
 use crate::physics::{ActiveStrain, Substrate};
 use crate::record::MeshFile;
 
@@ -64,7 +65,7 @@ pub fn element_polygon(x: &[Pt; 6], pieces: usize) -> Vec<Pt> {
 
 /// The point of a P2 element with node positions `x` at reference coordinates ξ.
 pub fn element_point(x: &[Pt; 6], xi: [f64; 2]) -> Pt {
-    let n = shape(xi);
+    let n = Tri6::shape(xi);
     let mut p = [0.0; 2];
     for a in 0..6 {
         p[0] += n[a] * x[a][0];

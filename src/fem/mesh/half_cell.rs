@@ -54,7 +54,7 @@ use spade::{
     AngleLimit, ConstrainedDelaunayTriangulation, Point2, RefinementParameters, Triangulation,
 };
 
-use super::super::element::Lagrange;
+use super::super::element::{CellMesh, Lagrange, extremes};
 use super::super::quadrature::TriangleRule;
 use super::super::tri6::{self, EDGES, P2Tabulation, REFERENCE_NODES, Tri6};
 use super::{MeshError, NamedPoints};
@@ -881,7 +881,7 @@ impl Mesh {
         let vals: [f64; 6] =
             std::array::from_fn(|a| tri6::jacobian(&x, &Tri6::grad_shape(REFERENCE_NODES[a])).1);
         let q = |xi: [f64; 2]| {
-            let n = tri6::shape(xi);
+            let n = Tri6::shape(xi);
             (0..6).map(|a| n[a] * vals[a]).sum::<f64>()
         };
         let mut cands: Vec<[f64; 2]> = REFERENCE_NODES.to_vec();
@@ -917,24 +917,7 @@ impl Mesh {
                 cands.push([xi, eta]);
             }
         }
-        let mut min = f64::INFINITY;
-        let mut max = f64::NEG_INFINITY;
-        let mut at = [0.0; 2];
-        for p in cands {
-            let v = q(p);
-            if v < min {
-                min = v;
-                at = p;
-            }
-            max = max.max(v);
-        }
-        (min, max, at)
-    }
-
-    /// Fails with the first element whose det J is not positive everywhere on it.
-    pub fn check_jacobians(&self) -> Result<(), MeshError> {
-        let refusal = |element, det, xi| MeshError::NonPositiveJacobian { element, det, xi };
-        super::check_jacobians(self.elements.len(), |e| self.jacobian_range(e), refusal)
+        extremes(cands, q)
     }
 
     /// Size and shape statistics.

@@ -43,17 +43,14 @@ pub enum MeshError {
         vertices: usize,
     },
     /// An element's isoparametric map is not orientation preserving somewhere.
-    #[error(
-        "element {element}: isoparametric Jacobian {det:e} ≤ 0 at reference point ({}, {})",
-        xi[0], xi[1]
-    )]
+    #[error("element {element}: isoparametric Jacobian {det:e} ≤ 0 at reference point {xi:?}")]
     NonPositiveJacobian {
         /// Element index.
         element: usize,
-        /// Minimum of det J over the element.
+        /// The smallest det J found over the element.
         det: f64,
-        /// Where the minimum is attained.
-        xi: [f64; 2],
+        /// Where it is attained (reference coordinates, two or three).
+        xi: Vec<f64>,
     },
     /// A generated mesh failed an internal consistency check (a bug, not a user error).
     #[error("mesh generation inconsistency: {0}")]
@@ -102,20 +99,6 @@ pub enum MeshError {
         /// The last lines of its error output.
         stderr: String,
     },
-    /// A tetrahedron's isoparametric map is not orientation preserving at a point where it
-    /// is checked (the 3-D twin of [`MeshError::NonPositiveJacobian`]).
-    #[error(
-        "tetrahedron {element}: isoparametric Jacobian {det:e} ≤ 0 at reference point ({}, {}, {})",
-        xi[0], xi[1], xi[2]
-    )]
-    NonPositiveJacobian3 {
-        /// Element index.
-        element: usize,
-        /// The smallest det J found.
-        det: f64,
-        /// Where.
-        xi: [f64; 3],
-    },
 }
 
 /// Node indices of the reference points used for output (MODEL.md §2); all are vertices on
@@ -132,22 +115,6 @@ pub struct NamedPoints {
     pub cell_bottom: usize,
     /// Cell top c + (0, r_c).
     pub cell_top: usize,
-}
-
-/// Fails with `refusal(e, det, at)` for the first of `elements` whose smallest det J
-/// (`range(e)`: minimum, maximum, where the minimum is) is not positive.
-pub(crate) fn check_jacobians<X>(
-    elements: usize,
-    range: impl Fn(usize) -> (f64, f64, X),
-    refusal: impl Fn(usize, f64, X) -> MeshError,
-) -> Result<(), MeshError> {
-    for e in 0..elements {
-        let (min, _, at) = range(e);
-        if min <= 0.0 || min.is_nan() {
-            return Err(refusal(e, min, at));
-        }
-    }
-    Ok(())
 }
 
 /// Fails with [`MeshError::InvalidParam`]: `field` = `value` breaks `rule`.

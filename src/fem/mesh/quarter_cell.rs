@@ -83,6 +83,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use super::super::element::{CellMesh, extremes};
 use super::super::quadrature::{TetRule, TriangleRule};
 use super::super::tet10::{self, FLIP, REFERENCE_NODES, TET_EDGES, TET_FACES, TetTabulation};
 use super::super::tri6::EDGES;
@@ -279,7 +280,9 @@ impl Mesh3Params {
             s.push('\n');
         };
         line(match self.wedge {
-            Wedge::Quarter => "// cellsim: the quarter cell x >= c_x, z >= c_z (MODEL.md §10).".into(),
+            Wedge::Quarter => {
+                "// cellsim: the quarter cell x >= c_x, z >= c_z (MODEL.md §10).".into()
+            }
             Wedge::Eighth => {
                 "// cellsim: the eighth cell 0 <= z - c_z <= x - c_x (MODEL.md §10).".into()
             }
@@ -302,31 +305,19 @@ impl Mesh3Params {
             f(cy),
             f(cz)
         ));
-        for tag in 4..=6 {
-            line(format!(
-                "Box({tag}) = {{{}, {}, {}, {}, {}, {}}};",
-                f(cx),
-                f(cy - 2.0 * rc),
-                f(cz),
-                f(2.0 * rc),
-                f(4.0 * rc),
-                f(2.0 * rc)
-            ));
-        }
+        // The quarter box x ≥ c_x, z ≥ c_z (around the whole ball in y).
+        let corner = [cx, cy - 2.0 * rc, cz, 2.0 * rc, 4.0 * rc, 2.0 * rc]
+            .map(f)
+            .join(", ");
+        let boxes = |tags: std::ops::RangeInclusive<i32>| -> Vec<String> {
+            tags.map(|tag| format!("Box({tag}) = {{{corner}}};"))
+                .collect()
+        };
+        boxes(4..=6).into_iter().for_each(&mut line);
         // The eighth: each box cut by the same box turned by π/4 about the vertical axis
         // (14–16 = 4–6 ∩ 7–9, the wedge 0 ≤ z − c_z ≤ x − c_x).
         let cut = if self.wedge == Wedge::Eighth {
-            for tag in 7..=9 {
-                line(format!(
-                    "Box({tag}) = {{{}, {}, {}, {}, {}, {}}};",
-                    f(cx),
-                    f(cy - 2.0 * rc),
-                    f(cz),
-                    f(2.0 * rc),
-                    f(4.0 * rc),
-                    f(2.0 * rc)
-                ));
-            }
+            boxes(7..=9).into_iter().for_each(&mut line);
             line(format!(
                 "Rotate {{{{0, 1, 0}}, {{{}, {}, {}}}, Pi / 4}} {{ Volume{{7, 8, 9}}; }}",
                 f(cx),
@@ -849,9 +840,8 @@ fn snap_to_symmetry_planes(params: &Mesh3Params, nodes: &mut [[f64; 3]]) -> Resu
     let c = params.center;
     let snap = 1e-9 * params.r_c;
     for (i, p) in nodes.iter_mut().enumerate() {
-        let outside = |p: &[f64; 3], wedge: &str| {
-            Err(format!("node {i} at {p:?} is outside the {wedge}"))
-        };
+        let outside =
+            |p: &[f64; 3], wedge: &str| Err(format!("node {i} at {p:?} is outside the {wedge}"));
         match params.wedge {
             Wedge::Quarter => {
                 for k in [0, 2] {
@@ -1290,24 +1280,9 @@ impl Mesh3 {
     pub fn jacobian_range(&self, e: usize) -> (f64, f64, [f64; 3]) {
         let tab = jacobian_check_points();
         let x = self.element_coords(e);
-        let mut min = f64::INFINITY;
-        let mut max = f64::NEG_INFINITY;
-        let mut at = [0.0; 3];
-        for q in 0..tab.len() {
-            let det = tet10::jacobian(&x, &tab.grads[q]).1;
-            if det < min || det.is_nan() {
-                min = det;
-                at = tab.points[q];
-            }
-            max = max.max(det);
-        }
-        (min, max, at)
-    }
-
-    /// Fails with the first element whose det J is not positive at all its check points.
-    pub fn check_jacobians(&self) -> Result<(), MeshError> {
-        let refusal = |element, det, xi| MeshError::NonPositiveJacobian3 { element, det, xi };
-        super::check_jacobians(self.elements.len(), |e| self.jacobian_range(e), refusal)
+        let det = |q: usize| tet10::jacobian(&x, &tab.grads[q]).1;
+        let (min, max, q) = extremes(0..tab.len(), det);
+        (min, max, tab.points[q])
     }
 
     /// Size and shape statistics.
