@@ -21,7 +21,6 @@
 //! Element geometry at quadrature points is a [`TetGeometry`] = [`GeometryOf<3, 10>`], the
 //! 3-D twin of the triangle's [`super::tri6::ElementGeometry`].
 
-
 use super::element::{GeometryOf, JacobianError, Lagrange, Tabulation};
 pub use super::element::{jacobian, physical_gradients};
 use super::quadrature::TetRule;

@@ -16,7 +16,6 @@
 //! mid-sides. The element map is x(ξ) = Σ Nₐ(ξ) xₐ; when a mid-node is not the midpoint of
 //! its edge (e.g. it lies on a circle), the edge is a parabola through the three nodes.
 
-
 use super::element::{GeometryOf, JacobianError, Lagrange, Tabulation};
 pub use super::element::{jacobian, physical_gradients};
 use super::quadrature::TriangleRule;

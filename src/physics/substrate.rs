@@ -231,29 +231,40 @@ impl Pillars {
         self.first_center + k * self.period()
     }
 
-    /// Penetration depth and outward normal of the pillar nearest to `x` alone (no floor):
-    /// `d = −l/|∇l|`, `n = ∇l/|∇l|`, `l = (|u|^q + |v|^q)^{1/q} − 1`.
-    /// With `ρ = |u|^q + |v|^q`, `r = ρ^{1/q}`, `g = (|u|^{q−1}sgn u/(w/2), |v|^{q−1}sgn v/(h/2))`:
-    /// `∇l = r^{1−q} g`, so `d = (1 − r) ρ/(r|g|)`, `n = g/|g|`.
+    /// Penetration depth and outward normal of the pillar nearest to `x` alone (no floor),
+    /// in 2-D the superellipse, in 3-D the superellipsoid on `lattice` (ignored in 2-D):
+    /// `d = −l/|∇l|`, `n = ∇l/|∇l|`, `l = ρ^{1/q} − 1` with `ρ = Σᵢ |uᵢ|^q` over the
+    /// scaled offsets `u = (x̃/(w/2), ỹ/(h/2)[, z̃/(w/2)])`. With `r = ρ^{1/q}` and
+    /// `gᵢ = |uᵢ|^{q−1} sgn uᵢ / (its half-size)`: `∇l = r^{1−q} g`, so
+    /// `d = (1 − r) ρ/(r|g|)`, `n = g/|g|`.
     #[inline(always)]
-    pub fn eval_pillar<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
+    pub fn eval_pillar<T: Real, const D: usize>(
+        &self,
+        x: &SVector<T, D>,
+        lattice: Lattice,
+    ) -> (T, SVector<T, D>) {
         let a = 0.5 * self.width;
         let b = 0.5 * self.height;
-        let xt = x.x - self.nearest_axis(re(x.x));
-        let yt = self.above_mid_height(x.y - (self.y_top - b));
-        let (pu, gu) = abs_pow(xt / a, self.q);
-        let (pv, gv) = abs_pow(yt / b, self.q);
-        let rho = pu + pv;
+        let half = [a, b, a];
+        let parts: [(T, T); D] = std::array::from_fn(|i| {
+            let offset = match i {
+                0 => x[0] - self.nearest_axis(re(x[0])),
+                1 => self.above_mid_height(x[1] - (self.y_top - b)),
+                _ => x[2] - self.nearest_axis_z(re(x[2]), lattice),
+            };
+            abs_pow(offset / half[i], self.q)
+        });
+        let rho = (1..D).fold(parts[0].0, |s, i| s + parts[i].0);
         if re(rho) <= 0.0 {
             // The pillar's centre, a·b deep inside: no direction; never reached in practice.
-            return (cst(a.min(b)), Vector2::new(cst(0.0), cst(1.0)));
+            let up = SVector::from_fn(|i, _| cst(if i == 1 { 1.0 } else { 0.0 }));
+            return (cst(a.min(b)), up);
         }
         let r = self.root(rho);
-        let gx = gu / a;
-        let gy = gv / b;
-        let g = sqrt(gx * gx + gy * gy);
-        let d = (-r + 1.0) * rho / (r * g);
-        (d, Vector2::new(gx / g, gy / g))
+        let g: SVector<T, D> = SVector::from_fn(|i, _| parts[i].1 / half[i]);
+        let norm = sqrt((1..D).fold(g[0] * g[0], |s, i| s + g[i] * g[i]));
+        let d = (-r + 1.0) * rho / (r * norm);
+        (d, g.map(|gi| gi / norm))
     }
 
     /// The height `ỹ` above the pillar's mid-height as the level set sees it: `ỹ` itself
@@ -270,13 +281,19 @@ impl Pillars {
     /// `y_top − h/2 + (h/2)(1 − |x̃/(w/2)|^q)^{1/q}` over a pillar, else `y_top − h`.
     pub fn surface_height(&self, x: f64) -> f64 {
         let a = 0.5 * self.width;
-        let b = 0.5 * self.height;
         let u = ((x - self.nearest_axis(x)) / a).abs();
+        self.height_over(u.powf(self.q))
+    }
+
+    /// The surface's height where `Σ |horizontal offset / (w/2)|^q` is `s`: the pillar's
+    /// top `y_top − h/2 + (h/2)(1 − s)^{1/q}` for `s < 1`, not below the floor `y_top − h`.
+    fn height_over(&self, s: f64) -> f64 {
+        let b = 0.5 * self.height;
         let floor = self.y_top - self.height;
-        if u >= 1.0 {
+        if s >= 1.0 {
             floor
         } else {
-            (self.y_top - b + b * (1.0 - u.powf(self.q)).powf(1.0 / self.q)).max(floor)
+            (self.y_top - b + b * (1.0 - s).powf(1.0 / self.q)).max(floor)
         }
     }
 
@@ -485,14 +502,14 @@ fn plane_eval<T: Real, const D: usize>(
 impl Surface<2> for Substrate {
     #[inline(always)]
     fn eval_inline<T: Real>(&self, x: &Vector2<T>) -> (T, Vector2<T>) {
-        plane_eval(self, x, |p| p.eval_pillar(x))
+        plane_eval(self, x, |p| p.eval_pillar(x, Lattice::Gap))
     }
 }
 
 impl Surface<3> for Substrate3 {
     #[inline(always)]
     fn eval_inline<T: Real>(&self, x: &Vector3<T>) -> (T, Vector3<T>) {
-        plane_eval(&self.plane, x, |p| p.eval_pillar3(x, self.lattice))
+        plane_eval(&self.plane, x, |p| p.eval_pillar(x, self.lattice))
     }
 }
 
@@ -545,51 +562,15 @@ impl Pillars {
         z0 + k * self.period()
     }
 
-    /// Penetration depth and outward normal of the superellipsoid pillar nearest to `x`
-    /// alone (no floor), as [`Pillars::eval_pillar`] in 3-D: with
-    /// `ρ = |u|^q + |v|^q + |w|^q`, `r = ρ^{1/q}`,
-    /// `g = (|u|^{q−1}sgn u/(w/2), |v|^{q−1}sgn v/(h/2), |w|^{q−1}sgn w/(w/2))`,
-    /// `d = (1 − r) ρ/(r|g|)`, `n = g/|g|`.
-    #[inline(always)]
-    pub fn eval_pillar3<T: Real>(&self, x: &Vector3<T>, lattice: Lattice) -> (T, Vector3<T>) {
-        let a = 0.5 * self.width;
-        let b = 0.5 * self.height;
-        let xt = x.x - self.nearest_axis(re(x.x));
-        let yt = self.above_mid_height(x.y - (self.y_top - b));
-        let zt = x.z - self.nearest_axis_z(re(x.z), lattice);
-        let (pu, gu) = abs_pow(xt / a, self.q);
-        let (pv, gv) = abs_pow(yt / b, self.q);
-        let (pw, gw) = abs_pow(zt / a, self.q);
-        let rho = pu + pv + pw;
-        if re(rho) <= 0.0 {
-            // The pillar's centre: no direction; never reached in practice.
-            return (cst(a.min(b)), Vector3::new(cst(0.0), cst(1.0), cst(0.0)));
-        }
-        let r = self.root(rho);
-        let gx = gu / a;
-        let gy = gv / b;
-        let gz = gw / a;
-        let g = sqrt(gx * gx + gy * gy + gz * gz);
-        let d = (-r + 1.0) * rho / (r * g);
-        (d, Vector3::new(gx / g, gy / g, gz / g))
-    }
-
     /// Height `y` of the substrate surface at `(x, z)` [µm] on `lattice`:
     /// `y_top − h/2 + (h/2)(1 − |u|^q − |w|^q)^{1/q}` over a pillar
     /// (`|u|^q + |w|^q < 1`), else the floor `y_top − h`.
     #[inline]
     pub fn surface_height3(&self, x: f64, z: f64, lattice: Lattice) -> f64 {
         let a = 0.5 * self.width;
-        let b = 0.5 * self.height;
         let u = ((x - self.nearest_axis(x)) / a).abs();
         let w = ((z - self.nearest_axis_z(z, lattice)) / a).abs();
-        let floor = self.y_top - self.height;
-        let s = u.powf(self.q) + w.powf(self.q);
-        if s >= 1.0 {
-            floor
-        } else {
-            (self.y_top - b + b * (1.0 - s).powf(1.0 / self.q)).max(floor)
-        }
+        self.height_over(u.powf(self.q) + w.powf(self.q))
     }
 }
 
