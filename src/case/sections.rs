@@ -56,10 +56,11 @@ pub struct Geometry {
     /// the problem. `Quarter`: x ≥ 0, z ≥ 0. `Eighth`: 0 ≤ z ≤ x, half the quarter's
     /// unknowns; the diagonal plane x = z must then be a mirror of the substrate too: a
     /// `Flat` substrate, or `Pillars` on the `FourPillars` lattice with the cell centre
-    /// above a gap (`first_center` an odd multiple of half the period). `Auto` (default):
-    /// `Eighth` where the substrate allows it, else `Quarter`. The output files hold the
+    /// above a gap (`first_center` an odd multiple of half the period). `Auto`: `Eighth`
+    /// where the substrate allows it, else `Quarter`. Default `Quarter`: the eighth's mesh
+    /// is another discretisation (README, "the eighth cell"). The output files hold the
     /// quarter either way (the eighth and its mirror image).
-    #[serde(skip_serializing_if = "WedgeChoice::is_auto")]
+    #[serde(skip_serializing_if = "WedgeChoice::is_quarter")]
     pub wedge: WedgeChoice,
 }
 
@@ -67,9 +68,9 @@ pub struct Geometry {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum WedgeChoice {
     /// The eighth where the substrate is symmetric about the plane x = z, else the quarter.
-    #[default]
     Auto,
     /// The quarter x ≥ 0, z ≥ 0.
+    #[default]
     Quarter,
     /// The eighth 0 ≤ z ≤ x.
     Eighth,
@@ -77,8 +78,8 @@ pub enum WedgeChoice {
 
 impl WedgeChoice {
     /// Whether this is the default (left out when a case is written).
-    pub fn is_auto(&self) -> bool {
-        *self == WedgeChoice::Auto
+    pub fn is_quarter(&self) -> bool {
+        *self == WedgeChoice::Quarter
     }
 }
 
@@ -90,7 +91,7 @@ impl Default for Geometry {
             r_n: 5.0,
             r_cp: 9.75,
             r_c: 10.0,
-            wedge: WedgeChoice::Auto,
+            wedge: WedgeChoice::Quarter,
         }
     }
 }

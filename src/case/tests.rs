@@ -840,3 +840,27 @@ fn case_names_are_single_path_components() {
         assert!(msg.contains("single path component"), "{msg}");
     }
 }
+
+#[test]
+fn case_wedge_choice_resolves_by_the_substrate_mirror() {
+    use crate::fem::Wedge;
+    let wedge = |extra: &str| -> Wedge {
+        let text = format!(
+            "(name: \"t\", geometry: (model: ThreeD{extra}), substrate: Pillars(), \
+             phases: (t_end: 100.0))"
+        );
+        let case = Case::from_str(&text, "t.ron").unwrap_or_else(|e| panic!("{e}"));
+        super::terms::mesh3_params(&case).wedge
+    };
+    // The default pillars: the cell above the centre of four (first_center = P/2).
+    assert_eq!(wedge(""), Wedge::Quarter, "the default");
+    assert_eq!(wedge(", wedge: Auto"), Wedge::Eighth);
+    assert_eq!(wedge(", wedge: Eighth"), Wedge::Eighth);
+    let gap = Case::from_str(
+        "(name: \"t\", geometry: (model: ThreeD, wedge: Auto), substrate: Pillars(lattice: Gap), \
+         phases: (t_end: 100.0))",
+        "t.ron",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(super::terms::mesh3_params(&gap).wedge, Wedge::Quarter);
+}
