@@ -638,23 +638,22 @@ impl LinearSolver for FaerLu {
                     return Err(LinearSolverError::NotReady("factorize"));
                 };
                 let (row_perm, col_perm) = (row_perm.as_ref(), g.col_perm.as_ref());
+                // The one solve on either kind of factors (two types with no common trait).
+                macro_rules! solve_with {
+                    ($lu:expr) => {
+                        $lu.solve_in_place_with_conj(
+                            row_perm,
+                            col_perm,
+                            Conj::No,
+                            rhs,
+                            self.par,
+                            stack,
+                        )
+                    };
+                }
                 match &g.factors {
-                    GivenFactors::Supernodal { lu, .. } => lu.solve_in_place_with_conj(
-                        row_perm,
-                        col_perm,
-                        Conj::No,
-                        rhs,
-                        self.par,
-                        stack,
-                    ),
-                    GivenFactors::Simplicial(lu) => lu.solve_in_place_with_conj(
-                        row_perm,
-                        col_perm,
-                        Conj::No,
-                        rhs,
-                        self.par,
-                        stack,
-                    ),
+                    GivenFactors::Supernodal { lu, .. } => solve_with!(lu),
+                    GivenFactors::Simplicial(lu) => solve_with!(lu),
                 }
             }
         }
