@@ -28,7 +28,7 @@
 //! search) and factorizes; [`CondensedLu::solve_in_place`] condenses the right-hand side,
 //! solves and recovers the velocities.
 
-use super::linsolve::{FaerLu, LinearSolver, LinearSolverError};
+use super::linsolve::{FaerLu, LinearSolver, LinearSolverError, Operand};
 use super::{FirstOrderBlocks, Pattern};
 use crate::fem::assembly::position;
 
@@ -200,12 +200,14 @@ impl LinearSolver for CondensedLu {
     }
 
     fn factorize(&mut self, values: &[f64]) -> Result<(), LinearSolverError> {
-        let plan = self
-            .plan
-            .as_mut()
-            .ok_or(LinearSolverError::NotReady("analyse"))?;
+        let plan = LinearSolverError::analysed(self.plan.as_mut())?;
         self.factorized = false;
-        LinearSolverError::check_values("condensed solver", values.len(), plan.nnz)?;
+        LinearSolverError::check_length(
+            "condensed solver",
+            Operand::Values,
+            values.len(),
+            plan.nnz,
+        )?;
         for k in 0..plan.p.len() {
             let (alpha, gamma) = (values[plan.pos_pp[k]], values[plan.pos_pq[k]]);
             if gamma == 0.0 || !gamma.is_finite() || !alpha.is_finite() {
@@ -237,7 +239,7 @@ impl LinearSolver for CondensedLu {
 
     fn solve_in_place(&mut self, b: &mut [f64]) -> Result<(), LinearSolverError> {
         let plan = LinearSolverError::ready(self.plan.as_mut(), self.factorized)?;
-        LinearSolverError::check_rhs("condensed solver", b.len(), plan.n)?;
+        LinearSolverError::check_length("condensed solver", Operand::Rhs, b.len(), plan.n)?;
         // g_k = b_(p_k)/γ_k; condensed right-hand side b_i − Σ_k J_(i, q_k) g_k.
         for k in 0..plan.p.len() {
             plan.g[k] = b[plan.p[k]] * plan.inv_gamma[k];

@@ -47,24 +47,17 @@ pub enum LinearSolverError {
         /// What the backend said.
         detail: String,
     },
-    /// Values whose number does not fit the pattern analysed.
-    #[error("{solver}: {got} values for a pattern of {expected} entries")]
-    WrongValues {
+    /// A slice whose length does not fit what was analysed: the values of the pattern or a
+    /// right-hand side for the unknowns.
+    #[error("{solver}: {}", operand.describe(*got, *expected))]
+    WrongLength {
         /// The backend ("KLU", "UMFPACK", "condensed solver", a permuted solver's name).
         solver: &'static str,
-        /// How many values were given.
-        got: usize,
-        /// The pattern's entries.
-        expected: usize,
-    },
-    /// A right-hand side whose length does not fit the unknowns analysed.
-    #[error("{solver}: right-hand side of length {got} for {expected} unknowns")]
-    WrongRhs {
-        /// The backend.
-        solver: &'static str,
+        /// Which slice.
+        operand: Operand,
         /// Its length.
         got: usize,
-        /// The unknowns.
+        /// The pattern's entries or the unknowns.
         expected: usize,
     },
     /// Anything else.
@@ -73,30 +66,32 @@ pub enum LinearSolverError {
 }
 
 impl LinearSolverError {
-    /// `got` values for a pattern of `expected` entries: an error unless they agree.
-    pub fn check_values(solver: &'static str, got: usize, expected: usize) -> Result<(), Self> {
-        let e = Self::WrongValues {
+    /// An `operand` of length `got` where `expected` were analysed: an error unless they
+    /// agree.
+    pub fn check_length(
+        solver: &'static str,
+        operand: Operand,
+        got: usize,
+        expected: usize,
+    ) -> Result<(), Self> {
+        let e = Self::WrongLength {
             solver,
+            operand,
             got,
             expected,
         };
         (got == expected).then_some(()).ok_or(e)
     }
 
-    /// A right-hand side of length `got` for `expected` unknowns: an error unless they agree.
-    pub fn check_rhs(solver: &'static str, got: usize, expected: usize) -> Result<(), Self> {
-        let e = Self::WrongRhs {
-            solver,
-            got,
-            expected,
-        };
-        (got == expected).then_some(()).ok_or(e)
+    /// The state `s` of a solver, required analysed: `NotReady("analyse")` if it is not.
+    pub fn analysed<T>(s: Option<T>) -> Result<T, Self> {
+        s.ok_or(Self::NotReady("analyse"))
     }
 
     /// The state `s` of an analysed solver, required factorized when `factorized` says
     /// not: `NotReady` for the step missing.
     pub fn ready<T>(s: Option<T>, factorized: bool) -> Result<T, Self> {
-        let s = s.ok_or(Self::NotReady("analyse"))?;
+        let s = Self::analysed(s)?;
         factorized.then_some(s).ok_or(Self::NotReady("factorize"))
     }
 
@@ -111,6 +106,26 @@ impl LinearSolverError {
             column: None,
             detail: detail.into(),
         })
+    }
+}
+
+/// What a linear solver is given whose length must fit what it analysed
+/// ([`LinearSolverError::WrongLength`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Operand {
+    /// The matrix values, one per entry of the pattern.
+    Values,
+    /// A right-hand side, one entry per unknown.
+    Rhs,
+}
+
+impl Operand {
+    /// The mismatch in words, for [`LinearSolverError::WrongLength`].
+    fn describe(self, got: usize, expected: usize) -> String {
+        match self {
+            Operand::Values => format!("{got} values for a pattern of {expected} entries"),
+            Operand::Rhs => format!("right-hand side of length {got} for {expected} unknowns"),
+        }
     }
 }
 
@@ -623,23 +638,22 @@ impl LinearSolver for FaerLu {
                     return Err(LinearSolverError::NotReady("factorize"));
                 };
                 let (row_perm, col_perm) = (row_perm.as_ref(), g.col_perm.as_ref());
+                // The one solve on either kind of factors (two types with no common trait).
+                macro_rules! solve_with {
+                    ($lu:expr) => {
+                        $lu.solve_in_place_with_conj(
+                            row_perm,
+                            col_perm,
+                            Conj::No,
+                            rhs,
+                            self.par,
+                            stack,
+                        )
+                    };
+                }
                 match &g.factors {
-                    GivenFactors::Supernodal { lu, .. } => lu.solve_in_place_with_conj(
-                        row_perm,
-                        col_perm,
-                        Conj::No,
-                        rhs,
-                        self.par,
-                        stack,
-                    ),
-                    GivenFactors::Simplicial(lu) => lu.solve_in_place_with_conj(
-                        row_perm,
-                        col_perm,
-                        Conj::No,
-                        rhs,
-                        self.par,
-                        stack,
-                    ),
+                    GivenFactors::Supernodal { lu, .. } => solve_with!(lu),
+                    GivenFactors::Simplicial(lu) => solve_with!(lu),
                 }
             }
         }
@@ -747,7 +761,7 @@ impl LinearSolver for Permuted {
         if !self.analysed {
             return Err(LinearSolverError::NotReady("analyse"));
         }
-        LinearSolverError::check_values(self.name, values.len(), self.src.len())?;
+        LinearSolverError::check_length(self.name, Operand::Values, values.len(), self.src.len())?;
         for (v, &k) in self.values.iter_mut().zip(&self.src) {
             *v = values[k];
         }
@@ -758,7 +772,7 @@ impl LinearSolver for Permuted {
         if !self.analysed {
             return Err(LinearSolverError::NotReady("analyse"));
         }
-        LinearSolverError::check_rhs(self.name, b.len(), self.perm.len())?;
+        LinearSolverError::check_length(self.name, Operand::Rhs, b.len(), self.perm.len())?;
         // A x = b ⇔ A' (P x) = P b.
         for (w, &i) in self.work.iter_mut().zip(&self.perm) {
             *w = b[i];

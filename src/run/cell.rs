@@ -5,7 +5,7 @@
 //! look at which it is ([`RunModel::view`]).
 
 use crate::dae::Dae;
-use crate::model::{Cell3, CellModel, CellOf, ModelError, ModelParams, Restart, Shape};
+use crate::model::{Cell3, CellModel, CellOf, ModelError, ModelParams, Restart, Shape, State};
 use crate::record::{Observables, Observables3};
 
 /// Which model a run integrates, for the writers of its mesh and states.
@@ -29,27 +29,16 @@ pub(crate) trait RunModel: Dae + Send {
     fn mesh_size(&self) -> (usize, usize);
     /// Whether the μ_as unknowns are left out until T_g0.
     fn adhesion_deferred(&self) -> bool;
-    /// The system with its μ_as unknowns added at `t`.
-    fn with_adhesion_unknowns(&self, t: f64, y: &[f64], yp: &[f64]) -> Result<Cell, ModelError>;
+    /// The system with its μ_as unknowns added at the state `at`.
+    fn with_adhesion_unknowns(&self, at: State<'_>) -> Result<Cell, ModelError>;
     /// Whether the contact carries the cell's current weight at `t`.
     fn contact_carries_weight(&self, t: f64, y: &[f64]) -> bool;
-    /// The same cell without inertia, at rest in equilibrium at `t`.
-    fn without_inertia_at_rest(
-        &self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        restart: &Restart,
-    ) -> Result<Cell, ModelError>;
+    /// The same cell without inertia, at rest in equilibrium at the time of `at`.
+    fn without_inertia_at_rest(&self, at: State<'_>, restart: &Restart)
+    -> Result<Cell, ModelError>;
     /// The same system with the parameters `params` of a case that agrees with this one's
-    /// up to `t`, restarting at `t` from (`y`, `yp`).
-    fn branched(
-        &self,
-        params: ModelParams,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-    ) -> Result<Cell, ModelError>;
+    /// up to the time of `at`, restarting from the state `at`.
+    fn branched(&self, params: ModelParams, at: State<'_>) -> Result<Cell, ModelError>;
     /// The time the integration starts from.
     fn initial_time(&self) -> f64;
     /// The scene's observables at `t`, and the 3-D ones for the 3-D model.
@@ -108,7 +97,8 @@ where
         CellOf::adhesion_deferred(self)
     }
 
-    fn with_adhesion_unknowns(&self, t: f64, y: &[f64], yp: &[f64]) -> Result<Cell, ModelError> {
+    fn with_adhesion_unknowns(&self, at: State<'_>) -> Result<Cell, ModelError> {
+        let State { t, y, yp } = at;
         Ok(Box::new(CellOf::with_adhesion_unknowns(self, t, y, yp)?))
     }
 
@@ -118,23 +108,17 @@ where
 
     fn without_inertia_at_rest(
         &self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
+        at: State<'_>,
         restart: &Restart,
     ) -> Result<Cell, ModelError> {
+        let State { t, y, yp } = at;
         Ok(Box::new(CellOf::without_inertia_at_rest(
             self, t, y, yp, restart,
         )?))
     }
 
-    fn branched(
-        &self,
-        params: ModelParams,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-    ) -> Result<Cell, ModelError> {
+    fn branched(&self, params: ModelParams, at: State<'_>) -> Result<Cell, ModelError> {
+        let State { t, y, yp } = at;
         Ok(Box::new(CellOf::branched(self, params, t, y, yp)?))
     }
 

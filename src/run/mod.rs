@@ -19,7 +19,7 @@ use crate::dae::bdf2::{Bdf2, Bdf2Options};
 use crate::dae::{Atol, Dae, Integrator, IntegratorError, Stats};
 use crate::fem::{Mesh, MeshError};
 use crate::model::{
-    CellModel, CellOf, HalfPlane, ModelError, ModelParams, Quarter, Restart, Shape,
+    CellModel, CellOf, HalfPlane, ModelError, ModelParams, Quarter, Restart, Shape, State,
 };
 use crate::output::{SnapshotOptions, SnapshotWriter, SnapshotWriter3};
 use crate::record::Observables;
@@ -680,10 +680,15 @@ impl Driver {
     fn add_adhesion_unknowns(&mut self) -> Result<(), String> {
         let integ = self.solver.integ_ref();
         let t = integ.t();
+        let at = State {
+            t,
+            y: integ.y(),
+            yp: integ.yp(),
+        };
         let m2 = self
             .solver
             .model()
-            .with_adhesion_unknowns(t, integ.y(), integ.yp())
+            .with_adhesion_unknowns(at)
             .map_err(|e| e.to_string())?;
         // The solution goes on smoothly: start from a tenth of the last step rather than
         // IDA's estimate (which started 4000× below it and took a dozen steps to regain it).
@@ -1206,9 +1211,14 @@ fn advance_switching(
                 rtol: settings.rtol,
                 atol: settings.atol,
             };
+            let at = State {
+                t,
+                y,
+                yp: integ.yp(),
+            };
             let m2 = solver
                 .model()
-                .without_inertia_at_rest(t, y, integ.yp(), &restart)
+                .without_inertia_at_rest(at, &restart)
                 .map_err(|e| e.to_string())?;
             let new = Solver::new(m2, settings)
                 .map_err(|e| format!("restart without inertia at t = {t}: {e}"))?;

@@ -23,6 +23,7 @@ use super::{
 };
 use crate::case::{Case, Output, Phases};
 use crate::dae::Stats;
+use crate::model::State;
 use crate::record::{FailureKind, Parting, Summary};
 
 /// The time up to which runs of `a` and `b` are the same computation: the earlier end
@@ -580,7 +581,11 @@ impl Context<'_, '_> {
         let lead = &self.members[sub[0].k];
         let built = crate::scene::model_params(lead.case, lead.file, model.inertia())
             .map_err(|e| e.to_string())
-            .and_then(|params| model.branched(params, t, y, yp).map_err(|e| e.to_string()));
+            .and_then(|params| {
+                model
+                    .branched(params, State { t, y, yp })
+                    .map_err(|e| e.to_string())
+            });
         match built {
             Ok(model) => self.push(Task {
                 members: sub,

@@ -392,26 +392,43 @@ impl<D: Dae> Ida<D> {
                 "IDASetMaxNumSteps",
                 sys::IDASetMaxNumSteps(mem, opts.max_steps as c_long),
             )?;
-            if let Some(h) = opts.init_step {
-                self.check("IDASetInitStep", sys::IDASetInitStep(mem, h))?;
-            }
-            if let Some(h) = opts.max_step {
-                self.check("IDASetMaxStep", sys::IDASetMaxStep(mem, h))?;
-            }
-            if let Some(m) = opts.max_newton_iters {
-                self.check("IDASetMaxNonlinIters", sys::IDASetMaxNonlinIters(mem, m))?;
-            }
-            if let Some(m) = opts.max_conv_fails {
-                self.check("IDASetMaxConvFails", sys::IDASetMaxConvFails(mem, m))?;
-            }
-            if let Some(d) = opts.delta_cj {
-                self.check("IDASetDeltaCjLSetup", sys::IDASetDeltaCjLSetup(mem, d))?;
-            }
-            if let Some(m) = opts.max_err_test_fails {
-                self.check("IDASetMaxErrTestFails", sys::IDASetMaxErrTestFails(mem, m))?;
-            }
         }
-        Ok(())
+        self.set_if_given("IDASetInitStep", opts.init_step, sys::IDASetInitStep)?;
+        self.set_if_given("IDASetMaxStep", opts.max_step, sys::IDASetMaxStep)?;
+        self.set_if_given(
+            "IDASetMaxNonlinIters",
+            opts.max_newton_iters,
+            sys::IDASetMaxNonlinIters,
+        )?;
+        self.set_if_given(
+            "IDASetMaxConvFails",
+            opts.max_conv_fails,
+            sys::IDASetMaxConvFails,
+        )?;
+        self.set_if_given(
+            "IDASetDeltaCjLSetup",
+            opts.delta_cj,
+            sys::IDASetDeltaCjLSetup,
+        )?;
+        self.set_if_given(
+            "IDASetMaxErrTestFails",
+            opts.max_err_test_fails,
+            sys::IDASetMaxErrTestFails,
+        )
+    }
+
+    /// Makes the IDASet* call `set` with `value`, and checks its flag, when there is one.
+    fn set_if_given<T>(
+        &self,
+        function: &'static str,
+        value: Option<T>,
+        set: unsafe extern "C" fn(*mut c_void, T) -> c_int,
+    ) -> Result<(), IntegratorError> {
+        match value {
+            // SAFETY: valid IDA memory (made by `create_memory`); the call takes a value only.
+            Some(v) => self.check(function, unsafe { set(self.mem, v) }),
+            None => Ok(()),
+        }
     }
 
     /// Tells IDA which components are differential (needed to suppress the algebraic

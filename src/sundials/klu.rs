@@ -9,7 +9,7 @@ use sundials_sys as sys;
 
 use super::{Context, NVector};
 use crate::dae::Pattern;
-use crate::dae::linsolve::{LinearSolver, LinearSolverError};
+use crate::dae::linsolve::{LinearSolver, LinearSolverError, Operand};
 
 /// KLU ordering choice: 0 = AMD (SUNDIALS' default is 1 = COLAMD, measured 2–3× slower
 /// on the cell's P2 matrices).
@@ -140,11 +140,8 @@ impl LinearSolver for KluLu {
     }
 
     fn factorize(&mut self, values: &[f64]) -> Result<(), LinearSolverError> {
-        let st = self
-            .state
-            .as_mut()
-            .ok_or(LinearSolverError::NotReady("analyse"))?;
-        LinearSolverError::check_values("KLU", values.len(), self.nnz)?;
+        let st = LinearSolverError::analysed(self.state.as_mut())?;
+        LinearSolverError::check_length("KLU", Operand::Values, values.len(), self.nnz)?;
         self.factorized = false;
         // SAFETY: the data array holds nnz values (allocated in analyse).
         let flag = unsafe {

@@ -24,17 +24,12 @@ pub(super) fn exclusive<R>(f: impl FnOnce() -> R) -> R {
 /// graph of A + Aᵀ (diagonal dropped): `perm[k]` is the unknown eliminated k-th.
 /// Deterministic (METIS's default seed).
 pub fn nested_dissection(a: &Pattern) -> Result<Vec<usize>, OrderingError> {
-    let n = square(a)?;
+    let (n, entries) = square_entries(a)?;
     // Adjacency of A + Aᵀ without the diagonal.
-    let (cp, ri) = (a.col_ptr(), a.row_idx());
     let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for j in 0..n {
-        for &i in &ri[cp[j]..cp[j + 1]] {
-            if i != j {
-                adj[j].push(i);
-                adj[i].push(j);
-            }
-        }
+    for (i, j) in entries.filter(|(i, j)| i != j) {
+        adj[j].push(i);
+        adj[i].push(j);
     }
     node_nd(adj)
 }
@@ -43,13 +38,10 @@ pub fn nested_dissection(a: &Pattern) -> Result<Vec<usize>, OrderingError> {
 /// of AᵀA (columns adjacent when they share a row): the ordering of the Cholesky factor
 /// of AᵀA, which bounds the L and U of an LU with partial pivoting.
 pub fn nested_dissection_ata(a: &Pattern) -> Result<Vec<usize>, OrderingError> {
-    let n = square(a)?;
-    let (cp, ri) = (a.col_ptr(), a.row_idx());
+    let (n, entries) = square_entries(a)?;
     let mut rows: Vec<Vec<usize>> = vec![Vec::new(); n];
-    for j in 0..n {
-        for &i in &ri[cp[j]..cp[j + 1]] {
-            rows[i].push(j);
-        }
+    for (i, j) in entries {
+        rows[i].push(j);
     }
     let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n];
     for cols in &rows {
@@ -60,7 +52,10 @@ pub fn nested_dissection_ata(a: &Pattern) -> Result<Vec<usize>, OrderingError> {
     node_nd(adj)
 }
 
-fn square(a: &Pattern) -> Result<usize, OrderingError> {
+/// The order n of the square pattern `a` and its entries (i, j), column by column.
+fn square_entries(
+    a: &Pattern,
+) -> Result<(usize, impl Iterator<Item = (usize, usize)> + '_), OrderingError> {
     let n = a.ncols();
     if a.nrows() != n {
         return Err(OrderingError::NotSquare {
@@ -68,7 +63,9 @@ fn square(a: &Pattern) -> Result<usize, OrderingError> {
             cols: n,
         });
     }
-    Ok(n)
+    let (cp, ri) = (a.col_ptr(), a.row_idx());
+    let column = move |j: usize| ri[cp[j]..cp[j + 1]].iter().map(move |&i| (i, j));
+    Ok((n, (0..n).flat_map(column)))
 }
 
 /// METIS_NodeND on the symmetric graph `adj` (no self-loops; lists deduplicated here).

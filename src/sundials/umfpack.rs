@@ -8,7 +8,7 @@ use std::os::raw::{c_long, c_void};
 use std::ptr;
 
 use crate::dae::Pattern;
-use crate::dae::linsolve::{LinearSolver, LinearSolverError};
+use crate::dae::linsolve::{LinearSolver, LinearSolverError, Operand};
 
 const UMFPACK_CONTROL: usize = 20;
 const UMFPACK_INFO: usize = 90;
@@ -260,7 +260,7 @@ impl LinearSolver for UmfpackLu {
         if self.symbolic.is_null() {
             return Err(LinearSolverError::NotReady("analyse"));
         }
-        LinearSolverError::check_values("UMFPACK", values.len(), self.ax.len())?;
+        LinearSolverError::check_length("UMFPACK", Operand::Values, values.len(), self.ax.len())?;
         self.ax.copy_from_slice(values);
         // SAFETY: the previous Numeric (if any) is freed; the arrays are those analysed.
         let status = unsafe {
@@ -305,7 +305,7 @@ impl LinearSolver for UmfpackLu {
         if self.numeric.is_null() {
             return Err(LinearSolverError::NotReady("factorize"));
         }
-        LinearSolverError::check_rhs("UMFPACK", b.len(), self.x.len())?;
+        LinearSolverError::check_length("UMFPACK", Operand::Rhs, b.len(), self.x.len())?;
         // SAFETY: x, b of length n, Wi n and W 5n as wsolve requires; Numeric valid.
         let status = unsafe {
             umfpack_dl_wsolve(
