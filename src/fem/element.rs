@@ -435,6 +435,13 @@ pub(crate) mod checks {
         map_interpolates_and_jacobian::<E, D, N>(nodes, x, points);
     }
 
+    /// The six nodes of the straight quadratic triangle with vertices `v` (in the plane or
+    /// in space): the vertices, then the midpoints of edges 0–1, 1–2, 2–0.
+    pub fn straight_triangle<const D: usize>(v: [[f64; D]; 3]) -> [[f64; D]; 6] {
+        let mid = |a: usize, b: usize| std::array::from_fn(|i| 0.5 * (v[a][i] + v[b][i]));
+        [v[0], v[1], v[2], mid(0, 1), mid(1, 2), mid(2, 0)]
+    }
+
     /// Σ Nₐ = 1 and Σ ∇Nₐ = 0.
     pub fn partition_of_unity<E: Lagrange<D, N>, const D: usize, const N: usize>(
         points: &[[f64; D]],

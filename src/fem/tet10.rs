@@ -294,16 +294,7 @@ mod tests {
     fn face_map_area_of_a_flat_triangle_and_a_parabolic_patch() {
         // Flat right triangle with legs 2 and 3 in the plane z = 1: area 3, normal +z.
         let v = [[0.0, 0.0, 1.0], [2.0, 0.0, 1.0], [0.0, 3.0, 1.0]];
-        let mid =
-            |a: [f64; 3], b: [f64; 3]| -> [f64; 3] { std::array::from_fn(|i| 0.5 * (a[i] + b[i])) };
-        let x = [
-            v[0],
-            v[1],
-            v[2],
-            mid(v[0], v[1]),
-            mid(v[1], v[2]),
-            mid(v[2], v[0]),
-        ];
+        let x = checks::straight_triangle(v);
         let rule = crate::fem::TriangleRule::degree(2);
         let mut area = 0.0;
         for (p, w) in rule.points.iter().zip(&rule.weights) {

@@ -150,15 +150,7 @@ mod tests {
     #[test]
     fn quadratic_fields_exact_on_straight_element() {
         let v = [[0.2, -0.1], [1.7, 0.4], [0.5, 1.3]];
-        let mid = |a: [f64; 2], b: [f64; 2]| [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
-        let x = [
-            v[0],
-            v[1],
-            v[2],
-            mid(v[0], v[1]),
-            mid(v[1], v[2]),
-            mid(v[2], v[0]),
-        ];
+        let x = checks::straight_triangle(v);
         let f = |p: [f64; 2]| {
             1.0 + p[0] - 2.0 * p[1] + 3.0 * p[0] * p[0] - p[0] * p[1] + 0.5 * p[1] * p[1]
         };
