@@ -13,6 +13,7 @@
 //!
 //! `cargo bench --bench kernels`
 
+use cellsim::dae::State;
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -68,7 +69,7 @@ fn kernels(c: &mut Criterion) {
         let mut g = c.benchmark_group("residual");
         g.bench_with_input(BenchmarkId::new("residual", n), &n, |b, _| {
             b.iter(|| {
-                m.residual(T, black_box(&y), black_box(&yp), &mut r)
+                m.residual(State::new(T, black_box(&y), black_box(&yp)), &mut r)
                     .unwrap()
             })
         });
@@ -76,12 +77,12 @@ fn kernels(c: &mut Criterion) {
         let mut g = c.benchmark_group("jacobian");
         g.bench_with_input(BenchmarkId::new("jacobian", n), &n, |b, _| {
             b.iter(|| {
-                m.jacobian(T, black_box(&y), black_box(&yp), 0.1, &mut vals)
+                m.jacobian(State::new(T, black_box(&y), black_box(&yp)), 0.1, &mut vals)
                     .unwrap()
             })
         });
         g.finish();
-        m.jacobian(T, &y, &yp, 0.1, &mut vals).unwrap();
+        m.jacobian(State::new(T, &y, &yp), 0.1, &mut vals).unwrap();
         let rhs: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).sin()).collect();
         for kind in [
             LinearSolverKind::Faer,
@@ -112,7 +113,8 @@ fn kernels(c: &mut Criterion) {
         let ni = mi.size();
         let (y, yp) = state(&mi);
         let mut vals = vec![0.0; mi.pattern().compute_nnz()];
-        mi.jacobian(T, &y, &yp, 100.0, &mut vals).unwrap();
+        mi.jacobian(State::new(T, &y, &yp), 100.0, &mut vals)
+            .unwrap();
         let rhs: Vec<f64> = (0..ni).map(|i| (0.37 * i as f64).sin()).collect();
         eprintln!("refine {refine} with inertia: n = {ni}");
         for kind in [

@@ -14,6 +14,7 @@
 //! Without `--t-end` it only meshes. With inertia (the case's `OffAfter`) the run keeps
 //! inertia throughout; `--drag` replaces it by the medium drag (no switch needed).
 
+use cellsim::dae::State;
 use std::time::Instant;
 
 use cellsim::case::Case;
@@ -216,7 +217,8 @@ fn lu_memory(m: &mut Cell3) {
     let (y, yp) = (vec![0.0; n], vec![0.0; n]);
     let pattern = m.pattern().clone();
     let mut vals = vec![0.0; pattern.compute_nnz()];
-    m.jacobian(50.0, &y, &yp, 0.1, &mut vals).expect("jacobian");
+    m.jacobian(State::new(50.0, &y, &yp), 0.1, &mut vals)
+        .expect("jacobian");
     let mut lu = UmfpackLu::new(UmfpackOrdering::Metis)
         .with_symmetric_strategy(true)
         .without_refinement();
@@ -265,7 +267,8 @@ fn bench_lu(m: &mut Cell3, only: Option<&str>) {
     let (y, yp) = (vec![0.0; n], vec![0.0; n]);
     let pattern = m.pattern().clone();
     let mut vals = vec![0.0; pattern.compute_nnz()];
-    m.jacobian(50.0, &y, &yp, 0.1, &mut vals).expect("jacobian");
+    m.jacobian(State::new(50.0, &y, &yp), 0.1, &mut vals)
+        .expect("jacobian");
     println!("n = {n}, nnz(J) = {}", vals.len());
     for name in [
         "faer",

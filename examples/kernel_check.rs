@@ -13,6 +13,7 @@
 //! `cargo run --release --example kernel_check -- time [REPS]` times REPS (default 200)
 //! residual and Jacobian evaluations of each model.
 
+use cellsim::dae::State;
 use std::time::Instant;
 
 use cellsim::case::Case;
@@ -81,11 +82,12 @@ fn values() -> Result<Vec<f64>, String> {
         let mut m = model(case, inertia)?;
         let (y, yp) = state(&m);
         let mut r = vec![0.0; m.size()];
-        m.residual(T, &y, &yp, &mut r).map_err(|e| e.to_string())?;
+        m.residual(State::new(T, &y, &yp), &mut r)
+            .map_err(|e| e.to_string())?;
         out.extend_from_slice(&r);
         for cj in [0.1, 100.0] {
             let mut v = vec![0.0; m.pattern().compute_nnz()];
-            m.jacobian(T, &y, &yp, cj, &mut v)
+            m.jacobian(State::new(T, &y, &yp), cj, &mut v)
                 .map_err(|e| e.to_string())?;
             out.extend_from_slice(&v);
         }
@@ -101,12 +103,13 @@ fn time(reps: usize) -> Result<(), String> {
         let mut v = vec![0.0; m.pattern().compute_nnz()];
         let start = Instant::now();
         for _ in 0..reps {
-            m.residual(T, &y, &yp, &mut r).map_err(|e| e.to_string())?;
+            m.residual(State::new(T, &y, &yp), &mut r)
+                .map_err(|e| e.to_string())?;
         }
         let tr = start.elapsed().as_secs_f64() / reps as f64;
         let start = Instant::now();
         for _ in 0..reps {
-            m.jacobian(T, &y, &yp, 0.1, &mut v)
+            m.jacobian(State::new(T, &y, &yp), 0.1, &mut v)
                 .map_err(|e| e.to_string())?;
         }
         let tj = start.elapsed().as_secs_f64() / reps as f64;

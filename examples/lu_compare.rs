@@ -7,6 +7,7 @@
 //! 10 000 and 90 000 unknowns). The two backends are timed in the same run, alternately,
 //! so their ratio is meaningful on a shared machine.
 
+use cellsim::dae::State;
 use std::time::Instant;
 
 use cellsim::dae::Dae;
@@ -40,7 +41,7 @@ fn main() {
         let mut values = vec![0.0; pattern.compute_nnz()];
         // cj of a typical mid-run step (h ≈ 1e-2 at order 2).
         let cj = 150.0;
-        dae.jacobian(t0, &y, &yp, cj, &mut values)
+        dae.jacobian(State::new(t0, &y, &yp), cj, &mut values)
             .expect("heat2d jacobian");
         let b: Vec<f64> = (0..n)
             .map(|i| ((i * 7919) % 1000) as f64 / 1000.0 - 0.5)

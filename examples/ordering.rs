@@ -14,6 +14,7 @@
 //! medians over repetitions in which the backends take turns, so their ratios hold on a
 //! shared machine.
 
+use cellsim::dae::State;
 use std::time::Instant;
 
 use cellsim::dae::condensed::CondensedLu;
@@ -224,7 +225,8 @@ fn main() {
         let (y, yp) = state(&m);
         let pattern = m.pattern().clone();
         let mut values = vec![0.0; pattern.compute_nnz()];
-        m.jacobian(T, &y, &yp, 0.1, &mut values).unwrap();
+        m.jacobian(State::new(T, &y, &yp), 0.1, &mut values)
+            .unwrap();
         measure(&format!("r{refine}"), &pattern, &values, &cands, reps);
 
         // With inertia (u, v, μ_as), cj as during the fall: the full-size LUs and the
@@ -233,7 +235,8 @@ fn main() {
         let (y, yp) = state(&m);
         let pattern = m.pattern().clone();
         let mut values = vec![0.0; pattern.compute_nnz()];
-        m.jacobian(T, &y, &yp, 100.0, &mut values).unwrap();
+        m.jacobian(State::new(T, &y, &yp), 100.0, &mut values)
+            .unwrap();
         let blocks = m.first_order_blocks().unwrap();
         let mut inertial: Vec<Candidate> = vec![
             faer_candidate("faer-colamd", FaerLu::new),

@@ -9,6 +9,7 @@
 //! `plots/scaling.png` (the README's scaling figure) and prints the exponents. Run it on a
 //! quiet machine: the wall times are single runs.
 
+use cellsim::dae::State;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -68,7 +69,8 @@ fn main() {
         let (y, yp) = support::state(&m);
         let mut values = vec![0.0; m.pattern().compute_nnz()];
         let mut mm = m;
-        mm.jacobian(45_000.0, &y, &yp, 0.1, &mut values).unwrap();
+        mm.jacobian(State::new(45_000.0, &y, &yp), 0.1, &mut values)
+            .unwrap();
         let mut lu = FaerLu::new();
         lu.analyse(mm.pattern()).unwrap();
         let fill = support::fill(mm.pattern(), &values, lu.column_permutation().unwrap());

@@ -2,6 +2,7 @@
 //! closed forms of the r-weighting, free fall, Hertz's sphere, the refusal of pillars and
 //! the scene end to end.
 
+use cellsim::dae::State;
 use std::f64::consts::PI;
 use std::process::Command;
 
@@ -126,7 +127,7 @@ fn axisymmetric_patch_test_homogeneous_deformation_gives_exact_internal_forces()
         }
         let yp = vec![0.0; m.size()];
         let mut r = vec![0.0; m.size()];
-        m.residual(1.0, &y, &yp, &mut r).unwrap();
+        m.residual(State::new(1.0, &y, &yp), &mut r).unwrap();
         let f0 = BlockDiag::new(Matrix2::new(1.0 + eps, 0.0, 0.0, 1.0 + delta), 1.0 + eps);
         let zero = BlockDiag::new(Matrix2::zeros(), 0.0);
         let p = |d: Domain| {
@@ -202,7 +203,7 @@ fn axisymmetric_weight_volumes_and_gravity_rows_are_weighted_by_r() {
     // The gravity rows of the residual at rest at full gravity add up to the weight.
     let yp = vec![0.0; m.size()];
     let mut r = vec![0.0; m.size()];
-    m.residual(t_g0, &y, &yp, &mut r).unwrap();
+    m.residual(State::new(t_g0, &y, &yp), &mut r).unwrap();
     let sum_y: f64 = (0..m.mesh.nodes.len())
         .map(|i| m.dofs.momentum_rows(i)[1])
         .filter(|&d| d != usize::MAX)
@@ -262,7 +263,7 @@ fn axisymmetric_contact_rows_carry_the_contact_force_with_the_hoop_jacobian() {
     let sum_y = |m: &mut CellModel, y: &[f64]| {
         let yp = vec![0.0; m.size()];
         let mut r = vec![0.0; m.size()];
-        m.residual(0.0, y, &yp, &mut r).unwrap();
+        m.residual(State::new(0.0, y, &yp), &mut r).unwrap();
         (0..m.mesh.nodes.len())
             .map(|i| m.dofs.momentum_rows(i)[1])
             .filter(|&d| d != usize::MAX)

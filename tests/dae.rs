@@ -1,6 +1,7 @@
 //! The DAE layer against references nobody here chose: SUNDIALS' published example
 //! outputs (idaRoberts_dns/_klu, idaHeat2D_bnd/_klu) and a closed-form DAE.
 
+use cellsim::dae::State;
 use cellsim::dae::bdf2::{Bdf2, Bdf2Options};
 use cellsim::dae::problems::{Analytic, Heat2D, Robertson};
 use cellsim::dae::{Atol, Dae, DaeError, Inadmissible, Integrator, Pattern, Stats};
@@ -261,27 +262,20 @@ impl<D: Dae> Dae for Wrapped<D> {
     fn size(&self) -> usize {
         self.inner.size()
     }
-    fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
+    fn residual(&mut self, State { t, y, yp }: State, r: &mut [f64]) -> Result<(), DaeError> {
         if t >= self.fail_after && self.fail_count > 0 {
             self.fail_count -= 1;
             return Err(DaeError::Inadmissible(Inadmissible::Other(format!(
                 "test: inadmissible at t = {t}"
             ))));
         }
-        self.inner.residual(t, y, yp, r)
+        self.inner.residual(State::new(t, y, yp), r)
     }
     fn pattern(&self) -> &Pattern {
         self.inner.pattern()
     }
-    fn jacobian(
-        &mut self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        cj: f64,
-        v: &mut [f64],
-    ) -> Result<(), DaeError> {
-        self.inner.jacobian(t, y, yp, cj, v)
+    fn jacobian(&mut self, at: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+        self.inner.jacobian(at, cj, v)
     }
     fn differential(&self) -> Vec<bool> {
         self.inner.differential()

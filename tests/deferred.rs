@@ -3,6 +3,7 @@
 
 use cellsim::case::{self, Case};
 use cellsim::dae::Dae;
+use cellsim::dae::State;
 use cellsim::model::CellModel;
 use cellsim::record::{RunData, RunSettings};
 use cellsim::run::{self, Progress, RunOptions};
@@ -29,8 +30,10 @@ fn before_adhesion_acts_the_smaller_system_is_the_same_cell() {
         // The μ_as block is last: the smaller system's unknowns are the first ones.
         let m = small.size();
         let (mut r_full, mut r_small) = (vec![0.0; full.size()], vec![0.0; m]);
-        full.residual(T, &y, &yp, &mut r_full).unwrap();
-        small.residual(T, &y[..m], &yp[..m], &mut r_small).unwrap();
+        full.residual(State::new(T, &y, &yp), &mut r_full).unwrap();
+        small
+            .residual(State::new(T, &y[..m], &yp[..m]), &mut r_small)
+            .unwrap();
         assert_eq!(&r_full[..m], &r_small[..], "inertia {inertia}");
         // Its iteration matrix is exact too.
         let mut rng = Rand64::new(5);
@@ -56,9 +59,11 @@ fn adding_the_adhesion_unknowns_keeps_the_state_consistent() {
     let (t, y2, yp2) = big.initial();
     assert_eq!(t, t0);
     let mut r = vec![0.0; big.size()];
-    big.residual(t, &y2, &yp2, &mut r).unwrap();
+    big.residual(State::new(t, &y2, &yp2), &mut r).unwrap();
     let mut r_small = vec![0.0; small.size()];
-    small.residual(t, &y, &yp, &mut r_small).unwrap();
+    small
+        .residual(State::new(t, &y, &yp), &mut r_small)
+        .unwrap();
     // The old rows are unchanged, the μ_as rows hold exactly.
     assert_eq!(&r[..small.size()], &r_small[..]);
     assert!(r[small.size()..].iter().all(|v| v.abs() < 1e-9));

@@ -4,6 +4,7 @@
 //! residual. Used by the plane-strain, axisymmetric, deferred and 3-D tests.
 
 use cellsim::dae::Dae;
+use cellsim::dae::State;
 use cellsim::fem::CellMesh;
 use cellsim::model::{CellOf, Shape};
 use oorandom::Rand64;
@@ -72,7 +73,7 @@ pub fn jacobian_fd_error<M: Dae + ?Sized>(
 ) -> (f64, usize) {
     let n = m.size();
     let mut vals = vec![0.0; m.pattern().compute_nnz()];
-    m.jacobian(t, y, yp, cj, &mut vals).unwrap();
+    m.jacobian(State::new(t, y, yp), cj, &mut vals).unwrap();
     let pat = m.pattern().clone();
     let mut worst: (f64, usize) = (0.0, usize::MAX);
     let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
@@ -82,10 +83,10 @@ pub fn jacobian_fd_error<M: Dae + ?Sized>(
                 let (mut y1, mut yp1) = (y.to_vec(), yp.to_vec());
                 y1[j] += h;
                 yp1[j] += cj * h;
-                m.residual(t, &y1, &yp1, &mut rp).unwrap();
+                m.residual(State::new(t, &y1, &yp1), &mut rp).unwrap();
                 y1[j] -= 2.0 * h;
                 yp1[j] -= 2.0 * cj * h;
-                m.residual(t, &y1, &yp1, &mut rm).unwrap();
+                m.residual(State::new(t, &y1, &yp1), &mut rm).unwrap();
                 rp.iter()
                     .zip(&rm)
                     .map(|(a, b)| (a - b) / (2.0 * h))

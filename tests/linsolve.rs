@@ -2,6 +2,7 @@
 //! the (u, v) system against the full-size LUs, and IDA with either on an inertial fall.
 
 use cellsim::case::Case;
+use cellsim::dae::State;
 use cellsim::dae::bdf2::{Bdf2, Bdf2Options};
 use cellsim::dae::linsolve::LinearSolverError;
 use cellsim::dae::{Atol, Dae, Integrator, IntegratorError, Pattern};
@@ -69,7 +70,7 @@ fn condensed_solve_matches_the_full_lu_on_the_cell_jacobian() {
         .map(|c| c * (1.0 + 2.0 * rng.rand_float()))
         .collect();
     for &cj in &cjs {
-        m.jacobian(t, &y, &yp, cj, &mut values).unwrap();
+        m.jacobian(State::new(t, &y, &yp), cj, &mut values).unwrap();
         // A right-hand side with every block populated, at the scales of a Newton
         // residual (velocity rows large where cj is).
         let b: Vec<f64> = (0..n).map(|_| rng.rand_float() - 0.5).collect();
@@ -125,7 +126,8 @@ fn every_backend_and_ordering_solves_the_cell_jacobian() {
         let mut values = vec![0.0; pattern.compute_nnz()];
         let mut rng = oorandom::Rand64::new(17);
         for cj in [0.1, 1e4] {
-            m.jacobian(45_000.0, &y, &yp, cj, &mut values).unwrap();
+            m.jacobian(State::new(45_000.0, &y, &yp), cj, &mut values)
+                .unwrap();
             let b: Vec<f64> = (0..m.size()).map(|_| rng.rand_float() - 0.5).collect();
             let reference = solve(LinearSolverKind::Faer, &m, &values, &b);
             for kind in [

@@ -2,6 +2,7 @@
 
 use cellsim::case::{self, Case, terms};
 use cellsim::dae::Dae;
+use cellsim::dae::State;
 use cellsim::fem::{Mesh, MeshParams};
 use cellsim::model::{CellModel, ModelParams};
 use cellsim::physics::Substrate;
@@ -124,7 +125,7 @@ fn global_jacobian_is_exact_for_every_reading_of_the_paper() {
         let mut m = CellModel::new(params, coarse_mesh()).unwrap();
         let (y, yp) = deformed_state(&m, 0.5, 7);
         let mut r = vec![0.0; m.size()];
-        m.residual(45_000.0, &y, &yp, &mut r).unwrap();
+        m.residual(State::new(45_000.0, &y, &yp), &mut r).unwrap();
         r
     };
     let r0 = residual(pillars_reading(|_| {}));
@@ -244,7 +245,7 @@ fn compare_internal_forces(
     let y = homogeneous_state(m, f0);
     let yp = vec![0.0; m.size()];
     let mut r = vec![0.0; m.size()];
-    m.residual(1.0, &y, &yp, &mut r).unwrap();
+    m.residual(State::new(1.0, &y, &yp), &mut r).unwrap();
     let exact = boundary_forces(m, exact_p);
     let (mut err, mut scale): (f64, f64) = (0.0, 0.0);
     for (i, fe) in exact.iter().enumerate() {
@@ -366,9 +367,7 @@ impl Dae for Creep {
     }
     fn residual(
         &mut self,
-        _t: f64,
-        y: &[f64],
-        yp: &[f64],
+        State { y, yp, .. }: State,
         r: &mut [f64],
     ) -> Result<(), cellsim::dae::DaeError> {
         let f = Matrix2::new(1.0 + y[0], 0.0, 0.0, 1.0);
@@ -382,9 +381,7 @@ impl Dae for Creep {
     }
     fn jacobian(
         &mut self,
-        _t: f64,
-        y: &[f64],
-        yp: &[f64],
+        State { y, yp, .. }: State,
         cj: f64,
         v: &mut [f64],
     ) -> Result<(), cellsim::dae::DaeError> {
@@ -666,8 +663,8 @@ fn element_loops_give_the_same_bits_in_parallel() {
     for parallel in [false, true] {
         m.set_parallel(parallel);
         let (mut r, mut j) = (vec![0.0; n], vec![0.0; nnz]);
-        m.residual(t, &y, &yp, &mut r).unwrap();
-        m.jacobian(t, &y, &yp, 37.0, &mut j).unwrap();
+        m.residual(State::new(t, &y, &yp), &mut r).unwrap();
+        m.jacobian(State::new(t, &y, &yp), 37.0, &mut j).unwrap();
         out.push((r, j));
     }
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();

@@ -3,6 +3,7 @@
 //! the weight and the contact force at rest, and the slab check against plane strain.
 
 use cellsim::case::{self, Case};
+use cellsim::dae::State;
 use cellsim::dae::{Atol, Dae, Integrator};
 use cellsim::fem::tet10::{TET_FACES, face_map};
 use cellsim::fem::{Domain, Lagrange, Mesh, Mesh3, Mesh3Params, MeshParams, TriangleRule, Wedge};
@@ -168,7 +169,7 @@ fn patch_test_homogeneous_deformation_gives_exact_internal_forces() {
     }
     let yp = vec![0.0; m.size()];
     let mut r = vec![0.0; m.size()];
-    m.residual(1.0, &y, &yp, &mut r).unwrap();
+    m.residual(State::new(1.0, &y, &yp), &mut r).unwrap();
     let zero = Matrix3::zeros();
     let stress = |d: Domain| {
         let k = match d {
@@ -630,8 +631,10 @@ fn deferred_exposures_leave_the_same_cell_and_join_consistently() {
     let m = small.size();
     let t = 5.0; // in the gravity phase of the reference case (t_g0 = 10 000 s)
     let (mut r_full, mut r_small) = (vec![0.0; full.size()], vec![0.0; m]);
-    full.residual(t, &y, &yp, &mut r_full).unwrap();
-    small.residual(t, &y[..m], &yp[..m], &mut r_small).unwrap();
+    full.residual(State::new(t, &y, &yp), &mut r_full).unwrap();
+    small
+        .residual(State::new(t, &y[..m], &yp[..m]), &mut r_small)
+        .unwrap();
     assert_eq!(&r_full[..m], &r_small[..]);
 
     let t0 = small.params.phases.t_g0;
@@ -640,9 +643,11 @@ fn deferred_exposures_leave_the_same_cell_and_join_consistently() {
     let (t, y2, yp2) = big.initial();
     assert_eq!(t, t0);
     let mut r = vec![0.0; big.size()];
-    big.residual(t, &y2, &yp2, &mut r).unwrap();
+    big.residual(State::new(t, &y2, &yp2), &mut r).unwrap();
     let mut r_small = vec![0.0; m];
-    small.residual(t, &y[..m], &yp[..m], &mut r_small).unwrap();
+    small
+        .residual(State::new(t, &y[..m], &yp[..m]), &mut r_small)
+        .unwrap();
     assert_eq!(&r[..m], &r_small[..]);
     assert!(r[m..].iter().all(|v| v.abs() < 1e-9));
     // The nodes that sank into the layer got an exposure from the history.

@@ -31,7 +31,7 @@
 
 use super::linsolve::{FaerFactory, LinearSolver, LinearSolverError, SharedFactory};
 use super::{
-    Atol, Dae, DaeError, Integrator, IntegratorError, Setup, Stats, error_weights, wrms_norm,
+    Atol, Dae, DaeError, Integrator, IntegratorError, Setup, State, Stats, error_weights, wrms_norm,
 };
 
 /// BDF2 settings.
@@ -254,10 +254,11 @@ impl<D: Dae> Bdf2<D> {
         let n = self.yn.len();
         let yp_pred: Vec<f64> = (0..n).map(|i| cj * self.y_new[i] + self.beta[i]).collect();
         self.stats.jacobian_evals += 1;
-        match self
-            .dae
-            .jacobian(t_new, &self.y_new, &yp_pred, cj, &mut self.values)
-        {
+        match self.dae.jacobian(
+            State::new(t_new, &self.y_new, &yp_pred),
+            cj,
+            &mut self.values,
+        ) {
             Ok(()) => {}
             Err(DaeError::Inadmissible(why)) => {
                 return Err(StepFailure::Newton(format!(
@@ -303,7 +304,10 @@ impl<D: Dae> Bdf2<D> {
                 yp_new[i] = cj * self.y_new[i] + self.beta[i];
             }
             self.stats.residual_evals += 1;
-            match self.dae.residual(t_new, &self.y_new, &yp_new, &mut self.r) {
+            match self
+                .dae
+                .residual(State::new(t_new, &self.y_new, &yp_new), &mut self.r)
+            {
                 Ok(()) => {}
                 Err(DaeError::Inadmissible(why)) => {
                     return Err(StepFailure::Newton(format!("inadmissible state: {why}")));

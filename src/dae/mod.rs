@@ -113,27 +113,39 @@ impl std::fmt::Display for ElementPoint {
     }
 }
 
+/// A state (t, y, ẏ) of a DAE.
+#[derive(Debug, Clone, Copy)]
+pub struct State<'a> {
+    /// Time.
+    pub t: f64,
+    /// y.
+    pub y: &'a [f64],
+    /// ẏ.
+    pub yp: &'a [f64],
+}
+
+impl<'a> State<'a> {
+    /// The state (t, y, ẏ).
+    #[inline]
+    pub fn new(t: f64, y: &'a [f64], yp: &'a [f64]) -> Self {
+        State { t, y, yp }
+    }
+}
+
 /// A fully implicit DAE `F(t, y, ẏ) = 0`: the only thing integrators see.
 pub trait Dae {
     /// Number of unknowns n.
     fn size(&self) -> usize;
 
-    /// Residual `r = F(t, y, ẏ)`.
-    fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError>;
+    /// Residual `r = F(t, y, ẏ)` at `at`.
+    fn residual(&mut self, at: State, r: &mut [f64]) -> Result<(), DaeError>;
 
     /// The pattern of `J = ∂F/∂y + cj ∂F/∂ẏ`, fixed for the run.
     fn pattern(&self) -> &Pattern;
 
     /// Fills `values` (length `pattern().compute_nnz()`, the pattern's order) with
-    /// `J = ∂F/∂y + cj ∂F/∂ẏ` at (t, y, ẏ). Every value must be written (not accumulated).
-    fn jacobian(
-        &mut self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        cj: f64,
-        values: &mut [f64],
-    ) -> Result<(), DaeError>;
+    /// `J = ∂F/∂y + cj ∂F/∂ẏ` at `at`. Every value must be written (not accumulated).
+    fn jacobian(&mut self, at: State, cj: f64, values: &mut [f64]) -> Result<(), DaeError>;
 
     /// For each component: `true` if differential (ẏᵢ appears in F), `false` if algebraic.
     fn differential(&self) -> Vec<bool>;
@@ -163,21 +175,14 @@ impl<T: Dae + ?Sized> Dae for Box<T> {
     fn size(&self) -> usize {
         (**self).size()
     }
-    fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
-        (**self).residual(t, y, yp, r)
+    fn residual(&mut self, at: State, r: &mut [f64]) -> Result<(), DaeError> {
+        (**self).residual(at, r)
     }
     fn pattern(&self) -> &Pattern {
         (**self).pattern()
     }
-    fn jacobian(
-        &mut self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        cj: f64,
-        v: &mut [f64],
-    ) -> Result<(), DaeError> {
-        (**self).jacobian(t, y, yp, cj, v)
+    fn jacobian(&mut self, at: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+        (**self).jacobian(at, cj, v)
     }
     fn differential(&self) -> Vec<bool> {
         (**self).differential()
@@ -530,9 +535,12 @@ pub fn consistent_init(
         source: e,
     };
     for it in 1..=MAX_ITERS {
-        dae.residual(t, y, yp, &mut r).map_err(problem)?;
-        dae.jacobian(t, y, yp, 0.0, &mut j0).map_err(problem)?;
-        dae.jacobian(t, y, yp, 1.0, &mut j1).map_err(problem)?;
+        dae.residual(State::new(t, y, yp), &mut r)
+            .map_err(problem)?;
+        dae.jacobian(State::new(t, y, yp), 0.0, &mut j0)
+            .map_err(problem)?;
+        dae.jacobian(State::new(t, y, yp), 1.0, &mut j1)
+            .map_err(problem)?;
         for (c, &for_y) in solve_for_y.iter().enumerate() {
             if !for_y {
                 for k in pattern.col_ptr()[c]..pattern.col_ptr()[c + 1] {

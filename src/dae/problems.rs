@@ -7,7 +7,7 @@
 //! - [`Analytic`]: Ascher & Petzold's example 10.2 (`idaAnalytic_mels`), with solution
 //!   x₁ = eᵗ, x₂ = eᵗ/(t − 2).
 
-use super::{Dae, DaeError, Pattern};
+use super::{Dae, DaeError, Pattern, State};
 use crate::fem::assembly::{pattern_from_entries, position};
 
 /// Robertson kinetics: y₁' = −0.04 y₁ + 10⁴ y₂ y₃, y₂' = 0.04 y₁ − 10⁴ y₂ y₃ − 3·10⁷ y₂²,
@@ -37,7 +37,7 @@ impl Dae for Robertson {
         3
     }
 
-    fn residual(&mut self, _t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
+    fn residual(&mut self, State { y, yp, .. }: State, r: &mut [f64]) -> Result<(), DaeError> {
         let f1 = -0.04 * y[0] + 1.0e4 * y[1] * y[2];
         r[0] = f1 - yp[0];
         r[1] = -f1 - 3.0e7 * y[1] * y[1] - yp[1];
@@ -49,14 +49,7 @@ impl Dae for Robertson {
         &self.pattern
     }
 
-    fn jacobian(
-        &mut self,
-        _t: f64,
-        y: &[f64],
-        _yp: &[f64],
-        cj: f64,
-        v: &mut [f64],
-    ) -> Result<(), DaeError> {
+    fn jacobian(&mut self, State { y, .. }: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
         // Dense pattern, column-major: v[3c + r] = J[r][c].
         let j = [
             [-0.04 - cj, 1.0e4 * y[2], 1.0e4 * y[1]],
@@ -149,7 +142,11 @@ impl Dae for Heat2D {
         self.m * self.m
     }
 
-    fn residual(&mut self, _t: f64, u: &[f64], up: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
+    fn residual(
+        &mut self,
+        State { y: u, yp: up, .. }: State,
+        r: &mut [f64],
+    ) -> Result<(), DaeError> {
         for k in 0..self.size() {
             r[k] = if Self::is_boundary(self.m, k) {
                 u[k]
@@ -164,14 +161,7 @@ impl Dae for Heat2D {
         &self.pattern
     }
 
-    fn jacobian(
-        &mut self,
-        _t: f64,
-        _u: &[f64],
-        _up: &[f64],
-        cj: f64,
-        v: &mut [f64],
-    ) -> Result<(), DaeError> {
+    fn jacobian(&mut self, _: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
         v.fill(0.0);
         for k in 0..self.size() {
             let p = self.pos[k];
@@ -250,7 +240,7 @@ impl Dae for Analytic {
         2
     }
 
-    fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
+    fn residual(&mut self, State { t, y, yp }: State, r: &mut [f64]) -> Result<(), DaeError> {
         let a = self.alpha;
         r[0] = (1.0 - a) / (t - 2.0) * y[0] - y[0] + (a - 1.0) * y[1] + 2.0 * t.exp() - yp[0];
         r[1] = (t + 2.0) * y[0] - (t + 2.0) * t.exp();
@@ -261,14 +251,7 @@ impl Dae for Analytic {
         &self.pattern
     }
 
-    fn jacobian(
-        &mut self,
-        t: f64,
-        _y: &[f64],
-        _yp: &[f64],
-        cj: f64,
-        v: &mut [f64],
-    ) -> Result<(), DaeError> {
+    fn jacobian(&mut self, State { t, .. }: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
         let a = self.alpha;
         // Column 0: rows 0, 1; column 1: row 0.
         v[0] = (1.0 - a) / (t - 2.0) - 1.0 - cj;

@@ -738,8 +738,8 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> Dae for 
     /// `F(t, y, ẏ)`: kinematic rows, then per element the solid, mass and band kernels
     /// scattered into the momentum rows, then the adhesion rows; the kernels of the case's
     /// kinematic model.
-    fn residual(&mut self, t: f64, y: &[f64], yp: &[f64], r: &mut [f64]) -> Result<(), DaeError> {
-        S::evaluate(self, Evaluation::Residual(State { t, y, yp }, r))
+    fn residual(&mut self, at: State, r: &mut [f64]) -> Result<(), DaeError> {
+        S::evaluate(self, Evaluation::Residual(at, r))
     }
 
     fn pattern(&self) -> &Pattern {
@@ -747,15 +747,8 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> Dae for 
     }
 
     /// `J = ∂F/∂y + cj ∂F/∂ẏ`: the same kernels' tangents, scattered by the plan.
-    fn jacobian(
-        &mut self,
-        t: f64,
-        y: &[f64],
-        yp: &[f64],
-        cj: f64,
-        v: &mut [f64],
-    ) -> Result<(), DaeError> {
-        S::evaluate(self, Evaluation::Jacobian(State { t, y, yp }, cj, v))
+    fn jacobian(&mut self, at: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+        S::evaluate(self, Evaluation::Jacobian(at, cj, v))
     }
 
     fn differential(&self) -> Vec<bool> {

@@ -119,16 +119,7 @@ pub trait Shape<const D: usize, const N: usize, const E: usize>:
     fn evaluate(cell: &mut CellOf<Self, D, N, E>, what: Evaluation) -> Result<(), DaeError>;
 }
 
-/// A state (t, y, ẏ) of the cell's DAE.
-#[derive(Debug, Clone, Copy)]
-pub struct State<'a> {
-    /// Time.
-    pub t: f64,
-    /// y.
-    pub y: &'a [f64],
-    /// ẏ.
-    pub yp: &'a [f64],
-}
+pub use crate::dae::State;
 
 /// One evaluation of the cell's DAE.
 pub enum Evaluation<'a> {

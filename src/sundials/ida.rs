@@ -18,7 +18,7 @@ use sundials_sys as sys;
 use super::{Context, NVector, guard, ida_flag_name, view, view_mut};
 use crate::dae::linsolve::{FaerFactory, LinearSolver, LinearSolverError, SharedFactory};
 use crate::dae::timing::{self, Phase};
-use crate::dae::{Atol, Dae, DaeError, Integrator, IntegratorError, Setup, Stats};
+use crate::dae::{Atol, Dae, DaeError, Integrator, IntegratorError, Setup, State, Stats};
 
 /// Initial-condition calculation (IDACalcIC) before the first step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -734,7 +734,11 @@ unsafe extern "C" fn residual_trampoline<D: Dae>(
     unsafe {
         let user = &mut *(user_data as *mut UserData<D>);
         let (y, ypv, r) = (view(yy), view(yp), view_mut(rr));
-        let out = guard(|| timing::time(Phase::Residual, || user.dae.residual(t, y, ypv, r)));
+        let out = guard(|| {
+            timing::time(Phase::Residual, || {
+                user.dae.residual(State::new(t, y, ypv), r)
+            })
+        });
         dae_code(user, out, "residual")
     }
 }
@@ -775,7 +779,7 @@ unsafe fn jacobian_into_values<D: Dae>(
         let UserData { dae, ls, .. } = user;
         let out = guard(|| {
             timing::time(Phase::Jacobian, || {
-                dae.jacobian(t, y, ypv, cj, &mut ls.values)
+                dae.jacobian(State::new(t, y, ypv), cj, &mut ls.values)
             })
         });
         dae_code(user, out, "jacobian")
