@@ -249,106 +249,72 @@ impl Mesh3Params {
     pub fn geo(&self) -> String {
         let [cx, cy, cz] = self.center;
         let (rn, rcp, rc) = (self.r_n, self.r_cp, self.r_c);
-        let f = |v: f64| format!("{v:?}");
+        let list = |v: &[f64]| {
+            v.iter()
+                .map(|v| format!("{v:?}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let centre = list(&self.center);
         // The thinnest layer bounds the tolerance of the bounding boxes that pick the
         // planar faces (their boxes are exact to 1e-7).
         let e = 1e-3 * rn.min(rcp - rn).min(rc - rcp);
         let (x0, y0, z0) = (cx - e, cy - rc - e, cz - e);
         let (x1, y1, z1) = (cx + rc + e, cy + rc + e, cz + rc + e);
-        // The size law: h = (h_b + (h_n − h_b) clamp(t, 0, 1)) / refine with
-        // t = (y − y_cb)/(y_nb − y_cb); clamp(t, 0, 1) = (|t| − |t − 1| + 1)/2. mathex has
-        // no unary minus after an operator: signs are folded into the operators.
-        let signed = |v: f64| {
-            if v < 0.0 {
-                format!("- {}", f(-v))
-            } else {
-                // abs: −0.0 would print as "-0.0".
-                format!("+ {}", f(v.abs()))
-            }
-        };
-        let y_cb = cy - rc;
-        let t = format!("((y {}) / {})", signed(-y_cb), f(rc - rn));
-        let size = format!(
-            "({} {} * (abs({t}) - abs({t} - 1) + 1) / 2) / {}",
-            f(self.h_bottom),
-            signed(self.h_nucleus - self.h_bottom),
-            f(self.refine)
-        );
         let mut s = String::new();
         let mut line = |l: String| {
             s.push_str(&l);
             s.push('\n');
         };
-        line(match self.wedge {
-            Wedge::Quarter => {
-                "// cellsim: the quarter cell x >= c_x, z >= c_z (MODEL.md §10).".into()
+        line(
+            match self.wedge {
+                Wedge::Quarter => "// cellsim: the quarter cell x >= c_x, z >= c_z (MODEL.md §10).",
+                Wedge::Eighth => {
+                    "// cellsim: the eighth cell 0 <= z - c_z <= x - c_x (MODEL.md §10)."
+                }
             }
-            Wedge::Eighth => {
-                "// cellsim: the eighth cell 0 <= z - c_z <= x - c_x (MODEL.md §10).".into()
-            }
-        });
+            .into(),
+        );
         line("SetFactory(\"OpenCASCADE\");".into());
         line("Geometry.OCCBooleanPreserveNumbering = 1;".into());
         line("General.NumThreads = 1;".into());
         for (tag, r) in [(1, rn), (2, rcp), (3, rc)] {
-            line(format!(
-                "Sphere({tag}) = {{{}, {}, {}, {}}};",
-                f(cx),
-                f(cy),
-                f(cz),
-                f(r)
-            ));
+            line(format!("Sphere({tag}) = {{{centre}, {}}};", list(&[r])));
         }
-        line(format!(
-            "Rotate {{{{0, 1, 0}}, {{{}, {}, {}}}, 3 * Pi / 4}} {{ Volume{{1, 2, 3}}; }}",
-            f(cx),
-            f(cy),
-            f(cz)
-        ));
-        // The quarter box x ≥ c_x, z ≥ c_z (around the whole ball in y).
-        let corner = [cx, cy - 2.0 * rc, cz, 2.0 * rc, 4.0 * rc, 2.0 * rc]
-            .map(f)
-            .join(", ");
-        let boxes = |tags: std::ops::RangeInclusive<i32>| -> Vec<String> {
-            tags.map(|tag| format!("Box({tag}) = {{{corner}}};"))
-                .collect()
+        let rotate = |angle: &str, volumes: &str| {
+            format!("Rotate {{{{0, 1, 0}}, {{{centre}}}, {angle}}} {{ Volume{{{volumes}}}; }}")
         };
-        boxes(4..=6).into_iter().for_each(&mut line);
+        line(rotate("3 * Pi / 4", "1, 2, 3"));
+        // The quarter box x ≥ c_x, z ≥ c_z (around the whole ball in y).
+        let corner = list(&[cx, cy - 2.0 * rc, cz, 2.0 * rc, 4.0 * rc, 2.0 * rc]);
+        let intersection = |tag: i32, a: i32, b: i32| {
+            format!(
+                "BooleanIntersection({tag}) = {{ Volume{{{a}}}; Delete; }}{{ Volume{{{b}}}; Delete; }};"
+            )
+        };
+        for tag in 4..=6 {
+            line(format!("Box({tag}) = {{{corner}}};"));
+        }
         // The eighth: each box cut by the same box turned by π/4 about the vertical axis
         // (14–16 = 4–6 ∩ 7–9, the wedge 0 ≤ z − c_z ≤ x − c_x).
         let cut = if self.wedge == Wedge::Eighth {
-            boxes(7..=9).into_iter().for_each(&mut line);
-            line(format!(
-                "Rotate {{{{0, 1, 0}}, {{{}, {}, {}}}, Pi / 4}} {{ Volume{{7, 8, 9}}; }}",
-                f(cx),
-                f(cy),
-                f(cz)
-            ));
+            for tag in 7..=9 {
+                line(format!("Box({tag}) = {{{corner}}};"));
+            }
+            line(rotate("Pi / 4", "7, 8, 9"));
             for tag in 4..=6 {
-                line(format!(
-                    "BooleanIntersection({}) = {{ Volume{{{tag}}}; Delete; }}{{ Volume{{{}}}; Delete; }};",
-                    tag + 10,
-                    tag + 3
-                ));
+                line(intersection(tag + 10, tag, tag + 3));
             }
             10
         } else {
             0
         };
         for (ball, tag) in [(1, 11), (2, 12), (3, 13)] {
-            line(format!(
-                "BooleanIntersection({tag}) = {{ Volume{{{ball}}}; Delete; }}{{ Volume{{{}}}; Delete; }};",
-                ball + 3 + cut
-            ));
+            line(intersection(tag, ball, ball + 3 + cut));
         }
         line("BooleanDifference(23) = { Volume{13}; Delete; }{ Volume{12}; };".into());
         line("BooleanDifference(22) = { Volume{12}; Delete; }{ Volume{11}; };".into());
-        line(format!(
-            "Point(1000) = {{{}, {}, {}}};",
-            f(cx),
-            f(cy),
-            f(cz)
-        ));
+        line(format!("Point(1000) = {{{centre}}};"));
         line("BooleanFragments{ Volume{11, 22, 23}; Delete; }{ Point{1000}; Delete; }".into());
         // The faces on the mirror plane x = c_x, or on the diagonal plane: the only faces
         // of the membrane inside the box c_x ≤ x, c_z ≤ z ≤ r_c/√2 (the sphere and the
@@ -360,34 +326,29 @@ impl Mesh3Params {
                 (cx + d + e, cz + d + e)
             }
         };
-        line(format!(
-            "sx() = Surface In BoundingBox{{{}, {}, {}, {}, {}, {}}};",
-            f(x0),
-            f(y0),
-            f(z0),
-            f(sx_x1),
-            f(y1),
-            f(sx_z1)
-        ));
-        line(format!(
-            "sz() = Surface In BoundingBox{{{}, {}, {}, {}, {}, {}}};",
-            f(x0),
-            f(y0),
-            f(z0),
-            f(x1),
-            f(y1),
-            f(cz + e)
-        ));
-        line("outer() = Abs(Boundary{ Volume{23}; });".into());
-        line("outer() -= Abs(Boundary{ Volume{22}; });".into());
-        line("outer() -= sx();".into());
-        line("outer() -= sz();".into());
-        line("Physical Volume(\"nucleus\") = {11};".into());
-        line("Physical Volume(\"cytoplasm\") = {22};".into());
-        line("Physical Volume(\"membrane\") = {23};".into());
-        line("Physical Surface(\"outer\") = {outer()};".into());
-        line("Field[1] = MathEval;".into());
-        line(format!("Field[1].F = \"{size}\";"));
+        for (name, corners) in [
+            ("sx", [x0, y0, z0, sx_x1, y1, sx_z1]),
+            ("sz", [x0, y0, z0, x1, y1, cz + e]),
+        ] {
+            line(format!(
+                "{name}() = Surface In BoundingBox{{{}}};",
+                list(&corners)
+            ));
+        }
+        for text in [
+            "outer() = Abs(Boundary{ Volume{23}; });",
+            "outer() -= Abs(Boundary{ Volume{22}; });",
+            "outer() -= sx();",
+            "outer() -= sz();",
+            "Physical Volume(\"nucleus\") = {11};",
+            "Physical Volume(\"cytoplasm\") = {22};",
+            "Physical Volume(\"membrane\") = {23};",
+            "Physical Surface(\"outer\") = {outer()};",
+            "Field[1] = MathEval;",
+        ] {
+            line(text.into());
+        }
+        line(format!("Field[1].F = \"{}\";", self.size_law()));
         line("Background Field = 1;".into());
         for opt in [
             "Mesh.MeshSizeExtendFromBoundary = 0",
@@ -404,6 +365,29 @@ impl Mesh3Params {
             line(format!("{opt};"));
         }
         s
+    }
+
+    /// The size law as a gmsh MathEval expression: h = (h_b + (h_n − h_b) clamp(t, 0, 1)) /
+    /// refine with t = (y − y_cb)/(y_nb − y_cb); clamp(t, 0, 1) = (|t| − |t − 1| + 1)/2.
+    /// mathex has no unary minus after an operator: signs are folded into the operators.
+    fn size_law(&self) -> String {
+        let f = |v: f64| format!("{v:?}");
+        let signed = |v: f64| {
+            if v < 0.0 {
+                format!("- {}", f(-v))
+            } else {
+                // abs: −0.0 would print as "-0.0".
+                format!("+ {}", f(v.abs()))
+            }
+        };
+        let y_cb = self.center[1] - self.r_c;
+        let t = format!("((y {}) / {})", signed(-y_cb), f(self.r_c - self.r_n));
+        format!(
+            "({} {} * (abs({t}) - abs({t} - 1) + 1) / 2) / {}",
+            f(self.h_bottom),
+            signed(self.h_nucleus - self.h_bottom),
+            f(self.refine)
+        )
     }
 }
 
