@@ -58,8 +58,9 @@ pub fn deformed_state<S: Shape<D, N, E>, const D: usize, const N: usize, const E
 /// (0.98–1 μ_as,max), and a node at the edge of the adhesion layer has a column of ~1e-8
 /// in rows of ~1: there the round-off of a small step (∝ 1/h) exceeds 1e-6 of the column,
 /// while a large step crosses the cap's band of other nodes. So, as in Ridders' method,
-/// an exposure column is differenced at `mu_step` × 100, × 10 and × 1, and the estimate
-/// kept is the one that agrees best with the next smaller step's.
+/// an exposure column is differenced at `mu_step` × 100, × 10 and × 1, and of the two
+/// larger steps' estimates the one kept is that which agrees better with the next smaller
+/// step's (the smallest step serves only as that comparison).
 #[allow(clippy::too_many_arguments)]
 pub fn jacobian_fd_error<M: Dae + ?Sized>(
     m: &mut M,
@@ -99,17 +100,14 @@ pub fn jacobian_fd_error<M: Dae + ?Sized>(
                 .collect()
         };
         let fd = if j >= mu_offset {
-            let r: Vec<Vec<f64>> = [100.0, 10.0, 1.0]
-                .iter()
-                .map(|&k| richardson(k * mu_step))
-                .collect();
+            let [large, middle, small] = [100.0, 10.0, 1.0].map(|k| richardson(k * mu_step));
             let gap = |a: &[f64], b: &[f64]| -> f64 {
                 a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum()
             };
-            if gap(&r[0], &r[1]) <= gap(&r[1], &r[2]) {
-                r[0].clone()
+            if gap(&large, &middle) <= gap(&middle, &small) {
+                large
             } else {
-                r[1].clone()
+                middle
             }
         } else {
             richardson(1e-4 * y[j].abs().max(0.1))

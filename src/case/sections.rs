@@ -476,6 +476,16 @@ impl Pillars {
         self.width + self.spacing
     }
 
+    /// `k` where `first_center` is `k` half periods (to 1e-9 of the period), else `None`:
+    /// the pillars are then mirror symmetric about x = 0 (any `k`), and on the `FourPillars`
+    /// lattice about the diagonal plane x = z too (odd `k`: the centre above a gap).
+    pub fn half_periods(&self) -> Option<f64> {
+        let half = 0.5 * self.period();
+        let k = (self.first_center / half).round();
+        (self.period().is_finite() && (k * half - self.first_center).abs() <= 1e-9 * self.period())
+            .then_some(k)
+    }
+
     /// The pillar geometry in the physics module's terms, with tops at `y_top` (µm).
     pub fn at_height(&self, y_top: f64) -> crate::physics::Pillars {
         crate::physics::Pillars {

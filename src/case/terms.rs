@@ -46,11 +46,8 @@ pub fn diagonal_mirror(substrate: &case::Substrate) -> bool {
     match substrate {
         case::Substrate::Flat(_) => true,
         case::Substrate::Pillars(p) => {
-            let halves = p.first_center / (0.5 * p.period());
-            let nearest = halves.round();
             p.lattice == physics::Lattice::FourPillars
-                && (halves - nearest).abs() <= 1e-9 * halves.abs().max(1.0)
-                && nearest.rem_euclid(2.0) == 1.0
+                && p.half_periods().is_some_and(|k| k.rem_euclid(2.0) == 1.0)
         }
     }
 }

@@ -170,12 +170,17 @@ impl Unfold {
                 off: Vec::new(),
             };
         }
-        let c = mesh.params.center;
+        // The nodes their own images: those on the diagonal plane, and on the axis (the
+        // eighth's nodes with x = c_x).
         let n = mesh.nodes.len();
+        let mut on_plane = vec![false; n];
+        for &i in mesh.symmetry_diagonal.iter().chain(&mesh.symmetry_x) {
+            on_plane[i] = true;
+        }
         let mut mirror = vec![0; n];
         let mut off = Vec::new();
-        for (i, p) in mesh.nodes.iter().enumerate() {
-            if p[0] - c[0] == p[2] - c[2] {
+        for i in 0..n {
+            if on_plane[i] {
                 mirror[i] = i;
             } else {
                 mirror[i] = n + off.len();
