@@ -276,7 +276,15 @@ pub trait CellMesh<const D: usize, const N: usize>: Clone + Send + Sync {
     /// The named points on the vertical axis through the centre.
     fn points(&self) -> &NamedPoints;
 
-    /// Whether each node belongs to an element of domain `d`.
+    /// Indices of the elements of domain `d`.
+    fn elements_of(&self, d: Domain) -> Vec<usize> {
+        (0..self.elements().len())
+            .filter(|&e| self.domains()[e] == d)
+            .collect()
+    }
+
+    /// Whether each node belongs to an element of domain `d` (nodes on an interface belong
+    /// to both sides).
     fn nodes_of_domain(&self, d: Domain) -> Vec<bool> {
         let mut on = vec![false; self.nodes().len()];
         for (el, &dom) in self.elements().iter().zip(self.domains()) {

@@ -15,6 +15,7 @@ use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
 use std::path::Path;
 
+use super::element::CellMesh;
 use super::mesh::{Domain, Mesh, Mesh3, Mesh3Params, MeshError, MeshParams, MeshParts};
 use super::tri6::EDGES;
 

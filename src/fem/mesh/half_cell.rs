@@ -813,11 +813,6 @@ impl Mesh {
         self.nodes.len()
     }
 
-    /// Coordinates of the six nodes of element `e`, in local order.
-    pub fn element_coords(&self, e: usize) -> [[f64; 2]; 6] {
-        self.elements[e].map(|n| self.nodes[n])
-    }
-
     /// The nodes along the outer boundary r = r_c, bottom to top:
     /// vertex, mid-node, vertex, …, vertex (2 · outer_edges.len() + 1 nodes).
     pub fn outer_boundary_nodes(&self) -> Vec<usize> {
@@ -830,27 +825,6 @@ impl Mesh {
             out.push(e[2]);
         }
         out
-    }
-
-    /// Indices of the elements of domain `d`.
-    pub fn elements_of(&self, d: Domain) -> Vec<usize> {
-        (0..self.elements.len())
-            .filter(|&e| self.domains[e] == d)
-            .collect()
-    }
-
-    /// Membership of every node in domain `d`: true if the node belongs to at least one
-    /// element of `d` (nodes on an interface belong to both sides).
-    pub fn nodes_of_domain(&self, d: Domain) -> Vec<bool> {
-        let mut m = vec![false; self.nodes.len()];
-        for (el, dom) in self.elements.iter().zip(&self.domains) {
-            if *dom == d {
-                for &n in el {
-                    m[n] = true;
-                }
-            }
-        }
-        m
     }
 
     /// Area of domain `d` (or of the whole mesh with `None`), integrating det J of the

@@ -1189,35 +1189,9 @@ impl Mesh3 {
         self.nodes.len()
     }
 
-    /// Coordinates of the ten nodes of element `e`, in local order.
-    pub fn element_coords(&self, e: usize) -> [[f64; 3]; 10] {
-        self.elements[e].map(|n| self.nodes[n])
-    }
-
     /// Coordinates of the six nodes of a face.
     pub fn face_coords(&self, f: &[usize; 6]) -> [[f64; 3]; 6] {
         f.map(|n| self.nodes[n])
-    }
-
-    /// Indices of the elements of domain `d`.
-    pub fn elements_of(&self, d: Domain) -> Vec<usize> {
-        (0..self.elements.len())
-            .filter(|&e| self.domains[e] == d)
-            .collect()
-    }
-
-    /// Membership of every node in domain `d`: true if the node belongs to at least one
-    /// element of `d` (interface nodes belong to both sides).
-    pub fn nodes_of_domain(&self, d: Domain) -> Vec<bool> {
-        let mut m = vec![false; self.nodes.len()];
-        for (el, dom) in self.elements.iter().zip(&self.domains) {
-            if *dom == d {
-                for &n in el {
-                    m[n] = true;
-                }
-            }
-        }
-        m
     }
 
     /// Displacement unknowns: 3 per node minus u_x on `symmetry_x` and u_z on
