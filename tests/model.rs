@@ -672,3 +672,39 @@ fn element_loops_give_the_same_bits_in_parallel() {
     assert_eq!(bits(&out[0].0), bits(&out[1].0));
     assert_eq!(bits(&out[0].1), bits(&out[1].1));
 }
+
+/// The model remembers the element its last evaluation found inverted (what a run that
+/// gives up reports as its place), and forgets it after an evaluation that succeeds.
+#[test]
+fn the_last_inverted_element_is_remembered_with_its_place() {
+    let yeoh = Yeoh::from_engineering(500.0, 0.485, 0.1, 0.2).unwrap();
+    let mut m = CellModel::new(unloaded(false, [yeoh; 3]), coarse_mesh()).unwrap();
+    let n = m.size();
+    let (rest, yp) = (vec![0.0; n], vec![0.0; n]);
+    let mut r = vec![0.0; n];
+    m.residual(State::new(1.0, &rest, &yp), &mut r).unwrap();
+    assert!(m.last_inadmissible().is_none());
+    // Every element mirrored: element 0 is the first the loop meets.
+    let f0 = Matrix2::new(-1.0, 0.0, 0.0, 1.0);
+    let y = homogeneous_state(&m, &f0);
+    let err = m.residual(State::new(2.0, &y, &yp), &mut r).unwrap_err();
+    assert!(err.to_string().contains("det F"), "{err}");
+    let (why, domain, x) = m.last_inadmissible().expect("an inverted element").clone();
+    let cellsim::dae::Inadmissible::Element {
+        t, element, value, ..
+    } = why
+    else {
+        panic!("not an element: {why}");
+    };
+    assert_eq!((t, element), (2.0, 0));
+    assert!(value <= 0.0);
+    assert_eq!(domain, m.mesh.domains[0]);
+    // The centroid of its six nodes, mirrored about the vertical through the centre.
+    let c = m.params.center;
+    let nodes = m.mesh.elements[0];
+    let mean = |k: usize| nodes.iter().map(|&i| m.mesh.nodes[i][k]).sum::<f64>() / 6.0;
+    assert!((x[0] - (2.0 * c[0] - mean(0))).abs() < 1e-12, "{x:?}");
+    assert!((x[1] - mean(1)).abs() < 1e-12, "{x:?}");
+    m.residual(State::new(3.0, &rest, &yp), &mut r).unwrap();
+    assert!(m.last_inadmissible().is_none());
+}

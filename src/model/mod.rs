@@ -174,6 +174,9 @@ pub struct CellOf<S: Shape<D, N, E>, const D: usize, const N: usize, const E: us
     /// Whether the element loops run on rayon's threads ([`Self::set_parallel`]).
     parallel: bool,
     scratch: Scratch<D, N, E>,
+    /// The element the last evaluation found inadmissible, with the centroid of its nodes
+    /// in that state; `None` after an evaluation that succeeded ([`Self::last_inadmissible`]).
+    inadmissible: Option<(Inadmissible, Domain, [f64; D])>,
 }
 
 /// The half-plane models (plane strain, axisymmetric) on six-node triangles.
@@ -348,6 +351,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
             history: None,
             parallel: false,
             scratch: Scratch::default(),
+            inadmissible: None,
         })
     }
 
@@ -584,6 +588,37 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         Some((c.map(|v| v.0), c.map(|v| v.1)))
     }
 
+    /// The element the last residual or Jacobian found inadmissible (an inverted or
+    /// flattened element), its domain and the centroid of its nodes in that state; `None`
+    /// when the last evaluation succeeded. What a run that gives up reports as its place.
+    pub fn last_inadmissible(&self) -> Option<&(Inadmissible, Domain, [f64; D])> {
+        self.inadmissible.as_ref()
+    }
+
+    /// Records the outcome of an evaluation at `y` for [`Self::last_inadmissible`], and
+    /// passes it on.
+    fn note_admissibility(
+        &mut self,
+        result: Result<(), DaeError>,
+        y: &[f64],
+    ) -> Result<(), DaeError> {
+        self.inadmissible = match &result {
+            Err(DaeError::Inadmissible(why @ Inadmissible::Element { element, .. })) => {
+                let nodes = &self.mesh.elements()[*element];
+                let mut x = [0.0; D];
+                for &i in nodes {
+                    let p = self.position(y, i);
+                    for (k, xk) in x.iter_mut().enumerate() {
+                        *xk += p[k] / N as f64;
+                    }
+                }
+                Some((why.clone(), self.mesh.domains()[*element], x))
+            }
+            _ => None,
+        };
+        result
+    }
+
     /// Current position of node `i` in state `y`.
     #[inline]
     pub fn position(&self, y: &[f64], i: usize) -> SVector<f64, D> {
@@ -739,7 +774,8 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> Dae for 
     /// scattered into the momentum rows, then the adhesion rows; the kernels of the case's
     /// kinematic model.
     fn residual(&mut self, at: State, r: &mut [f64]) -> Result<(), DaeError> {
-        S::evaluate(self, Evaluation::Residual(at, r))
+        let result = S::evaluate(self, Evaluation::Residual(at, r));
+        self.note_admissibility(result, at.y)
     }
 
     fn pattern(&self) -> &Pattern {
@@ -748,7 +784,8 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> Dae for 
 
     /// `J = ∂F/∂y + cj ∂F/∂ẏ`: the same kernels' tangents, scattered by the plan.
     fn jacobian(&mut self, at: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
-        S::evaluate(self, Evaluation::Jacobian(at, cj, v))
+        let result = S::evaluate(self, Evaluation::Jacobian(at, cj, v));
+        self.note_admissibility(result, at.y)
     }
 
     fn differential(&self) -> Vec<bool> {

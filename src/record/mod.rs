@@ -131,6 +131,33 @@ pub struct Failure {
     pub t_last_output: f64,
     /// Steps taken.
     pub step: u64,
+    /// Simulated time the run reached: its last accepted step [s] (absent in summaries of
+    /// an older cellsim).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t_stop: Option<f64>,
+    /// Where in the mesh, for a stop at an element ([`FailureKind::Inverted`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub place: Option<StopPlace>,
+}
+
+/// The element at which a run met a state it could not go past: the last evaluation of the
+/// residual or the Jacobian before the integrator gave up found it not admissible there.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StopPlace {
+    /// Index of the element in the mesh.
+    pub element: usize,
+    /// Its domain.
+    pub domain: Domain,
+    /// The point of the element ("quadrature point 3", "contact point 35").
+    pub point: String,
+    /// What was not positive there (`det F`, or the hoop stretch `1 + u_r/r`).
+    pub quantity: String,
+    /// Its value.
+    pub value: f64,
+    /// Time of that evaluation [s] (a trial state of the step that failed).
+    pub t: f64,
+    /// Centroid of the element's nodes in that state [µm].
+    pub x: Vec<f64>,
 }
 
 /// The kind of an early stop, so that readers of a summary need not parse its reason.
@@ -149,6 +176,10 @@ pub enum FailureKind {
     StepLimit,
     /// The step size collapsed (the stall rule of [`StepGuard`]).
     Stalled,
+    /// The integrator gave up on a state in which an element is inverted or flattened
+    /// (det F ≤ 0 at one of its points, [`Failure::place`]): the last state it tried was
+    /// not admissible there.
+    Inverted,
     /// The state left the scene: a node moved further than the cell's diameter plus its
     /// height above the substrate's lowest point (nothing written at that time).
     Unphysical,
@@ -157,6 +188,20 @@ pub enum FailureKind {
 }
 
 impl FailureKind {
+    /// Its name in `summary.json` (and a sweep's `stop_class`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FailureKind::Integration => "integration",
+            FailureKind::Interrupted => "interrupted",
+            FailureKind::Budget => "budget",
+            FailureKind::StepLimit => "step_limit",
+            FailureKind::Stalled => "stalled",
+            FailureKind::Inverted => "inverted",
+            FailureKind::Unphysical => "unphysical",
+            FailureKind::Output => "output",
+        }
+    }
+
     /// Whether the run was stopped from outside (signal or budget) rather than by the
     /// method or the model.
     pub fn is_external(self) -> bool {
@@ -478,4 +523,27 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> std::io::Result<()> {
     let tmp = path.with_extension("json.tmp");
     std::fs::write(&tmp, text)?;
     std::fs::rename(&tmp, path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::FailureKind;
+
+    #[test]
+    fn a_failure_kind_is_named_as_in_the_summary() {
+        use FailureKind::*;
+        for k in [
+            Integration,
+            Interrupted,
+            Budget,
+            StepLimit,
+            Stalled,
+            Inverted,
+            Unphysical,
+            Output,
+        ] {
+            let json = serde_json::to_string(&k).unwrap();
+            assert_eq!(json, format!("\"{}\"", k.as_str()));
+        }
+    }
 }

@@ -4,9 +4,9 @@
 //! [`RunModel`]; only the output writers, which record each shape's mesh in its own files,
 //! look at which it is ([`RunModel::view`]).
 
-use crate::dae::Dae;
+use crate::dae::{Dae, Inadmissible};
 use crate::model::{Cell3, CellModel, CellOf, ModelError, ModelParams, Restart, Shape, State};
-use crate::record::{Observables, Observables3};
+use crate::record::{Observables, Observables3, StopPlace};
 
 /// Which model a run integrates, for the writers of its mesh and states.
 pub(crate) enum ModelView<'a> {
@@ -47,6 +47,8 @@ pub(crate) trait RunModel: Dae + Send {
     fn largest_displacement(&self, y: &[f64]) -> (usize, f64);
     /// Which model this is, for the output writers.
     fn view(&self) -> ModelView<'_>;
+    /// The element the last residual or Jacobian found inverted, as a stop's place.
+    fn inadmissible_place(&self) -> Option<StopPlace>;
 }
 
 /// A run's model.
@@ -140,5 +142,28 @@ where
 
     fn view(&self) -> ModelView<'_> {
         self.view_of()
+    }
+
+    fn inadmissible_place(&self) -> Option<StopPlace> {
+        let (why, domain, x) = self.last_inadmissible()?;
+        let Inadmissible::Element {
+            t,
+            element,
+            point,
+            quantity,
+            value,
+        } = why
+        else {
+            return None;
+        };
+        Some(StopPlace {
+            element: *element,
+            domain: *domain,
+            point: point.to_string(),
+            quantity: quantity.to_string(),
+            value: *value,
+            t: *t,
+            x: x.to_vec(),
+        })
     }
 }

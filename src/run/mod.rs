@@ -25,8 +25,8 @@ use crate::output::{SnapshotOptions, SnapshotWriter, SnapshotWriter3};
 use crate::record::Observables;
 use crate::record::read::STOPPED;
 use crate::record::{
-    self, Failure, FailureKind, MeshFile, RunSettings, Snapshot, StateFile, Summary, TimeBreakdown,
-    Unknowns,
+    self, Failure, FailureKind, MeshFile, RunSettings, Snapshot, StateFile, StopPlace, Summary,
+    TimeBreakdown, Unknowns,
 };
 use crate::scene::{self, SceneError};
 use crate::stop::{StopFlag, signal_name};
@@ -567,8 +567,34 @@ where
 enum Advance {
     /// The output time was reached.
     Reached,
-    /// The run stops: the kind of stop and its reason.
-    Stopped(FailureKind, String),
+    /// The run stops.
+    Stopped(Stop),
+}
+
+/// Why a run stops before its end: the kind of stop and its reason, the time it reached
+/// and, for a stop at an element, where.
+#[derive(Debug, Clone)]
+pub(crate) struct Stop {
+    /// The kind of stop.
+    pub kind: FailureKind,
+    /// What happened.
+    pub reason: String,
+    /// The time of the last accepted step, where the driver knows it [s].
+    pub t: Option<f64>,
+    /// The element, for [`FailureKind::Inverted`].
+    pub place: Option<StopPlace>,
+}
+
+impl Stop {
+    /// A stop of `kind` for `reason`, its time and place not known.
+    pub fn new(kind: FailureKind, reason: String) -> Self {
+        Self {
+            kind,
+            reason,
+            t: None,
+            place: None,
+        }
+    }
 }
 
 /// The integrator on the current system, and what the driver keeps across output times:
@@ -652,8 +678,23 @@ impl Driver {
         let mut stopped: Option<(StopCause, f64)> = None;
         let result = self.advance_inner(tout, &mut stopped);
         match (stopped, result) {
-            (Some((cause, t)), _) => Advance::Stopped(cause.kind(), cause.reason(t)),
-            (None, Err(reason)) => Advance::Stopped(FailureKind::Integration, reason),
+            (Some((cause, t)), _) => Advance::Stopped(Stop {
+                t: Some(t),
+                ..Stop::new(cause.kind(), cause.reason(t))
+            }),
+            (None, Err(reason)) => {
+                // Given up: on an inverted element if the last state tried had one.
+                let place = self.solver.model().inadmissible_place();
+                let kind = match place {
+                    Some(_) => FailureKind::Inverted,
+                    None => FailureKind::Integration,
+                };
+                Advance::Stopped(Stop {
+                    t: Some(self.solver.integ_ref().last_step().0),
+                    place,
+                    ..Stop::new(kind, reason)
+                })
+            }
             (None, Ok(())) => Advance::Reached,
         }
     }
@@ -781,14 +822,14 @@ enum OutputStop {
 
 impl OutputStop {
     /// The stop this makes, or the error to return at once.
-    fn into_stop(self) -> Result<(FailureKind, String), RunError> {
+    fn into_stop(self) -> Result<Stop, RunError> {
         match self {
-            OutputStop::NonFinite(t) => Ok((
+            OutputStop::NonFinite(t) => Ok(Stop::new(
                 FailureKind::Integration,
                 format!("non-finite state or output at t = {t} s (not written)"),
             )),
-            OutputStop::Unphysical(why) => Ok((FailureKind::Unphysical, why)),
-            OutputStop::State(t, why) => Ok((
+            OutputStop::Unphysical(why) => Ok(Stop::new(FailureKind::Unphysical, why)),
+            OutputStop::State(t, why) => Ok(Stop::new(
                 FailureKind::Integration,
                 format!("cannot form the state at t = {t} s: {why}"),
             )),
@@ -1108,7 +1149,7 @@ impl RunWriter {
         case: &Case,
         stats: Stats,
         wall: f64,
-        mut stopped: Option<(FailureKind, String)>,
+        mut stopped: Option<Stop>,
     ) -> Result<Summary, RunError> {
         let RunWriter {
             out,
@@ -1128,7 +1169,7 @@ impl RunWriter {
             Frames::Quarter(f) => f.finish(),
         };
         if let Err(e) = finished {
-            stopped.get_or_insert((
+            stopped.get_or_insert(Stop::new(
                 FailureKind::Output,
                 format!("writing the VTU/GIF output: {e}"),
             ));
@@ -1140,7 +1181,12 @@ impl RunWriter {
                 write_json(&path, &summary)?;
                 Ok(summary)
             }
-            Some((kind, reason)) => {
+            Some(Stop {
+                kind,
+                reason,
+                t,
+                place,
+            }) => {
                 // The statistics up to the failing step (not only up to the last output).
                 summary.stats = stats;
                 summary.failure = Some(Failure {
@@ -1148,6 +1194,8 @@ impl RunWriter {
                     reason: reason.clone(),
                     t_last_output: summary.final_values.map(|o| o.t).unwrap_or(0.0),
                     step: summary.stats.steps,
+                    t_stop: t,
+                    place,
                 });
                 write_json(&path, &summary)?;
                 Err(RunError::Integration {
@@ -1377,7 +1425,7 @@ mod admissible {
         let Err(stop) = observe_admissible(&model, 1.0, &y, reach) else {
             panic!("accepted a node 1.01 × the reach away");
         };
-        let (kind, reason) = stop.into_stop().unwrap();
+        let Stop { kind, reason, .. } = stop.into_stop().unwrap();
         assert_eq!(kind, FailureKind::Unphysical);
         assert!(
             reason.starts_with("unphysical state at t = 1.000000e0 s"),

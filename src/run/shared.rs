@@ -17,10 +17,10 @@
 use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
-use super::Cell;
 use super::{
     Advance, Driver, Progress, RunError, RunOptions, RunWriter, Solver, build_model, output_times,
 };
+use super::{Cell, Stop};
 use crate::case::{Case, Output, Phases};
 use crate::dae::Stats;
 use crate::model::State;
@@ -339,7 +339,7 @@ impl Context<'_, '_> {
             // No member could start (each already ended with its error).
             Ok(None) => return,
             Err(reason) => {
-                let stop = (FailureKind::Integration, reason);
+                let stop = Stop::new(FailureKind::Integration, reason);
                 for tr in tracks {
                     self.end(tr, Stats::default(), Some(stop.clone()));
                 }
@@ -363,7 +363,7 @@ impl Context<'_, '_> {
                     let mut files = RunWriter::create(m.case, m.file, &m.opts, &model)?;
                     let y0 = vec![0.0; model.size()];
                     if let Err(stop) = files.output(&model, 0.0, &y0, &y0) {
-                        let (_, message) = stop.into_stop()?;
+                        let message = stop.into_stop()?.reason;
                         return Err(RunError::Model {
                             file: m.file.into(),
                             message,
@@ -424,10 +424,11 @@ impl Context<'_, '_> {
                         let (t, y, yp) = driver.solver.integ_ref().last_step();
                         if let Err(e) = files.stopped_state(driver.solver.model(), t, y, yp) {
                             let why = match e.into_stop() {
-                                Ok((_, why)) => why,
+                                Ok(s) => s.reason,
                                 Err(e) => e.to_string(),
                             };
-                            stop.1 = format!("{} (its last state not written: {why})", stop.1);
+                            stop.reason =
+                                format!("{} (its last state not written: {why})", stop.reason);
                         }
                     }
                     self.end(tr, driver.stats(), Some(stop));
@@ -515,7 +516,7 @@ impl Context<'_, '_> {
         tracks: &mut Vec<Track>,
         end: f64,
         start: Instant,
-    ) -> Option<(FailureKind, String)> {
+    ) -> Option<Stop> {
         let t0 = driver.solver.integ_ref().t();
         let tol = 1e-9 * end.max(1.0);
         let per_member: Vec<Vec<f64>> = tracks
@@ -531,8 +532,8 @@ impl Context<'_, '_> {
         times.sort_by(f64::total_cmp);
         times.dedup_by(|a, b| (*a - *b).abs() <= tol);
         for tout in times {
-            if let Advance::Stopped(kind, reason) = driver.advance_to(tout) {
-                return Some((kind, reason));
+            if let Advance::Stopped(stop) = driver.advance_to(tout) {
+                return Some(stop);
             }
             let mut failed = Vec::new();
             for (i, tr) in tracks.iter_mut().enumerate() {
@@ -568,7 +569,7 @@ impl Context<'_, '_> {
                 return None;
             }
             if let Some(reason) = driver.switch_overdue() {
-                return Some((FailureKind::Integration, reason));
+                return Some(Stop::new(FailureKind::Integration, reason));
             }
         }
         None
@@ -604,7 +605,7 @@ impl Context<'_, '_> {
                     self.end(
                         tr,
                         driver.stats(),
-                        Some((FailureKind::Integration, reason.clone())),
+                        Some(Stop::new(FailureKind::Integration, reason.clone())),
                     );
                 }
             }
@@ -612,10 +613,12 @@ impl Context<'_, '_> {
     }
 
     /// Writes a member's final summary (finished, or stopped) and reports it.
-    fn end(&self, tr: Track, stats: Stats, stop: Option<(FailureKind, String)>) {
+    fn end(&self, tr: Track, stats: Stats, stop: Option<Stop>) {
         let m = &self.members[tr.k];
         let Some(files) = tr.files else {
-            let message = stop.map(|s| s.1).unwrap_or_else(|| "not started".into());
+            let message = stop
+                .map(|s| s.reason)
+                .unwrap_or_else(|| "not started".into());
             self.finish(
                 tr.k,
                 Err(RunError::Model {

@@ -58,7 +58,7 @@ use crate::stop::StopFlag;
 pub use compare::TableSpec;
 use design::DesignPoint;
 pub use design::{Design, DesignSpec, Kind};
-pub use table::{Row, Status};
+pub use table::{Row, Status, Stopped};
 
 /// Why a sweep could not be set up, run or collected.
 #[derive(Debug, thiserror::Error)]
@@ -719,6 +719,19 @@ pub fn read_row(id: &str, values: &[String], dir: &Path) -> Row {
             ),
         }
     };
+    let stopped = match &s.failure {
+        Some(f) if !s.finished => Stopped {
+            class: f.kind.as_str().into(),
+            t: f.t_stop,
+            element: f.place.as_ref().map(|p| p.element),
+            x: std::array::from_fn(|k| f.place.as_ref().and_then(|p| p.x.get(k).copied())),
+        },
+        _ if status == Status::Interrupted => Stopped {
+            class: status.as_str().into(),
+            ..Stopped::default()
+        },
+        _ => Stopped::default(),
+    };
     let case = Case::from_str(&case_text, &dir.join("case.ron").display().to_string()).ok();
     let penetration = match (&case, &s.final_values) {
         (Some(c), Some(o)) => Some(table::penetration_depth(c, o.uy_bottom)),
@@ -732,6 +745,7 @@ pub fn read_row(id: &str, values: &[String], dir: &Path) -> Row {
         penetration,
         wall_seconds: Some(s.wall_seconds + s.setup_seconds),
         steps: Some(s.stats.steps),
+        stopped,
         reason: table::one_line(&reason),
     }
 }

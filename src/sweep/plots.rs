@@ -2,7 +2,8 @@
 //! `sweep.json`) only:
 //!
 //! - a Grid over two axes: `heatmap-<quantity>.png`, the quantity (default: penetration
-//!   depth) on the grid, each cell labelled with its value; failed points crossed,
+//!   depth) on the grid, each cell labelled with its value; points that stopped early
+//!   crossed, in the colour of their `stop_class` and with it under the value,
 //!   invalid ones grey and labelled "invalid", missing ones blank;
 //! - one axis (a Grid or a Zip; a Zip's first axis): `line-<quantity>.png`;
 //! - a Latin hypercube: `scatter-<quantity>.png`, the quantity against each axis;
@@ -183,8 +184,8 @@ fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), O
     for r in rows {
         let Some((i, j)) = cell(r) else { continue };
         let (fill, text) = cell_look(r, q, lo, hi);
-        let failed = r.status == Status::Failed;
-        draw_grid_cell(&mut chart, (i, j), fill, failed, text).map_err(&e)?;
+        let stop = (r.status == Status::Failed).then_some(r.stopped.class.as_str());
+        draw_grid_cell(&mut chart, (i, j), fill, stop, text).map_err(&e)?;
     }
     colorbar(&side, lo, hi, &quantity_label(q)).map_err(&e)?;
     root.present().map_err(|x| e(x.to_string()))?;
@@ -214,14 +215,15 @@ fn colour_range(rows: &[Row], q: &str) -> (f64, f64) {
     (lo, hi)
 }
 
-/// The heat map's title: the sweep, the quantity, and what a cross means if a run failed.
+/// The heat map's title: the sweep, the quantity, and what a cross means if a run failed
+/// (its colour and the word under the value say how it stopped).
 fn heat_map_title(record: &Record, rows: &[Row], q: &str) -> String {
     format!(
         "{}: {}{}",
         record.name,
         quantity_label(q),
         if rows.iter().any(|r| r.status == Status::Failed) {
-            " (crossed: failed, last value written)"
+            " (crossed: stopped early, how under the value; last value written)"
         } else {
             ""
         }
@@ -303,13 +305,25 @@ fn cell_look(r: &Row, q: &str, lo: f64, hi: f64) -> (RGBColor, String) {
     }
 }
 
-/// Draws cell (i, j): its fill, a white border, a red cross if the run `failed`, and its
-/// label in black or white, whichever reads on the fill.
+/// The colour of the cross over a point that stopped early, by its `stop_class`: an
+/// inverted element red, a stalled step size orange, any other stop (the step limit, the
+/// wall-clock budget, an integration failure) black.
+fn stop_colour(class: &str) -> RGBColor {
+    match class {
+        "inverted" => RED,
+        "stalled" => RGBColor(230, 120, 0),
+        _ => BLACK,
+    }
+}
+
+/// Draws cell (i, j): its fill, a white border, and for a run that stopped early
+/// (`stop`: its class) a cross in the class's colour ([`stop_colour`]), and its label in
+/// black or white, whichever reads on the fill, the class under it.
 fn draw_grid_cell(
     chart: &mut GridChart<'_, '_>,
     (i, j): (usize, usize),
     fill: RGBColor,
-    failed: bool,
+    stop: Option<&str>,
     text: String,
 ) -> Result<(), String> {
     let e = |x: DrawingAreaErrorKind<_>| x.to_string();
@@ -331,10 +345,10 @@ fn draw_grid_cell(
             WHITE.stroke_width(2),
         )))
         .map_err(e)?;
-    if failed {
+    if let Some(class) = stop {
         // A cross over the cell: the value is the last one written before it stopped.
         let (a, b) = (corners(i, j)[0].clone(), corners(i, j)[1].clone());
-        let style = RED.stroke_width(3);
+        let style = stop_colour(class).stroke_width(3);
         chart
             .draw_series([
                 PathElement::new(vec![a.clone(), b.clone()], style),
@@ -344,17 +358,35 @@ fn draw_grid_cell(
     }
     let luminance = 0.299 * fill.0 as f64 + 0.587 * fill.1 as f64 + 0.114 * fill.2 as f64;
     let color = if luminance < 140.0 { WHITE } else { BLACK };
-    let style = (FONT, 17)
-        .into_font()
-        .color(&color)
-        .pos(Pos::new(HPos::Center, VPos::Center));
+    let centre = (SegmentValue::CenterOf(i), SegmentValue::CenterOf(j));
+    let font = |size: u32, v: VPos| {
+        (FONT, size)
+            .into_font()
+            .color(&color)
+            .pos(Pos::new(HPos::Center, v))
+    };
+    let class = stop.filter(|c| !c.is_empty());
+    let value_pos = if class.is_some() {
+        VPos::Bottom
+    } else {
+        VPos::Center
+    };
     chart
         .draw_series(std::iter::once(Text::new(
             text,
-            (SegmentValue::CenterOf(i), SegmentValue::CenterOf(j)),
-            style,
+            centre.clone(),
+            font(17, value_pos),
         )))
         .map_err(e)?;
+    if let Some(c) = class {
+        chart
+            .draw_series(std::iter::once(Text::new(
+                c.replace('_', " "),
+                centre,
+                font(14, VPos::Top),
+            )))
+            .map_err(e)?;
+    }
     Ok(())
 }
 
@@ -689,6 +721,7 @@ mod tests {
             penetration: Some(0.0),
             wall_seconds: Some(1.0),
             steps: Some(10),
+            stopped: Default::default(),
             reason: String::new(),
         }
     }

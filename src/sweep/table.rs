@@ -3,8 +3,11 @@
 //! Columns: `id`, one per axis (its dotted path; the value the point has on that axis),
 //! `status` (finished / failed / invalid / interrupted / missing), the last row of the
 //! point's `timeseries.csv` (its columns [`COLUMNS`], `t` … `uy_nucleus_max`: the final
-//! values of a finished run, the last ones written for one that stopped), `penetration_depth` (µm), `wall_seconds` (set-up and
-//! integration), `steps` and `reason` (why the point failed, is invalid or interrupted).
+//! values of a finished run, the last ones written for one that stopped),
+//! `penetration_depth` (µm), `wall_seconds` (set-up and integration), `steps`, the stop of
+//! a point that did not finish as fields ([`Stopped`]: `stop_class`, `t_stop`,
+//! `stop_element`, `stop_x`, `stop_y`, `stop_z`) and `reason` (why the point failed, is
+//! invalid or interrupted, in words).
 //! Numbers are written in full precision; fields with a comma or a quote are quoted as
 //! RFC 4180 says.
 
@@ -68,9 +71,37 @@ pub struct Row {
     pub wall_seconds: Option<f64>,
     /// Integrator steps.
     pub steps: Option<u64>,
+    /// How a point that did not finish stopped, as fields.
+    pub stopped: Stopped,
     /// Why the point failed, is invalid or was interrupted (one line).
     pub reason: String,
 }
+
+/// How a point stopped, as fields a map can draw: the class (the summary's failure kind:
+/// `stalled`, `inverted`, `step_limit`, `budget`, `interrupted`, `integration`, …; or
+/// `invalid`), the time the run reached, and for an inverted element which element and
+/// where it was (its centroid; `z` only in 3-D). Empty for a finished point.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Stopped {
+    /// The class (`stop_class`).
+    pub class: String,
+    /// Simulated time reached [s] (`t_stop`).
+    pub t: Option<f64>,
+    /// The element (`stop_element`).
+    pub element: Option<usize>,
+    /// Its centroid [µm] (`stop_x`, `stop_y`, `stop_z`).
+    pub x: [Option<f64>; 3],
+}
+
+/// The columns of [`Stopped`], in order.
+const STOP_COLUMNS: [&str; 6] = [
+    "stop_class",
+    "t_stop",
+    "stop_element",
+    "stop_x",
+    "stop_y",
+    "stop_z",
+];
 
 impl Row {
     /// A row with only an id, values, a status and a reason.
@@ -83,6 +114,13 @@ impl Row {
             penetration: None,
             wall_seconds: None,
             steps: None,
+            stopped: Stopped {
+                class: match status {
+                    Status::Invalid | Status::Interrupted => status.as_str().into(),
+                    _ => String::new(),
+                },
+                ..Stopped::default()
+            },
             reason: one_line(reason),
         }
     }
@@ -156,8 +194,9 @@ pub fn header(axes: &[String]) -> String {
         "penetration_depth".into(),
         "wall_seconds".into(),
         "steps".into(),
-        "reason".into(),
     ]);
+    cols.extend(STOP_COLUMNS.iter().map(|c| c.to_string()));
+    cols.push("reason".into());
     cols.join(",")
 }
 
@@ -173,6 +212,11 @@ pub fn line(r: &Row) -> String {
     cols.push(num(r.penetration));
     cols.push(num(r.wall_seconds));
     cols.push(r.steps.map(|s| s.to_string()).unwrap_or_default());
+    let s = &r.stopped;
+    cols.push(field(&s.class));
+    cols.push(num(s.t));
+    cols.push(s.element.map(|e| e.to_string()).unwrap_or_default());
+    cols.extend(s.x.iter().map(|&v| num(v)));
     cols.push(field(&r.reason));
     cols.join(",")
 }
@@ -243,8 +287,11 @@ pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), CsvError> {
         return Err(header("the first column is not `id`".into()));
     }
     let axes: Vec<String> = head[1..status_at].to_vec();
-    let expected = status_at + 1 + N_COLUMNS + 4;
-    if head.len() != expected {
+    let expected = status_at + 1 + N_COLUMNS + 4 + STOP_COLUMNS.len();
+    // Written before the stop's fields: read with those empty.
+    let without_stop = expected - STOP_COLUMNS.len();
+    let has_stop = head.len() == expected;
+    if !has_stop && head.len() != without_stop {
         let older = !head.iter().any(|h| h == COLUMNS[N_COLUMNS - 1]);
         return Err(header(format!(
             "{} columns, expected {expected}{}",
@@ -267,8 +314,8 @@ pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), CsvError> {
             line: k + 1,
             problem,
         };
-        if f.len() != expected {
-            return Err(bad(format!("{} fields, expected {expected}", f.len())));
+        if f.len() != head.len() {
+            return Err(bad(format!("{} fields, expected {}", f.len(), head.len())));
         }
         let number = |s: &str| -> Result<Option<f64>, CsvError> {
             if s.is_empty() {
@@ -300,7 +347,24 @@ pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), CsvError> {
             penetration: number(&rest[0])?,
             wall_seconds: number(&rest[1])?,
             steps: number(&rest[2])?.map(|s| s as u64),
-            reason: rest[3].clone(),
+            stopped: if has_stop {
+                let element = match rest[5].as_str() {
+                    "" => None,
+                    e => Some(
+                        e.parse()
+                            .map_err(|_| bad(format!("`{e}` is not an element index")))?,
+                    ),
+                };
+                Stopped {
+                    class: rest[3].clone(),
+                    t: number(&rest[4])?,
+                    element,
+                    x: [number(&rest[6])?, number(&rest[7])?, number(&rest[8])?],
+                }
+            } else {
+                Stopped::default()
+            },
+            reason: rest[rest.len() - 1].clone(),
         });
     }
     Ok((axes, rows))
@@ -327,7 +391,24 @@ mod tests {
                 penetration: Some(1.25),
                 wall_seconds: Some(3.5),
                 steps: Some(775),
+                stopped: Stopped::default(),
                 reason: String::new(),
+            },
+            Row {
+                id: "g0_2".into(),
+                values: vec!["7.0".into(), "(5.0, 4.0)".into()],
+                status: Status::Failed,
+                last: None,
+                penetration: None,
+                wall_seconds: Some(9.0),
+                steps: Some(90),
+                stopped: Stopped {
+                    class: "inverted".into(),
+                    t: Some(48276.14),
+                    element: Some(246),
+                    x: [Some(6.2), Some(-4.1), None],
+                },
+                reason: "element 246, contact point 35: det F = -2.4e-5".into(),
             },
             Row::bare(
                 "g1_0",
@@ -344,7 +425,7 @@ mod tests {
         assert_eq!(a, axes);
         assert_eq!(r, rows);
         assert_eq!(
-            r[1].reason,
+            r[2].reason,
             "base.ron:3:4: x = 1 is \"bad\", really; second line"
         );
         assert_eq!(r[0].quantity("uy_top"), Some(-6.6));
@@ -362,6 +443,20 @@ mod tests {
                    strain_cytoplasm,penetration_depth,wall_seconds,steps,reason\n";
         let err = parse(old).unwrap_err().to_string();
         assert!(err.contains("older cellsim"), "{err}");
+        // One written before the stop's fields: read, those fields empty.
+        let lines: Vec<String> = text
+            .lines()
+            .map(|l| {
+                let mut f = split(l);
+                let n = f.len();
+                f.drain(n - 1 - STOP_COLUMNS.len()..n - 1);
+                f.iter().map(|s| field(s)).collect::<Vec<_>>().join(",")
+            })
+            .collect();
+        let (_, r) = parse(&lines.join("\n")).unwrap();
+        assert_eq!(r[1].stopped, Stopped::default());
+        assert_eq!(r[1].reason, rows[1].reason);
+        assert_eq!(r[1].steps, Some(90));
     }
 
     #[test]
