@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use cellsim::case::Case;
-use cellsim::record::{RunSettings, Summary};
+use cellsim::record::{FailureKind, RunSettings, Summary};
 use cellsim::run::{self, Progress, RunError, RunOptions};
 
 use crate::scenes::read_csv;
@@ -68,6 +68,18 @@ fn run_hard(name: &str) -> Summary {
             assert!(reason.contains("t = "), "{name}: no time in {reason:?}");
             assert!(reason.len() > 40, "{name}: terse reason {reason:?}");
             assert!(f.t_last_output == last.t && f.step > 0);
+            // The time reached and, for an inverted element, where, as fields.
+            let t_stop = f.t_stop.expect("t_stop recorded");
+            assert!(t_stop >= f.t_last_output, "{name}: t_stop {t_stop}");
+            if f.kind == FailureKind::Inverted {
+                let p = f.place.as_ref().expect("an inverted element's place");
+                assert!(p.value <= 0.0 && p.t >= f.t_last_output, "{name}: {p:?}");
+                assert!(
+                    reason.contains(&format!("element {}", p.element)),
+                    "{reason}"
+                );
+                assert_eq!(p.x.len(), 2, "{name}: {p:?}");
+            }
             eprintln!("{name}: stopped cleanly: {reason}");
         }
         Err(e) => panic!("{name}: not an integration failure: {e}"),
@@ -95,5 +107,18 @@ fn very_loose_tolerance_finishes() {
 fn strong_contraction_finishes_or_stops_cleanly() {
     // Measured: with e = 0.9 an element at the pillar edge inverts at t ≈ 47 119 s, in
     // the active phase; the reason names the element and its det F.
-    run_hard("e-09");
+    let s = run_hard("e-09");
+    // Measured: the element is 16 (cytoplasm, above the pillar's top-left corner), at a
+    // point of the band rule, det F ≈ −3e-15: a stop classified as an inverted element.
+    if let Some(f) = &s.failure {
+        assert_eq!(f.kind, FailureKind::Inverted, "{}", f.reason);
+    }
+}
+
+#[test]
+fn narrow_pillars_with_a_wide_gap_finish() {
+    // Stalled at t = 34 355 s with the sharp foot corner (`fillet: 0.0`); the default
+    // fillet turns the normal continuously round the corner (cases/hard/narrow-pillars.ron).
+    let s = run_hard("narrow-pillars");
+    assert!(s.finished, "{:?}", s.failure);
 }

@@ -449,7 +449,8 @@ pub struct Pillars {
     /// floor and pillar, a kink in the concave corner at the pillar's foot; k > 0 their
     /// smooth maximum where the two depths are within k of each other (the normal turns
     /// continuously round the corner; the surface moves out by at most k/4 there).
-    /// Default 0 (MODEL.md §5). Valid: 0 ≤ k ≤ min(h, s)/2.
+    /// Default 0.5 ([`DEFAULT_FILLET`]: the sharp corner of MODEL.md §5 stalls Newton's
+    /// method where the membrane reaches it). Valid: 0 ≤ k ≤ min(h, s)/2.
     pub fillet: f64,
 }
 
@@ -465,7 +466,7 @@ impl Default for Pillars {
             lattice: crate::physics::Lattice::FourPillars,
             y_top: None,
             foot: crate::physics::PillarFoot::Rounded,
-            fillet: 0.0,
+            fillet: DEFAULT_FILLET,
         }
     }
 }
@@ -566,7 +567,7 @@ enum SubstrateRepr {
         y_top: Option<f64>,
         #[serde(default, skip_serializing_if = "is_rounded")]
         foot: crate::physics::PillarFoot,
-        #[serde(default, skip_serializing_if = "is_zero")]
+        #[serde(default = "default_fillet", skip_serializing_if = "is_default_fillet")]
         fillet: f64,
     },
 }
@@ -581,9 +582,19 @@ fn is_rounded(f: &crate::physics::PillarFoot) -> bool {
     *f == crate::physics::PillarFoot::Rounded
 }
 
-/// Nor is the default fillet (0).
-fn is_zero(k: &f64) -> bool {
-    *k == 0.0
+/// Width of the default fillet at a pillar's foot (µm; docs/MODEL.md §5): where the
+/// membrane reaches the concave corner between floor and pillar, the deeper-of-two normal
+/// jumps by 90–150° between neighbouring quadrature points, and Newton's method fails at
+/// every step size (the geometry map's narrow pillars with wide gaps stalled there).
+pub const DEFAULT_FILLET: f64 = 0.5;
+
+fn default_fillet() -> f64 {
+    DEFAULT_FILLET
+}
+
+/// Nor is the default fillet.
+fn is_default_fillet(k: &f64) -> bool {
+    *k == DEFAULT_FILLET
 }
 
 /// The conversions between [`Substrate`] and its file form [`SubstrateRepr`], field for

@@ -902,7 +902,11 @@ mod tests {
 
     #[test]
     fn outline_runs_along_the_surface() {
-        let p = crate::physics::reference::pillars();
+        // The outline traces the superellipses and the floor: the sharp foot.
+        let p = Pillars {
+            fillet: 0.0,
+            ..crate::physics::reference::pillars()
+        };
         let s = Substrate::Pillars(p);
         let pts = s.outline(0.0, 20.0, 64);
         // pillars at 8 and 24 (24 − 4 = 20 ≤ x_max): two closed curves of 65 points + ends
@@ -1011,7 +1015,10 @@ mod tests3 {
 
     #[test]
     fn a_straight_foot_closes_the_undercut_and_keeps_the_upper_half() {
-        let rounded = pillars();
+        let rounded = Pillars {
+            fillet: 0.0,
+            ..pillars()
+        };
         let straight = Pillars {
             foot: PillarFoot::Straight,
             ..rounded
