@@ -83,4 +83,25 @@ fn ida_and_bdf2_agree_on_a_short_scene() {
     }
     // The scene moved: the comparison is not between two resting states.
     assert!(ida.last().unwrap()[2] < -5.0);
+
+    // IDA with its Newton systems solved by GMRES preconditioned by the kept LU
+    // (`solver.krylov`): the same solution to the same tolerance.
+    let (sk, kry, _) = run_case("cases/fast/push-pull-short-drag.ron", "agree-krylov", |s| {
+        s.rtol = 1e-6;
+        s.krylov = Some(case::Krylov::default());
+    });
+    assert!(sk.finished);
+    assert_eq!(sk.settings.krylov, Some(case::Krylov::default()));
+    assert_eq!(ida.len(), kry.len());
+    for (a, b) in ida.iter().zip(&kry).filter(|(a, _)| a[0] >= 20.0) {
+        for c in 1..tol.len() {
+            assert!(
+                (a[c] - b[c]).abs() <= tol[c] / 2.0,
+                "t = {}: column {c}: direct {} Krylov {}",
+                a[0],
+                a[c],
+                b[c]
+            );
+        }
+    }
 }

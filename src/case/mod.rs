@@ -47,8 +47,9 @@ pub use locate::Position;
 pub use overrides::Override;
 pub use sections::{
     Active, Adhesion, AdhesionDirection, Bottom, Contact, Flat, Geometry, Gravity, Inertia,
-    InertiaMode, Integrator, KinematicModel, LinearSolver, MAX_ATOL, MAX_RTOL, Material, Materials,
-    Mesh, Output, Pac, Phases, Pillars, Solver, Substrate, Viscosity, WedgeChoice, units,
+    InertiaMode, Integrator, KinematicModel, Krylov, LinearSolver, MAX_ATOL, MAX_RTOL, Material,
+    Materials, Mesh, Output, Pac, Phases, Pillars, Solver, Substrate, Viscosity, WedgeChoice,
+    units,
 };
 pub use validate::{Rule, Violation};
 pub(crate) use validate::{axes, num};

@@ -638,6 +638,15 @@ impl Checker<'_> {
             "0 < delta_cj < 1",
         );
         self.int_range("solver.newton_iters", s.newton_iters.into(), 1, Some(50));
+        if let Some(k) = &s.krylov {
+            self.int_range("solver.krylov.max_dim", k.max_dim.into(), 1, Some(100));
+            self.range(
+                "solver.krylov.eps_lin",
+                k.eps_lin,
+                k.eps_lin > 0.0 && k.eps_lin < 1.0,
+                "0 < eps_lin < 1",
+            );
+        }
         if let Some(h0) = s.initial_step {
             self.positive("solver.initial_step", h0);
         }

@@ -65,6 +65,9 @@ pub struct RunSettings {
     /// IDA's most Newton iterations per step.
     #[serde(default = "default_newton_iters")]
     pub newton_iters: u32,
+    /// IDA's Newton systems by GMRES preconditioned by the LU (`None`: the LU alone).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub krylov: Option<case::Krylov>,
 }
 
 fn default_delta_cj() -> f64 {
@@ -102,6 +105,7 @@ impl RunSettings {
             defer_adhesion: s.defer_adhesion,
             delta_cj: s.delta_cj,
             newton_iters: s.newton_iters,
+            krylov: s.krylov,
         }
     }
 }

@@ -30,7 +30,7 @@ use crate::record::{
 };
 use crate::scene::{self, SceneError};
 use crate::stop::{StopFlag, signal_name};
-use crate::sundials::{Ida, IdaOptions};
+use crate::sundials::{Ida, IdaOptions, Krylov};
 
 mod cell;
 mod shared;
@@ -424,6 +424,10 @@ impl Solver {
                     linear_solver: linear_solver.into(),
                     delta_cj: Some(s.delta_cj),
                     max_newton_iters: Some(s.newton_iters as i32),
+                    krylov: s.krylov.map(|k| Krylov {
+                        max_dim: k.max_dim as i32,
+                        eps_lin: k.eps_lin,
+                    }),
                     ..Default::default()
                 };
                 Solver::Ida(Box::new(Ida::new(model, opts)?))
