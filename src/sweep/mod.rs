@@ -721,7 +721,7 @@ pub fn read_row(id: &str, values: &[String], dir: &Path) -> Row {
     };
     let stopped = match &s.failure {
         Some(f) if !s.finished => Stopped {
-            class: f.kind.as_str().into(),
+            class: f.kind.name(),
             t: f.t_stop,
             element: f.place.as_ref().map(|p| p.element),
             x: std::array::from_fn(|k| f.place.as_ref().and_then(|p| p.x.get(k).copied())),
