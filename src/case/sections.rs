@@ -1013,10 +1013,12 @@ pub struct Krylov {
 }
 
 impl Default for Krylov {
+    /// IDA's own defaults ([`crate::sundials::Krylov`]).
     fn default() -> Self {
+        let ida = crate::sundials::Krylov::default();
         Krylov {
-            max_dim: 5,
-            eps_lin: 0.05,
+            max_dim: ida.max_dim.unsigned_abs(),
+            eps_lin: ida.eps_lin,
         }
     }
 }

@@ -726,11 +726,7 @@ pub fn read_row(id: &str, values: &[String], dir: &Path) -> Row {
             element: f.place.as_ref().map(|p| p.element),
             x: std::array::from_fn(|k| f.place.as_ref().and_then(|p| p.x.get(k).copied())),
         },
-        _ if status == Status::Interrupted => Stopped {
-            class: status.as_str().into(),
-            ..Stopped::default()
-        },
-        _ => Stopped::default(),
+        _ => Stopped::of_status(status),
     };
     let case = Case::from_str(&case_text, &dir.join("case.ron").display().to_string()).ok();
     let penetration = match (&case, &s.final_values) {

@@ -93,6 +93,20 @@ pub struct Stopped {
     pub x: [Option<f64>; 3],
 }
 
+impl Stopped {
+    /// What a point's status alone says: the class `invalid` or `interrupted` for those,
+    /// nothing otherwise (a failed run's class comes from its summary).
+    pub fn of_status(status: Status) -> Self {
+        Stopped {
+            class: match status {
+                Status::Invalid | Status::Interrupted => status.as_str().into(),
+                _ => String::new(),
+            },
+            ..Stopped::default()
+        }
+    }
+}
+
 /// The columns of [`Stopped`], in order.
 const STOP_COLUMNS: [&str; 6] = [
     "stop_class",
@@ -114,13 +128,7 @@ impl Row {
             penetration: None,
             wall_seconds: None,
             steps: None,
-            stopped: Stopped {
-                class: match status {
-                    Status::Invalid | Status::Interrupted => status.as_str().into(),
-                    _ => String::new(),
-                },
-                ..Stopped::default()
-            },
+            stopped: Stopped::of_status(status),
             reason: one_line(reason),
         }
     }
