@@ -4,7 +4,8 @@
 //!
 //! - `piola_total` (2-D) and `piola_total3` in `f64`, the residual's stress;
 //! - `material_point` (2-D, one `DualSVec64<4>` pass), `material_point3` (closed form) and
-//!   `material_point3_dual` (one `DualSVec64<9>` pass), the tangent's;
+//!   `dual_material_point` over `piola_total3` (one `DualSVec64<9>` pass, instantiated
+//!   here), the tangent's;
 //! - `contact_force` in 2-D and in 3-D with `DualSVec64<3>` (x and J), on the
 //!   default pillars, points in the contact band.
 //!
@@ -17,8 +18,8 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use cellsim::physics::{
-    Contact, Lattice, Pillars, Substrate, Substrate3, Viscosity, Yeoh, contact_force,
-    material_point, material_point3, material_point3_dual, piola_total, piola_total3,
+    Contact, Lattice, MaterialPoint3, Pillars, Substrate, Substrate3, Viscosity, Yeoh,
+    contact_force, dual_material_point, material_point, material_point3, piola_total, piola_total3,
 };
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
@@ -144,7 +145,10 @@ fn laws(c: &mut Criterion) {
         b.iter(|| {
             let mut acc = 0.0;
             for (F, G, Fa) in &three {
-                let m = material_point3_dual(&mat, &visc, black_box(F), black_box(G), Fa);
+                let (F, G) = (black_box(F), black_box(G));
+                let piola = |Fd: &_, Gd: &_| piola_total3(&mat, &visc, Fd, Gd, Fa);
+                let m: MaterialPoint3 =
+                    dual_material_point(F, G, piola, |E| visc.piola_viscous3(F, E));
                 acc += m.dP_dF[(0, 0)] + m.dP_dFdot[(8, 8)];
             }
             acc

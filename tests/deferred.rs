@@ -40,8 +40,7 @@ fn before_adhesion_acts_the_smaller_system_is_the_same_cell() {
         let cols: Vec<usize> = (0..120)
             .map(|_| (rng.rand_float() * m as f64) as usize)
             .collect();
-        for cj in [0.0, 37.0] {
-            let err = jacobian_fd_error(&mut small, T, &y[..m], &yp[..m], cj, &cols);
+        for (cj, err) in jacobian_fd_error(&mut small, T, &y[..m], &yp[..m], &cols) {
             assert!(err < 1e-6, "inertia {inertia}, cj {cj}: {err:.2e}");
         }
     }

@@ -49,16 +49,21 @@ pub fn deformed_state<S: Shape<D, N, E>, const D: usize, const N: usize, const E
     (y, yp)
 }
 
-/// Worst relative column error of `J = ∂F/∂y + cj ∂F/∂ẏ` against Richardson-extrapolated
-/// central differences of the residual (error O(h⁴), so that the steps can be large
-/// enough to keep round-off far below the tolerance: relative 1e-4 on u and v), on the
-/// columns `cols`; with the column where it is.
+/// Worst relative column error of `J = ∂F/∂y + cj ∂F/∂ẏ` for each `cj` of `cjs` against
+/// finite differences of the residual, on the columns `cols`; with the column where it is.
+///
+/// `∂F/∂y` by Richardson-extrapolated central differences (error O(h⁴), so that the steps
+/// can be large enough to keep round-off far below the tolerance: relative 1e-4 on u and
+/// v); `∂F/∂ẏ` by one central difference in ẏ at the same step, exact (to round-off) where
+/// `F` is affine in ẏ, as the model's residual is (inertia, viscosity and drag are linear
+/// in the rates, and so is the exposure row): a dependence of higher order would show as
+/// an error here, not hide one. Every `cj` is then checked on the same differences.
 ///
 /// An exposure (~1e3) enters the residual linearly except in the cap's band
 /// (0.98–1 μ_as,max), and a node at the edge of the adhesion layer has a column of ~1e-8
 /// in rows of ~1: there the round-off of a small step (∝ 1/h) exceeds 1e-6 of the column,
 /// while a large step crosses the cap's band of other nodes. So, as in Ridders' method,
-/// an exposure column is differenced at `mu_step` × 100, × 10 and × 1, and of the two
+/// an exposure's `∂F/∂y` is differenced at `mu_step` × 100, × 10 and × 1, and of the two
 /// larger steps' estimates the one kept is that which agrees better with the next smaller
 /// step's (the smallest step serves only as that comparison).
 #[allow(clippy::too_many_arguments)]
@@ -69,37 +74,45 @@ pub fn jacobian_fd_error<M: Dae + ?Sized>(
     t: f64,
     y: &[f64],
     yp: &[f64],
-    cj: f64,
+    cjs: &[f64],
     cols: &[usize],
-) -> (f64, usize) {
+) -> Vec<(f64, usize)> {
     let n = m.size();
-    let mut vals = vec![0.0; m.pattern().compute_nnz()];
-    m.jacobian(State::new(t, y, yp), cj, &mut vals).unwrap();
     let pat = m.pattern().clone();
-    let mut worst: (f64, usize) = (0.0, usize::MAX);
+    let jacobians: Vec<Vec<f64>> = cjs
+        .iter()
+        .map(|&cj| {
+            let mut vals = vec![0.0; pat.compute_nnz()];
+            m.jacobian(State::new(t, y, yp), cj, &mut vals).unwrap();
+            vals
+        })
+        .collect();
+    let mut worst = vec![(0.0, usize::MAX); cjs.len()];
     let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
     for &j in cols {
+        // Central difference along unknown j of y (`rate` false) or of ẏ (true).
+        let mut central = |h: f64, rate: bool| -> Vec<f64> {
+            let (mut y1, mut yp1) = (y.to_vec(), yp.to_vec());
+            let v = if rate { &mut yp1 } else { &mut y1 };
+            v[j] += h;
+            m.residual(State::new(t, &y1, &yp1), &mut rp).unwrap();
+            let v = if rate { &mut yp1 } else { &mut y1 };
+            v[j] -= 2.0 * h;
+            m.residual(State::new(t, &y1, &yp1), &mut rm).unwrap();
+            rp.iter()
+                .zip(&rm)
+                .map(|(a, b)| (a - b) / (2.0 * h))
+                .collect()
+        };
         let mut richardson = |h: f64| -> Vec<f64> {
-            let mut central = |h: f64| -> Vec<f64> {
-                let (mut y1, mut yp1) = (y.to_vec(), yp.to_vec());
-                y1[j] += h;
-                yp1[j] += cj * h;
-                m.residual(State::new(t, &y1, &yp1), &mut rp).unwrap();
-                y1[j] -= 2.0 * h;
-                yp1[j] -= 2.0 * cj * h;
-                m.residual(State::new(t, &y1, &yp1), &mut rm).unwrap();
-                rp.iter()
-                    .zip(&rm)
-                    .map(|(a, b)| (a - b) / (2.0 * h))
-                    .collect()
-            };
-            let (d1, d2) = (central(h), central(h / 2.0));
+            let (d1, d2) = (central(h, false), central(h / 2.0, false));
             d1.iter()
                 .zip(&d2)
                 .map(|(a, b)| (4.0 * b - a) / 3.0)
                 .collect()
         };
-        let fd = if j >= mu_offset {
+        let h = 1e-4 * y[j].abs().max(0.1);
+        let dy = if j >= mu_offset {
             let [large, middle, small] = [100.0, 10.0, 1.0].map(|k| richardson(k * mu_step));
             let gap = |a: &[f64], b: &[f64]| -> f64 {
                 a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum()
@@ -110,28 +123,31 @@ pub fn jacobian_fd_error<M: Dae + ?Sized>(
                 middle
             }
         } else {
-            richardson(1e-4 * y[j].abs().max(0.1))
+            richardson(h)
         };
-        let mut col = vec![0.0; n];
-        for k in pat.col_ptr()[j]..pat.col_ptr()[j + 1] {
-            col[pat.row_idx()[k]] = vals[k];
-        }
-        let norm = col.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let diff = col
-            .iter()
-            .zip(&fd)
-            .map(|(a, b)| (a - b).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        // A column may vanish (e.g. μ_as of a node out of the layer with cj = 0): then the
-        // finite differences must vanish too.
-        if norm == 0.0 {
-            assert!(
-                diff < 1e-9,
-                "column {j}: J is zero there, finite differences give {diff:.2e}"
-            );
-        } else if diff / norm > worst.0 {
-            worst = (diff / norm, j);
+        let dyp = central(if j >= mu_offset { mu_step } else { h }, true);
+        for ((&cj, vals), worst) in cjs.iter().zip(&jacobians).zip(&mut worst) {
+            let mut col = vec![0.0; n];
+            for k in pat.col_ptr()[j]..pat.col_ptr()[j + 1] {
+                col[pat.row_idx()[k]] = vals[k];
+            }
+            let norm = col.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let diff = col
+                .iter()
+                .zip(dy.iter().zip(&dyp))
+                .map(|(a, (d, p))| (a - (d + cj * p)).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            // A column may vanish (e.g. μ_as of a node out of the layer with cj = 0): then
+            // the finite differences must vanish too.
+            if norm == 0.0 {
+                assert!(
+                    diff < 1e-9,
+                    "column {j}, cj {cj}: J is zero there, finite differences give {diff:.2e}"
+                );
+            } else if diff / norm > worst.0 {
+                *worst = (diff / norm, j);
+            }
         }
     }
     worst

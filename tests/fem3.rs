@@ -254,7 +254,7 @@ fn default_mesh_is_complete_and_of_good_quality() {
         })
         .collect();
     let mut n_boundary = 0;
-    for f in m.boundary_faces() {
+    for f in boundary_faces(&m) {
         n_boundary += 1;
         let mut k = [f[0], f[1], f[2]];
         k.sort_unstable();
@@ -833,4 +833,23 @@ fn the_eighth_mesh_is_half_the_quarter() {
     ] {
         assert!(m.symmetry_x.contains(&n));
     }
+}
+
+/// All boundary faces of `m` (used by one tetrahedron), outward, in element order.
+fn boundary_faces(m: &Mesh3) -> Vec<[usize; 6]> {
+    let key = |f: &[usize; 6]| {
+        let mut k = [f[0], f[1], f[2]];
+        k.sort_unstable();
+        k
+    };
+    let mut count: HashMap<[usize; 3], usize> = HashMap::new();
+    let faces = || {
+        m.elements
+            .iter()
+            .flat_map(|el| TET_FACES.map(|lf| lf.map(|k| el[k])))
+    };
+    for f in faces() {
+        *count.entry(key(&f)).or_insert(0) += 1;
+    }
+    faces().filter(|f| count[&key(f)] == 1).collect()
 }

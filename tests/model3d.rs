@@ -62,66 +62,71 @@ use crate::fd::deformed_state;
 const MU_STEP: f64 = 1e-1;
 
 #[test]
-fn jacobian_of_the_quarter_cell_matches_finite_differences() {
-    // Pillars (the cell above the centre of four), contact, adhesion with its exposure
-    // unknowns and both active regions, with inertia and without (medium drag): every
-    // block of J. t in the active phase, the cell sunk 0.5 µm into the bands. The eighth
-    // cell too, whose nodes on the diagonal plane carry one unknown for u_x = u_z: the u
-    // and v unknowns of every such node in the lower half are columns.
-    let (quarter, eighth) = (coarse3(), coarse8());
-    for (inertia, lattice, mesh) in [
-        (false, Lattice::Gap, &quarter),
-        (true, Lattice::FourPillars, &quarter),
-        (true, Lattice::FourPillars, &eighth),
-    ] {
-        let wedge = mesh.params.wedge;
-        let mut c = Case::reference_active();
-        c.substrate = case::Substrate::pillars();
-        let mut p = scene::model_params(&c, "pillars-3d", inertia).expect("a valid case");
-        p.drag = if inertia { 0.0 } else { 1e-3 };
-        // The pillar tops 0.5 µm below the cell's lowest point over them, in 3-D.
-        if let Substrate::Pillars(pl) = &mut p.substrate {
-            let c3 = [p.center[0], p.center[1], 0.0];
-            pl.y_top = pl.y_top_for_gap3(0.5, lattice, c3, 10.0).expect("placed");
+fn jacobian_of_the_quarter_cell_without_inertia_matches_finite_differences() {
+    check_jacobian3(false, Lattice::Gap, &coarse3());
+}
+
+#[test]
+fn jacobian_of_the_quarter_cell_with_inertia_matches_finite_differences() {
+    check_jacobian3(true, Lattice::FourPillars, &coarse3());
+}
+
+#[test]
+fn jacobian_of_the_eighth_cell_matches_finite_differences() {
+    check_jacobian3(true, Lattice::FourPillars, &coarse8());
+}
+
+/// Pillars (the cell above the centre of four, or above the gap between two), contact,
+/// adhesion with its exposure unknowns and both active regions, with inertia or without
+/// (medium drag): every block of J. t in the active phase, the cell sunk 0.5 µm into the
+/// bands. On the eighth cell, whose nodes on the diagonal plane carry one unknown for
+/// u_x = u_z, the u and v unknowns of every such node in the lower half are columns.
+fn check_jacobian3(inertia: bool, lattice: Lattice, mesh: &Mesh3) {
+    let wedge = mesh.params.wedge;
+    let mut c = Case::reference_active();
+    c.substrate = case::Substrate::pillars();
+    let mut p = scene::model_params(&c, "pillars-3d", inertia).expect("a valid case");
+    p.drag = if inertia { 0.0 } else { 1e-3 };
+    // The pillar tops 0.5 µm below the cell's lowest point over them, in 3-D.
+    if let Substrate::Pillars(pl) = &mut p.substrate {
+        let c3 = [p.center[0], p.center[1], 0.0];
+        pl.y_top = pl.y_top_for_gap3(0.5, lattice, c3, 10.0).expect("placed");
+    }
+    let mut m = Cell3::new(
+        ModelParams {
+            lattice,
+            ..params3(p)
+        },
+        mesh.clone(),
+    )
+    .unwrap();
+    let (y, yp) = deformed_state(&m, 0.5, 7);
+    let t = 45_000.0;
+    let f = m.contact_force_total(&y);
+    assert!(f.y > 1e-3, "no contact in the test state (force {f:?})");
+    // 60 random columns and every unknown of 40 of the lowest nodes (in contact),
+    // velocities and exposures included.
+    let mut cols = crate::fd::contact_columns(&m, 60, Some(40));
+    for &i in &m.mesh.symmetry_diagonal {
+        assert_eq!(m.dofs.u[i][0], m.dofs.u[i][2], "u_z is u_x on the diagonal");
+        if m.mesh.nodes[i][1] < 0.0 {
+            // The tie is in u and v; μ_as is one unknown per node either way.
+            cols.extend(m.dofs.u[i].iter().chain(&m.dofs.v[i]));
         }
-        let mut m = Cell3::new(
-            ModelParams {
-                lattice,
-                ..params3(p)
-            },
-            mesh.clone(),
-        )
-        .unwrap();
-        let (y, yp) = deformed_state(&m, 0.5, 7);
-        let t = 45_000.0;
-        let f = m.contact_force_total(&y);
-        assert!(f.y > 1e-3, "no contact in the test state (force {f:?})");
-        // 60 random columns and every unknown of 40 of the lowest nodes (in contact),
-        // velocities and exposures included.
-        let mut cols = crate::fd::contact_columns(&m, 60, Some(40));
-        for &i in &m.mesh.symmetry_diagonal {
-            assert_eq!(m.dofs.u[i][0], m.dofs.u[i][2], "u_z is u_x on the diagonal");
-            if m.mesh.nodes[i][1] < 0.0 {
-                // The tie is in u and v; μ_as is one unknown per node either way.
-                cols.extend(m.dofs.u[i].iter().chain(&m.dofs.v[i]));
-            }
-        }
-        cols.retain(|&c| c != usize::MAX);
-        assert_eq!(m.mesh.symmetry_diagonal.is_empty(), wedge == Wedge::Quarter);
-        for cj in [0.0, 37.0] {
-            let off = m.dofs.mu_offset();
-            let (err, j) =
-                crate::fd::jacobian_fd_error(&mut m, off, MU_STEP, t, &y, &yp, cj, &cols);
-            let node = (0..m.mesh.nodes.len()).find(|&i| {
-                m.dofs.u[i].contains(&j) || m.dofs.v[i].contains(&j) || m.dofs.mu[i] == j
-            });
-            assert!(
-                err < 1e-6,
-                "{wedge:?}, {lattice:?}, inertia {inertia}, cj {cj}: relative column error {err:.2e} \
-                 (column {j}, node {node:?} at {:?})",
-                node.map(|i| m.mesh.nodes[i])
-            );
-        }
+    }
+    cols.retain(|&c| c != usize::MAX);
+    assert_eq!(m.mesh.symmetry_diagonal.is_empty(), wedge == Wedge::Quarter);
+    let (off, cjs) = (m.dofs.mu_offset(), [0.0, 37.0]);
+    let errs = crate::fd::jacobian_fd_error(&mut m, off, MU_STEP, t, &y, &yp, &cjs, &cols);
+    for (cj, (err, j)) in cjs.into_iter().zip(errs) {
+        let node = (0..m.mesh.nodes.len())
+            .find(|&i| m.dofs.u[i].contains(&j) || m.dofs.v[i].contains(&j) || m.dofs.mu[i] == j);
+        assert!(
+            err < 1e-6,
+            "{wedge:?}, {lattice:?}, inertia {inertia}, cj {cj}: relative column error {err:.2e} \
+             (column {j}, node {node:?} at {:?})",
+            node.map(|i| m.mesh.nodes[i])
+        );
     }
 }
 

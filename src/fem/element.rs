@@ -12,7 +12,7 @@ use nalgebra::{Const, DimMin, SMatrix};
 use thiserror::Error;
 
 use super::quadrature::{Rule, Subdivision};
-use super::{Domain, Mesh, Mesh3, MeshError, NamedPoints};
+use super::{Domain, Mesh, Mesh3, MeshError, NamedPoints, P2Tabulation, TetTabulation};
 use crate::physics::cofactor;
 
 /// An isoparametric quadratic (P2) Lagrange element on the reference simplex of dimension
@@ -267,6 +267,11 @@ where
 /// A conforming mesh of the cell: nodes, elements of `N` nodes, their domains and the
 /// named points on the vertical axis.
 pub trait CellMesh<const D: usize, const N: usize>: Clone + Send + Sync {
+    /// The element's shape functions on a quadrature rule.
+    type Tab: ElementTabulation<D, N>;
+    /// What its elements are called in messages.
+    const ELEMENTS: &'static str;
+
     /// Node coordinates (reference configuration, µm).
     fn nodes(&self) -> &[[f64; D]];
     /// Element connectivity.
@@ -338,8 +343,10 @@ pub(crate) fn extremes<P: Copy + Default>(
 
 /// The [`CellMesh`] of a mesh type with the fields `nodes`, `elements`, `domains`, `points`.
 macro_rules! cell_mesh {
-    ($mesh:ty, $d:literal, $n:literal) => {
+    ($mesh:ty, $d:literal, $n:literal, $tab:ty, $elements:literal) => {
         impl CellMesh<$d, $n> for $mesh {
+            type Tab = $tab;
+            const ELEMENTS: &'static str = $elements;
             fn nodes(&self) -> &[[f64; $d]] {
                 &self.nodes
             }
@@ -359,8 +366,8 @@ macro_rules! cell_mesh {
     };
 }
 
-cell_mesh!(Mesh, 2, 6);
-cell_mesh!(Mesh3, 3, 10);
+cell_mesh!(Mesh, 2, 6, P2Tabulation, "triangles");
+cell_mesh!(Mesh3, 3, 10, TetTabulation, "tetrahedra");
 
 /// An element whose reference geometry is not valid: inverted or degenerate.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

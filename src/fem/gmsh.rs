@@ -817,14 +817,6 @@ impl Mesh {
         let _ = writeln!(s, "$EndElements");
         s
     }
-
-    /// Writes [`Mesh::to_gmsh`] to `path`.
-    pub fn write_gmsh(&self, path: &Path) -> Result<(), MeshError> {
-        std::fs::write(path, self.to_gmsh()).map_err(|source| MeshError::Write {
-            path: path.display().to_string(),
-            source,
-        })
-    }
 }
 
 #[cfg(test)]

@@ -57,14 +57,6 @@ pub const TET_FACES: [[usize; 6]; 4] = [
 /// with their mid-nodes (new node a is old node `FLIP[a]`).
 pub const FLIP: [usize; 10] = [0, 2, 1, 3, 6, 5, 4, 7, 9, 8];
 
-/// The local mid-node of the edge between local vertices `i` and `j` (i ≠ j, both < 4).
-pub fn edge_node(i: usize, j: usize) -> Option<usize> {
-    TET_EDGES
-        .iter()
-        .position(|e| (e[0] == i && e[1] == j) || (e[0] == j && e[1] == i))
-        .map(|k| 4 + k)
-}
-
 /// Geometry of one ten-node tetrahedron at the points of a [`TetTabulation`]: points,
 /// det J · w and physical gradients.
 pub type TetGeometry = GeometryOf<3, 10>;
@@ -113,6 +105,14 @@ pub type TetTabulation = Tabulation<Tet10, 3, 10>;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The local mid-node of the edge between local vertices `i` and `j` (i ≠ j, both < 4).
+    fn edge_node(i: usize, j: usize) -> Option<usize> {
+        TET_EDGES
+            .iter()
+            .position(|e| (e[0] == i && e[1] == j) || (e[0] == j && e[1] == i))
+            .map(|k| 4 + k)
+    }
     use crate::fem::element::checks;
 
     /// A curved element: an irregular tetrahedron with some mid-nodes moved off their

@@ -154,9 +154,4 @@ impl<const D: usize> DofMapOf<D> {
     pub fn momentum_rows(&self, i: usize) -> [usize; D] {
         if self.inertia { self.v[i] } else { self.u[i] }
     }
-
-    /// The unknowns whose time derivative is the velocity used in Ḟ: v with inertia, u̇ without.
-    pub fn velocity_cols(&self, i: usize) -> [usize; D] {
-        if self.inertia { self.v[i] } else { self.u[i] }
-    }
 }

@@ -14,7 +14,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use super::kinematics::NodalOf;
-use super::shape::Shape;
+use super::shape::{Shape, TabOf};
 use super::{ModelError, ModelParams};
 use crate::fem::{CellMesh, Domain, ElementTabulation, GeometryOf};
 use crate::physics::KinematicModel;
@@ -62,7 +62,7 @@ impl<T: ElementTabulation<D, N>, const D: usize, const N: usize> ReferenceElemen
     /// `params.contact_degree` subdivided `params.contact_subdivisions` times.
     /// `adhesion_unknowns`: whether the membrane elements carry μ_as unknowns (adhesion
     /// modelled and not deferred).
-    pub(crate) fn new<S: Shape<D, N, E, Tab = T>, const E: usize>(
+    pub(crate) fn new<S: Shape<D, N, E, Mesh: CellMesh<D, N, Tab = T>>, const E: usize>(
         params: &ModelParams,
         mesh: &S::Mesh,
         adhesion_unknowns: bool,
@@ -89,8 +89,8 @@ impl<const D: usize, const N: usize> ElementOf<D, N> {
         params: &ModelParams,
         mesh: &S::Mesh,
         e: usize,
-        std_tab: &S::Tab,
-        ctab: &S::Tab,
+        std_tab: &TabOf<S, D, N, E>,
+        ctab: &TabOf<S, D, N, E>,
     ) -> Result<Self, crate::fem::ElementGeometryError> {
         let nodes = mesh.elements()[e];
         let x = mesh.element_coords(e);

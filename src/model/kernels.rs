@@ -41,7 +41,7 @@ use super::kinematics::{
     NodalOf, PlaneStrain, ThreeD, contract, current_position, deformation, det, rate,
 };
 use super::plan::TangentOf;
-use super::shape::{Seeded, Shape};
+use super::shape::{Seeded, Shape, TabOf};
 use crate::dae::{DaeError, ElementPoint, Inadmissible};
 use crate::fem::ElementTabulation;
 use crate::physics::{
@@ -395,7 +395,7 @@ fn band_is_zero<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usiz
 /// on it, and the adhesion ramp `t_as`.
 pub(crate) struct Band<'a, S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> {
     pub(crate) el: &'a ElementOf<D, N>,
-    pub(crate) ctab: &'a S::Tab,
+    pub(crate) ctab: &'a TabOf<S, D, N, E>,
     pub(crate) p: &'a ModelParams,
     pub(crate) sub: &'a S::Substrate,
     pub(crate) st: &'a ElementState<D, N>,

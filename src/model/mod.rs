@@ -64,6 +64,7 @@ use kernels::{Formulation, Switches};
 use kinematics::NodalOf;
 pub(crate) use kinematics::deformation;
 use plan::{PlanOf, TangentOf};
+use shape::TabOf;
 pub use shape::{Constraints, Evaluation, HalfPlane, Quarter, Shape, State};
 pub use switch::Restart;
 
@@ -164,7 +165,7 @@ pub struct CellOf<S: Shape<D, N, E>, const D: usize, const N: usize, const E: us
     /// The symmetry conditions.
     pub constraints: Constraints,
     elements: Vec<ElementOf<D, N>>,
-    ctab: S::Tab,
+    ctab: TabOf<S, D, N, E>,
     plan: PlanOf<D, N, E>,
     /// Initial state (t₀, y₀, ẏ₀) when not the rest state at t = 0 (restarts).
     initial_state: Option<(f64, Vec<f64>, Vec<f64>)>,
@@ -318,7 +319,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         if (params.kinematics == KinematicModel::ThreeD) != (D == 3) {
             return Err(ModelError::Kinematics {
                 model: params.kinematics,
-                elements: S::ELEMENTS,
+                elements: <S::Mesh as CellMesh<D, N>>::ELEMENTS,
             });
         }
         let eliminated = S::eliminated(&mesh, constraints);

@@ -135,12 +135,6 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         }
     }
 
-    /// Deformed length of the contour in contact (the first value of
-    /// [`Shape::contact_lengths`]).
-    pub fn contact_length(&self, y: &[f64]) -> f64 {
-        S::contact_lengths(self, y).0
-    }
-
     /// Reference integrals of the Frobenius norm of E = ½(FᵀF − I) per domain (plane
     /// strain: E₃₃ = 0; axisymmetric: with the hoop strain E₃₃ = ½(λ_θ² − 1), weighted by r,
     /// volumes per radian; 3-D: the quarter's volumes), and the domains' reference sizes.

@@ -7,7 +7,7 @@
 //! - [`Quarter`]: ten-node tetrahedra on the quarter cell's [`Mesh3`], the substrate on its
 //!   pillar lattice [`Substrate3`]; the symmetry planes x = c_x and z = c_z.
 //!
-//! A shape names its mesh, substrate and tabulation types and the dual numbers of its
+//! A shape names its mesh (which names its element's tabulation), its substrate and the dual numbers of its
 //! tangents (`D + D² + 1` directions for the band forces, `D + 1` for the adhesion rows),
 //! places the active strain and the symmetry, and sends the element loops to the
 //! formulation of the case's kinematic model. The physics itself is written once for
@@ -19,7 +19,7 @@ use num_dual::DualSVec64;
 use super::history::LayerField;
 use super::{CellOf, ModelParams};
 use crate::dae::DaeError;
-use crate::fem::{CellMesh, Domain, ElementTabulation, Mesh, Mesh3, P2Tabulation, TetTabulation};
+use crate::fem::{CellMesh, Domain, Mesh, Mesh3};
 use crate::physics::{ActiveStrain, KinematicModel, Real, Substrate, Substrate3};
 
 /// Largest number of dual directions a tangent uses (3-D band forces: 3 + 9 + 1).
@@ -73,16 +73,12 @@ pub trait Shape<const D: usize, const N: usize, const E: usize>:
     type Mesh: CellMesh<D, N>;
     /// The substrate, evaluated at positions in `D` dimensions.
     type Substrate: LayerField<D> + Send + Sync + PartialEq;
-    /// The element's shape functions on a quadrature rule.
-    type Tab: ElementTabulation<D, N>;
     /// Dual numbers of the band tangent: x (D), F (D²), μ_as (1).
     #[doc(hidden)]
     type BandDual: Seeded;
     /// Dual numbers of the adhesion row's tangent: x (D), μ_as (1).
     #[doc(hidden)]
     type RateDual: Seeded;
-    /// What its elements are called in messages.
-    const ELEMENTS: &'static str;
     /// Whether the band kernel checks `det F > 0` at every band point of an element in
     /// reach, also where the band is zero (then it skips the force), or skips those points
     /// unchecked. Checking catches an element turned inside out between the standard
@@ -121,6 +117,10 @@ pub trait Shape<const D: usize, const N: usize, const E: usize>:
 
 pub use crate::dae::State;
 
+/// The element tabulation of shape `S`'s mesh.
+pub(crate) type TabOf<S, const D: usize, const N: usize, const E: usize> =
+    <<S as Shape<D, N, E>>::Mesh as CellMesh<D, N>>::Tab;
+
 /// One evaluation of the cell's DAE.
 pub enum Evaluation<'a> {
     /// The residual `F(t, y, ẏ)` into the slice.
@@ -153,10 +153,8 @@ fn mark<const D: usize>(mut out: Vec<[bool; D]>, nodes: &[usize], c: usize) -> V
 impl Shape<2, 6, 12> for HalfPlane {
     type Mesh = Mesh;
     type Substrate = Substrate;
-    type Tab = P2Tabulation;
     type BandDual = DualSVec64<7>;
     type RateDual = DualSVec64<3>;
-    const ELEMENTS: &'static str = "triangles";
     const CHECK_EVERY_BAND_POINT: bool = true;
 
     fn substrate(p: &ModelParams) -> Substrate {
@@ -198,10 +196,8 @@ impl Shape<2, 6, 12> for HalfPlane {
 impl Shape<3, 10, 30> for Quarter {
     type Mesh = Mesh3;
     type Substrate = Substrate3;
-    type Tab = TetTabulation;
     type BandDual = DualSVec64<13>;
     type RateDual = DualSVec64<4>;
-    const ELEMENTS: &'static str = "tetrahedra";
     const CHECK_EVERY_BAND_POINT: bool = false;
 
     fn substrate(p: &ModelParams) -> Substrate3 {

@@ -55,11 +55,7 @@ pub fn admissible_hoop(F: &BlockDiag<f64>) -> bool {
 
 impl Yeoh {
     /// Strain energy `W(C_e)` per unit intermediate volume [Pa] from the in-plane block of
-    /// the symmetric `C_e` and its hoop entry `c33 = λ_e²`.
-    pub fn strain_energy_hoop<T: Real>(&self, Ce: &Matrix2<T>, c33: T) -> T {
-        self.strain_energy_hoop_sym(Sym::from_upper(Ce), c33)
-    }
-
+    /// the symmetric `C_e` and its hoop entry `c = λ_e²`.
     fn strain_energy_hoop_sym<T: Real>(&self, Ce: Sym<T>, c: T) -> T {
         let tr = Ce.tr();
         let d2 = Ce.det();
@@ -81,11 +77,6 @@ impl Yeoh {
     /// `S_e = a I + k C_e⁻¹ − 2β C_e` with `a = 2(A + βI₁)`,
     /// `k = λ_Y ln J_e − 2A I₃^{1/3} − 4β I₃^{2/3}`, `A = α₁ + 2α₂X + 3α₃X²`; in-plane
     /// `C_e⁻¹ = adj(C_e2)/det C_e2`, hoop `1/c`.
-    pub fn pk2_elastic_hoop<T: Real>(&self, Ce: &Matrix2<T>, c33: T) -> (Matrix2<T>, T) {
-        let (s, s33) = self.pk2_elastic_hoop_sym(Sym::from_upper(Ce), c33);
-        (s.to_matrix(), s33)
-    }
-
     fn pk2_elastic_hoop_sym<T: Real>(&self, Ce: Sym<T>, c: T) -> (Sym<T>, T) {
         let d2 = Ce.det();
         let StressScalars { a, k, c: cc } = self.stress_scalars(Ce.tr() + c, c * d2);

@@ -240,7 +240,7 @@ pub struct MaterialPointOf<const D: usize, const DD: usize> {
 }
 
 /// A `D × D` matrix of dual numbers in `DD` directions.
-type DualMatrix<const D: usize, const DD: usize> = SMatrix<DualSVec64<DD>, D, D>;
+pub type DualMatrix<const D: usize, const DD: usize> = SMatrix<DualSVec64<DD>, D, D>;
 
 /// `P` and its exact tangents at one material point of a `D × D` kinematics by
 /// forward-mode dual numbers: `∂P/∂F` by one `DualSVec64<DD>` pass of `piola(F, Ḟ)` over
@@ -248,7 +248,7 @@ type DualMatrix<const D: usize, const DD: usize> = SMatrix<DualSVec64<DD>, D, D>
 /// the solid does not depend on `Ḟ` and `P_f` is linear in it, so column `D k + L` is
 /// `viscous(E_kL) = P_f(F, E_kL)` (`E_kL` the unit matrix), exactly.
 #[inline(always)]
-pub(super) fn dual_material_point<const D: usize, const DD: usize>(
+pub fn dual_material_point<const D: usize, const DD: usize>(
     F: &SMatrix<f64, D, D>,
     Fdot: &SMatrix<f64, D, D>,
     piola: impl Fn(&DualMatrix<D, DD>, &DualMatrix<D, DD>) -> DualMatrix<D, DD>,

@@ -12,7 +12,7 @@
 use super::smooth::{heaviside, smooth_step};
 use super::substrate::Surface;
 use super::{PhysicsError, Real, check, cst, sqrt};
-use nalgebra::{SMatrix, SVector, Vector2};
+use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
 /// Penalty contact with the substrate.
@@ -249,18 +249,11 @@ pub fn adhesion_rate<T: Real, S: Surface<D>, const D: usize>(
     h * (-cap + 1.0) * ad.mu_as0
 }
 
-/// Gravity per unit reference volume [pN/µm³]: `b_g = −ρ₀ g s_g t_g e_y`, with `ρ₀`
-/// [pN·s²/µm⁴] (1000 kg/m³ = 1e-9), `g` [µm/s²] (9.81e6), the gravity switch `t_g` and
-/// sign `s_g`.
-pub fn gravity_force(rho: f64, g: f64, t_g: f64, sign: f64) -> Vector2<f64> {
-    Vector2::new(0.0, -rho * g * sign * t_g)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::physics::{Substrate, Substrate3};
-    use nalgebra::{Matrix2, Matrix3, Vector3};
+    use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
     use num_dual::DualSVec64;
 
     fn substrates() -> [Substrate; 2] {
@@ -560,15 +553,6 @@ mod tests {
                 );
             }
         }
-    }
-
-    #[test]
-    fn gravity() {
-        let rho = 1.0e-9; // 1000 kg/m³
-        let g = 9.81e6;
-        let b = gravity_force(rho, g, 1.0, 1.0);
-        assert!((b.y + 9.81e-3).abs() < 1e-15 && b.x == 0.0);
-        assert!((gravity_force(rho, g, 0.5, -1.0).y - 0.5 * 9.81e-3).abs() < 1e-17);
     }
 
     #[test]

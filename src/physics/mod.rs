@@ -55,18 +55,17 @@ pub use hoop::{
 };
 pub use law::{
     Invariants, IsotropicSolid, MaterialPointOf, StressScalars, TangentScalars, Viscosity, Yeoh,
+    dual_material_point,
 };
 pub use loads::{
     Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_hoop_factor, adhesion_rate,
-    cofactor, contact_force, gravity_force, layer,
+    cofactor, contact_force, layer,
 };
 pub use phases::{Flip, Phases};
 pub use plane_strain::{MaterialPoint, admissible, material_point, piola_total};
-pub use smooth::{heaviside, smooth_step, smooth_step_d};
+pub use smooth::{heaviside, smooth_step};
 pub use substrate::{Lattice, PillarFoot, Pillars, Substrate, Substrate3, Surface};
-pub use three_d::{
-    MaterialPoint3, admissible3, material_point3, material_point3_dual, piola_total3,
-};
+pub use three_d::{MaterialPoint3, admissible3, material_point3, piola_total3};
 
 use nalgebra::RealField;
 use num_dual::DualNum;

@@ -19,10 +19,6 @@ use nalgebra::Matrix2;
 impl Yeoh {
     /// Strain energy `W(C_e)` per unit intermediate volume [Pa], from the in-plane block of
     /// the symmetric `C_e` (`C_e,33 = 1`).
-    pub fn strain_energy<T: Real>(&self, Ce: &Matrix2<T>) -> T {
-        self.strain_energy_sym(Sym::from_upper(Ce))
-    }
-
     fn strain_energy_sym<T: Real>(&self, Ce: Sym<T>) -> T {
         let tr = Ce.tr();
         let I3 = Ce.det();
@@ -45,10 +41,6 @@ impl Yeoh {
     ///
     /// `S_e = 2∂W/∂C_e = 2(α₁ + 2α₂X + 3α₃X²)(I − I₃^{1/3}C_e⁻¹)
     ///       + 2β(I₁I − C_e − 2I₃^{2/3}C_e⁻¹) + λ_Y ln J_e C_e⁻¹`.
-    pub fn pk2_elastic<T: Real>(&self, Ce: &Matrix2<T>) -> Matrix2<T> {
-        self.pk2_elastic_sym(Sym::from_upper(Ce)).to_matrix()
-    }
-
     fn pk2_elastic_sym<T: Real>(&self, Ce: Sym<T>) -> Sym<T> {
         let I3 = Ce.det();
         let StressScalars { a, k, c } = self.stress_scalars(Ce.tr() + 1.0, I3);
@@ -61,7 +53,8 @@ impl Yeoh {
         }
     }
 
-    /// Solid second Piola–Kirchhoff stress, symmetric.
+    /// Second Piola–Kirchhoff stress of the solid phase in the reference configuration,
+    /// `S_s = J_a F_a⁻¹ S_e F_a⁻ᵀ` [Pa], symmetric.
     fn pk2_solid_sym<T: Real>(&self, F: &Matrix2<T>, Fa: &Matrix2<f64>) -> Sym<T> {
         let (Ce, Fa_inv, Ja) = elastic_right_cauchy_green(F, Fa);
         let Se = self.pk2_elastic_sym(Ce);
@@ -69,12 +62,6 @@ impl Yeoh {
             None => Se,
             Some(G) => Se.push(&(G * Ja.sqrt())),
         }
-    }
-
-    /// Second Piola–Kirchhoff stress of the solid phase in the reference configuration,
-    /// `S_s = J_a F_a⁻¹ S_e F_a⁻ᵀ` [Pa].
-    pub fn pk2_solid<T: Real>(&self, F: &Matrix2<T>, Fa: &Matrix2<f64>) -> Matrix2<T> {
-        self.pk2_solid_sym(F, Fa).to_matrix()
     }
 
     /// First Piola–Kirchhoff stress of the solid phase, `P_s = F J_a F_a⁻¹ S_e F_a⁻ᵀ` [Pa];
@@ -94,21 +81,6 @@ pub(super) struct Sym<T> {
 }
 
 impl<T: Real> Sym<T> {
-    /// From the diagonal and the upper off-diagonal entry of `M` (assumed symmetric).
-    #[inline(always)]
-    pub(super) fn from_upper(M: &Matrix2<T>) -> Self {
-        Self {
-            xx: M[(0, 0)],
-            xy: M[(0, 1)],
-            yy: M[(1, 1)],
-        }
-    }
-
-    #[inline(always)]
-    pub(super) fn to_matrix(self) -> Matrix2<T> {
-        Matrix2::new(self.xx, self.xy, self.xy, self.yy)
-    }
-
     #[inline(always)]
     pub(super) fn tr(self) -> T {
         self.xx + self.yy
@@ -204,10 +176,6 @@ pub(super) fn elastic_right_cauchy_green<T: Real>(
 
 impl Viscosity {
     /// Viscous second Piola–Kirchhoff stress `S_f` (in-plane block) [Pa].
-    pub fn pk2_viscous<T: Real>(&self, F: &Matrix2<T>, Fdot: &Matrix2<T>) -> Matrix2<T> {
-        self.pk2_viscous_sym(F, Fdot).to_matrix()
-    }
-
     fn pk2_viscous_sym<T: Real>(&self, F: &Matrix2<T>, Fdot: &Matrix2<T>) -> Sym<T> {
         let v = ViscousKinematics::of(F, Fdot);
         let tr = v.Ci.dot(v.Cd);

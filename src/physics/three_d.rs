@@ -50,7 +50,7 @@
 //! plane strain's `material_point` evaluates one by one; here they come in closed form.
 //!
 //! The tests check both against finite differences and against one `DualSVec64<9>` pass
-//! over `F` ([`material_point3_dual`], kept as the independent reference).
+//! over `F` ([`super::dual_material_point`], kept as the independent reference in the tests).
 //!
 //! Admissibility: every function assumes `det F > 0` and `det F_a > 0` (check with
 //! [`admissible3`]); it does not check, for speed.
@@ -59,7 +59,7 @@
 
 use nalgebra::{Matrix3, SMatrix};
 
-use super::law::{Invariants, IsotropicSolid, StressScalars, TangentScalars, dual_material_point};
+use super::law::{Invariants, IsotropicSolid, StressScalars, TangentScalars};
 use super::{Real, Viscosity, Yeoh};
 
 /// Number of entries of a 3 × 3 tensor, the size of the flattened tangents.
@@ -79,7 +79,7 @@ pub(super) struct Sym3<T> {
 
 impl<T: Real> Sym3<T> {
     /// From the diagonal and the upper off-diagonal entries of `M` (assumed symmetric).
-    #[inline(always)]
+    #[cfg(test)]
     pub(super) fn from_upper(M: &Matrix3<T>) -> Self {
         Self {
             xx: M[(0, 0)],
@@ -221,12 +221,7 @@ fn elastic_right_cauchy_green3<T: Real>(
 
 impl Yeoh {
     /// Strain energy `W(C_e)` per unit intermediate volume [Pa] from a symmetric 3 × 3
-    /// `C_e` (its diagonal and upper entries are read): `I₁ = tr C_e`,
-    /// `I₂ = ½(I₁² − tr C_e²)`, `I₃ = det C_e`, `W` as in [`Yeoh`].
-    pub fn strain_energy3<T: Real>(&self, Ce: &Matrix3<T>) -> T {
-        self.strain_energy3_sym(Sym3::from_upper(Ce))
-    }
-
+    /// `C_e`: `I₁ = tr C_e`, `I₂ = ½(I₁² − tr C_e²)`, `I₃ = det C_e`, `W` as in [`Yeoh`].
     fn strain_energy3_sym<T: Real>(&self, Ce: Sym3<T>) -> T {
         self.energy_density(Invariants {
             i1: Ce.tr(),
@@ -335,7 +330,7 @@ pub type MaterialPoint3 = super::law::MaterialPointOf<3, ENTRIES3>;
 /// Measured with `benches/kernels3.rs` (criterion, release, 256 inputs, half with active
 /// strain; a shared 2-core machine, so ratios, over three runs): 0.24–0.26 µs per call,
 /// 3.3–3.5 × the residual-only [`piola_total3`] in `f64` and 1.6–1.9 × plane strain's
-/// [`super::material_point`]; one `DualSVec64<9>` pass ([`material_point3_dual`]) costs
+/// [`super::material_point`]; one `DualSVec64<9>` pass ([`super::dual_material_point`]) costs
 /// 7–10 × as much (1.9–2.4 µs) instantiated in the calling crate as here, and 3.5–4.8 ×
 /// (1.2–1.3 µs) when it was compiled in this crate. `P` agrees with [`piola_total3`] to
 /// round-off (the same stress summed in another order).
@@ -444,30 +439,19 @@ pub fn material_point3(
     }
 }
 
-/// The same as [`material_point3`] by forward-mode dual numbers: `∂P/∂F` by one
-/// `DualSVec64<9>` pass of [`piola_total3`] over `F` (`Ḟ` fixed), `∂P/∂Ḟ` column by column
-/// from the linearity of `P_f` in `Ḟ` (column `3k + L` is `P_f(F, E_kL)`), as
-/// [`super::material_point`] does in plane strain.
-///
-/// The independent reference for the closed form (the tests compare them) and its
-/// benchmark baseline; several times slower (see [`material_point3`]), so the model uses
-/// the closed form. `P` is [`piola_total3`]'s to round-off (dual arithmetic rounds the
-/// last bits differently). Assumes [`admissible3`]`(F)` and `det F_a > 0`.
-#[inline]
-pub fn material_point3_dual(
-    yeoh: &Yeoh,
-    visc: &Viscosity,
-    F: &Matrix3<f64>,
-    Fdot: &Matrix3<f64>,
-    Fa: &Matrix3<f64>,
-) -> MaterialPoint3 {
-    let piola = |Fd: &_, Gd: &_| piola_total3(yeoh, visc, Fd, Gd, Fa);
-    dual_material_point(F, Fdot, piola, |E| visc.piola_viscous3(F, E))
-}
-
 #[cfg(test)]
 pub(super) mod tests {
     use super::*;
+    use crate::physics::dual_material_point;
+
+    /// [`material_point3`] by forward-mode dual numbers ([`dual_material_point`]: one
+    /// `DualSVec64<9>` pass of [`piola_total3`] over `F`, `∂P/∂Ḟ` from the linearity of `P_f`
+    /// in `Ḟ`), as [`super::super::material_point`] does in plane strain: the independent
+    /// reference for the closed form.
+    fn by_duals(m: (&Yeoh, &Viscosity), [F, Fdot, Fa]: [&Matrix3<f64>; 3]) -> MaterialPoint3 {
+        let piola = |Fd: &_, Gd: &_| piola_total3(m.0, m.1, Fd, Gd, Fa);
+        dual_material_point(F, Fdot, piola, |E| m.1.piola_viscous3(F, E))
+    }
     use crate::physics::hoop::{BlockDiag, HOOP, material_point_hoop, piola_total_hoop};
     use crate::physics::plane_strain::tests::{Rng, active, cytoplasm};
     use crate::physics::{material_point, piola_total, reference};
@@ -585,7 +569,7 @@ pub(super) mod tests {
     #[test]
     fn energy_uses_the_invariants_of_model_md() {
         // W from I₂ = ½(I₁² − tr C²) and I₃ = det C computed by nalgebra, against
-        // strain_energy3 (principal minors and the adjugate).
+        // strain_energy3_sym (principal minors and the adjugate).
         let mut rng = Rng::new(41);
         let m = Yeoh::from_engineering(500.0, 0.3, 1.5, 0.2).unwrap();
         for _ in 0..10 {
@@ -600,7 +584,7 @@ pub(super) mod tests {
                 + m.alpha3 * X * X * X
                 + m.beta * (I2 - 3.0 * I3.powf(2.0 / 3.0))
                 + 0.5 * m.lambda_y * (0.5 * I3.ln()).powi(2);
-            let w = m.strain_energy3(&C);
+            let w = m.strain_energy3_sym(Sym3::from_upper(&C));
             assert!((w - W).abs() < 1e-12 * W.abs().max(1.0), "{w} vs {W}");
             assert_eq!(m.energy3(&F, &Matrix3::identity()), w);
         }
@@ -617,7 +601,7 @@ pub(super) mod tests {
                 for (case, (F, Fa)) in cases(&mut rng, 12).into_iter().enumerate() {
                     let Fdot = Matrix3::from_fn(|_, _| rng.uniform(-1.0, 1.0));
                     let a = material_point3(&mat, &visc, &F, &Fdot, &Fa);
-                    let d = material_point3_dual(&mat, &visc, &F, &Fdot, &Fa);
+                    let d = by_duals((&mat, &visc), [&F, &Fdot, &Fa]);
                     // dual arithmetic rounds differently from f64 in the last bits
                     let P = piola_total3(&mat, &visc, &F, &Fdot, &Fa);
                     assert!(rel(&d.P, &P) < 1e-14, "case {case}");
@@ -769,7 +753,7 @@ pub(super) mod tests {
                 let mp2 = material_point(&mat, &visc, &F2, &G2, &Fa2);
                 for (name, mp) in [
                     ("closed form", material_point3(&mat, &visc, &F, &G, &Fa)),
-                    ("dual", material_point3_dual(&mat, &visc, &F, &G, &Fa)),
+                    ("dual", by_duals((&mat, &visc), [&F, &G, &Fa])),
                 ] {
                     let P3 = piola_total3(&mat, &visc, &F, &G, &Fa);
                     for P in [P3, mp.P] {

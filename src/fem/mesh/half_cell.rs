@@ -813,20 +813,6 @@ impl Mesh {
         self.nodes.len()
     }
 
-    /// The nodes along the outer boundary r = r_c, bottom to top:
-    /// vertex, mid-node, vertex, …, vertex (2 · outer_edges.len() + 1 nodes).
-    pub fn outer_boundary_nodes(&self) -> Vec<usize> {
-        let mut out = Vec::with_capacity(2 * self.outer_edges.len() + 1);
-        for e in &self.outer_edges {
-            if out.is_empty() {
-                out.push(e[0]);
-            }
-            out.push(e[1]);
-            out.push(e[2]);
-        }
-        out
-    }
-
     /// Area of domain `d` (or of the whole mesh with `None`), integrating det J of the
     /// isoparametric maps exactly (det J is quadratic in ξ; a degree-2 rule is exact).
     pub fn area(&self, d: Option<Domain>) -> f64 {
@@ -1259,7 +1245,9 @@ mod tests {
             }
             assert_eq!(n_boundary_outer, m.outer_edges.len());
             assert_eq!(m.outer_edges[0][0], m.points.cell_bottom);
-            let ob = m.outer_boundary_nodes();
+            // The outer boundary's nodes bottom to top: vertex, mid-node, vertex, …
+            let mut ob = vec![m.outer_edges[0][0]];
+            ob.extend(m.outer_edges.iter().flat_map(|e| [e[1], e[2]]));
             assert_eq!(ob.len(), 2 * m.outer_edges.len() + 1);
             assert_eq!(
                 (ob[0], ob[ob.len() - 1]),

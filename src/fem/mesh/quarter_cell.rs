@@ -1159,26 +1159,6 @@ impl Mesh3 {
             .collect())
     }
 
-    /// All boundary faces (used by one tetrahedron), outward, in element order.
-    pub fn boundary_faces(&self) -> Vec<[usize; 6]> {
-        let mut count: HashMap<[usize; 3], usize> = HashMap::new();
-        for el in &self.elements {
-            for lf in TET_FACES {
-                *count.entry(face_key(&lf.map(|k| el[k]))).or_insert(0) += 1;
-            }
-        }
-        let mut out = Vec::new();
-        for el in &self.elements {
-            for lf in TET_FACES {
-                let f = lf.map(|k| el[k]);
-                if count[&face_key(&f)] == 1 {
-                    out.push(f);
-                }
-            }
-        }
-        out
-    }
-
     /// Number of elements.
     pub fn n_elements(&self) -> usize {
         self.elements.len()
