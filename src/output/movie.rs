@@ -29,6 +29,9 @@ use super::geometry::{Backdrop, Bounds, substrate_floor};
 use super::{DrawError, OutputError};
 use crate::record::{Mesh3File, MeshFile, Snapshot, Snapshot3, Timed};
 
+/// A movie frame's drawing area.
+type Frame<'b> = DrawingArea<BitMapBackend<'b>, Shift>;
+
 /// Pixel size of a frame.
 pub const FRAME_SIZE: (u32, u32) = (800, 560);
 /// Largest number of frames in a movie.
@@ -56,12 +59,7 @@ pub trait FramePainter: Sized {
     /// NeuQuant speed of the colour quantisation of a frame (1 best … 30 fastest).
     fn quant_speed(&self) -> i32;
     /// Draws `s` with the title `title` into the frame `area` (filled white).
-    fn paint(
-        &mut self,
-        area: &DrawingArea<BitMapBackend<'_>, Shift>,
-        s: &Self::State,
-        title: String,
-    ) -> Result<(), DrawError>;
+    fn paint(&mut self, area: &Frame, s: &Self::State, title: String) -> Result<(), DrawError>;
 }
 
 /// An animated GIF being written, each frame drawn by the painter `P`.
@@ -105,12 +103,7 @@ impl FramePainter for ShapePainter {
         QUANT_SPEED
     }
 
-    fn paint(
-        &mut self,
-        area: &DrawingArea<BitMapBackend<'_>, Shift>,
-        s: &Snapshot,
-        title: String,
-    ) -> Result<(), DrawError> {
+    fn paint(&mut self, area: &Frame, s: &Snapshot, title: String) -> Result<(), DrawError> {
         let opts = ShapeStyleOptions {
             title,
             legend: false,
@@ -325,12 +318,7 @@ impl FramePainter for View3Painter {
         }
     }
 
-    fn paint(
-        &mut self,
-        area: &DrawingArea<BitMapBackend<'_>, Shift>,
-        s: &Snapshot3,
-        title: String,
-    ) -> Result<(), DrawError> {
+    fn paint(&mut self, area: &Frame, s: &Snapshot3, title: String) -> Result<(), DrawError> {
         match &self.framing {
             Framing::Section(plane, view) => {
                 let opts = ShapeStyleOptions {

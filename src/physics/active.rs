@@ -145,20 +145,23 @@ impl ActiveStrain {
             self.center[0] + self.center[1],
             "must be finite",
         )?;
-        let angle_ok = |t: f64| t.is_finite() && t > -90.0 && t <= 90.0;
-        if let Some(p) = self.pac {
+        // A region's amplitude and angle, with their names.
+        let amplitude_and_angle = |[name_e, name_theta]: [&'static str; 2], e: f64, theta: f64| {
             check(
-                p.e.is_finite() && (0.0..1.0).contains(&p.e),
-                "pac.e",
-                p.e,
+                e.is_finite() && (0.0..1.0).contains(&e),
+                name_e,
+                e,
                 "must lie in [0, 1)",
             )?;
             check(
-                angle_ok(p.theta_deg),
-                "pac.theta_deg",
-                p.theta_deg,
+                theta.is_finite() && theta > -90.0 && theta <= 90.0,
+                name_theta,
+                theta,
                 "must lie in (-90, 90]",
-            )?;
+            )
+        };
+        if let Some(p) = self.pac {
+            amplitude_and_angle(["pac.e", "pac.theta_deg"], p.e, p.theta_deg)?;
             for i in 0..2 {
                 check(
                     p.inner_axes[i].is_finite() && p.inner_axes[i] > 0.0,
@@ -177,18 +180,7 @@ impl ActiveStrain {
             }
         }
         if let Some(b) = self.bottom {
-            check(
-                b.e.is_finite() && (0.0..1.0).contains(&b.e),
-                "bottom.e",
-                b.e,
-                "must lie in [0, 1)",
-            )?;
-            check(
-                angle_ok(b.theta_deg),
-                "bottom.theta_deg",
-                b.theta_deg,
-                "must lie in (-90, 90]",
-            )?;
+            amplitude_and_angle(["bottom.e", "bottom.theta_deg"], b.e, b.theta_deg)?;
         }
         Ok(())
     }

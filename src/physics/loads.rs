@@ -252,7 +252,7 @@ pub fn adhesion_rate<T: Real, S: Surface<D>, const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::{Substrate, Substrate3};
+    use crate::physics::{Substrate, Substrate3, reference};
     use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
     use num_dual::DualSVec64;
 
@@ -364,7 +364,6 @@ mod tests {
     #[test]
     fn adhesion_force_and_rate_derivatives_match_finite_differences() {
         // variables: x (2), F (4), μ_as (1)
-        type D = DualSVec64<7>;
         let h = 1e-6;
         let N = Vector2::new(0.6, -0.8);
         let F0 = Matrix2::new(1.1, 0.2, -0.3, 0.9);
@@ -385,44 +384,48 @@ mod tests {
                 (8.5, y_top + 0.03, 1200.0),
             ] {
                 let v = [x, y, F0[(0, 0)], F0[(0, 1)], F0[(1, 0)], F0[(1, 1)], mu];
-                let dual = |i: usize| D::from_re(v[i]).derivative(i);
-                let xd = Vector2::new(dual(0), dual(1));
-                let Fd = Matrix2::new(dual(2), dual(3), dual(4), dual(5));
-                let f = adhesion_force(&s, &ad, &xd, &Fd, &N, dual(6), 0.7);
-                let r = adhesion_rate(&s, &ad, &xd, dual(6));
-                let eval = |w: &[f64; 7]| {
-                    let X = Vector2::new(w[0], w[1]);
-                    let F = Matrix2::new(w[2], w[3], w[4], w[5]);
-                    (
-                        adhesion_force(&s, &ad, &X, &F, &N, w[6], 0.7),
-                        adhesion_rate(&s, &ad, &X, w[6]),
-                    )
-                };
-                for k in 0..7 {
-                    let step = if k == 6 { 1e-3 } else { h };
-                    let (mut p, mut m) = (v, v);
-                    p[k] += step;
-                    m[k] -= step;
-                    let ((fp, rp), (fm, rm)) = (eval(&p), eval(&m));
-                    let fd = (fp - fm) / (2.0 * step);
-                    let rd = (rp - rm) / (2.0 * step);
-                    let fscale = mu.max(1.0) / ad.eps;
-                    assert!(
-                        (fd.x - eps(&f.x)[k]).abs() < 1e-6 * fscale,
-                        "{ad:?} {s:?} f_x k={k}"
-                    );
-                    assert!(
-                        (fd.y - eps(&f.y)[k]).abs() < 1e-6 * fscale,
-                        "{ad:?} {s:?} f_y k={k}"
-                    );
-                    let rscale = ad.mu_as0 / ad.eps.min(0.02 * ad.mu_as_max);
-                    assert!(
-                        (rd - eps(&r)[k]).abs() < 1e-6 * rscale,
-                        "{ad:?} {s:?} rate k={k}: {rd} vs {}",
-                        eps(&r)[k]
-                    );
-                }
+                check_adhesion_derivatives(&s, &ad, &N, v, h);
             }
+        }
+    }
+
+    /// The adhesion force's and rate's dual derivatives along x, F and μ_as against central
+    /// differences at `v` = (x, F row by row, μ_as) on `s` (`M = D + D² + 1`), t_as = 0.7.
+    fn check_adhesion_derivatives<S, const D: usize, const M: usize>(
+        s: &S,
+        ad: &Adhesion,
+        n: &SVector<f64, D>,
+        v: [f64; M],
+        h: f64,
+    ) where
+        S: Surface<D> + std::fmt::Debug,
+    {
+        let dual = |i: usize| DualSVec64::<M>::from_re(v[i]).derivative(i);
+        let xd = SVector::from_fn(|i, _| dual(i));
+        let fd = SMatrix::from_fn(|i, j| dual(D + D * i + j));
+        let f = adhesion_force(s, ad, &xd, &fd, n, dual(M - 1), 0.7);
+        let r = adhesion_rate(s, ad, &xd, dual(M - 1));
+        let eval = |w: &[f64; M]| {
+            let x = SVector::from_fn(|i, _| w[i]);
+            let F = SMatrix::from_fn(|i, j| w[D + D * i + j]);
+            let force = adhesion_force(s, ad, &x, &F, n, w[M - 1], 0.7);
+            (force, adhesion_rate(s, ad, &x, w[M - 1]))
+        };
+        let fscale = v[M - 1].max(1.0) / ad.eps;
+        let rscale = ad.mu_as0 / ad.eps.min(0.02 * ad.mu_as_max);
+        for k in 0..M {
+            let step = if k == M - 1 { 1e-3 } else { h };
+            let (mut p, mut m) = (v, v);
+            p[k] += step;
+            m[k] -= step;
+            let ((fp, rp), (fm, rm)) = (eval(&p), eval(&m));
+            let (dfd, rd) = ((fp - fm) / (2.0 * step), (rp - rm) / (2.0 * step));
+            for c in 0..D {
+                let e = (dfd[c] - eps(&f[c])[k]).abs();
+                assert!(e < 1e-6 * fscale, "{ad:?} {s:?} f_{c} k={k} at {v:?}");
+            }
+            let e = (rd - eps(&r)[k]).abs();
+            assert!(e < 1e-6 * rscale, "{ad:?} {s:?} rate k={k} at {v:?}");
         }
     }
 
@@ -513,17 +516,7 @@ mod tests {
         let s = Substrate::Flat { y_s: -2.0 };
         let F = Matrix2::new(1.2, 0.1, -0.2, 0.8);
         let lambda = 1.35;
-        let F3 = nalgebra::Matrix3::new(
-            F[(0, 0)],
-            F[(0, 1)],
-            0.0,
-            F[(1, 0)],
-            F[(1, 1)],
-            0.0,
-            0.0,
-            0.0,
-            lambda,
-        );
+        let F3 = crate::physics::three_d::tests::embed(&F, lambda);
         let J3 = F3.determinant();
         let N = Vector2::new(0.6, -0.8);
         let N3 = nalgebra::Vector3::new(N.x, N.y, 0.0);
@@ -557,37 +550,26 @@ mod tests {
 
     #[test]
     fn parameter_validation() {
-        assert!(crate::physics::reference::contact().validate().is_ok());
-        assert!(crate::physics::reference::adhesion().validate().is_ok());
-        assert!(
-            Contact {
-                eps: 0.0,
-                ..crate::physics::reference::contact()
-            }
-            .validate()
-            .is_err()
-        );
+        let (contact, adhesion) = (reference::contact(), reference::adhesion());
+        assert!(contact.validate().is_ok() && adhesion.validate().is_ok());
+        let eps = 0.0;
+        assert!(Contact { eps, ..contact }.validate().is_err());
+        let mu_as_max = 0.0;
         assert!(
             Adhesion {
-                mu_as_max: 0.0,
-                ..crate::physics::reference::adhesion()
+                mu_as_max,
+                ..adhesion
             }
             .validate()
             .is_err()
         );
-        assert!(
-            Adhesion {
-                e_f: f64::NAN,
-                ..crate::physics::reference::adhesion()
-            }
-            .validate()
-            .is_err()
-        );
+        let e_f = f64::NAN;
+        assert!(Adhesion { e_f, ..adhesion }.validate().is_err());
         // Excluding the substrate needs a positive half-width and a layer wider than
         // both bands.
         let excl = Adhesion {
             exclude_substrate: Some(0.1),
-            ..crate::physics::reference::adhesion()
+            ..adhesion
         };
         assert!(excl.validate().is_ok());
         for (e_f, eps_s) in [(1.5, 0.0), (1.5, f64::NAN), (0.15, 0.1)] {
@@ -731,7 +713,6 @@ mod tests {
     fn loads3_derivatives_match_finite_differences() {
         use crate::physics::Lattice;
         // variables: x (3), F (9), μ_as (1); contact: x and J
-        type D = DualSVec64<13>;
         type D4 = DualSVec64<4>;
         let h = 1e-6;
         let c = crate::physics::reference::contact();
@@ -775,37 +756,7 @@ mod tests {
                         v[3 + k] = F0[(k / 3, k % 3)];
                     }
                     v[12] = mu;
-                    let dual = |i: usize| D::from_re(v[i]).derivative(i);
-                    let xd = Vector3::new(dual(0), dual(1), dual(2));
-                    let Fd = Matrix3::from_fn(|i, j| dual(3 + 3 * i + j));
-                    let f = adhesion_force(s, &ad, &xd, &Fd, &N, dual(12), 0.7);
-                    let r = adhesion_rate(s, &ad, &xd, dual(12));
-                    let eval = |w: &[f64; 13]| {
-                        let X = Vector3::new(w[0], w[1], w[2]);
-                        let F = Matrix3::from_fn(|i, j| w[3 + 3 * i + j]);
-                        (
-                            adhesion_force(s, &ad, &X, &F, &N, w[12], 0.7),
-                            adhesion_rate(s, &ad, &X, w[12]),
-                        )
-                    };
-                    for k in 0..13 {
-                        let step = if k == 12 { 1e-3 } else { h };
-                        let (mut pp, mut mm) = (v, v);
-                        pp[k] += step;
-                        mm[k] -= step;
-                        let ((fp, rp), (fm, rm)) = (eval(&pp), eval(&mm));
-                        let fd = (fp - fm) / (2.0 * step);
-                        let rd = (rp - rm) / (2.0 * step);
-                        let fscale = mu.max(1.0) / ad.eps;
-                        for cpt in 0..3 {
-                            assert!(
-                                (fd[cpt] - eps(&f[cpt])[k]).abs() < 1e-6 * fscale,
-                                "{ad:?} {s:?} f_{cpt} k={k} at ({x}, {y}, {z})"
-                            );
-                        }
-                        let rscale = ad.mu_as0 / ad.eps.min(0.02 * ad.mu_as_max);
-                        assert!((rd - eps(&r)[k]).abs() < 1e-6 * rscale, "rate k={k}");
-                    }
+                    check_adhesion_derivatives(s, &ad, &N, v, h);
                 }
             }
             // contact: x and J

@@ -135,27 +135,22 @@ pub fn read_mesh3(path: &Path) -> Result<Mesh3File, ReadError> {
 
 /// Reads a 3-D state file and checks its sizes against the mesh.
 pub fn read_state3(path: &Path, mesh: &Mesh3File) -> Result<StateFile3, ReadError> {
-    let s: StateFile3 = read_json(path)?;
-    let st = &s.state;
-    check_state(
-        path,
-        mesh.nodes.len(),
-        mesh.elements.len(),
-        &st.u,
-        [st.element_strain.len(), st.element_jacobian.len()],
-    )?;
-    Ok(s)
+    let sizes = [mesh.nodes.len(), mesh.elements.len()];
+    read_checked(path, sizes, |s: &StateFile3| {
+        let st = &s.state;
+        (&st.u, [st.element_strain.len(), st.element_jacobian.len()])
+    })
 }
 
-/// A state's sizes against its mesh's `nn` nodes and `ne` elements (`per_element`: the
-/// lengths of its per-element arrays), and its displacements finite.
-fn check_state<const D: usize>(
+/// Reads a state file whose displacements and per-element array lengths `parts` gives,
+/// and checks them against its mesh's `nn` nodes and `ne` elements and finite.
+fn read_checked<T: DeserializeOwned, const D: usize>(
     path: &Path,
-    nn: usize,
-    ne: usize,
-    u: &[[f64; D]],
-    per_element: [usize; 2],
-) -> Result<(), ReadError> {
+    [nn, ne]: [usize; 2],
+    parts: impl Fn(&T) -> (&Vec<[f64; D]>, [usize; 2]),
+) -> Result<T, ReadError> {
+    let s: T = read_json(path)?;
+    let (u, per_element) = parts(&s);
     if u.len() != nn {
         return Err(ReadError::malformed(
             path,
@@ -171,7 +166,7 @@ fn check_state<const D: usize>(
     if u.iter().flatten().any(|v| !v.is_finite()) {
         return Err(ReadError::malformed(path, "non-finite displacement"));
     }
-    Ok(())
+    Ok(s)
 }
 
 fn read_text(path: &Path) -> Result<String, ReadError> {
@@ -376,15 +371,10 @@ fn parse_3d_columns(text: &str) -> Result<Observables3, RowError> {
 
 /// Reads a state file and checks its sizes against the mesh.
 pub fn read_state(path: &Path, mesh: &MeshFile) -> Result<StateFile, ReadError> {
-    let s: StateFile = read_json(path)?;
-    check_state(
-        path,
-        mesh.nodes.len(),
-        mesh.elements.len(),
-        &s.u,
-        [s.element_strain.len(), s.element_jacobian.len()],
-    )?;
-    Ok(s)
+    let sizes = [mesh.nodes.len(), mesh.elements.len()];
+    read_checked(path, sizes, |s: &StateFile| {
+        (&s.u, [s.element_strain.len(), s.element_jacobian.len()])
+    })
 }
 
 impl RunData {

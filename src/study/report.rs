@@ -368,7 +368,6 @@ pub struct StudyReport {
     pub runs: Vec<StudyRow>,
 }
 
-/// The ladder settings, as recorded in study.json.
 /// The ladders and tolerances of a study, as recorded in study.json.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct StudySettings {
