@@ -7,10 +7,10 @@
 //! - [`Quarter`]: ten-node tetrahedra on the quarter cell's [`Mesh3`], the substrate on its
 //!   pillar lattice [`Substrate3`]; the symmetry planes x = c_x and z = c_z.
 //!
-//! A shape names its mesh (which names its element's tabulation), its substrate and the dual numbers of its
-//! tangents (`D + D² + 1` directions for the band forces, `D + 1` for the adhesion rows),
-//! places the active strain and the symmetry, and sends the element loops to the
-//! formulation of the case's kinematic model. The physics itself is written once for
+//! A shape names its mesh (which names its element's tabulation), its substrate and the
+//! dual numbers of its tangents (`D + D² + 1` directions for the band forces, `D + 1` for
+//! the adhesion rows), places the active strain and the symmetry, and sends the element
+//! loops to the formulation of the case's kinematic model. The physics itself is written once for
 //! every dimension ([`crate::physics`]).
 
 use nalgebra::{Const, SMatrix, SVector, Vector2, Vector3};
