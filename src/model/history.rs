@@ -122,7 +122,7 @@ impl<const D: usize, S: LayerField<D>> AdhesionHistoryOf<D, S> {
 
     /// The drive `a = μ_as0 H_ε(d(x) + e_f)` at position `x`.
     fn drive(&self, x: [f64; D]) -> f64 {
-        self.adhesion.mu_as0 * layer(&self.substrate, &self.adhesion, &SVector::from(x))
+        self.adhesion.mu_as0 * layer(&self.adhesion, self.substrate.eval(&SVector::from(x)).0)
     }
 
     /// The exposure at time `t` in [s0.t, s1.t] from `mu0` at `s0.t`.

@@ -321,23 +321,17 @@ impl<const D: usize> BandPoint<D> {
     }
 }
 
-/// Body force of the bands at a point: contact `b_ct(x, J)` plus, with `mu` (membrane
-/// elements while adhesion acts), adhesion `b_as(x, F, μ_as)` along the outward radial
-/// reference direction `radial`, ramped by `t_as`. `J` is `det F`; with a hoop stretch
-/// `hoop = F₃₃` (axisymmetric) the contact takes `J = F₃₃ det F₂` and the adhesion its
-/// factor [`adhesion_hoop_factor`].
+/// Body force of the bands at a point where the substrate gives `surf = (d(x), n(x))` for
+/// the current position `x` ([`Surface::eval`], once per point): contact `b_ct(x, J)` plus,
+/// with `mu` (membrane elements while adhesion acts), adhesion `b_as(x, F, μ_as)` along the
+/// outward radial reference direction `radial`, ramped by `t_as`. `J` is `det F`; with a
+/// hoop stretch `hoop = F₃₃` (axisymmetric) the contact takes `J = F₃₃ det F₂` and the
+/// adhesion its factor [`adhesion_hoop_factor`].
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn band_force<
-    S: Shape<D, N, E>,
-    T: Real,
-    const D: usize,
-    const N: usize,
-    const E: usize,
->(
+pub(crate) fn band_force<T: Real, const D: usize>(
     p: &ModelParams,
-    sub: &S::Substrate,
-    x: &SVector<T, D>,
+    surf: (T, SVector<T, D>),
     f: &SMatrix<T, D, D>,
     j: T,
     hoop: Option<T>,
@@ -349,9 +343,10 @@ pub(crate) fn band_force<
         Some(l) => j * l,
         None => j,
     };
-    let mut b = contact_force(sub, &p.contact, x, j);
+    let d = surf.0;
+    let mut b = contact_force(&p.contact, surf, j);
     if let (Some(ad), Some(mu), Some(n)) = (&p.adhesion, mu, radial) {
-        let fa = adhesion_force(sub, ad, x, f, n, mu, t_as);
+        let fa = adhesion_force(ad, d, f, n, mu, t_as);
         b += match hoop {
             Some(l) => fa * adhesion_hoop_factor(ad, l),
             None => fa,
@@ -370,19 +365,13 @@ pub(crate) fn adhesion_acts<const D: usize, const N: usize>(
     el.with_mu && t_as > 0.0 && p.adhesion.is_some()
 }
 
-/// Whether the band force is exactly zero at the current position `x`, with its
-/// derivatives: below the contact band (`d ≤ −ε_ct`, where `H_ε` and its derivatives
-/// vanish) and, where adhesion acts (`adhesion`), below the fibronectin layer too
-/// (`d + e_f ≤ −ε`). The band rule's points there are skipped (a thick element reaching
+/// Whether the band force is exactly zero where the substrate's penetration depth is `d`,
+/// with its derivatives: below the contact band (`d ≤ −ε_ct`, where `H_ε` and its
+/// derivatives vanish) and, where adhesion acts (`adhesion`), below the fibronectin layer
+/// too (`d + e_f ≤ −ε`). The band rule's points there are skipped (a thick element reaching
 /// into the band has most of its points far above it).
 #[inline]
-fn band_is_zero<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize>(
-    p: &ModelParams,
-    sub: &S::Substrate,
-    x: &SVector<f64, D>,
-    adhesion: bool,
-) -> bool {
-    let (d, _) = sub.eval(x);
+fn band_is_zero(p: &ModelParams, d: f64, adhesion: bool) -> bool {
     let below_contact = d <= -p.contact.eps;
     match (&p.adhesion, adhesion) {
         (Some(ad), true) => below_contact && d + ad.e_f <= -ad.eps,
@@ -404,19 +393,19 @@ pub(crate) struct Band<'a, S: Shape<D, N, E>, const D: usize, const N: usize, co
 }
 
 impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> Band<'_, S, D, N, E> {
-    /// [`band_force`] at band point `q`.
+    /// [`band_force`] at band point `q`, where the substrate gives `surf`.
     #[inline(always)]
     fn force<T: Real>(
         &self,
         q: usize,
-        x: &SVector<T, D>,
+        surf: (T, SVector<T, D>),
         f: &SMatrix<T, D, D>,
         j: T,
         hoop: Option<T>,
         mu: Option<T>,
     ) -> SVector<T, D> {
         let radial = self.el.radial.get(q);
-        band_force::<S, T, D, N, E>(self.p, self.sub, x, f, j, hoop, radial, mu, self.t_as)
+        band_force(self.p, surf, f, j, hoop, radial, mu, self.t_as)
     }
 }
 
@@ -437,11 +426,15 @@ pub(crate) fn band_residual<
     let values = band.ctab.values();
     for q in 0..el.cgeo.jxw.len() {
         let nv = &values[q];
+        // The substrate at the point, evaluated once (the position is that of `pt` below).
+        let mut surf = None;
         if !S::CHECK_EVERY_BAND_POINT {
             let x = current_position(&el.cgeo.x[q], nv, &st.u);
-            if band_is_zero::<S, D, N, E>(p, sub, &x, mue.is_some()) {
+            let s = sub.eval(&x);
+            if band_is_zero(p, s.0, mue.is_some()) {
                 continue;
             }
+            surf = Some(s);
         }
         let pt = BandPoint::at(el, nv, q, st, mue);
         let j = det(&pt.f);
@@ -450,10 +443,17 @@ pub(crate) fn band_residual<
         if !(j > 0.0 && j3 > 0.0) {
             return Err(inadmissible(e, ElementPoint::Contact(q), "det F", j3));
         }
-        if S::CHECK_EVERY_BAND_POINT && band_is_zero::<S, D, N, E>(p, sub, &pt.x, mue.is_some()) {
-            continue;
-        }
-        let b = band.force(q, &pt.x, &pt.f, j, hoop, pt.mu);
+        let surf = match surf {
+            Some(s) => s,
+            None => {
+                let s = sub.eval(&pt.x);
+                if band_is_zero(p, s.0, mue.is_some()) {
+                    continue;
+                }
+                s
+            }
+        };
+        let b = band.force(q, surf, &pt.f, j, hoop, pt.mu);
         let w = el.cgeo.jxw[q];
         for a in 0..N {
             for i in 0..D {
@@ -488,7 +488,7 @@ pub(crate) fn band_tangent<
         let g = &el.cgeo.grads[q];
         let nv = &values[q];
         let x = current_position(&el.cgeo.x[q], nv, &st.u);
-        if band_is_zero::<S, D, N, E>(p, sub, &x, mue.is_some()) {
+        if band_is_zero(p, sub.eval(&x).0, mue.is_some()) {
             continue;
         }
         let pt = BandPoint::at(el, nv, q, st, mue);
@@ -499,7 +499,7 @@ pub(crate) fn band_tangent<
         let mud = pt.mu.map(|mu| S::BandDual::seeded(mu, mu_dir));
         // F₃₃ = x_r/X_r (axisymmetric) is a function of x: no dual direction of its own.
         let hoop = K::hoop(&xd, &el.cgeo.x[q]);
-        let b = band.force(q, &xd, &fd, j, hoop, mud);
+        let b = band.force(q, sub.eval(&xd), &fd, j, hoop, mud);
         let w = el.cgeo.jxw[q];
         for i in 0..D {
             let db = b[i].gradient();

@@ -13,7 +13,7 @@ use super::kinematics::{NodalOf, det};
 use super::{CellOf, Shape, deformation};
 use crate::fem::tri6::edge_shape;
 use crate::fem::{CellMesh, Domain, ElementTabulation};
-use crate::physics::{KinematicModel, contact_force};
+use crate::physics::{KinematicModel, Surface, contact_force};
 use crate::record::Observables;
 
 /// Sub-segments per boundary edge when measuring the contact length.
@@ -215,8 +215,8 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
                 } else {
                     1.0
                 };
-                total +=
-                    contact_force(&self.substrate, &p.contact, &x, det(&f) * f33) * el.cgeo.jxw[q];
+                let surf = self.substrate.eval(&x);
+                total += contact_force(&p.contact, surf, det(&f) * f33) * el.cgeo.jxw[q];
             }
         }
         total

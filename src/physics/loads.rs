@@ -130,32 +130,26 @@ impl Adhesion {
     }
 }
 
-/// Contact force per unit reference volume [pN/µm³] at current position `x` with
-/// `J = det F`: `b_ct = J μ_ct H_ε(d(x)) n(x)`, over the substrate `sub` in `D`
-/// dimensions.
+/// Contact force per unit reference volume [pN/µm³] at a current position `x` with
+/// `J = det F`: `b_ct = J μ_ct H_ε(d(x)) n(x)`, from the substrate's `(d(x), n(x))`
+/// ([`Surface::eval`], evaluated once per point by the caller and shared with the layer).
 #[inline(always)]
-pub fn contact_force<T: Real, S: Surface<D>, const D: usize>(
-    sub: &S,
+pub fn contact_force<T: Real, const D: usize>(
     c: &Contact,
-    x: &SVector<T, D>,
+    (d, n): (T, SVector<T, D>),
     J: T,
 ) -> SVector<T, D> {
-    let (d, n) = sub.eval(x);
     let h = heaviside(d, c.eps);
     n * (J * h * c.mu_ct)
 }
 
-/// Fibronectin-layer indicator at current position `x` [µm]: `H_ε(d(x) + e_f)` ∈ [0, 1],
-/// 1 within `e_f − ε` of the substrate and inside it; or, when the layer excludes the
-/// substrate (`exclude_substrate = Some(ε_s)`), `H_ε(d + e_f) − H_ε_s(d)`, 0 again inside
-/// the substrate.
+/// Fibronectin-layer indicator at a current position `x` [µm], from the substrate's
+/// penetration depth `d = d(x)`: `H_ε(d + e_f)` ∈ [0, 1], 1 within `e_f − ε` of the
+/// substrate and inside it; or, when the layer excludes the substrate
+/// (`exclude_substrate = Some(ε_s)`), `H_ε(d + e_f) − H_ε_s(d)`, 0 again inside the
+/// substrate.
 #[inline(always)]
-pub fn layer<T: Real, S: Surface<D>, const D: usize>(
-    sub: &S,
-    ad: &Adhesion,
-    x: &SVector<T, D>,
-) -> T {
-    let (d, _) = sub.eval(x);
+pub fn layer<T: Real>(ad: &Adhesion, d: T) -> T {
     let h = heaviside(d + ad.e_f, ad.eps);
     match ad.exclude_substrate {
         None => h,
@@ -181,21 +175,20 @@ pub fn cofactor<T: Real, const D: usize>(F: &SMatrix<T, D, D>) -> SMatrix<T, D, 
 
 /// Adhesive spreading force per unit reference volume [pN/µm³] (membrane only — the
 /// caller applies it there): `b_as = t_as μ_as g_l(x) a(F)`, with `g_l` the [`layer`]
-/// indicator, `N` the outward radial reference direction `(p − c)/|p − c|`, `μ_as`
+/// indicator from the substrate's penetration depth `d = d(x)`, `N` the outward radial reference direction `(p − c)/|p − c|`, `μ_as`
 /// [pN/µm³] the local adhesion coefficient, `t_as` the adhesion switch and `a(F)` by the
 /// readings of `ad`: `cof(F) N` (MODEL.md) or `cof(F) N/|cof(F) N|`
 /// ([`AdhesionDirection`]), times `J = det F` when `jacobian_factor`.
 #[inline(always)]
-pub fn adhesion_force<T: Real, S: Surface<D>, const D: usize>(
-    sub: &S,
+pub fn adhesion_force<T: Real, const D: usize>(
     ad: &Adhesion,
-    x: &SVector<T, D>,
+    d: T,
     F: &SMatrix<T, D, D>,
     N_ref: &SVector<f64, D>,
     mu_as: T,
     t_as: f64,
 ) -> SVector<T, D> {
-    let h = layer(sub, ad, x);
+    let h = layer(ad, d);
     let N: SVector<T, D> = N_ref.map(cst::<T>);
     let cof = cofactor(F);
     let mut a = cof * N;
@@ -244,7 +237,7 @@ pub fn adhesion_rate<T: Real, S: Surface<D>, const D: usize>(
     x: &SVector<T, D>,
     mu_as: T,
 ) -> T {
-    let h = layer(sub, ad, x);
+    let h = layer(ad, sub.eval(x).0);
     let cap = smooth_step(mu_as, 0.98 * ad.mu_as_max, ad.mu_as_max);
     h * (-cap + 1.0) * ad.mu_as0
 }
@@ -275,21 +268,21 @@ mod tests {
         let J = 1.3;
         // above the band (d < −ε)
         assert_eq!(
-            contact_force(&s, &c, &Vector2::new(0.0, -1.85), J),
+            contact_force(&c, s.eval(&Vector2::new(0.0, -1.85)), J),
             Vector2::zeros()
         );
         // deep inside (d > ε)
-        let f = contact_force(&s, &c, &Vector2::new(0.0, -2.2), J);
+        let f = contact_force(&c, s.eval(&Vector2::new(0.0, -2.2)), J);
         assert_eq!(f, Vector2::new(0.0, J * c.mu_ct));
         // on the surface: half
-        let f = contact_force(&s, &c, &Vector2::new(0.0, -2.0), J);
+        let f = contact_force(&c, s.eval(&Vector2::new(0.0, -2.0)), J);
         assert!((f.y - 0.5 * J * c.mu_ct).abs() < 1e-12);
         // pillars: on a side, deep inside → along the outward side normal
         let p = Substrate::Pillars(crate::physics::reference::pillars());
         let mid = crate::physics::reference::pillars().y_top - 4.0; // mid-height of the pillars
-        let f = contact_force(&p, &c, &Vector2::new(11.7, mid), 1.0);
+        let f = contact_force(&c, p.eval(&Vector2::new(11.7, mid)), 1.0);
         assert!((f - Vector2::new(c.mu_ct, 0.0)).norm() < 1e-9, "f = {f}");
-        let f = contact_force(&p, &c, &Vector2::new(12.2, mid), 1.0);
+        let f = contact_force(&c, p.eval(&Vector2::new(12.2, mid)), 1.0);
         assert_eq!(f, Vector2::zeros());
     }
 
@@ -309,15 +302,15 @@ mod tests {
             ] {
                 let xd = Vector2::new(D::from_re(x).derivative(0), D::from_re(y).derivative(1));
                 let Jd = D::from_re(J).derivative(2);
-                let f = contact_force(&s, &c, &xd, Jd);
+                let f = contact_force(&c, s.eval(&xd), Jd);
                 let base = [x, y, J];
                 for k in 0..3 {
                     let mut p = base;
                     let mut m = base;
                     p[k] += h;
                     m[k] -= h;
-                    let fp = contact_force(&s, &c, &Vector2::new(p[0], p[1]), p[2]);
-                    let fm = contact_force(&s, &c, &Vector2::new(m[0], m[1]), m[2]);
+                    let fp = contact_force(&c, s.eval(&Vector2::new(p[0], p[1])), p[2]);
+                    let fm = contact_force(&c, s.eval(&Vector2::new(m[0], m[1])), m[2]);
                     let fd = (fp - fm) / (2.0 * h);
                     let scale = c.mu_ct / c.eps;
                     assert!(
@@ -403,12 +396,12 @@ mod tests {
         let dual = |i: usize| DualSVec64::<M>::from_re(v[i]).derivative(i);
         let xd = SVector::from_fn(|i, _| dual(i));
         let fd = SMatrix::from_fn(|i, j| dual(D + D * i + j));
-        let f = adhesion_force(s, ad, &xd, &fd, n, dual(M - 1), 0.7);
+        let f = adhesion_force(ad, s.eval(&xd).0, &fd, n, dual(M - 1), 0.7);
         let r = adhesion_rate(s, ad, &xd, dual(M - 1));
         let eval = |w: &[f64; M]| {
             let x = SVector::from_fn(|i, _| w[i]);
             let F = SMatrix::from_fn(|i, j| w[D + D * i + j]);
-            let force = adhesion_force(s, ad, &x, &F, n, w[M - 1], 0.7);
+            let force = adhesion_force(ad, s.eval(&x).0, &F, n, w[M - 1], 0.7);
             (force, adhesion_rate(s, ad, &x, w[M - 1]))
         };
         let fscale = v[M - 1].max(1.0) / ad.eps;
@@ -437,13 +430,13 @@ mod tests {
         let N = Vector2::new(0.0, -1.0);
         // inside the layer (d + e_f > ε): full force t_as μ cof(F) N; cof(F) = J F⁻ᵀ
         let X = Vector2::new(0.0, -1.0);
-        let f = adhesion_force(&s, &ad, &X, &F, &N, 100.0, 0.5);
+        let f = adhesion_force(&ad, s.eval(&X).0, &F, &N, 100.0, 0.5);
         let cof = F.try_inverse().unwrap().transpose() * F.determinant();
         assert!((f - cof * N * 50.0).norm() < 1e-12);
         // outside the layer: none
         let X = Vector2::new(0.0, -0.3);
         assert_eq!(
-            adhesion_force(&s, &ad, &X, &F, &N, 100.0, 0.5),
+            adhesion_force(&ad, s.eval(&X).0, &F, &N, 100.0, 0.5),
             Vector2::zeros()
         );
         assert_eq!(adhesion_rate(&s, &ad, &X, 0.0), 0.0);
@@ -454,7 +447,7 @@ mod tests {
         assert_eq!(adhesion_rate(&s, &ad, &X, ad.mu_as_max), 0.0);
         assert!((adhesion_rate(&s, &ad, &X, 0.99 * ad.mu_as_max) - 0.5 * ad.mu_as0).abs() < 1e-12);
         // layer indicator is ½ at distance e_f from the surface
-        assert!((layer(&s, &ad, &Vector2::new(3.0_f64, -0.5)) - 0.5).abs() < 1e-12);
+        assert!((layer(&ad, s.eval(&Vector2::new(3.0_f64, -0.5)).0) - 0.5).abs() < 1e-12);
     }
 
     #[test]
@@ -467,14 +460,14 @@ mod tests {
         let N = Vector2::new(0.6, -0.8);
         let X = Vector2::new(0.0_f64, -1.0); // inside the layer, above the substrate's band
         let cof_n = F.try_inverse().unwrap().transpose() * N * J;
-        let f0 = adhesion_force(&s, &d, &X, &F, &N, 100.0, 0.5);
+        let f0 = adhesion_force(&d, s.eval(&X).0, &F, &N, 100.0, 0.5);
         assert!((f0 - cof_n * 50.0).norm() < 1e-12);
         // Unit: the same direction, length t_as μ_as.
         let unit = Adhesion {
             direction: AdhesionDirection::Unit,
             ..d
         };
-        let f = adhesion_force(&s, &unit, &X, &F, &N, 100.0, 0.5);
+        let f = adhesion_force(&unit, s.eval(&X).0, &F, &N, 100.0, 0.5);
         assert!((f - cof_n / cof_n.norm() * 50.0).norm() < 1e-12);
         assert!((f.norm() - 50.0).abs() < 1e-12);
         // J f_as: J times the default.
@@ -482,7 +475,7 @@ mod tests {
             jacobian_factor: true,
             ..d
         };
-        let f = adhesion_force(&s, &with_j, &X, &F, &N, 100.0, 0.5);
+        let f = adhesion_force(&with_j, s.eval(&X).0, &F, &N, 100.0, 0.5);
         assert!((f - f0 * J).norm() < 1e-12);
         // Excluding the substrate: the same above its band, ½ less on its surface, nothing
         // inside it (where the default layer is 1).
@@ -490,19 +483,19 @@ mod tests {
             exclude_substrate: Some(eps_ct),
             ..d
         };
-        assert_eq!(layer(&s, &excl, &X), layer(&s, &d, &X));
+        assert_eq!(layer(&excl, s.eval(&X).0), layer(&d, s.eval(&X).0));
         let on = Vector2::new(0.0_f64, -2.0);
-        assert_eq!(layer(&s, &d, &on), 1.0);
-        assert!((layer(&s, &excl, &on) - 0.5).abs() < 1e-15);
+        assert_eq!(layer(&d, s.eval(&on).0), 1.0);
+        assert!((layer(&excl, s.eval(&on).0) - 0.5).abs() < 1e-15);
         let inside = Vector2::new(0.0_f64, -2.5);
-        assert_eq!(layer(&s, &d, &inside), 1.0);
-        assert_eq!(layer(&s, &excl, &inside), 0.0);
+        assert_eq!(layer(&d, s.eval(&inside).0), 1.0);
+        assert_eq!(layer(&excl, s.eval(&inside).0), 0.0);
         assert_eq!(adhesion_rate(&s, &excl, &inside, 0.0), 0.0);
         assert_eq!(adhesion_rate(&s, &d, &inside, 0.0), d.mu_as0);
         // The layer indicator stays in [0, 1] across both bands.
         for k in 0..=400 {
             let x = Vector2::new(0.0, -2.6 + 1.2 * k as f64 / 400.0);
-            let g = layer(&s, &excl, &x);
+            let g = layer(&excl, s.eval(&x).0);
             assert!((0.0..=1.0).contains(&g), "y = {}: {g}", x.y);
         }
     }
@@ -538,7 +531,7 @@ mod tests {
                     a *= J3;
                 }
                 let exact = Vector2::new(a.x, a.y) * (100.0 * 0.5);
-                let f = adhesion_force(&s, &ad, &X, &F, &N, 100.0, 0.5)
+                let f = adhesion_force(&ad, s.eval(&X).0, &F, &N, 100.0, 0.5)
                     * adhesion_hoop_factor(&ad, lambda);
                 assert!(
                     (f - exact).norm() < 1e-12 * exact.norm(),
@@ -644,17 +637,17 @@ mod tests {
                     };
                     let (X2, X3) = (Vector2::new(x, y), Vector3::new(x, y, z0));
                     let J = rng.uniform(0.7, 1.3);
-                    let f2 = contact_force(&s2, &c, &X2, J);
-                    let f3 = contact_force(&s3, &c, &X3, J);
+                    let f2 = contact_force(&c, s2.eval(&X2), J);
+                    let f3 = contact_force(&c, s3.eval(&X3), J);
                     assert_eq!(f3, Vector3::new(f2.x, f2.y, 0.0), "{s3:?} ({x}, {y})");
-                    assert_eq!(layer(&s3, &ad, &X3), layer(&s2, &ad, &X2));
+                    assert_eq!(layer(&ad, s3.eval(&X3).0), layer(&ad, s2.eval(&X2).0));
                     let F2 = crate::physics::plane_strain::tests::Rng::deformation(&mut rng, 0.4);
                     let phi = rng.uniform(-3.0, 3.0);
                     let N2 = Vector2::new(phi.cos(), phi.sin());
                     let N3 = Vector3::new(N2.x, N2.y, 0.0);
                     let mu = rng.uniform(0.0, 1400.0);
-                    let a2 = adhesion_force(&s2, &ad, &X2, &F2, &N2, mu, 0.7);
-                    let a3 = adhesion_force(&s3, &ad, &X3, &embed(&F2), &N3, mu, 0.7);
+                    let a2 = adhesion_force(&ad, s2.eval(&X2).0, &F2, &N2, mu, 0.7);
+                    let a3 = adhesion_force(&ad, s3.eval(&X3).0, &embed(&F2), &N3, mu, 0.7);
                     let scale = mu * (1.0 + F2.norm()).powi(2);
                     assert!(
                         (a3 - Vector3::new(a2.x, a2.y, 0.0)).norm() <= 1e-14 * scale,
@@ -699,13 +692,13 @@ mod tests {
         };
         let mid = p.y_top - 4.0;
         // inside the z side face of the pillar at (8, 8), deep in the band: μ_ct e_z
-        let f = contact_force(&s, &c, &Vector3::new(8.0, mid, 11.7), 1.0);
+        let f = contact_force(&c, s.eval(&Vector3::new(8.0, mid, 11.7)), 1.0);
         assert!(
             (f - Vector3::new(0.0, 0.0, c.mu_ct)).norm() < 1e-9,
             "f = {f}"
         );
         // and nothing 0.2 µm outside it
-        let f = contact_force(&s, &c, &Vector3::new(8.0, mid, 12.2), 1.0);
+        let f = contact_force(&c, s.eval(&Vector3::new(8.0, mid, 12.2)), 1.0);
         assert_eq!(f, Vector3::zeros());
     }
 
@@ -767,14 +760,14 @@ mod tests {
                     D4::from_re(y).derivative(1),
                     D4::from_re(z).derivative(2),
                 );
-                let f = contact_force(s, &c, &xd, D4::from_re(J).derivative(3));
+                let f = contact_force(&c, s.eval(&xd), D4::from_re(J).derivative(3));
                 let base = [x, y, z, J];
                 for k in 0..4 {
                     let (mut pp, mut mm) = (base, base);
                     pp[k] += 1e-7;
                     mm[k] -= 1e-7;
-                    let fp = contact_force(s, &c, &Vector3::new(pp[0], pp[1], pp[2]), pp[3]);
-                    let fm = contact_force(s, &c, &Vector3::new(mm[0], mm[1], mm[2]), mm[3]);
+                    let fp = contact_force(&c, s.eval(&Vector3::new(pp[0], pp[1], pp[2])), pp[3]);
+                    let fm = contact_force(&c, s.eval(&Vector3::new(mm[0], mm[1], mm[2])), mm[3]);
                     let fd = (fp - fm) / 2e-7;
                     let scale = c.mu_ct / c.eps;
                     for cpt in 0..3 {
