@@ -176,6 +176,25 @@ fn a_tiny_sweep_writes_its_table_resumes_and_shards_collect_to_the_same_table() 
     assert!(stdout.contains("(0 run, 4 reused)"), "{stdout}");
     assert_eq!(mtime(&summary), before);
     let direct = without_wall(&format!("{dir}/sweep.csv"));
+    // A point run when a default was different: `case.ron` omits the field at its default,
+    // so only `resolved.txt` tells; the point runs again, and so does one from before
+    // `resolved.txt` was written.
+    let resolved = format!("{dir}/points/g1_1/resolved.txt");
+    let was = std::fs::read_to_string(&resolved).unwrap();
+    let case_ron = std::fs::read_to_string(format!("{dir}/points/g1_1/case.ron")).unwrap();
+    assert!(
+        was.contains("krylov: None") && !case_ron.contains("krylov"),
+        "{was}"
+    );
+    std::fs::write(&resolved, was.replacen("nu: 0.45", "nu: 0.4", 1)).unwrap();
+    assert_ne!(std::fs::read_to_string(&resolved).unwrap(), was);
+    std::fs::remove_file(format!("{dir}/points/g0_0/resolved.txt")).unwrap();
+    let res = cellsim(&["sweep", SWEEP, "--out", &dir, "--jobs", "2"]);
+    let (stdout, stderr) = text(&res);
+    assert_eq!(res.status.code(), Some(0), "{stderr}");
+    assert!(stdout.contains("(2 run, 2 reused)"), "{stdout}");
+    assert_eq!(std::fs::read_to_string(&resolved).unwrap(), was);
+    assert_eq!(without_wall(&format!("{dir}/sweep.csv")), direct);
     eprintln!("fast-flat sweep: {first:.1} s wall, resumed in {second:.1} s");
 
     // The figures are redrawn from the table alone.

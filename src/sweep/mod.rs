@@ -25,11 +25,13 @@
 //! not apply at all (an unknown field, a value of the wrong type) stops the sweep before
 //! anything runs.
 //!
-//! `DIR/points/<id>/` holds `case.ron` (the resolved case, as `cellsim check` prints it)
-//! and the run's usual files, or `invalid.txt` (the validation message), or `error.txt`
+//! `DIR/points/<id>/` holds `case.ron` (the resolved case, as `cellsim check` prints it),
+//! `resolved.txt` (the same case with every field, those at their defaults included, as
+//! the code that ran it read them) and the run's usual files, or `invalid.txt` (the validation message), or `error.txt`
 //! (a run that could not start). `DIR/sweep.json` records the design and the settings,
 //! `DIR/sweep.csv` the results ([`table`]). Running the same sweep again skips the points
-//! whose `case.ron` is unchanged and whose summary says finished (or failed, unless
+//! whose `case.ron` and `resolved.txt` are unchanged (a default changed since the point
+//! ran leaves `case.ron` as it was, not `resolved.txt`) and whose summary says finished (or failed, unless
 //! `retry_failed`); `--shard i/K` runs the points k with k mod K = i only, and
 //! [`collect`] assembles the table and figures from the point directories.
 
@@ -746,13 +748,22 @@ pub fn read_row(id: &str, values: &[String], dir: &Path) -> Row {
     }
 }
 
-/// Whether a point's directory holds a run of `text` that need not run again.
-fn is_done(dir: &Path, text: &str, retry_failed: bool) -> bool {
-    if std::fs::read_to_string(dir.join("case.ron"))
-        .ok()
-        .as_deref()
-        != Some(text)
-    {
+/// The file of a point's directory that holds [`resolved`].
+const RESOLVED: &str = "resolved.txt";
+
+/// A case with every field, those at their defaults included (which `case.ron` omits):
+/// what a point's run is compared by, beside its text.
+fn resolved(case: &Case) -> String {
+    format!("{case:#?}\n")
+}
+
+/// Whether a point's directory holds a run of `case` (`text`: its `case.ron`) that need not
+/// run again. A directory from before `resolved.txt` was written runs again.
+fn is_done(dir: &Path, case: &Case, text: &str, retry_failed: bool) -> bool {
+    let holds = |name: &str, want: &str| {
+        std::fs::read_to_string(dir.join(name)).ok().as_deref() == Some(want)
+    };
+    if !holds("case.ron", text) || !holds(RESOLVED, &resolved(case)) {
         return false;
     }
     match crate::record::read::read_summary(dir) {
@@ -1026,7 +1037,7 @@ impl Todo {
                     }
                     todo.rows[k] = Some(read_row(&p.id, &p.values, &dir));
                 }
-                Ok((_, text)) if is_done(&dir, text, retry_failed) => {
+                Ok((case, text)) if is_done(&dir, case, text, retry_failed) => {
                     todo.reused += 1;
                     todo.rows[k] = Some(read_row(&p.id, &p.values, &dir));
                     first_with.entry(text).or_insert(k);
@@ -1382,6 +1393,7 @@ fn run_point(p: &Point, dir: &Path, opts: &SweepOptions) -> Result<Row, SweepErr
         return Ok(read_row(&p.id, &p.values, dir));
     };
     reset_point_dir(dir, "case.ron", text)?;
+    write_atomic(&dir.join(RESOLVED), &resolved(case))?;
     let mut settings = RunSettings::from_case(case);
     settings.max_wall_seconds = opts.max_wall;
     let ropts = RunOptions {
