@@ -55,11 +55,11 @@ robertson: deps
 	$(CARGO) run --release --example robertson
 
 bench: deps
-	$(CARGO) bench
+	$(CARGO) bench --features bench
 
 lint: deps
 	$(CARGO) fmt --all -- --check
-	$(CARGO) clippy --release --all-targets -- -D warnings
+	$(CARGO) clippy --release --all-targets --features bench -- -D warnings
 
 clean:
 	$(CARGO) clean

@@ -11,7 +11,7 @@
 //! t = 45 000 s (gravity, adhesion and active strain all on), and cj = 1/(10 s) (no
 //! inertia) or 1/(10 ms) (inertia, as during the fall).
 //!
-//! `cargo bench --bench kernels`
+//! `cargo bench --features bench --bench kernels`
 
 use cellsim::dae::State;
 use std::hint::black_box;

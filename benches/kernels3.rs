@@ -10,7 +10,7 @@
 //!   default pillars, points in the contact band.
 //!
 //! Each benchmark runs the kernel over all `N` inputs; the machine is shared, so compare
-//! ratios. `cargo bench --bench kernels3`
+//! ratios. `cargo bench --features bench --bench kernels3`
 
 #![allow(non_snake_case)]
 

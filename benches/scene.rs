@@ -8,7 +8,7 @@
 //!   landing, first bounce), with the full-size LU (`faer`) and the condensed one
 //!   (`faer-condensed`) at refinement 0.5 and 1: the whole-run gain of the condensed solve.
 //!
-//! `cargo bench --bench scene`
+//! `cargo bench --features bench --bench scene`
 
 use std::path::Path;
 use std::time::Duration;
