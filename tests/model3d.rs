@@ -706,7 +706,7 @@ fn hertz3(e: f64, h_bottom: f64, eps_ct: f64, mu_ct: f64, degree: u32, sub: u32)
     let p = scene::model_params(&case, "hertz-3d.ron", false).unwrap();
     let m = Cell3::new(params3(p), mesh3(h_bottom, 1.5)).unwrap();
     let atol = m.atol_vector(1e-6);
-    let ida = ida_to(m, atol, 150.0, LinearSolverKind::UmfpackNd);
+    let ida = ida_to(m, atol, 150.0, LinearSolverKind::Faer);
     let (m, y) = (ida.dae(), ida.y());
     // Whole ball: four quarters.
     let weight = 4.0 * m.weight();

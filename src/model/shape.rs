@@ -10,8 +10,8 @@
 //! A shape names its mesh (which names its element's tabulation), its substrate and the
 //! dual numbers of its tangents (`D + D² + 1` directions for the band forces, `D + 1` for
 //! the adhesion rows), places the active strain and the symmetry, and sends the element
-//! loops to the formulation of the case's kinematic model. The physics itself is written once for
-//! every dimension ([`crate::physics`]).
+//! loops to the formulation of the case's kinematic model. The physics itself is written
+//! once for every dimension ([`crate::physics`]).
 
 use nalgebra::{Const, SMatrix, SVector, Vector2, Vector3};
 use num_dual::DualSVec64;

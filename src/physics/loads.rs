@@ -173,12 +173,12 @@ pub fn cofactor<T: Real, const D: usize>(F: &SMatrix<T, D, D>) -> SMatrix<T, D, 
     })
 }
 
-/// Adhesive spreading force per unit reference volume [pN/µm³] (membrane only — the
-/// caller applies it there): `b_as = t_as μ_as g_l(x) a(F)`, with `g_l` the [`layer`]
-/// indicator from the substrate's penetration depth `d = d(x)`, `N` the outward radial reference direction `(p − c)/|p − c|`, `μ_as`
-/// [pN/µm³] the local adhesion coefficient, `t_as` the adhesion switch and `a(F)` by the
-/// readings of `ad`: `cof(F) N` (MODEL.md) or `cof(F) N/|cof(F) N|`
-/// ([`AdhesionDirection`]), times `J = det F` when `jacobian_factor`.
+/// Adhesive spreading force per unit reference volume [pN/µm³] (membrane only — the caller
+/// applies it there): `b_as = t_as μ_as g_l(x) a(F)`, with `g_l` the [`layer`] indicator
+/// from the substrate's penetration depth `d = d(x)`, `N` the outward radial reference
+/// direction `(p − c)/|p − c|`, `μ_as` [pN/µm³] the local adhesion coefficient, `t_as` the
+/// adhesion switch and `a(F)` by the readings of `ad`: `cof(F) N` (MODEL.md) or
+/// `cof(F) N/|cof(F) N|` ([`AdhesionDirection`]), times `J = det F` when `jacobian_factor`.
 #[inline(always)]
 pub fn adhesion_force<T: Real, const D: usize>(
     ad: &Adhesion,

@@ -26,14 +26,15 @@
 //! anything runs.
 //!
 //! `DIR/points/<id>/` holds `case.ron` (the resolved case, as `cellsim check` prints it),
-//! `resolved.txt` (the same case with every field, those at their defaults included, as
-//! the code that ran it read them) and the run's usual files, or `invalid.txt` (the validation message), or `error.txt`
-//! (a run that could not start). `DIR/sweep.json` records the design and the settings,
-//! `DIR/sweep.csv` the results ([`table`]). Running the same sweep again skips the points
-//! whose `case.ron` and `resolved.txt` are unchanged (a default changed since the point
-//! ran leaves `case.ron` as it was, not `resolved.txt`) and whose summary says finished (or failed, unless
-//! `retry_failed`); `--shard i/K` runs the points k with k mod K = i only, and
-//! [`collect`] assembles the table and figures from the point directories.
+//! `resolved.txt` (the same case with every field, those at their defaults included, as the
+//! code that ran it read them) and the run's usual files, or `invalid.txt` (the validation
+//! message), or `error.txt` (a run that could not start). `DIR/sweep.json` records the
+//! design and the settings, `DIR/sweep.csv` the results ([`table`]). Running the same sweep
+//! again skips the points whose `case.ron` and `resolved.txt` are unchanged (a default
+//! changed since the point ran leaves `case.ron` as it was, not `resolved.txt`) and whose
+//! summary says finished (or failed, unless `retry_failed`); `--shard i/K` runs the points
+//! k with k mod K = i only, and [`collect`] assembles the table and figures from the point
+//! directories.
 
 pub mod compare;
 pub mod design;
