@@ -54,7 +54,10 @@ fn adding_the_adhesion_unknowns_keeps_the_state_consistent() {
     let t0 = small.params.phases.t_g0;
     // Advance the history over one step into the layer, then join at its end.
     small.accepted_step(t0, &y, &yp);
+    // The element loops on the thread pool carry over to the new system.
+    small.set_parallel(true);
     let mut big = small.with_adhesion_unknowns(t0, &y, &yp).unwrap();
+    assert!(big.parallel());
     let (t, y2, yp2) = big.initial();
     assert_eq!(t, t0);
     let mut r = vec![0.0; big.size()];

@@ -84,6 +84,19 @@ fn ida_and_bdf2_agree_on_a_short_scene() {
     // The scene moved: the comparison is not between two resting states.
     assert!(ida.last().unwrap()[2] < -5.0);
 
+    // The element loops on the thread pool (`solver.parallel_elements`), carried across the
+    // run's changes of system: the same bits.
+    let (sp, par, _) = run_case(
+        "cases/fast/push-pull-short-drag.ron",
+        "agree-parallel",
+        |s| {
+            s.rtol = 1e-6;
+            s.parallel_elements = true;
+        },
+    );
+    assert!(sp.finished && sp.settings.parallel_elements);
+    assert_eq!(ida, par);
+
     // IDA with its Newton systems solved by GMRES preconditioned by the kept LU
     // (`solver.krylov`): the same solution to the same tolerance.
     let (sk, kry, _) = run_case("cases/fast/push-pull-short-drag.ron", "agree-krylov", |s| {

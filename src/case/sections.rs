@@ -997,6 +997,12 @@ pub struct Solver {
     /// (`Some(Krylov(max_dim: 5, eps_lin: 0.05))`). Default none. Unused by BDF2.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub krylov: Option<Krylov>,
+    /// Compute the residual's and the Jacobian's element loops on rayon's thread pool
+    /// (one thread per core; blocks of 64 elements, added in element order: the same bits
+    /// either way). Default false: on the 2-D meshes the pool's synchronisation costs
+    /// more than it saves (docs/benchmarks.md); the 3-D scenes turn it on.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub parallel_elements: bool,
 }
 
 /// GMRES (SUNDIALS' SPGMR) on IDA's Newton systems, `J v` by IDA's difference quotients of
@@ -1038,6 +1044,7 @@ impl Default for Solver {
             delta_cj: 0.25,
             newton_iters: 4,
             krylov: None,
+            parallel_elements: false,
         }
     }
 }

@@ -358,7 +358,9 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
 
     /// Runs the element loops (residual and Jacobian) on rayon's thread pool. The results
     /// are the same bits either way: each element's contribution is computed on its own
-    /// and the contributions are added in element order. Off in the 2-D runs: on 2 cores
+    /// and the contributions are added in element order (`solver.parallel_elements`, on
+    /// in the 3-D scenes: 0.83× the wall time of the coarse eighth push-pull with GMRES,
+    /// docs/benchmarks.md). Off in the 2-D runs: on 2 cores
     /// it made the flat gravity phase 1.17× slower at refine 1 and 2 and push-pull 1.22×
     /// (paired runs against `RAYON_NUM_THREADS=1`, medians of 3–7, quiet machine,
     /// 2026-12-02; perf put a fifth of the samples in the pool's `sched_yield` and futex

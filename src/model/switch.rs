@@ -31,7 +31,9 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
     fn rebuilt(&self, params: ModelParams) -> Result<Self, ModelError> {
         let deferred = self.history.is_some();
         let with_mu = !deferred && self.params.adhesion.is_some();
-        Self::build(params, self.mesh.clone(), self.constraints, with_mu)
+        let mut m = Self::build(params, self.mesh.clone(), self.constraints, with_mu)?;
+        m.parallel = self.parallel;
+        Ok(m)
     }
 
     /// This cell's deferred μ_as history, if any, restarted at `t` from the membrane
@@ -144,6 +146,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         let exposure = h.at(t).map_err(|e| restart_err(e.to_string()))?;
         let mut m =
             Self::with_constraints(self.params.clone(), self.mesh.clone(), self.constraints)?;
+        m.parallel = self.parallel;
         debug_assert_eq!(m.dofs.n, self.dofs.n + exposure.len());
         let mut y2 = y.to_vec();
         let mut yp2 = yp.to_vec();

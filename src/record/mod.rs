@@ -68,6 +68,9 @@ pub struct RunSettings {
     /// IDA's Newton systems by GMRES preconditioned by the LU (`None`: the LU alone).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub krylov: Option<case::Krylov>,
+    /// The element loops on rayon's thread pool.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub parallel_elements: bool,
 }
 
 fn default_delta_cj() -> f64 {
@@ -106,6 +109,7 @@ impl RunSettings {
             delta_cj: s.delta_cj,
             newton_iters: s.newton_iters,
             krylov: s.krylov,
+            parallel_elements: s.parallel_elements,
         }
     }
 }

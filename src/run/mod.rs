@@ -529,9 +529,11 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
     })
 }
 
-/// The mesh and the cell model of a case, with the system it starts with (`defer_adhesion`:
-/// the μ_as unknowns join it at T_g0, [`CellModel::deferring_adhesion`]).
-fn build_model(case: &Case, file: &str, defer_adhesion: bool) -> Result<Cell, RunError> {
+/// The mesh and the cell model of a case, with the system it starts with
+/// (`settings.defer_adhesion`: the μ_as unknowns join it at T_g0,
+/// [`CellModel::deferring_adhesion`]) and its element loops in parallel or not.
+fn build_model(case: &Case, file: &str, settings: &RunSettings) -> Result<Cell, RunError> {
+    let (defer_adhesion, parallel) = (settings.defer_adhesion, settings.parallel_elements);
     let mesh_err = |source| RunError::Mesh {
         file: file.into(),
         source,
@@ -539,10 +541,10 @@ fn build_model(case: &Case, file: &str, defer_adhesion: bool) -> Result<Cell, Ru
     let params = scene::model_params(case, file, scene::starts_with_inertia(case))?;
     let built: Result<Cell, _> = if scene::is_3d(case) {
         let mesh = crate::fem::Mesh3::generate(&scene::mesh3_params(case)).map_err(mesh_err)?;
-        new_model::<Quarter, 3, 10, 30>(params, mesh, defer_adhesion)
+        new_model::<Quarter, 3, 10, 30>(params, mesh, defer_adhesion, parallel)
     } else {
         let mesh = Mesh::generate(&scene::mesh_params(case)).map_err(mesh_err)?;
-        new_model::<HalfPlane, 2, 6, 12>(params, mesh, defer_adhesion)
+        new_model::<HalfPlane, 2, 6, 12>(params, mesh, defer_adhesion, parallel)
     };
     built.map_err(|e| RunError::Model {
         file: file.into(),
@@ -550,20 +552,23 @@ fn build_model(case: &Case, file: &str, defer_adhesion: bool) -> Result<Cell, Ru
     })
 }
 
-/// The model of shape `S` on `mesh`, deferring its μ_as unknowns or not.
+/// The model of shape `S` on `mesh`, deferring its μ_as unknowns or not, its element loops
+/// on the thread pool or not.
 fn new_model<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize>(
     params: ModelParams,
     mesh: S::Mesh,
     defer_adhesion: bool,
+    parallel: bool,
 ) -> Result<Cell, ModelError>
 where
     CellOf<S, D, N, E>: RunModel,
 {
-    let m = if defer_adhesion {
+    let mut m = if defer_adhesion {
         CellOf::<S, D, N, E>::deferring_adhesion(params, mesh)?
     } else {
         CellOf::<S, D, N, E>::new(params, mesh)?
     };
+    m.set_parallel(parallel);
     Ok(Box::new(m))
 }
 
@@ -1419,7 +1424,7 @@ mod admissible {
         // The cell's diameter, 20 µm, plus its 0.5 µm above the substrate.
         let reach = scene_reach(&case);
         assert!((reach - 20.5).abs() < 1e-12, "{reach}");
-        let model = build_model(&case, "flat-gravity", true).unwrap();
+        let model = build_model(&case, "flat-gravity", &RunSettings::from_case(&case)).unwrap();
         let (_, mut y, _) = model.initial();
         assert!(observe_admissible(&model, 0.0, &y, reach).is_ok());
         // The first displacement unknown: 0.99 of the reach is a state, 1.01 is not.

@@ -358,20 +358,19 @@ impl Context<'_, '_> {
         for mut tr in std::mem::take(tracks) {
             let m = &self.members[tr.k];
             let setup = Instant::now();
-            let started =
-                build_model(m.case, m.file, m.opts.settings.defer_adhesion).and_then(|model| {
-                    let mut files = RunWriter::create(m.case, m.file, &m.opts, &model)?;
-                    let y0 = vec![0.0; model.size()];
-                    if let Err(stop) = files.output(&model, 0.0, &y0, &y0) {
-                        let message = stop.into_stop()?.reason;
-                        return Err(RunError::Model {
-                            file: m.file.into(),
-                            message,
-                        });
-                    }
-                    files.summary.setup_seconds = setup.elapsed().as_secs_f64();
-                    Ok((model, files))
-                });
+            let started = build_model(m.case, m.file, &m.opts.settings).and_then(|model| {
+                let mut files = RunWriter::create(m.case, m.file, &m.opts, &model)?;
+                let y0 = vec![0.0; model.size()];
+                if let Err(stop) = files.output(&model, 0.0, &y0, &y0) {
+                    let message = stop.into_stop()?.reason;
+                    return Err(RunError::Model {
+                        file: m.file.into(),
+                        message,
+                    });
+                }
+                files.summary.setup_seconds = setup.elapsed().as_secs_f64();
+                Ok((model, files))
+            });
             match started {
                 Ok((model, files)) => {
                     tr.files = Some(files);
