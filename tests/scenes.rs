@@ -84,8 +84,8 @@ fn ida_and_bdf2_agree_on_a_short_scene() {
     // The scene moved: the comparison is not between two resting states.
     assert!(ida.last().unwrap()[2] < -5.0);
 
-    // The element loops on the thread pool (`solver.parallel_elements`), carried across the
-    // run's changes of system: the same bits.
+    // The element loops on the thread pool (`solver.parallel_elements`): the same bits. (That
+    // the setting survives the μ_as unknowns joining is tests/deferred.rs's check.)
     let (sp, par, _) = run_case(
         "cases/fast/push-pull-short-drag.ron",
         "agree-parallel",
