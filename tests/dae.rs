@@ -29,6 +29,57 @@ fn printed(v: f64) -> String {
     format!("{v:.4e}")
 }
 
+/// Robertson's problem (autonomous) started at `t0` instead of 0, as a restarted system
+/// starts where the run switched.
+struct StartedAt(Robertson, f64);
+
+impl Dae for StartedAt {
+    fn size(&self) -> usize {
+        self.0.size()
+    }
+    fn residual(&mut self, at: State, r: &mut [f64]) -> Result<(), DaeError> {
+        self.0.residual(at, r)
+    }
+    fn pattern(&self) -> &Pattern {
+        self.0.pattern()
+    }
+    fn jacobian(&mut self, at: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+        self.0.jacobian(at, cj, v)
+    }
+    fn differential(&self) -> Vec<bool> {
+        self.0.differential()
+    }
+    fn initial(&self) -> (f64, Vec<f64>, Vec<f64>) {
+        let (_, y, yp) = self.0.initial();
+        (self.1, y, yp)
+    }
+}
+
+#[test]
+fn ida_takes_an_output_time_within_round_off_of_its_start_as_reached() {
+    // A system restarted at 10.079999999999998 s, asked for the output time 10.08 s a few
+    // ulps later: IDA itself refuses it ("tout too close to t0", IDA_ILL_INPUT); the
+    // integrator gives the initial state there, then goes on.
+    let t0 = 10.079999999999998;
+    let opts = IdaOptions {
+        rtol: 1e-4,
+        atol: Atol::Vector(vec![1e-8, 1e-6, 1e-6]),
+        ..Default::default()
+    };
+    let mut ida = Ida::new(StartedAt(Robertson::new(), t0), opts).unwrap();
+    let y0 = Robertson::new().initial().1;
+    run_to(&mut ida, 10.08);
+    assert_eq!((ida.t(), ida.y()), (10.08, &y0[..]));
+    assert_eq!(ida.stats().steps, 0);
+    run_to(&mut ida, 10.48);
+    // 0.4 s after its start, as at Robertson's first published output time.
+    let (_, y1, _, y3, _) = ROBERTSON_DNS[0];
+    assert_eq!(
+        (printed(ida.y()[0]), printed(ida.y()[2])),
+        (printed(y1), printed(y3))
+    );
+}
+
 /// idaRoberts_dns.out (SUNDIALS 6.x): t, y1, y2, y3, nst up to t = 4e5, where a sparse LU
 /// still follows the dense table digit for digit.
 const ROBERTSON_DNS: [(f64, f64, f64, f64, u64); 7] = [
