@@ -655,6 +655,15 @@ pub struct Contact {
     /// distance within which boundary counts as "in contact" for the contact radius.
     /// Default 0.1. Valid: > 0.
     pub eps_ct: f64,
+    /// Stiffening κ beyond the band: where material is deeper than ε_ct the force grows as
+    /// μ_ct (1 + κ ξ³), ξ = (d − ε_ct)/ε_ct (C² at d = ε_ct; below ε_ct the force is the
+    /// paper's). Default 0: the paper's force, which stays μ_ct however deep. Valid: ≥ 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub stiffening: f64,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 impl Default for Contact {
@@ -662,6 +671,7 @@ impl Default for Contact {
         Contact {
             mu_ct_n_m3: 2e9,
             eps_ct: 0.1,
+            stiffening: 0.0,
         }
     }
 }

@@ -161,6 +161,7 @@ pub fn contact(case: &Case) -> physics::Contact {
     physics::Contact {
         mu_ct: case.contact.mu_ct(),
         eps: case.contact.eps_ct,
+        stiffening: case.contact.stiffening,
     }
 }
 
@@ -404,6 +405,7 @@ fn contact_refusal(case: &Case) -> Result<(), Refusal> {
     physics_refusal(contact(case).validate(), "contact", |name| match name {
         "contact.mu_ct" => field("contact.mu_ct_n_m3", case.contact.mu_ct_n_m3),
         "contact.eps" => field("contact.eps_ct", case.contact.eps_ct),
+        "contact.stiffening" => field("contact.stiffening", case.contact.stiffening),
         _ => None,
     })
 }
