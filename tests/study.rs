@@ -271,4 +271,37 @@ fn study_of_the_fast_scene_writes_its_files_and_finds_order_two() {
 
     check_png(&out.join("work-precision.png"));
     check_png(&out.join("dt-sensitivity.png"));
+    // The same study with IDA on GMRES (`solver.krylov`), resumed in the same directory:
+    // the BDF2 runs, which do not use the option, are reused; the reference and the IDA
+    // ladder run again.
+    let o = Command::new(env!("CARGO_BIN_EXE_cellsim"))
+        .args([
+            "study",
+            "cases/fast/push-pull-short-drag.ron",
+            "--set",
+            "solver.krylov=Some(())",
+            "--out",
+            out.to_str().unwrap(),
+            "--dt-max",
+            "1",
+            "--rungs",
+            "2",
+            "--rtols",
+            "5e-3,1e-3",
+            "--ref-rtol",
+            "1e-6",
+            "--reuse",
+            "--quiet",
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run cellsim study");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let reused: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.ends_with("(reused)"))
+        .filter_map(|l| l.split_whitespace().nth(1))
+        .collect();
+    assert_eq!(reused, ["bdf2-dt1", "bdf2-dt0.5"], "{stderr}");
 }
