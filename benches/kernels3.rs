@@ -176,6 +176,7 @@ fn contact(c: &mut Criterion) {
     let law = Contact {
         mu_ct: 2e3,
         eps: 0.1,
+        stiffening: 0.0,
     };
     let p = pillars();
     let s2 = Substrate::Pillars(p);
