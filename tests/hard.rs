@@ -15,10 +15,16 @@ fn run_hard(name: &str) -> Summary {
     run_hard_with(name, "", |_| {})
 }
 
+/// The file of the hard case `name` and the case it holds.
+fn hard_case(name: &str) -> (String, Case) {
+    let file = format!("{}/cases/hard/{name}.ron", env!("CARGO_MANIFEST_DIR"));
+    let case = Case::load(&file).unwrap_or_else(|e| panic!("{name}: {e}"));
+    (file, case)
+}
+
 /// [`run_hard`] with the case changed by `change` (`tag` names the output directory).
 fn run_hard_with(name: &str, tag: &str, change: impl Fn(&mut Case)) -> Summary {
-    let file = format!("{}/cases/hard/{name}.ron", env!("CARGO_MANIFEST_DIR"));
-    let mut case = Case::load(&file).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let (file, mut case) = hard_case(name);
     change(&mut case);
     case.validate().unwrap_or_else(|e| panic!("{name}: {e:?}"));
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("hard-{name}{tag}"));
@@ -156,11 +162,7 @@ fn a_ten_micrometre_fall_lands_and_finishes() {
     // point meets the contact band (ε_ct above the pillar top) after falling gap − ε_ct.
     let s = run_hard("gap-large");
     assert!(s.finished, "{:?}", s.failure);
-    let case = Case::load(format!(
-        "{}/cases/hard/gap-large.ron",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .unwrap();
+    let (_, case) = hard_case("gap-large");
     let cellsim::case::Substrate::Pillars(p) = &case.substrate else {
         panic!("gap-large is on pillars")
     };

@@ -94,6 +94,15 @@ fn pillars_reading(change: impl Fn(&mut Case)) -> ModelParams {
     p
 }
 
+/// The residual in [`check_jacobian`]'s test state (the cell sunk by `sink`, t = 45 000 s).
+fn test_state_residual(params: ModelParams, sink: f64) -> Vec<f64> {
+    let mut m = CellModel::new(params, coarse_mesh()).unwrap();
+    let (y, yp) = deformed_state(&m, sink, 7);
+    let mut r = vec![0.0; m.size()];
+    m.residual(State::new(45_000.0, &y, &yp), &mut r).unwrap();
+    r
+}
+
 #[test]
 fn global_jacobian_is_exact_for_every_reading_of_the_paper() {
     let adhesion =
@@ -123,16 +132,9 @@ fn global_jacobian_is_exact_for_every_reading_of_the_paper() {
     ];
     // Each reading changes the residual of the default case in the test state (the
     // option reaches the model), and its Jacobian is exact.
-    let residual = |params: ModelParams| {
-        let mut m = CellModel::new(params, coarse_mesh()).unwrap();
-        let (y, yp) = deformed_state(&m, 0.5, 7);
-        let mut r = vec![0.0; m.size()];
-        m.residual(State::new(45_000.0, &y, &yp), &mut r).unwrap();
-        r
-    };
-    let r0 = residual(pillars_reading(|_| {}));
+    let r0 = test_state_residual(pillars_reading(|_| {}), 0.5);
     for (label, params) in readings {
-        let r = residual(params.clone());
+        let r = test_state_residual(params.clone(), 0.5);
         let change = r
             .iter()
             .zip(&r0)
@@ -155,16 +157,9 @@ fn global_jacobian_is_exact_with_a_contact_that_stiffens_beyond_its_band() {
     // quotients' limit described in `fd::jacobian_fd_error`, with or without the option.)
     let sink = 0.7;
     let stiffened = pillars_reading(|c| c.contact.stiffening = 2.0);
-    let residual = |params: ModelParams| {
-        let mut m = CellModel::new(params, coarse_mesh()).unwrap();
-        let (y, yp) = deformed_state(&m, sink, 7);
-        let mut r = vec![0.0; m.size()];
-        m.residual(State::new(45_000.0, &y, &yp), &mut r).unwrap();
-        r
-    };
     let (r0, r) = (
-        residual(pillars_reading(|_| {})),
-        residual(stiffened.clone()),
+        test_state_residual(pillars_reading(|_| {}), sink),
+        test_state_residual(stiffened.clone(), sink),
     );
     assert!(
         r0.iter().zip(&r).any(|(a, b)| a != b),

@@ -147,11 +147,10 @@ fn check_png(path: &Path) {
 /// or two steps, so the curve error is pre-asymptotic and dominated by the fall
 /// (measured 1.46e-2, 1.48e-2, 1.55e-2 at dt = 8, 4, 2 s; then 5.2e-3 at 1 s and 1.4e-3
 /// at 0.5 s: order 1.85 between the last two).
-#[test]
-fn study_of_the_fast_scene_writes_its_files_and_finds_order_two() {
-    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("study-short-drag");
-    let _ = std::fs::remove_dir_all(&out);
-    let o = Command::new(env!("CARGO_BIN_EXE_cellsim"))
+/// `cellsim study` of the fast scene into `out` (two BDF2 rungs from dt 1 s, IDA at 5e-3
+/// and 1e-3, the reference at 1e-6), with `extra` arguments.
+fn short_study(out: &Path, extra: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_cellsim"))
         .args([
             "study",
             "cases/fast/push-pull-short-drag.ron",
@@ -167,9 +166,17 @@ fn study_of_the_fast_scene_writes_its_files_and_finds_order_two() {
             "1e-6",
             "--quiet",
         ])
+        .args(extra)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
-        .expect("run cellsim study");
+        .expect("run cellsim study")
+}
+
+#[test]
+fn study_of_the_fast_scene_writes_its_files_and_finds_order_two() {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("study-short-drag");
+    let _ = std::fs::remove_dir_all(&out);
+    let o = short_study(&out, &[]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stdout}\n{stderr}");
@@ -274,28 +281,7 @@ fn study_of_the_fast_scene_writes_its_files_and_finds_order_two() {
     // The same study with IDA on GMRES (`solver.krylov`), resumed in the same directory:
     // the BDF2 runs, which do not use the option, are reused; the reference and the IDA
     // ladder run again.
-    let o = Command::new(env!("CARGO_BIN_EXE_cellsim"))
-        .args([
-            "study",
-            "cases/fast/push-pull-short-drag.ron",
-            "--set",
-            "solver.krylov=Some(())",
-            "--out",
-            out.to_str().unwrap(),
-            "--dt-max",
-            "1",
-            "--rungs",
-            "2",
-            "--rtols",
-            "5e-3,1e-3",
-            "--ref-rtol",
-            "1e-6",
-            "--reuse",
-            "--quiet",
-        ])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run cellsim study");
+    let o = short_study(&out, &["--set", "solver.krylov=Some(())", "--reuse"]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     let reused: Vec<&str> = stderr

@@ -1287,8 +1287,8 @@ fn advance_switching(
             false
         };
         match solver.integ().advance_to(tout, &mut one_step) {
-            Ok(()) | Err(IntegratorError::Interrupted { .. }) if !driver_stop => {}
             Ok(()) => {}
+            Err(IntegratorError::Interrupted { .. }) if !driver_stop => {}
             Err(e) => return Err(e.to_string()),
         }
     }
