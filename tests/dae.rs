@@ -527,6 +527,83 @@ fn bdf2_cuts_its_step_on_an_inadmissible_state() {
 }
 
 #[test]
+fn bdf2_starts_with_a_fraction_of_dt_and_grows_to_it_gradually() {
+    // dt = 0.04 with a cut at t = 0.5 (three failing residuals: the step's three attempts).
+    let dt = 0.04;
+    let opts = Bdf2Options {
+        dt,
+        ..Default::default()
+    };
+    let (start, growth) = (opts.start_fraction, opts.max_growth);
+    assert!(start < 1.0 && growth > 1.0);
+    let mut w = Wrapped::new(Analytic::new(10.0));
+    (w.fail_after, w.fail_count) = (0.5, 3);
+    let mut b = Bdf2::new(w, opts).unwrap();
+    let mut times = vec![0.0];
+    b.advance_to(1.0, &mut |t, _| {
+        times.push(t);
+        true
+    })
+    .unwrap();
+    assert_eq!(b.cuts, 1);
+    let steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12;
+    // The start: start·dt, then growing by the factor until the planned step (≤ dt).
+    assert!(close(steps[0], start * dt), "{:?}", &steps[..6]);
+    let ramp = steps.iter().position(|h| *h > 0.9 * dt).unwrap();
+    assert!(ramp >= 2, "{:?}", &steps[..6]);
+    for k in 1..ramp {
+        assert!(close(steps[k], growth * steps[k - 1]), "{:?}", &steps[..6]);
+    }
+    assert!(steps.iter().all(|h| *h <= dt + 1e-15), "{steps:?}");
+    // A cut later halves the step; the one after it is the planned step again.
+    let cut = (0..steps.len())
+        .find(|&i| times[i] > 0.4 && steps[i] < 0.75 * dt)
+        .expect("a cut step");
+    assert!(
+        close(steps[cut] * 2.0, steps[cut - 1]),
+        "{:?}",
+        &steps[cut - 1..cut + 3]
+    );
+    assert!(steps[cut + 1] > 0.9 * dt, "{:?}", &steps[cut - 1..cut + 3]);
+    assert!(analytic_error(b.y(), 1.0) < 1e-3);
+}
+
+#[test]
+fn bdf2_keeps_its_factorization_across_the_equal_steps_of_a_segment() {
+    // A segment from an uneven time (after the start's growing steps) to an uneven
+    // breakpoint: its steps are equal but recomputed from the remaining length each time,
+    // so their cj differ in the last bits.
+    let factorizations = |cj_reuse_tol: f64| {
+        let mut w = Wrapped::new(Analytic::new(10.0));
+        w.breakpoints = vec![0.7137];
+        let opts = Bdf2Options {
+            dt: 0.00731,
+            cj_reuse_tol,
+            ..Default::default()
+        };
+        let mut b = Bdf2::new(w, opts).unwrap();
+        run_to(&mut b, 0.7137);
+        b.stats()
+    };
+    let (kept, exact) = (
+        factorizations(Bdf2Options::default().cj_reuse_tol),
+        factorizations(0.0),
+    );
+    assert!(kept.steps > 90, "{kept:?}");
+    // One factorization per step of the start and per Newton failure, and few more.
+    assert!(
+        kept.lu_factorizations <= 2 * kept.newton_failures + 8,
+        "{kept:?}"
+    );
+    // Bit equality refactorizes at most steps.
+    assert!(
+        exact.lu_factorizations >= 3 * kept.lu_factorizations,
+        "{exact:?} against {kept:?}"
+    );
+}
+
+#[test]
 fn integrators_land_exactly_on_breakpoints() {
     let bps = vec![0.3, 0.55];
     let mut w = Wrapped::new(Analytic::new(10.0));

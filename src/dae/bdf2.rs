@@ -12,7 +12,11 @@
 //!
 //! **Start.** The first step is backward Euler (BDF1). Its local error is O(h²), one step
 //! only, so the global error stays O(h²): the method is second order (tested on a
-//! closed-form DAE).
+//! closed-form DAE). It is `start_fraction` of dt, and the steps after it grow by at most
+//! `max_growth` each until they reach the planned step, so the start scales with dt: a
+//! first step cut to a size of its own (a Newton failure at the full dt) would otherwise
+//! begin every rung of a dt ladder in the same state, and the error of the start would
+//! not fall with dt.
 //!
 //! **Newton.** Modified Newton on F(t, y, cj y + β) = 0 with the iteration matrix
 //! J = ∂F/∂y + cj ∂F/∂ẏ factorized once and reused across iterations and steps while cj
@@ -49,6 +53,13 @@ pub struct Bdf2Options {
     pub max_newton_iters: u32,
     /// Most consecutive step halvings before giving up.
     pub max_cuts: u32,
+    /// The first step after a (re)start as a fraction of dt (module docs, "Start").
+    pub start_fraction: f64,
+    /// Largest ratio of a step to the one before it while the steps grow from the start.
+    pub max_growth: f64,
+    /// The stored factorization is reused while cj agrees with its own to this relative
+    /// difference (0: bit for bit).
+    pub cj_reuse_tol: f64,
     /// Which sparse LU factorizes the iteration matrix.
     pub linear_solver: SharedFactory,
 }
@@ -62,6 +73,9 @@ impl Default for Bdf2Options {
             newton_tol: 0.33,
             max_newton_iters: 4,
             max_cuts: 10,
+            start_fraction: 0.25,
+            max_growth: 1.5,
+            cj_reuse_tol: 1e-9,
             linear_solver: std::sync::Arc::new(FaerFactory),
         }
     }
@@ -85,6 +99,8 @@ pub struct Bdf2<D: Dae> {
     yp_prev: Vec<f64>,
     /// Previous step size (None before the first step: use BDF1).
     h_prev: Option<f64>,
+    /// Whether the steps are still growing from the start (module docs, "Start").
+    ramping: bool,
     /// Output point.
     t_out: f64,
     y_out: Vec<f64>,
@@ -131,6 +147,7 @@ impl<D: Dae> Bdf2<D> {
             y_prev: y0.clone(),
             yp_prev: yp0.clone(),
             h_prev: None,
+            ramping: true,
             t_out: t0,
             y_out: y0,
             yp_out: yp0,
@@ -204,8 +221,12 @@ impl<D: Dae> Bdf2<D> {
         // Attempts: (0) modified Newton with the stored factorization, if its cj matches;
         // (1) modified Newton with a fresh Jacobian at the predictor; (2) full Newton, the
         // Jacobian re-evaluated at every iterate (contact onset changes the stiffness within
-        // one step). All failing fails the step.
-        let stale_ok = self.factor_cj == Some(cj);
+        // one step). All failing fails the step. "Matches" is to `cj_reuse_tol`: the equal
+        // steps of a segment are recomputed at every step (remaining / k) and differ in their
+        // last bits, and so would cj.
+        let stale_ok = self
+            .factor_cj
+            .is_some_and(|c| (c - cj).abs() <= self.opts.cj_reuse_tol * cj.abs());
         let mut last = String::new();
         for attempt in 0..3 {
             if attempt == 0 && !stale_ok {
@@ -400,7 +421,13 @@ impl<D: Dae> Integrator for Bdf2<D> {
     ) -> Result<(), IntegratorError> {
         let eps = 8.0 * f64::EPSILON * tout.abs().max(1.0);
         while self.tn < tout - eps {
-            let mut h = self.planned_step();
+            let planned = self.planned_step();
+            let mut h = match (self.ramping, self.h_prev) {
+                (false, _) => planned,
+                (true, None) => planned.min(self.opts.start_fraction * self.opts.dt),
+                (true, Some(hp)) => planned.min(self.opts.max_growth * hp),
+            };
+            self.ramping = h < planned;
             let mut cuts = 0;
             loop {
                 match self.try_step(h) {
