@@ -8,13 +8,16 @@
 #      slurmd as the current user, configured by a slurm.conf written into that directory
 #      (one node, this host, its CPUs as `slurmd -C` reports them; no accounting, no
 #      cgroups, no systemd);
-#   3. submits cases/sweeps/fast-flat.ron (6 points, 2 of them invalid) as a job array of
-#      3 tasks of 2 points (`--shard-size 2`), waits for it (10 min at most), then
-#      `cellsim sweep collect`;
-#   4. runs the same sweep without Slurm and checks that both sweep.csv are identical
-#      except for the wall_seconds column (the wall time of each run, the one value that
-#      depends on the run and not on the computation; every number is printed with all
-#      its digits, so "identical" means the same doubles) and that every point's
+#   3. submits two sweeps at once: cases/sweeps/fast-flat.ron (6 points, 2 of them
+#      invalid) as a job array of 3 tasks of 2 points (`--shard-size 2`), and
+#      cases/sweeps/fast-3d.ron (one point of the coarse 3-D cell, meshed by gmsh in the
+#      task, into a cache of its own) as an array of one task; checks that each batch
+#      script asks for an estimated --time and --mem; waits for both (10 min at most),
+#      then `cellsim sweep collect` on each;
+#   4. runs the same sweeps without Slurm and checks that both sweep.csv of each are
+#      identical except for the wall_seconds column (the wall time of each run, the one
+#      value that depends on the run and not on the computation; every number is printed
+#      with all its digits, so "identical" means the same doubles) and that every point's
 #      timeseries.csv is byte for byte the same;
 #   5. stops every daemon it started (on failure too) and removes the temporary directory.
 #
@@ -62,7 +65,7 @@ job=""
 ok=0
 
 show_logs() {
-    for f in "$tmp"/cluster/slurm/*.out; do
+    for f in "$tmp"/cluster-*/slurm/*.out; do
         [ -f "$f" ] && { echo "----- $f"; cat "$f"; }
     done
     for f in "$tmp"/log/*.log; do
@@ -78,10 +81,11 @@ cleanup() {
         show_logs
     fi
     if [ -n "$job" ]; then
-        timeout 10 scancel "$job" 2>/dev/null
+        # shellcheck disable=SC2086 # the job ids, one word each
+        timeout 10 scancel $job 2>/dev/null
         # Let the job's processes end before their slurmd does.
         for _ in $(seq 1 20); do
-            [ -z "$(timeout 10 squeue -h -j "$job" 2>/dev/null)" ] && break
+            [ -z "$(timeout 10 squeue -h -j "${job// /,}" 2>/dev/null)" ] && break
             sleep 0.5
         done
     fi
@@ -134,11 +138,16 @@ done
 
 host=$(hostname -s)
 user=$(id -un)
-# The node as slurmd sees the hardware (CPUs, sockets, cores, threads), with a modest
-# RealMemory so that the node is never drained for having less.
-hw=$(slurmd -C 2>/dev/null | grep -m1 '^NodeName=' |
-    sed -e 's/^NodeName=[^ ]* //' -e 's/ *RealMemory=[0-9]*//' -e 's/ *UpTime=.*//')
+# The node as slurmd sees the hardware (CPUs, sockets, cores, threads), with RealMemory
+# 80 % of what it sees (at most 8 GB), so that the node is never drained for having less
+# and the batch scripts' estimated --mem fits.
+conf=$(slurmd -C 2>/dev/null | grep -m1 '^NodeName=' || true)
+hw=$(echo "$conf" | sed -e 's/^NodeName=[^ ]* //' -e 's/ *RealMemory=[0-9]*//' -e 's/ *UpTime=.*//')
 [ -n "$hw" ] || hw="CPUs=$(nproc)"
+mem=$(echo "$conf" | sed -n 's/.*RealMemory=\([0-9]*\).*/\1/p')
+[ -n "$mem" ] || mem=$(awk '/^MemTotal:/ {print int($2 / 1024)}' /proc/meminfo)
+mem=$((mem * 8 / 10))
+((mem <= 8000)) || mem=8000
 cat >"$tmp/slurm.conf" <<EOF
 # Single-node test cluster written by scripts/slurm-test.sh.
 ClusterName=cellsim-test
@@ -174,7 +183,7 @@ SlurmdTimeout=30
 KillWait=5
 MailProg=/bin/true
 MinJobAge=300
-NodeName=$host NodeAddr=127.0.0.1 $hw RealMemory=500 State=UNKNOWN
+NodeName=$host NodeAddr=127.0.0.1 $hw RealMemory=$mem State=UNKNOWN
 PartitionName=test Nodes=$host Default=YES MaxTime=INFINITE State=UP
 EOF
 export SLURM_CONF="$tmp/slurm.conf"
@@ -198,27 +207,44 @@ done
 t_cluster=$(date +%s)
 log "cluster up in $((t_cluster - t_start)) s: node $host ($hw), slurmctld on port $port"
 
-# --- the sweep on Slurm ------------------------------------------------------------------
-sweep=cases/sweeps/fast-flat.ron
+# --- the sweeps on Slurm -----------------------------------------------------------------
+# name, sweep file, shard size. The 3-D point meshes with gmsh into a cold cache of its own.
+names=(flat 3d)
+files=(cases/sweeps/fast-flat.ron cases/sweeps/fast-3d.ron)
+sizes=(2 1)
+export CELLSIM_CACHE="$tmp/cache"
+jobs=()
 t_submit=$(date +%s)
-out=$("$bin" sweep "$sweep" --out "$tmp/cluster" --slurm --shard-size 2 --submit)
-echo "$out"
-job=$(echo "$out" | sed -n 's/^submitted batch job \([0-9][0-9]*\)$/\1/p')
-[ -n "$job" ] || { log "no job id in the output of --submit"; exit 1; }
+for i in "${!names[@]}"; do
+    out=$("$bin" sweep "${files[i]}" --out "$tmp/cluster-${names[i]}" --slurm \
+        --shard-size "${sizes[i]}" --submit)
+    echo "$out"
+    id=$(echo "$out" | sed -n 's/^submitted batch job \([0-9][0-9]*\)$/\1/p')
+    [ -n "$id" ] || { log "no job id in the output of --submit"; exit 1; }
+    jobs+=("$id")
+    job="${jobs[*]}"
+    script="$tmp/cluster-${names[i]}/sweep.sbatch"
+    [ "$(grep -cE '^#SBATCH --(time|mem)=' "$script")" = 2 ] ||
+        { log "$script: no estimated --time and --mem:"; cat "$script"; exit 1; }
+    log "${files[i]}: job $id, asked $(grep -E '^#SBATCH --(time|mem)=' "$script" |
+        sed 's/^#SBATCH //' | paste -sd' ' -)"
+done
 
 timeout=${SLURM_TEST_TIMEOUT:-600}
 last=""
 while :; do
-    # All the array's tasks, finished ones included (kept MinJobAge = 300 s).
-    tasks=$(squeue -h -j "$job" --states=all -o '%i %T %M' 2>/dev/null | sort -V || true)
-    line=$(echo "$tasks" | tr '\n' ' ' | sed 's/ *$//')
-    [ "$line" != "$last" ] && log "$((  $(date +%s) - t_submit )) s: $line"
+    # All the arrays' tasks, finished ones included (kept MinJobAge = 300 s).
+    tasks=$(squeue -h -j "$(echo "${jobs[*]}" | tr ' ' ,)" --states=all -o '%i %T %M %l' 2>/dev/null |
+        sort -V || true)
+    # Printed when a task's state changes (not its run time).
+    line=$(echo "$tasks" | awk '{print $1, $2}' | tr '\n' ' ' | sed 's/ *$//')
+    [ "$line" != "$last" ] && log "$(($(date +%s) - t_submit)) s: $line"
     last=$line
     if [ -n "$tasks" ] && ! echo "$tasks" | grep -qE ' (PENDING|CONFIGURING|RUNNING|COMPLETING|SUSPENDED|REQUEUED|RESIZING) '; then
         break
     fi
     if (($(date +%s) - t_submit > timeout)); then
-        log "job $job not done after $timeout s"
+        log "jobs ${jobs[*]} not done after $timeout s"
         exit 1
     fi
     sleep 1
@@ -226,15 +252,19 @@ done
 t_done=$(date +%s)
 n_tasks=$(echo "$tasks" | wc -l)
 if echo "$tasks" | grep -vq ' COMPLETED '; then
-    log "job $job: some tasks did not complete:"
+    log "jobs ${jobs[*]}: some tasks did not complete:"
     echo "$tasks"
     exit 1
 fi
-"$bin" sweep collect "$tmp/cluster"
+for n in "${names[@]}"; do
+    "$bin" sweep collect "$tmp/cluster-$n"
+done
 
-# --- the same sweep without Slurm, and the comparison ------------------------------------
+# --- the same sweeps without Slurm, and the comparison ------------------------------------
 t_local=$(date +%s)
-"$bin" sweep "$sweep" --out "$tmp/local" --quiet
+for i in "${!names[@]}"; do
+    "$bin" sweep "${files[i]}" --out "$tmp/local-${names[i]}" --quiet
+done
 t_local_done=$(date +%s)
 
 # sweep.csv without its wall_seconds column. Fields are split as CSV (a quoted field may
@@ -260,27 +290,32 @@ without_wall() {
         print s
     }' "$1"
 }
-without_wall "$tmp/cluster/sweep.csv" >"$tmp/cluster.csv"
-without_wall "$tmp/local/sweep.csv" >"$tmp/local.csv"
-rows=$(($(wc -l <"$tmp/local.csv") - 1))
-finished=$(grep -c ',finished,' "$tmp/local.csv" || true)
-if ! diff -u "$tmp/local.csv" "$tmp/cluster.csv"; then
-    log "sweep.csv differs between the local run (-) and the Slurm array (+)"
-    exit 1
-fi
+rows=0
 series=0
-for f in "$tmp"/local/points/*/timeseries.csv; do
-    g="$tmp/cluster/points/$(basename "$(dirname "$f")")/timeseries.csv"
-    cmp -s "$f" "$g" || { log "$g differs from $f"; exit 1; }
-    series=$((series + 1))
+for n in "${names[@]}"; do
+    without_wall "$tmp/cluster-$n/sweep.csv" >"$tmp/cluster-$n.csv"
+    without_wall "$tmp/local-$n/sweep.csv" >"$tmp/local-$n.csv"
+    rows=$((rows + $(wc -l <"$tmp/local-$n.csv") - 1))
+    finished=$(grep -c ',finished,' "$tmp/local-$n.csv" || true)
+    if ! diff -u "$tmp/local-$n.csv" "$tmp/cluster-$n.csv"; then
+        log "$n: sweep.csv differs between the local run (-) and the Slurm array (+)"
+        exit 1
+    fi
+    compared=0
+    for f in "$tmp/local-$n"/points/*/timeseries.csv; do
+        g="$tmp/cluster-$n/points/$(basename "$(dirname "$f")")/timeseries.csv"
+        cmp -s "$f" "$g" || { log "$g differs from $f"; exit 1; }
+        compared=$((compared + 1))
+    done
+    [ "$finished" -gt 0 ] && [ "$compared" = "$finished" ] ||
+        { log "$n: expected $finished timeseries.csv, compared $compared"; exit 1; }
+    series=$((series + compared))
 done
-[ "$finished" -gt 0 ] && [ "$series" = "$finished" ] ||
-    { log "expected $finished timeseries.csv, compared $series"; exit 1; }
 
 ok=1
 log "summary:"
-echo "  job $job: $n_tasks array tasks ($(echo "$tasks" | awk '{print $1 " " $2 " " $3}' | paste -sd, - | sed 's/,/, /g'))"
-echo "  array: $((t_done - t_submit)) s from submission to the last task's end; local run: $((t_local_done - t_local)) s"
-echo "  sweep.csv: $rows rows identical to the local run's except wall_seconds;" \
+echo "  jobs ${jobs[*]}: $n_tasks array tasks (state, run time, time limit: $(echo "$tasks" | awk '{print $1 " " $2 " " $3 " " $4}' | paste -sd, - | sed 's/,/, /g'))"
+echo "  arrays: $((t_done - t_submit)) s from submission to the last task's end; local runs: $((t_local_done - t_local)) s"
+echo "  sweep.csv: $rows rows identical to the local runs' except wall_seconds;" \
     "$series timeseries.csv identical"
 echo "  total: $(($(date +%s) - t_start)) s (cluster start $((t_cluster - t_start)) s)"

@@ -900,9 +900,24 @@ fn mesh_command(path: &Path, svg: Option<&Path>) -> ExitCode {
             err!("error: {}: --svg draws 2-D meshes only", path.display());
             return ExitCode::from(2);
         }
-        return match cellsim::fem::Mesh3::generate(&scene::mesh3_params(&case)) {
-            Ok(mesh) => {
-                out!("{}", mesh.quality());
+        let cache = cellsim::fem::mesh::quarter_cell::cache_root();
+        let made = cellsim::fem::Mesh3::generate_with(
+            &scene::mesh3_params(&case),
+            Path::new("gmsh"),
+            &cache,
+        );
+        return match made {
+            Ok(g) => {
+                out!("{}", g.mesh.quality());
+                if g.from_cache {
+                    out!("mesh file {} (from the cache)", g.file.display());
+                } else {
+                    out!(
+                        "mesh file {} (made by gmsh in {:.1} s)",
+                        g.file.display(),
+                        g.gmsh_seconds
+                    );
+                }
                 ExitCode::SUCCESS
             }
             Err(e) => {

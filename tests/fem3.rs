@@ -853,3 +853,123 @@ fn boundary_faces(m: &Mesh3) -> Vec<[usize; 6]> {
     }
     faces().filter(|f| count[&key(f)] == 1).collect()
 }
+
+/// Several processes meshing one geometry at once on one cold cache (Slurm array tasks on a
+/// shared file system do this): every process gets the mesh, and the cache never holds a
+/// half-written file under its final name. A watcher reads the final name over and over
+/// (without pause) while they run; whatever it reads must be the whole file the processes
+/// leave. (Writing the final name directly, without the rename, fails here: the watcher
+/// reads the file while it is being copied.)
+#[test]
+fn several_processes_on_one_cold_cache_share_one_whole_mesh() {
+    const N: usize = 4;
+    let root = scratch("cold-cache");
+    std::fs::create_dir_all(&root).expect("cache root");
+    let case = "cases/fast/push-pull-3d-coarse.ron";
+    // Started 0.2 s apart, so that later ones may find the cache being written.
+    let children: Vec<_> = (0..N)
+        .map(|k| {
+            std::thread::sleep(std::time::Duration::from_millis(200 * u64::from(k > 0)));
+            std::process::Command::new(env!("CARGO_BIN_EXE_cellsim"))
+                .args(["mesh", case])
+                .current_dir(env!("CARGO_MANIFEST_DIR"))
+                .env("CELLSIM_CACHE", &root)
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .expect("start cellsim mesh")
+        })
+        .collect();
+    // Watch the cache directory until every process has ended.
+    let dir = root.join("mesh3d");
+    let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let watcher = {
+        let (dir, done) = (dir.clone(), done.clone());
+        std::thread::spawn(move || {
+            let mut seen: Vec<Vec<u8>> = Vec::new();
+            let mut reads = 0usize;
+            while !done.load(std::sync::atomic::Ordering::Relaxed) {
+                for e in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
+                    let name = e.file_name().to_string_lossy().into_owned();
+                    if name.ends_with(".msh") {
+                        if let Ok(bytes) = std::fs::read(e.path()) {
+                            reads += 1;
+                            if !seen.contains(&bytes) {
+                                seen.push(bytes);
+                            }
+                        }
+                    }
+                }
+            }
+            (seen, reads)
+        })
+    };
+    let outputs: Vec<_> = children
+        .into_iter()
+        .map(|c| c.wait_with_output().expect("wait"))
+        .collect();
+    done.store(true, std::sync::atomic::Ordering::Relaxed);
+    let (seen, reads) = watcher.join().expect("watcher");
+    let mut made = 0;
+    for o in &outputs {
+        let (stdout, stderr) = (
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr),
+        );
+        assert!(o.status.success(), "{stdout}\n{stderr}");
+        made += usize::from(stdout.contains("made by gmsh"));
+    }
+    // The same report (the same mesh) in every process; the file line aside.
+    let report = |o: &std::process::Output| {
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .filter(|l| !l.starts_with("mesh file "))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    for o in &outputs[1..] {
+        assert_eq!(report(o), report(&outputs[0]));
+    }
+    // One mesh and its geometry, nothing temporary left.
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .expect("dir")
+        .filter_map(|d| d.ok())
+        .map(|d| d.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names.len(), 2, "{names:?}");
+    assert!(
+        names[0].ends_with(".geo") && names[1].ends_with(".msh"),
+        "{names:?}"
+    );
+    // Whole: ending as the file left (the same bytes where gmsh runs without address
+    // randomization, as here; otherwise another run's whole mesh).
+    let whole = std::fs::read(dir.join(&names[1])).expect("mesh");
+    let text = String::from_utf8_lossy(&whole);
+    let last = text.trim_end().lines().last().expect("a line").to_string();
+    assert!(last.starts_with("$End"), "{last}");
+    for s in &seen {
+        let t = String::from_utf8_lossy(s);
+        assert!(
+            t.trim_end().ends_with(&last) && s.len() * 10 > whole.len() * 9,
+            "a partial mesh file was read ({} of {} bytes)",
+            s.len(),
+            whole.len()
+        );
+    }
+    println!(
+        "{N} processes on a cold cache: {made} ran gmsh, the watcher read the final name \
+         {reads} times, always whole"
+    );
+    assert!(made >= 1, "nobody ran gmsh on a cold cache");
+    // A later process reads it from the cache.
+    let again = std::process::Command::new(env!("CARGO_BIN_EXE_cellsim"))
+        .args(["mesh", case])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env("CELLSIM_CACHE", &root)
+        .output()
+        .expect("cellsim mesh");
+    assert!(String::from_utf8_lossy(&again.stdout).contains("(from the cache)"));
+    assert_eq!(report(&again), report(&outputs[0]));
+    let _ = std::fs::remove_dir_all(&root);
+}

@@ -388,6 +388,18 @@ fn one_at_a_time_gives_sensitivities_and_slurm_gets_a_job_array() {
     ] {
         assert!(script.contains(needle), "`{needle}` not in:\n{script}");
     }
+    // The user's --time replaces the estimate; the memory is estimated (MB, at least the
+    // process's own 200 MB).
+    assert_eq!(script.matches("#SBATCH --time").count(), 1, "{script}");
+    let mem: u64 = script
+        .lines()
+        .find_map(|l| l.strip_prefix("#SBATCH --mem="))
+        .and_then(|v| v.strip_suffix('M'))
+        .unwrap_or_else(|| panic!("no estimated --mem in:\n{script}"))
+        .parse()
+        .expect("MB");
+    assert!((200..2000).contains(&mem), "{mem} MB");
+    assert!(script.contains("# Estimated before meshing:"), "{script}");
     assert!(!Path::new(&format!("{sl}/points")).exists());
 }
 

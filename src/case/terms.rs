@@ -490,6 +490,82 @@ pub fn memory_refusal(case: &Case) -> Result<(), Refusal> {
     })
 }
 
+/// What a run of a case is expected to cost, estimated before it is meshed (for the batch
+/// scripts of a sweep, [`crate::sweep::slurm`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunCost {
+    /// 2 (plane strain, axisymmetric) or 3 (the 3-D cell).
+    pub dimension: usize,
+    /// Elements expected ([`MeshSpec::expected_elements`]).
+    pub elements: f64,
+    /// Wall time on one core of this project's machines [s] ([`estimated_run_seconds`]).
+    pub seconds: f64,
+    /// Peak memory [bytes] ([`crate::lu::estimated_run_memory`]).
+    pub bytes: f64,
+}
+
+/// The expected cost of a run of `case`; `None` for a mesh the generator refuses.
+pub fn run_cost(case: &Case) -> Option<RunCost> {
+    let spec = MeshSpec::of(case);
+    spec.validate().ok()?;
+    let (dimension, elements) = (spec.dimension(), spec.expected_elements());
+    Some(RunCost {
+        dimension,
+        elements,
+        seconds: estimated_run_seconds(dimension, elements, &case.phases),
+        bytes: crate::lu::estimated_run_memory(dimension, elements),
+    })
+}
+
+/// Wall time [s] of a run of the scene phases `phases` (to its `t_end`) on a mesh of
+/// `elements` expected elements in `dim` dimensions, at the scenes' tolerances, on one
+/// core of this project's kind of machine.
+///
+/// Calibrated on the push-pull scene (to 50 000 s, the scenes' hardest), whose cost grows
+/// with the mesh as the cost per step (the step count hardly changes with the mesh):
+/// in 2-D 7.3 s on the default mesh (590 triangles; 5 388 unknowns) and n^1.21 with the
+/// mesh from refine 1 to 4 (`cargo run --release --example scaling`); in 3-D 1 551 s on
+/// the default mesh and 5 544 s refined ×1.5 (`cellsim run cases/3d/pillars-push-pull.ron
+/// [--set mesh.refine=1.5]`: 9 660 and 26 927 tetrahedra, growing as tetrahedra^1.24),
+/// the README's measurements of 2026-12-02. A run that ends earlier, or whose phases are
+/// shorter, costs the fraction [`work_fraction`] of that. What the estimate leaves out
+/// (another tolerance or integrator, a slower node, the mesh generator's first run) is
+/// the margin's job.
+pub fn estimated_run_seconds(dim: usize, elements: f64, phases: &case::Phases) -> f64 {
+    let (seconds, reference, growth) = if dim == 3 {
+        (1_551.0, 9_660.0, 1.24)
+    } else {
+        (7.3, 590.0, 1.21)
+    };
+    seconds * (elements / reference).powf(growth) * work_fraction(phases)
+}
+
+/// The fraction of the push-pull scene's work a run of `phases` does, by phase: the
+/// gravity phase (to t_g0, the landing) 0.1, the spreading (to t_as0) 0.6, the active
+/// phase (to t_a0) 0.3, and 0.02 for each 10 000 s after it; within a phase the square
+/// root of the fraction of its time (the work comes early in a phase: the landing, the
+/// first spreading, the onset of contraction). Measured on `cellsim run
+/// cases/pillars-push-pull.ron --set phases.t_end=T` (2026-12-04): wall fractions 0.10,
+/// 0.63, 0.72 and 0.75 of the whole at T = 10 000, 25 000, 40 000 and 45 000 s (this
+/// gives 0.10, 0.52, 0.70 and 0.91: ahead by the active phase, behind by a fifth in the
+/// middle of the spreading). A phase that never starts (t_end before it) costs nothing;
+/// the fraction does not depend on the phases' lengths (a compressed scene does the
+/// same work faster).
+pub fn work_fraction(phases: &case::Phases) -> f64 {
+    let t = phases.t_end;
+    let part = |from: f64, to: f64| {
+        if to <= from {
+            f64::from(u8::from(t >= to))
+        } else {
+            ((t - from) / (to - from)).clamp(0.0, 1.0).sqrt()
+        }
+    };
+    0.1 * part(0.0, phases.t_g0)
+        + 0.6 * part(phases.t_g0, phases.t_as0)
+        + 0.3 * part(phases.t_as0, phases.t_a0)
+        + 0.02 * ((t - phases.t_a0).max(0.0) / 10_000.0)
+}
+
 /// The mesh generator's checks of a case's mesh ([`MeshSpec::validate`]), its error
 /// traced back to the case fields.
 fn mesh_refusal(case: &Case) -> Result<(), Refusal> {

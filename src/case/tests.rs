@@ -864,3 +864,46 @@ fn case_wedge_choice_resolves_by_the_substrate_mirror() {
     .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(super::terms::mesh3_params(&gap).wedge, Wedge::Quarter);
 }
+
+/// The run-cost estimate against the measured runs it was fitted to (the README's
+/// 2026-12-02 runs: the 3-D push-pull 1 551 s on the default mesh and 5 544 s refined
+/// ×1.5; the 2-D push-pull 7.3 s), through the element counts estimated before meshing
+/// (not the meshes' own counts): each within 15 %.
+#[test]
+fn run_cost_estimates_the_measured_scenes() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let load = |file: &str| Case::load(root.join(file)).unwrap_or_else(|e| panic!("{e}"));
+    let mut refined = load("cases/3d/pillars-push-pull.ron");
+    refined.mesh.refine = 1.5;
+    let cases = [
+        (load("cases/3d/pillars-push-pull.ron"), 1_551.0, 3),
+        (refined, 5_544.0, 3),
+        (load("cases/pillars-push-pull.ron"), 7.3, 2),
+    ];
+    for (case, measured, dim) in &cases {
+        let c = terms::run_cost(case).expect("a mesh the generator accepts");
+        assert_eq!(c.dimension, *dim);
+        let ratio = c.seconds / measured;
+        assert!(
+            (ratio - 1.0).abs() < 0.15,
+            "{}: estimated {:.0} s against {measured} s ({:.0} elements)",
+            case.name,
+            c.seconds,
+            c.elements
+        );
+        assert!(c.bytes > 0.0);
+    }
+    // The phases: the whole push-pull is the unit; a run that stops at T_g0 a tenth; a
+    // compressed scene (every phase 100 s) the same work.
+    let mut p = cases[2].0.phases.clone();
+    assert!((terms::work_fraction(&p) - 1.0).abs() < 1e-12);
+    p.t_end = p.t_g0;
+    assert!((terms::work_fraction(&p) - 0.1).abs() < 1e-12);
+    let short = Phases {
+        t_g0: 100.0,
+        t_as0: 200.0,
+        t_a0: 300.0,
+        t_end: 300.0,
+    };
+    assert!((terms::work_fraction(&short) - 1.0).abs() < 1e-12);
+}

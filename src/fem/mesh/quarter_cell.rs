@@ -46,7 +46,11 @@
 //! command line and `gmsh --version`'s output. A new mesh is copied beside its final name,
 //! read and checked there, and renamed, so an interrupted run leaves no half file under the
 //! final name (a mesh failing the checks stays under its temporary name, which the error
-//! gives); a cached file is read instead of running gmsh.
+//! gives); a cached file is read instead of running gmsh. Processes sharing one cache (a
+//! Slurm array on a shared file system, say) may mesh the same geometry at once: each
+//! writes under a name of its own (host, process, counter) and the renames, to the same
+//! bytes, replace one another whole, so a reader finds no file or a whole one (tested with
+//! several processes on one cold cache).
 //!
 //! **Reading** ([`Mesh3::read_gmsh`], in [`crate::fem::gmsh`]): 10-node tetrahedra (gmsh type 11)
 //! in the three physical volumes and 6-node triangles (type 9) in `outer`; the nodes the
@@ -594,12 +598,24 @@ fn tail(stderr: &[u8], stdout: &[u8]) -> String {
     lines[lines.len().saturating_sub(LINES)..].join(" | ")
 }
 
-/// A unique temporary name beside `path` (same directory, so a rename is atomic).
+/// A unique temporary name beside `path` (same directory, so a rename is atomic): the
+/// host name, the process id and a counter, so that processes on several machines sharing
+/// the directory never write to one file.
 fn temp_beside(path: &Path) -> PathBuf {
     static COUNTER: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .unwrap_or_default();
+    let host: String = host
+        .trim()
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '-')
+        .take(32)
+        .collect();
     let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(format!(".tmp-{}-{n}", std::process::id()));
+    name.push(format!(".tmp-{host}-{}-{n}", std::process::id()));
     path.with_file_name(name)
 }
 
