@@ -606,6 +606,14 @@ fn strain_of_the_cytoplasm_includes_the_membrane_weighted_by_area() {
     ] {
         assert!((v - e).abs() < 1e-12, "{name}: {v} against {e}");
     }
+    // A homogeneous strain: its largest value is the mean, in every domain.
+    for d in [Domain::Nucleus, Domain::Cytoplasm, Domain::Membrane] {
+        let largest = m.largest_strain_norm(&y, d);
+        assert!(
+            (largest - e).abs() < 1e-12,
+            "{d:?}: largest {largest} against {e}"
+        );
+    }
     // The same stretch on the membrane's nodes only (nodes of the cytoplasm and nucleus
     // elements do not move): the nucleus and the cytoplasm proper are unstrained, so the
     // paper's cytoplasm mean is the membrane's times its share of the area,
@@ -619,6 +627,15 @@ fn strain_of_the_cytoplasm_includes_the_membrane_weighted_by_area() {
     });
     let o = m.observe(1.0, &y);
     assert_eq!(o.strain_nucleus, 0.0);
+    assert_eq!(m.largest_strain_norm(&y, Domain::Nucleus), 0.0);
+    // In the membrane the strain varies (its inner nodes are held): the largest value is
+    // above the mean.
+    let largest = m.largest_strain_norm(&y, Domain::Membrane);
+    assert!(
+        largest > o.strain_membrane,
+        "{largest} against mean {}",
+        o.strain_membrane
+    );
     assert!(
         o.strain_membrane > 0.1 * e,
         "membrane {}",

@@ -155,6 +155,21 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         s
     }
 
+    /// The largest ‖E‖_F = ‖½(FᵀF − I)‖ over the quadrature points of the elements of
+    /// `domain` (with the hoop strain where axisymmetric), as [`Self::mean_strain_norms`]
+    /// evaluates it; 0 for a domain without elements.
+    pub fn largest_strain_norm(&self, y: &[f64], domain: Domain) -> f64 {
+        let mut largest = 0.0f64;
+        for el in self.elements.iter().filter(|el| el.domain == domain) {
+            let ue = self.element_displacements(el, y);
+            for q in 0..el.geo.jxw.len() {
+                let f = deformation(&ue, &el.geo.grads[q]);
+                largest = largest.max(strain_norm(&f, hoop_stretch(el, q, &ue)));
+            }
+        }
+        largest
+    }
+
     /// The smallest vertical displacement (the largest downward one, negative = down)
     /// over every node of the nucleus elements, vertices and mid-side nodes [µm].
     pub fn nucleus_lowest_uy(&self, y: &[f64]) -> f64 {

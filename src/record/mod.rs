@@ -242,6 +242,13 @@ pub struct Summary {
     pub failure: Option<Failure>,
     /// The last output row.
     pub final_values: Option<Observables>,
+    /// The 3-D columns of the last output row (3-D runs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub final_values_3d: Option<Observables3>,
+    /// The largest ‖E‖_F at a quadrature point of the nucleus at the last output (the
+    /// largest nucleus strain; `final_values` holds its mean).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strain_nucleus_max: Option<f64>,
     /// Output rows written (including t = 0).
     pub outputs: usize,
     /// Time at which inertia was switched off, if it was.

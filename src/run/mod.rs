@@ -17,7 +17,7 @@ use serde::Serialize;
 use crate::case::{self, Case, InertiaMode};
 use crate::dae::bdf2::{Bdf2, Bdf2Options};
 use crate::dae::{Atol, Dae, Integrator, IntegratorError, Stats};
-use crate::fem::{Mesh, MeshError};
+use crate::fem::{Domain, Mesh, MeshError};
 use crate::model::{
     CellModel, CellOf, HalfPlane, ModelError, ModelParams, Quarter, Restart, Shape, State,
 };
@@ -998,6 +998,8 @@ impl RunWriter {
             finished: false,
             failure: None,
             final_values: None,
+            final_values_3d: None,
+            strain_nucleus_max: None,
             outputs: 0,
             inertia_switched_off_at: None,
             adhesion_unknowns_added_at: None,
@@ -1051,6 +1053,11 @@ impl RunWriter {
             .map_err(io_err(&self.csv_path))?;
         self.summary.outputs += 1;
         self.summary.final_values = Some(obs);
+        self.summary.final_values_3d = obs3;
+        self.summary.strain_nucleus_max = Some(match model.view() {
+            ModelView::Plane(m) => m.largest_strain_norm(y, Domain::Nucleus),
+            ModelView::Quarter(m) => m.largest_strain_norm(y, Domain::Nucleus),
+        });
         match (model.view(), &mut self.frames) {
             (ModelView::Plane(m), Frames::Plane(frames)) if frames.is_active() => {
                 let mu_as = m

@@ -745,6 +745,11 @@ pub fn read_row(id: &str, values: &[String], dir: &Path) -> Row {
         wall_seconds: Some(s.wall_seconds + s.setup_seconds),
         steps: Some(s.stats.steps),
         stopped,
+        extras: [
+            s.final_values_3d.map(|o| o.contact_area),
+            s.final_values_3d.map(|o| o.contact_area_ref),
+            s.strain_nucleus_max,
+        ],
         reason: table::one_line(&reason),
     }
 }

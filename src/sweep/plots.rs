@@ -722,6 +722,7 @@ mod tests {
             wall_seconds: Some(1.0),
             steps: Some(10),
             stopped: Default::default(),
+            extras: [None; 3],
             reason: String::new(),
         }
     }

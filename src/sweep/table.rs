@@ -73,9 +73,17 @@ pub struct Row {
     pub steps: Option<u64>,
     /// How a point that did not finish stopped, as fields.
     pub stopped: Stopped,
+    /// Further final values: [`EXTRA_COLUMNS`], in order (the contact areas of a 3-D run,
+    /// the largest nucleus strain); `None` where the run or its cellsim has none.
+    pub extras: [Option<f64>; 3],
     /// Why the point failed, is invalid or was interrupted (one line).
     pub reason: String,
 }
+
+/// The further final values of [`Row::extras`], after the stop's columns: the deformed and
+/// reference contact areas of a 3-D run (whole cell [µm²]) and the largest ‖E‖_F at a
+/// quadrature point of the nucleus.
+pub const EXTRA_COLUMNS: [&str; 3] = ["contact_area", "contact_area_ref", "strain_nucleus_max"];
 
 /// How a point stopped, as fields a map can draw: the class (the summary's failure kind:
 /// `stalled`, `inverted`, `step_limit`, `budget`, `interrupted`, `integration`, …; or
@@ -129,6 +137,7 @@ impl Row {
             wall_seconds: None,
             steps: None,
             stopped: Stopped::of_status(status),
+            extras: [None; 3],
             reason: one_line(reason),
         }
     }
@@ -140,7 +149,10 @@ impl Row {
             "penetration_depth" => self.penetration,
             "wall_seconds" => self.wall_seconds,
             "steps" => self.steps.map(|s| s as f64),
-            _ => self.last.and_then(|o| o.get(name)),
+            _ => match EXTRA_COLUMNS.iter().position(|c| *c == name) {
+                Some(k) => self.extras[k],
+                None => self.last.and_then(|o| o.get(name)),
+            },
         }
     }
 }
@@ -149,6 +161,7 @@ impl Row {
 pub fn quantities() -> Vec<&'static str> {
     let mut q: Vec<&str> = COLUMNS[1..].to_vec();
     q.extend(["penetration_depth", "wall_seconds", "steps"]);
+    q.extend(EXTRA_COLUMNS);
     q
 }
 
@@ -204,6 +217,7 @@ pub fn header(axes: &[String]) -> String {
         "steps".into(),
     ]);
     cols.extend(STOP_COLUMNS.iter().map(|c| c.to_string()));
+    cols.extend(EXTRA_COLUMNS.iter().map(|c| c.to_string()));
     cols.push("reason".into());
     cols.join(",")
 }
@@ -225,6 +239,7 @@ pub fn line(r: &Row) -> String {
     cols.push(num(s.t));
     cols.push(s.element.map(|e| e.to_string()).unwrap_or_default());
     cols.extend(s.x.iter().map(|&v| num(v)));
+    cols.extend(r.extras.iter().map(|&v| num(v)));
     cols.push(field(&r.reason));
     cols.join(",")
 }
@@ -295,10 +310,13 @@ pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), CsvError> {
         return Err(header("the first column is not `id`".into()));
     }
     let axes: Vec<String> = head[1..status_at].to_vec();
-    let expected = status_at + 1 + N_COLUMNS + 4 + STOP_COLUMNS.len();
-    // Written before the stop's fields: read with those empty.
-    let without_stop = expected - STOP_COLUMNS.len();
-    let has_stop = head.len() == expected;
+    let expected = status_at + 1 + N_COLUMNS + 4 + STOP_COLUMNS.len() + EXTRA_COLUMNS.len();
+    // Written before the further values, or before the stop's fields too: read with
+    // those empty.
+    let without_extras = expected - EXTRA_COLUMNS.len();
+    let without_stop = without_extras - STOP_COLUMNS.len();
+    let has_extras = head.len() == expected;
+    let has_stop = has_extras || head.len() == without_extras;
     if !has_stop && head.len() != without_stop {
         let older = !head.iter().any(|h| h == COLUMNS[N_COLUMNS - 1]);
         return Err(header(format!(
@@ -372,6 +390,11 @@ pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), CsvError> {
             } else {
                 Stopped::default()
             },
+            extras: if has_extras {
+                [number(&rest[9])?, number(&rest[10])?, number(&rest[11])?]
+            } else {
+                [None; 3]
+            },
             reason: rest[rest.len() - 1].clone(),
         });
     }
@@ -400,6 +423,7 @@ mod tests {
                 wall_seconds: Some(3.5),
                 steps: Some(775),
                 stopped: Stopped::default(),
+                extras: [Some(817.9), Some(620.5), Some(1.31)],
                 reason: String::new(),
             },
             Row {
@@ -416,6 +440,7 @@ mod tests {
                     element: Some(246),
                     x: [Some(6.2), Some(-4.1), None],
                 },
+                extras: [None, None, Some(0.42)],
                 reason: "element 246, contact point 35: det F = -2.4e-5".into(),
             },
             Row::bare(
@@ -445,23 +470,38 @@ mod tests {
         for q in ["contact_radius_ref", "strain_membrane", "uy_nucleus_max"] {
             assert!(quantities().contains(&q), "{q}");
         }
+        // The further values too.
+        assert_eq!(r[0].quantity("contact_area"), Some(817.9));
+        assert_eq!(r[0].quantity("strain_nucleus_max"), Some(1.31));
+        assert_eq!(r[1].quantity("contact_area"), None);
+        for q in EXTRA_COLUMNS {
+            assert!(quantities().contains(&q), "{q}");
+        }
         assert!(parse("id,status\n").is_err());
         // A sweep.csv written before those columns existed: refused, saying why.
         let old = "id,status,t,contact_radius,uy_top,uy_centre,uy_bottom,strain_nucleus,\
                    strain_cytoplasm,penetration_depth,wall_seconds,steps,reason\n";
         let err = parse(old).unwrap_err().to_string();
         assert!(err.contains("older cellsim"), "{err}");
-        // One written before the stop's fields: read, those fields empty.
-        let lines: Vec<String> = text
-            .lines()
-            .map(|l| {
-                let mut f = split(l);
-                let n = f.len();
-                f.drain(n - 1 - STOP_COLUMNS.len()..n - 1);
-                f.iter().map(|s| field(s)).collect::<Vec<_>>().join(",")
-            })
-            .collect();
-        let (_, r) = parse(&lines.join("\n")).unwrap();
+        // One written before the further values (and before the stop's fields too):
+        // read, those fields empty.
+        let without = |dropped: usize| {
+            let lines: Vec<String> = text
+                .lines()
+                .map(|l| {
+                    let mut f = split(l);
+                    let n = f.len();
+                    f.drain(n - 1 - dropped..n - 1);
+                    f.iter().map(|s| field(s)).collect::<Vec<_>>().join(",")
+                })
+                .collect();
+            parse(&lines.join("\n")).unwrap().1
+        };
+        let r = without(EXTRA_COLUMNS.len());
+        assert_eq!(r[1].stopped, rows[1].stopped);
+        assert_eq!(r[0].extras, [None; 3]);
+        assert_eq!(r[1].reason, rows[1].reason);
+        let r = without(EXTRA_COLUMNS.len() + STOP_COLUMNS.len());
         assert_eq!(r[1].stopped, Stopped::default());
         assert_eq!(r[1].reason, rows[1].reason);
         assert_eq!(r[1].steps, Some(90));
