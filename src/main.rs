@@ -406,6 +406,22 @@ enum SweepAction {
         /// The sweep directory.
         dir: PathBuf,
     },
+    /// Set a plane-strain sweep of the pillar geometry beside a 3-D one: the quantity
+    /// against the spacing, one line per width, plane strain dashed, 3-D solid, the Gap
+    /// lattice dotted (run from where the sweeps' base cases can be read).
+    #[command(name = "plane-vs-3d")]
+    PlaneVs3d {
+        /// The plane-strain sweep directory (e.g. plots/sweeps/pillar-geometry).
+        plane: PathBuf,
+        /// The 3-D sweep directory (e.g. plots/sweeps/pillar-geometry-3d).
+        three_d: PathBuf,
+        /// The figure [default: THREE_D/plane-vs-3d-<quantity>.png].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Column shown [default: penetration_depth].
+        #[arg(long)]
+        quantity: Option<String>,
+    },
 }
 
 /// Loads a case with its `--set` overrides; a bad case prints its located error and exits
@@ -694,6 +710,27 @@ fn sweep_command(a: SweepArgs) -> ExitCode {
             return sweep_plot_command(dir, quantity.as_deref());
         }
         Some(SweepAction::Collect { dir }) => return sweep_collect_command(dir),
+        Some(SweepAction::PlaneVs3d {
+            plane,
+            three_d,
+            out,
+            quantity,
+        }) => {
+            let q = quantity.as_deref();
+            let out = out.clone().unwrap_or_else(|| {
+                three_d.join(format!(
+                    "plane-vs-3d-{}.png",
+                    q.unwrap_or("penetration_depth")
+                ))
+            });
+            return match sweep::plane_and_3d(plane, three_d, &out, q) {
+                Ok(path) => {
+                    out!("{}", path.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => sweep_error(&e),
+            };
+        }
         None => {}
     }
     let Some(file) = a.sweep.clone() else {

@@ -509,3 +509,25 @@ fn variant_axes_run_a_case_once_and_write_the_comparison_table() {
     assert!(stdout.contains("(0 run, 3 reused)"), "{stdout}");
     assert_eq!(std::fs::read_to_string(&doc).unwrap(), written);
 }
+
+/// `sweep plane-vs-3d` reads two sweep directories (here the committed plane-strain map,
+/// twice) and draws the figure; a sweep without pillars is refused with the reason.
+#[test]
+fn plane_vs_3d_draws_two_geometry_sweeps_and_refuses_a_flat_one() {
+    let out = format!("{}/plane-vs-3d.png", tmp("sweep-plane-vs-3d"));
+    std::fs::create_dir_all(Path::new(&out).parent().unwrap()).unwrap();
+    let map = "plots/sweeps/pillar-geometry";
+    let res = cellsim(&["sweep", "plane-vs-3d", map, map, "--out", &out]);
+    let (stdout, stderr) = text(&res);
+    assert!(res.status.success(), "{stderr}");
+    assert_eq!(stdout.trim(), out);
+    assert!(std::fs::metadata(&out).unwrap().len() > 1000);
+    // A flat sweep has no pillar geometry.
+    let flat = tmp("sweep-plane-vs-3d-flat");
+    let res = cellsim(&["sweep", SWEEP, "--out", &flat, "--quiet"]);
+    assert!(res.status.success(), "{}", text(&res).1);
+    let res = cellsim(&["sweep", "plane-vs-3d", map, &flat]);
+    let (_, stderr) = text(&res);
+    assert_eq!(res.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("no point on pillars"), "{stderr}");
+}

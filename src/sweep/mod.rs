@@ -1464,6 +1464,25 @@ pub fn collect(dir: &Path) -> Result<Collected, SweepError> {
 /// Redraws the figures of `DIR` from `DIR/sweep.csv` (and the design in `sweep.json`);
 /// `quantity` is the column of the heat map or line plot (default: penetration depth).
 pub fn plot(dir: &Path, quantity: Option<&str>) -> Result<Vec<PathBuf>, SweepError> {
+    let (record, rows) = load_table(dir)?;
+    check_quantity(quantity)?;
+    Ok(plots::draw(dir, &record, &rows, quantity)?)
+}
+
+/// `--quantity`'s column, if given, is one of sweep.csv's.
+fn check_quantity(quantity: Option<&str>) -> Result<(), SweepError> {
+    match quantity {
+        Some(q) if !table::quantities().contains(&q) => Err(SweepError::Input(format!(
+            "--quantity {q}: not a column of sweep.csv; one of {}",
+            table::quantities().join(", ")
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// A sweep directory's `sweep.json` and the rows of its `sweep.csv` (whose axes must be
+/// the record's).
+fn load_table(dir: &Path) -> Result<(Record, Vec<Row>), SweepError> {
     let record = Record::load(dir)?;
     let path = dir.join("sweep.csv");
     let text = std::fs::read_to_string(&path)
@@ -1477,15 +1496,64 @@ pub fn plot(dir: &Path, quantity: Option<&str>) -> Result<Vec<PathBuf>, SweepErr
             record.axes()
         )));
     }
-    if let Some(q) = quantity {
-        if !table::quantities().contains(&q) {
+    Ok((record, rows))
+}
+
+/// The pillar geometry of each point of a sweep, from the overrides `sweep.json` records
+/// for it (the axes', the variants' and the derived ones), the base case's where a field
+/// is not overridden (the base as `sweep.json` names it, relative to the working
+/// directory): (width, spacing, on the `Gap` lattice) [µm]; `None` for a point on a flat
+/// substrate or whose base cannot be read.
+fn pillar_geometry(record: &Record) -> Vec<Option<(f64, f64, bool)>> {
+    record
+        .points
+        .iter()
+        .map(|p| {
+            let overrides: Vec<Override> =
+                p.overrides.iter().filter_map(|o| o.parse().ok()).collect();
+            let case = Case::load_with_overrides(&record.base, &overrides).ok()?;
+            match &case.substrate {
+                Substrate::Pillars(q) => Some((
+                    q.width,
+                    q.spacing,
+                    q.lattice == crate::physics::Lattice::Gap,
+                )),
+                Substrate::Flat(_) => None,
+            }
+        })
+        .collect()
+}
+
+/// The figure that sets a plane-strain sweep of the pillar geometry beside a 3-D one:
+/// `quantity` (default: penetration depth) against the spacing, one line per width, plane
+/// strain dashed, 3-D solid, the 3-D cell on the `Gap` lattice dotted with triangles;
+/// written to `out`. Each sweep's points are read from its `sweep.csv`, their width,
+/// spacing and lattice from its `sweep.json` ([`pillar_geometry`]).
+pub fn plane_and_3d(
+    plane: &Path,
+    three_d: &Path,
+    out: &Path,
+    quantity: Option<&str>,
+) -> Result<PathBuf, SweepError> {
+    check_quantity(quantity)?;
+    let q = quantity.unwrap_or("penetration_depth");
+    let mut sets = Vec::new();
+    for (dir, dim) in [(plane, 2), (three_d, 3)] {
+        let (record, rows) = load_table(dir)?;
+        let geometry = pillar_geometry(&record);
+        if geometry.iter().all(Option::is_none) {
             return Err(SweepError::Input(format!(
-                "--quantity {q}: not a column of sweep.csv; one of {}",
-                table::quantities().join(", ")
+                "{}: no point on pillars whose geometry could be read (is its base case, {}, \
+                 readable from here?)",
+                dir.display(),
+                record.base
             )));
         }
+        sets.push((dim, rows, geometry));
     }
-    Ok(plots::draw(dir, &record, &rows, quantity)?)
+    let curves = plots::geometry_curves(&sets, q);
+    plots::by_spacing(out, &curves, q)?;
+    Ok(out.to_path_buf())
 }
 
 #[cfg(test)]

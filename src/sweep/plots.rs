@@ -527,6 +527,182 @@ fn line_plot(
     Ok(())
 }
 
+/// One line of [`by_spacing`]: a width in one model, the points by spacing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GeometryCurve {
+    /// 2 (plane strain) or 3.
+    pub dim: usize,
+    /// Pillar width [µm].
+    pub width: f64,
+    /// The 3-D cell above the gap between two pillars (`Gap` lattice).
+    pub gap: bool,
+    /// (spacing, value, finished), by spacing; a point that stopped early at its last value.
+    pub points: Vec<(f64, f64, bool)>,
+}
+
+impl GeometryCurve {
+    /// The legend's text.
+    pub fn label(&self) -> String {
+        let model = match (self.dim, self.gap) {
+            (2, _) => "plane strain",
+            (_, false) => "3-D, four pillars",
+            (_, true) => "3-D, gap lattice",
+        };
+        format!("{model}, w = {} µm", self.width)
+    }
+}
+
+/// The curves of [`by_spacing`] from sweeps' rows and their points' pillar geometry
+/// (width, spacing, `Gap` lattice; `None` off pillars): one per (model, lattice, width),
+/// ordered by model, lattice, width; points finished or failed (at the last value), by
+/// spacing.
+pub fn geometry_curves(
+    sets: &[(usize, Vec<Row>, Vec<Option<(f64, f64, bool)>>)],
+    q: &str,
+) -> Vec<GeometryCurve> {
+    let mut curves: Vec<GeometryCurve> = Vec::new();
+    for (dim, rows, geometry) in sets {
+        for (r, g) in rows.iter().zip(geometry) {
+            let (Some((width, spacing, gap)), Some(v)) = (*g, r.quantity(q)) else {
+                continue;
+            };
+            if !matches!(r.status, Status::Finished | Status::Failed) || !v.is_finite() {
+                continue;
+            }
+            let gap = gap && *dim == 3;
+            let point = (spacing, v, r.status == Status::Finished);
+            match curves
+                .iter_mut()
+                .find(|c| c.dim == *dim && c.gap == gap && c.width == width)
+            {
+                Some(c) => c.points.push(point),
+                None => curves.push(GeometryCurve {
+                    dim: *dim,
+                    width,
+                    gap,
+                    points: vec![point],
+                }),
+            }
+        }
+    }
+    for c in &mut curves {
+        c.points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    }
+    curves.sort_by(|a, b| {
+        (a.dim, a.gap)
+            .cmp(&(b.dim, b.gap))
+            .then(a.width.total_cmp(&b.width))
+    });
+    curves
+}
+
+/// Draws `curves` (quantity `q` against the spacing) into `path`: a colour per width,
+/// plane strain dashed with hollow circles, 3-D solid with filled circles, the `Gap`
+/// lattice dotted with triangles; points that stopped early as red crosses.
+pub fn by_spacing(path: &Path, curves: &[GeometryCurve], q: &str) -> Result<(), OutputError> {
+    let e = draw_err(path);
+    let root = BitMapBackend::new(path, (900, 620)).into_drawing_area();
+    root.fill(&WHITE).map_err(|x| e(x.to_string()))?;
+    let all = || curves.iter().flat_map(|c| c.points.iter());
+    let span = |f: &dyn Fn(&(f64, f64, bool)) -> f64| {
+        let (lo, hi) = all()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(x), b.max(x))
+            });
+        if lo.is_finite() {
+            let pad = ((hi - lo) * 0.08).max(0.5);
+            (lo - pad, hi + pad)
+        } else {
+            (0.0, 1.0)
+        }
+    };
+    let (x0, x1) = span(&|p| p.0);
+    let (y0, y1) = span(&|p| p.1);
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!("{} against the pillar spacing", quantity_label(q)),
+            (FONT, 22),
+        )
+        .margin(16)
+        .x_label_area_size(55)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x0..x1, y0.min(0.0)..y1)
+        .map_err(|x| e(x.to_string()))?;
+    chart
+        .configure_mesh()
+        .x_desc("pillar spacing s [µm]")
+        .y_desc(quantity_label(q))
+        .axis_desc_style((FONT, 17))
+        .label_style((FONT, 15))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(|x| e(x.to_string()))?;
+    let mut widths: Vec<f64> = curves.iter().map(|c| c.width).collect();
+    widths.sort_by(f64::total_cmp);
+    widths.dedup();
+    const PALETTE: [RGBColor; 6] = [
+        BLUE,
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(23, 190, 207),
+    ];
+    for c in curves {
+        let k = widths.iter().position(|w| *w == c.width).unwrap_or(0);
+        let colour = PALETTE[k % PALETTE.len()];
+        let line: Vec<(f64, f64)> = c.points.iter().map(|p| (p.0, p.1)).collect();
+        let style = colour.stroke_width(if c.dim == 3 { 3 } else { 2 });
+        let drawn = match (c.dim, c.gap) {
+            (2, _) => chart.draw_series(DashedLineSeries::new(line, 14, 8, style)),
+            (_, true) => chart.draw_series(DashedLineSeries::new(line, 3, 6, style)),
+            _ => chart.draw_series(LineSeries::new(line, style)),
+        }
+        .map_err(|x| e(x.to_string()))?;
+        drawn
+            .label(c.label())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
+        for &(x, y, done) in &c.points {
+            if !done {
+                chart
+                    .draw_series(std::iter::once(Cross::new((x, y), 7, RED.stroke_width(3))))
+                    .map_err(|x| e(x.to_string()))?;
+            } else if c.gap {
+                chart
+                    .draw_series(std::iter::once(TriangleMarker::new(
+                        (x, y),
+                        7,
+                        colour.filled(),
+                    )))
+                    .map_err(|x| e(x.to_string()))?;
+            } else if c.dim == 2 {
+                chart
+                    .draw_series(std::iter::once(Circle::new(
+                        (x, y),
+                        5,
+                        colour.stroke_width(2),
+                    )))
+                    .map_err(|x| e(x.to_string()))?;
+            } else {
+                chart
+                    .draw_series(std::iter::once(Circle::new((x, y), 5, colour.filled())))
+                    .map_err(|x| e(x.to_string()))?;
+            }
+        }
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::LowerRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(GREY)
+        .label_font((FONT, 15))
+        .draw()
+        .map_err(|x| e(x.to_string()))?;
+    root.present().map_err(|x| e(x.to_string()))?;
+    Ok(())
+}
+
 /// A normalised sensitivity of one quantity to one parameter.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sensitivity {
@@ -725,6 +901,53 @@ mod tests {
             extras: [None; 3],
             reason: String::new(),
         }
+    }
+
+    #[test]
+    fn geometry_curves_group_by_model_lattice_and_width_and_sort_by_spacing() {
+        let mut failed = row("f", &[], -1.0);
+        failed.status = Status::Failed;
+        let mut invalid = row("i", &[], -1.0);
+        invalid.status = Status::Invalid;
+        let plane = vec![
+            row("a", &[], -3.0),
+            row("b", &[], -2.0),
+            row("c", &[], -5.0),
+        ];
+        let plane_g = vec![Some((8.0, 12.0, false)), Some((8.0, 4.0, false)), None];
+        let three = vec![row("d", &[], -4.0), failed, row("e", &[], -6.0), invalid];
+        let three_g = vec![
+            Some((8.0, 6.0, false)),
+            Some((8.0, 4.0, false)),
+            Some((8.0, 6.0, true)),
+            Some((4.0, 6.0, false)),
+        ];
+        let curves = geometry_curves(&[(2, plane, plane_g), (3, three, three_g)], "uy_top");
+        let summary: Vec<(String, Vec<(f64, f64, bool)>)> = curves
+            .iter()
+            .map(|c| (c.label(), c.points.clone()))
+            .collect();
+        assert_eq!(
+            summary,
+            vec![
+                (
+                    "plane strain, w = 8 µm".to_string(),
+                    vec![(4.0, -2.0, true), (12.0, -3.0, true)]
+                ),
+                (
+                    "3-D, four pillars, w = 8 µm".to_string(),
+                    vec![(4.0, -1.0, false), (6.0, -4.0, true)]
+                ),
+                (
+                    "3-D, gap lattice, w = 8 µm".to_string(),
+                    vec![(6.0, -6.0, true)]
+                ),
+            ]
+        );
+        let path = std::env::temp_dir().join(format!("by-spacing-{}.png", std::process::id()));
+        by_spacing(&path, &curves, "uy_top").expect("drawn");
+        assert!(std::fs::metadata(&path).expect("written").len() > 1000);
+        let _ = std::fs::remove_file(&path);
     }
 
     #[test]
