@@ -1504,7 +1504,7 @@ fn load_table(dir: &Path) -> Result<(Record, Vec<Row>), SweepError> {
 /// is not overridden (the base as `sweep.json` names it, relative to the working
 /// directory): (width, spacing, on the `Gap` lattice) [µm]; `None` for a point on a flat
 /// substrate or whose base cannot be read.
-fn pillar_geometry(record: &Record) -> Vec<Option<(f64, f64, bool)>> {
+fn pillar_geometry(record: &Record) -> Vec<plots::PillarGeometry> {
     record
         .points
         .iter()

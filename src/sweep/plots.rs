@@ -527,6 +527,16 @@ fn line_plot(
     Ok(())
 }
 
+/// A point of a [`GeometryCurve`]: (spacing, value, finished).
+pub type CurvePoint = (f64, f64, bool);
+
+/// A point's pillar geometry: (width, spacing, on the `Gap` lattice); `None` off pillars.
+pub type PillarGeometry = Option<(f64, f64, bool)>;
+
+/// One sweep for [`geometry_curves`]: the model's dimension (2 or 3), its rows and each
+/// row's pillar geometry.
+pub type GeometrySet = (usize, Vec<Row>, Vec<PillarGeometry>);
+
 /// One line of [`by_spacing`]: a width in one model, the points by spacing.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GeometryCurve {
@@ -537,7 +547,7 @@ pub struct GeometryCurve {
     /// The 3-D cell above the gap between two pillars (`Gap` lattice).
     pub gap: bool,
     /// (spacing, value, finished), by spacing; a point that stopped early at its last value.
-    pub points: Vec<(f64, f64, bool)>,
+    pub points: Vec<CurvePoint>,
 }
 
 impl GeometryCurve {
@@ -556,10 +566,7 @@ impl GeometryCurve {
 /// (width, spacing, `Gap` lattice; `None` off pillars): one per (model, lattice, width),
 /// ordered by model, lattice, width; points finished or failed (at the last value), by
 /// spacing.
-pub fn geometry_curves(
-    sets: &[(usize, Vec<Row>, Vec<Option<(f64, f64, bool)>>)],
-    q: &str,
-) -> Vec<GeometryCurve> {
+pub fn geometry_curves(sets: &[GeometrySet], q: &str) -> Vec<GeometryCurve> {
     let mut curves: Vec<GeometryCurve> = Vec::new();
     for (dim, rows, geometry) in sets {
         for (r, g) in rows.iter().zip(geometry) {
@@ -604,7 +611,7 @@ pub fn by_spacing(path: &Path, curves: &[GeometryCurve], q: &str) -> Result<(), 
     let root = BitMapBackend::new(path, (900, 620)).into_drawing_area();
     root.fill(&WHITE).map_err(|x| e(x.to_string()))?;
     let all = || curves.iter().flat_map(|c| c.points.iter());
-    let span = |f: &dyn Fn(&(f64, f64, bool)) -> f64| {
+    let span = |f: &dyn Fn(&CurvePoint) -> f64| {
         let (lo, hi) = all()
             .map(f)
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
@@ -923,7 +930,7 @@ mod tests {
             Some((4.0, 6.0, false)),
         ];
         let curves = geometry_curves(&[(2, plane, plane_g), (3, three, three_g)], "uy_top");
-        let summary: Vec<(String, Vec<(f64, f64, bool)>)> = curves
+        let summary: Vec<(String, Vec<CurvePoint>)> = curves
             .iter()
             .map(|c| (c.label(), c.points.clone()))
             .collect();
