@@ -281,6 +281,23 @@ fn default_mesh_is_complete_and_of_good_quality() {
 
 /// The same parameters give the same file, byte for byte, from two independent gmsh runs;
 /// a second call on the same cache does not run gmsh and gives the same mesh.
+/// The names in a mesh cache directory, sorted, after checking that they are one `.geo`
+/// and one `.msh` (nothing temporary left).
+fn only_geo_and_msh(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .expect("dir")
+        .filter_map(|d| d.ok())
+        .map(|d| d.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names.len(), 2, "{names:?}");
+    assert!(
+        names[0].ends_with(".geo") && names[1].ends_with(".msh"),
+        "{names:?}"
+    );
+    names
+}
+
 #[test]
 fn meshing_is_deterministic_and_cached() {
     let p = Mesh3Params {
@@ -306,17 +323,7 @@ fn meshing_is_deterministic_and_cached() {
         "differs from the shared cache"
     );
     // Only the mesh and its geometry are left in the cache directory.
-    let mut names: Vec<String> = std::fs::read_dir(ra.join("mesh3d"))
-        .expect("dir")
-        .filter_map(|d| d.ok())
-        .map(|d| d.file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    assert_eq!(names.len(), 2, "{names:?}");
-    assert!(
-        names[0].ends_with(".geo") && names[1].ends_with(".msh"),
-        "{names:?}"
-    );
+    only_geo_and_msh(&ra.join("mesh3d"));
     // From the cache.
     let t = Instant::now();
     let c = Mesh3::generate_with(&p, Path::new("gmsh"), &ra).expect("cached");
@@ -931,17 +938,7 @@ fn several_processes_on_one_cold_cache_share_one_whole_mesh() {
         assert_eq!(report(o), report(&outputs[0]));
     }
     // One mesh and its geometry, nothing temporary left.
-    let mut names: Vec<String> = std::fs::read_dir(&dir)
-        .expect("dir")
-        .filter_map(|d| d.ok())
-        .map(|d| d.file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    assert_eq!(names.len(), 2, "{names:?}");
-    assert!(
-        names[0].ends_with(".geo") && names[1].ends_with(".msh"),
-        "{names:?}"
-    );
+    let names = only_geo_and_msh(&dir);
     // Whole: ending as the file left (the same bytes where gmsh runs without address
     // randomization, as here; otherwise another run's whole mesh).
     let whole = std::fs::read(dir.join(&names[1])).expect("mesh");

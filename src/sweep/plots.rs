@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 use plotters::coord::Shift;
 use plotters::coord::ranged1d::SegmentedCoord;
-use plotters::coord::types::RangedCoordusize;
+use plotters::coord::types::{RangedCoordf64, RangedCoordusize};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -435,6 +435,23 @@ fn colorbar(
 
 /// The quantity against the axes' values: one panel per axis; `joined` draws lines
 /// between the points (a Grid or Zip axis), else markers only (a sample).
+/// The axes, their descriptions and the light grid of a line or scatter chart.
+fn draw_axes<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    x_desc: &str,
+    y_desc: &str,
+) -> Result<(), String> {
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .axis_desc_style((FONT, 17))
+        .label_style((FONT, 15))
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(|x| x.to_string())
+}
+
 fn line_plot(
     path: &Path,
     name: &str,
@@ -489,15 +506,7 @@ fn line_plot(
             .y_label_area_size(80)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(|x| e(x.to_string()))?;
-        chart
-            .configure_mesh()
-            .x_desc(axis.as_str())
-            .y_desc(quantity_label(q))
-            .axis_desc_style((FONT, 17))
-            .label_style((FONT, 15))
-            .light_line_style(RGBColor(235, 235, 235))
-            .draw()
-            .map_err(|x| e(x.to_string()))?;
+        draw_axes(&mut chart, axis, &quantity_label(q)).map_err(&e)?;
         if joined {
             chart
                 .draw_series(LineSeries::new(
@@ -636,15 +645,7 @@ pub fn by_spacing(path: &Path, curves: &[GeometryCurve], q: &str) -> Result<(), 
         .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, y0.min(0.0)..y1)
         .map_err(|x| e(x.to_string()))?;
-    chart
-        .configure_mesh()
-        .x_desc("pillar spacing s [µm]")
-        .y_desc(quantity_label(q))
-        .axis_desc_style((FONT, 17))
-        .label_style((FONT, 15))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(|x| e(x.to_string()))?;
+    draw_axes(&mut chart, "pillar spacing s [µm]", &quantity_label(q)).map_err(&e)?;
     let mut widths: Vec<f64> = curves.iter().map(|c| c.width).collect();
     widths.sort_by(f64::total_cmp);
     widths.dedup();
