@@ -314,6 +314,7 @@ fn integrate_flat_gravity() -> (Mesh3File, Snapshot3) {
         h_bottom: 0.6,
         h_nucleus: 1.5,
         refine: 1.0,
+        h_surface: None,
     })
     .expect("the quarter cell meshes");
     let lattice = Lattice::FourPillars;

@@ -362,6 +362,7 @@ fn other_cells_mesh_with_their_planes_points_and_volumes() {
             h_bottom: 0.6,
             h_nucleus: 0.6,
             refine: 1.0,
+            h_surface: None,
         },
         Mesh3Params {
             center: [0.0, 10.0, 0.0],
@@ -969,4 +970,64 @@ fn several_processes_on_one_cold_cache_share_one_whole_mesh() {
     assert!(String::from_utf8_lossy(&again.stdout).contains("(from the cache)"));
     assert_eq!(report(&again), report(&outputs[0]));
     let _ = std::fs::remove_dir_all(&root);
+}
+
+/// `mesh.h_surface`: the eighth cell's outer surface below the centre gets edges no
+/// longer than the cap allows (gmsh's sizes are targets: within 1.5× of them), the rest of
+/// the mesh keeps the grading law, the count is estimated before meshing, and without the
+/// option the geometry file (and so every cached mesh's key) is what it was.
+#[test]
+fn a_surface_cap_refines_the_lower_surface_only() {
+    let base = Mesh3Params {
+        wedge: Wedge::Eighth,
+        ..params(1.0)
+    };
+    let geo = base.geo();
+    assert!(geo.contains("Background Field = 1;") && !geo.contains("Field[2]"));
+    let capped_params = Mesh3Params {
+        h_surface: Some(0.6),
+        ..base.clone()
+    };
+    let geo = capped_params.geo();
+    assert!(geo.contains("Field[3] = Min;") && geo.contains("Background Field = 3;"));
+    let plain = generate(&base).mesh;
+    let capped = generate(&capped_params).mesh;
+    let c = base.center;
+    // The longest vertex-to-vertex edge of the outer faces whose midpoint lies in the
+    // height band `ys` and whose ends are both on the surface.
+    let longest = |m: &Mesh3, ys: std::ops::Range<f64>| -> f64 {
+        let mut l: f64 = 0.0;
+        for f in &m.outer_faces {
+            for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+                let (p, q) = (m.nodes[f[a]], m.nodes[f[b]]);
+                if ys.contains(&(0.5 * (p[1] + q[1]) - c[1])) {
+                    l = l.max(norm(sub(p, q)));
+                }
+            }
+        }
+        l
+    };
+    // From the nucleus bottom (where the grading law reaches h_nucleus = 1) to 2 µm below
+    // the centre: the cap is 0.6 there, the law 1.0.
+    let band = -5.0..-2.0;
+    let (l_plain, l_capped) = (longest(&plain, band.clone()), longest(&capped, band));
+    assert!(l_plain > 1.0, "{l_plain}");
+    assert!(l_capped < 1.5 * 0.6, "{l_capped}");
+    // Near the top the cap (0.6 + 0.5 × 9) is far above the law: same sizes.
+    let top = 8.0..10.0;
+    let (t_plain, t_capped) = (longest(&plain, top.clone()), longest(&capped, top));
+    assert!(
+        (t_capped / t_plain - 1.0).abs() < 0.3,
+        "{t_plain} {t_capped}"
+    );
+    let (n_plain, n_capped) = (plain.elements.len() as f64, capped.elements.len() as f64);
+    assert!(n_capped > 1.1 * n_plain, "{n_plain} {n_capped}");
+    for (m, p) in [(&plain, &base), (&capped, &capped_params)] {
+        let est = p.estimated_tets();
+        let n = m.elements.len() as f64;
+        assert!((est / n - 1.0).abs() < 0.25, "estimate {est} vs {n}");
+    }
+    // The cap's estimate grows as its mesh does.
+    let grows = capped_params.estimated_tets() / base.estimated_tets();
+    assert!((grows / (n_capped / n_plain) - 1.0).abs() < 0.15, "{grows}");
 }

@@ -33,6 +33,7 @@ pub fn wedge_mesh(h_bottom: f64, h_nucleus: f64, wedge: Wedge) -> Mesh3 {
         h_bottom,
         h_nucleus,
         refine: 1.0,
+        h_surface: None,
     })
     .expect("the cell meshes")
 }

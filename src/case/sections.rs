@@ -124,6 +124,15 @@ pub struct Mesh {
     /// Refinement factor for convergence studies: the mesh uses h / refine, so 2 halves
     /// every element size and 0.5 doubles it. Default 1. Valid: refine > 0.
     pub refine: f64,
+    /// Largest element size at the cell surface below the cell centre's height (µm, before
+    /// `refine`), where the cell meets the substrate and the contact radius is read: the
+    /// size there is min(grading law, h_surface + ½ × depth below r_cp + ½ × height above
+    /// the centre), so it grows back to the grading law half a µm per µm inward and
+    /// upward. In 3-D the membrane's elements then follow it; in 2-D the membrane's
+    /// spacing is already at most twice its layer thickness (0.5 µm at refine 1), so only
+    /// a smaller value acts. Default none (the grading law alone). Valid: 0 < h_surface ≤
+    /// r_c.
+    pub h_surface: Option<f64>,
     /// Polynomial degree integrated exactly by the quadrature of the elements that the
     /// contact and fibronectin bands cross (the band at rest is ≈ 0.05 µm thick, far
     /// thinner than an element; degree 4 gave a 15 % error in the contact force, MODEL.md
@@ -140,6 +149,7 @@ impl Default for Mesh {
             h_bottom: 0.3,
             h_nucleus: 1.0,
             refine: 1.0,
+            h_surface: None,
             contact_quadrature_degree: 10,
             contact_subdivisions: 0,
         }

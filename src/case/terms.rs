@@ -18,6 +18,7 @@ pub fn mesh_params(case: &Case) -> MeshParams {
         h_bottom: case.mesh.h_bottom,
         h_nucleus: case.mesh.h_nucleus,
         refine: case.mesh.refine,
+        h_surface: case.mesh.h_surface,
         min_angle_deg: crate::fem::mesh::MIN_ANGLE_DEG,
     }
 }
@@ -261,7 +262,13 @@ fn physics_refusal<T>(
 }
 
 /// The case fields the mesh is made from.
-const MESH_READS: [&str; 4] = ["geometry", "mesh.h_bottom", "mesh.h_nucleus", "mesh.refine"];
+const MESH_READS: [&str; 5] = [
+    "geometry",
+    "mesh.h_bottom",
+    "mesh.h_nucleus",
+    "mesh.refine",
+    "mesh.h_surface",
+];
 
 /// Every check the lower layers make of a case's parameters before a run integrates:
 /// the mesh generator's of the model's mesh ([`MeshSpec::validate`], with its

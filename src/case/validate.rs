@@ -314,6 +314,16 @@ impl Checker<'_> {
             let rule = format!("0 < {} <= r_c = {}", short(field), num(g.r_c));
             self.range_given(field, &["geometry.r_c"], h, h > 0.0 && h <= g.r_c, rule);
         }
+        if let Some(h) = m.h_surface {
+            let rule = format!("0 < h_surface <= r_c = {}", num(g.r_c));
+            self.range_given(
+                "mesh.h_surface",
+                &["geometry.r_c"],
+                h,
+                h > 0.0 && h <= g.r_c,
+                rule,
+            );
+        }
         self.positive("mesh.refine", m.refine);
         self.int_range(
             "mesh.contact_quadrature_degree",

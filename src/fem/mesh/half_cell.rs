@@ -19,7 +19,8 @@
 //!    r_c. Vertices on neighbouring rings are staggered (half a spacing apart), so each
 //!    layer is a zig-zag band of isosceles triangles. The tangential spacing is
 //!    min(h, 2 t/L) for the membrane thickness t = r_c − r_cp: the band's triangles then
-//!    have base angles ≥ 45°, and the membrane is at least one element thick. (For
+//!    have base angles ≥ 45°, and the membrane is at least one element thick; with a
+//!    surface cap (`h_surface`, [`MeshParams::surface_cap`]) at most that cap. (For
 //!    refine < 1 the membrane keeps this spacing: it cannot coarsen without skinny
 //!    elements, so a coarse mesh has more than ¼ of the default's elements.)
 //! 3. **Nucleus circle** and **symmetry line** x = c_x: vertices spaced by h along the
@@ -82,10 +83,17 @@ pub struct MeshParams {
     /// Refinement factor: every size is divided by it (2 halves all sizes, ≈ 4× the
     /// elements).
     pub refine: f64,
+    /// Largest size at the cell surface below the centre (before `refine`), if any
+    /// ([`MeshParams::surface_cap`]).
+    pub h_surface: Option<f64>,
     /// Angle limit (degrees) of the Delaunay refinement, in (0, 33]
     /// ([`MIN_ANGLE_DEG`] unless a test asks otherwise).
     pub min_angle_deg: f64,
 }
+
+/// How fast the surface cap ([`MeshParams::surface_cap`]) grows inward from r_cp and
+/// upward from the centre's height (µm of size per µm).
+pub const SURFACE_GRADING: f64 = 0.5;
 
 /// The generator's angle limit for the Delaunay refinement (degrees): the largest that
 /// terminates reliably with the graded sizes.
@@ -173,6 +181,25 @@ impl MeshParams {
         let y_nb = self.center[1] - self.r_n;
         let s = ((y - y_cb) / (y_nb - y_cb)).clamp(0.0, 1.0);
         (self.h_bottom + (self.h_nucleus - self.h_bottom) * s) / self.refine
+    }
+
+    /// The surface cap on the size at a point at distance `r` from the centre c and height
+    /// `y` (µm), if `h_surface` is set: (h_surface + ½ max(0, r_cp − r) + ½ max(0, y − c_y))
+    /// / refine. The size there is the smaller of this and [`MeshParams::size_at`]: at most
+    /// h_surface on the cell's lower half from r_cp outward, growing back to the grading
+    /// law half a µm per µm inward and above the centre.
+    pub fn surface_cap(&self, r: f64, y: f64) -> Option<f64> {
+        let h = self.h_surface?;
+        let inward = (self.r_cp - r).max(0.0);
+        let up = (y - self.center[1]).max(0.0);
+        Some((h + SURFACE_GRADING * (inward + up)) / self.refine)
+    }
+
+    /// The element size at a point at distance `r` from the centre and height `y`: the
+    /// grading law, capped near the surface ([`MeshParams::surface_cap`]).
+    pub fn size_near(&self, r: f64, y: f64) -> f64 {
+        let h = self.size_at(y);
+        self.surface_cap(r, y).map_or(h, |c| c.min(h))
     }
 
     /// Number of element layers through the membrane: max(1, round(refine)).
@@ -581,7 +608,7 @@ fn ring_angles(
         r_mid,
         graded_division(
             PI * r_mid,
-            |s| h(arc_y(r_mid, s)).min(l_cap),
+            |s| prm.size_near(r_mid, arc_y(r_mid, s)).min(l_cap),
             MIN_CIRCLE_SEGMENTS,
         ),
     );
@@ -1441,6 +1468,7 @@ mod tests {
             h_bottom: 0.5,
             h_nucleus: 0.5,
             refine: 1.0,
+            h_surface: None,
             min_angle_deg: 25.0,
         };
         let m = Mesh::generate(&p).expect("mesh");
@@ -1611,6 +1639,67 @@ mod tests {
             .expect_err("invalid")
             .to_string();
         assert!(msg.contains("r_cp") && msg.contains("r_n"), "{msg}");
+    }
+
+    /// The surface cap: below the centre the outer ring's edges are no longer than the cap
+    /// (0.2 µm, under the membrane's own limit of 0.5); above the centre, where the cap has
+    /// grown past that limit, the ring's spacing is the default one.
+    #[test]
+    fn a_surface_cap_shortens_the_lower_outer_edges() {
+        let plain = mesh(1.0);
+        let capped = Mesh::generate(&MeshParams {
+            h_surface: Some(0.2),
+            ..params(1.0)
+        })
+        .expect("mesh generation");
+        let c = plain.params.center;
+        let edges = |m: &Mesh, below: bool| -> Vec<f64> {
+            m.outer_edges
+                .iter()
+                .filter(|e| (m.nodes[e[1]][1] < c[1] - 0.5) == below)
+                .map(|e| dist(m.nodes[e[0]], m.nodes[e[2]]))
+                .collect()
+        };
+        let max = |v: Vec<f64>| v.into_iter().fold(0.0, f64::max);
+        let (p_low, c_low) = (max(edges(&plain, true)), max(edges(&capped, true)));
+        assert!(p_low > 0.3, "{p_low}");
+        assert!(c_low <= 0.2 * 1.05, "{c_low}");
+        assert!(capped.n_elements() > plain.n_elements());
+        // Where the cap exceeds the membrane's limit (above c_y + 0.6 µm) the spacing is the
+        // membrane's limit again (the division equidistributes over the whole half circle,
+        // so the points there shift, but the longest edge stays within 5 %).
+        let high = |m: &Mesh| -> Vec<f64> {
+            let mut v: Vec<f64> = m
+                .outer_edges
+                .iter()
+                .filter(|e| m.nodes[e[1]][1] > c[1] + 2.0)
+                .map(|e| dist(m.nodes[e[0]], m.nodes[e[2]]))
+                .collect();
+            v.sort_by(f64::total_cmp);
+            v
+        };
+        let (h_plain, h_capped) = (max(high(&plain)), max(high(&capped)));
+        assert!(
+            (h_capped / h_plain - 1.0).abs() < 0.05,
+            "{h_plain} {h_capped}"
+        );
+        assert_eq!(
+            params(1.0).surface_cap(9.0, c[1] + 1.0),
+            None,
+            "no cap without h_surface"
+        );
+        let p = MeshParams {
+            h_surface: Some(0.2),
+            refine: 2.0,
+            ..params(1.0)
+        };
+        // (0.2 + 0.5 × 0.75 + 0.5 × 1) / 2 at 0.75 µm inside r_cp and 1 µm above c.
+        let cap = p.surface_cap(p.r_cp - 0.75, c[1] + 1.0).unwrap();
+        assert!((cap - 0.5375).abs() < 1e-12, "{cap}");
+        // At the bottom the cap (0.1) is below the law (0.157); 5 µm above the centre the
+        // law (0.5) below the cap (1.35).
+        assert_eq!(p.size_near(p.r_c, c[1] - 9.9), 0.1);
+        assert_eq!(p.size_near(p.r_c, c[1] + 5.0), p.size_at(c[1] + 5.0));
     }
 
     #[test]

@@ -24,7 +24,10 @@
 //! 3. The size field is the 2-D grading law ([`MeshParams::size_at`]): linear in y from
 //!    h_bottom at the cell bottom c_y − r_c to h_nucleus at the nucleus bottom c_y − r_n,
 //!    constant above, divided by `refine`; a `MathEval` field, the clamp written with
-//!    `abs`. Sizes from points, curvature and boundary extension are off.
+//!    `abs`. With `h_surface`, a second `MathEval` field, the surface cap of
+//!    [`MeshParams::surface_cap`], and a `Min` field of the two as the background field
+//!    (without it the file is as before, so cached meshes keep their keys). Sizes from
+//!    points, curvature and boundary extension are off.
 //! 4. `Mesh.Algorithm3D = 10` (HXT): the default Delaunay leaves slivers in the 0.25 µm
 //!    membrane shell that gmsh cannot repair (min γ 0.01). Second order with the mid-edge
 //!    nodes on the curved surfaces (`Mesh.ElementOrder = 2`, `SecondOrderLinear = 0`).
@@ -164,6 +167,9 @@ pub struct Mesh3Params {
     /// Refinement factor: every size is divided by it (2 halves all sizes, ≈ 8× the
     /// tetrahedra).
     pub refine: f64,
+    /// Largest size at the cell surface below the centre (before `refine`), if any: the
+    /// 2-D [`MeshParams::surface_cap`], a second gmsh field.
+    pub h_surface: Option<f64>,
 }
 
 impl Mesh3Params {
@@ -179,6 +185,7 @@ impl Mesh3Params {
             h_bottom: p.h_bottom,
             h_nucleus: p.h_nucleus,
             refine: p.refine,
+            h_surface: p.h_surface,
         }
     }
 
@@ -212,6 +219,7 @@ impl Mesh3Params {
             h_bottom: self.h_bottom,
             h_nucleus: self.h_nucleus,
             refine: self.refine,
+            h_surface: self.h_surface,
             min_angle_deg: MIN_ANGLE_DEG,
         }
     }
@@ -230,19 +238,36 @@ impl Mesh3Params {
     /// that pass the other checks of `validate`.
     pub fn estimated_tets(&self) -> f64 {
         const N: usize = 2000;
+        // Radial points of the midpoint rule inside r_cp where the surface cap may act.
+        const NR: usize = 40;
         let (cy, rc, rcp) = (self.center[1], self.r_c, self.r_cp);
         let t = rc - rcp;
         let dy = 2.0 * rc / N as f64;
         let opening = 0.5 * self.wedge.angle();
         let sector = |r: f64, y: f64| opening * (r * r - (y - cy) * (y - cy)).max(0.0);
+        let section = self.section();
         let mut acc = 0.0;
         for k in 0..N {
             let y = cy - rc + (k as f64 + 0.5) * dy;
             let h = self.size_at(y);
-            let inner = sector(rcp, y);
-            let shell = sector(rc, y) - inner;
-            acc +=
-                TETS_PER_H3 * inner / (h * h * h) + SHELL_TETS_PER_H2T * shell / (h * h * h.min(t));
+            let inner = if self.h_surface.is_some() {
+                // Rings of the disc r ≤ r_cp at this height, each at its own capped size.
+                let dz = (y - cy).abs();
+                let rho = (rcp * rcp - dz * dz).max(0.0).sqrt();
+                let dr = rho / NR as f64;
+                (0..NR)
+                    .map(|j| {
+                        let p = (j as f64 + 0.5) * dr;
+                        let hr = section.size_near(p.hypot(dz), y);
+                        2.0 * opening * p * dr / (hr * hr * hr)
+                    })
+                    .sum::<f64>()
+            } else {
+                sector(rcp, y) / (h * h * h)
+            };
+            let hs = section.size_near(rc, y);
+            let shell = sector(rc, y) - sector(rcp, y);
+            acc += TETS_PER_H3 * inner + SHELL_TETS_PER_H2T * shell / (hs * hs * hs.min(t));
         }
         acc * dy
     }
@@ -353,7 +378,16 @@ impl Mesh3Params {
             line(text.into());
         }
         line(format!("Field[1].F = \"{}\";", self.size_law()));
-        line("Background Field = 1;".into());
+        match self.surface_law() {
+            Some(law) => {
+                line("Field[2] = MathEval;".into());
+                line(format!("Field[2].F = \"{law}\";"));
+                line("Field[3] = Min;".into());
+                line("Field[3].FieldsList = {1, 2};".into());
+                line("Background Field = 3;".into());
+            }
+            None => line("Background Field = 1;".into()),
+        }
         for opt in [
             "Mesh.MeshSizeExtendFromBoundary = 0",
             "Mesh.MeshSizeFromPoints = 0",
@@ -371,19 +405,30 @@ impl Mesh3Params {
         s
     }
 
+    /// The surface cap [`MeshParams::surface_cap`] as a gmsh MathEval expression (none
+    /// without `h_surface`): (h_s + ½ max(0, r_cp − r) + ½ max(0, y − c_y)) / refine, with
+    /// max(0, a) = (a + |a|)/2 and r the distance from c.
+    fn surface_law(&self) -> Option<String> {
+        let h = self.h_surface?;
+        let f = |v: f64| format!("{v:?}");
+        let [cx, cy, cz] = self.center;
+        let d = |axis: &str, c: f64| format!("({axis} {})", signed(-c));
+        let (dx, dy, dz) = (d("x", cx), d("y", cy), d("z", cz));
+        let r = format!("sqrt({dx} * {dx} + {dy} * {dy} + {dz} * {dz})");
+        let inward = format!("({} - {r})", f(self.r_cp));
+        let k = f(super::half_cell::SURFACE_GRADING);
+        Some(format!(
+            "({} + {k} * ({inward} + abs({inward})) / 2 + {k} * ({dy} + abs({dy})) / 2) / {}",
+            f(h),
+            f(self.refine)
+        ))
+    }
+
     /// The size law as a gmsh MathEval expression: h = (h_b + (h_n − h_b) clamp(t, 0, 1)) /
     /// refine with t = (y − y_cb)/(y_nb − y_cb); clamp(t, 0, 1) = (|t| − |t − 1| + 1)/2.
     /// mathex has no unary minus after an operator: signs are folded into the operators.
     fn size_law(&self) -> String {
         let f = |v: f64| format!("{v:?}");
-        let signed = |v: f64| {
-            if v < 0.0 {
-                format!("- {}", f(-v))
-            } else {
-                // abs: −0.0 would print as "-0.0".
-                format!("+ {}", f(v.abs()))
-            }
-        };
         let y_cb = self.center[1] - self.r_c;
         let t = format!("((y {}) / {})", signed(-y_cb), f(self.r_c - self.r_n));
         format!(
@@ -392,6 +437,17 @@ impl Mesh3Params {
             signed(self.h_nucleus - self.h_bottom),
             f(self.refine)
         )
+    }
+}
+
+/// `v` as a signed term of a gmsh MathEval expression, `+ v` or `- |v|` (mathex has no
+/// unary minus after an operator: signs are folded into the operators).
+fn signed(v: f64) -> String {
+    if v < 0.0 {
+        format!("- {:?}", -v)
+    } else {
+        // abs: −0.0 would print as "-0.0".
+        format!("+ {:?}", v.abs())
     }
 }
 
