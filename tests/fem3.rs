@@ -279,8 +279,6 @@ fn default_mesh_is_complete_and_of_good_quality() {
     assert!(m.check_jacobians().is_ok());
 }
 
-/// The same parameters give the same file, byte for byte, from two independent gmsh runs;
-/// a second call on the same cache does not run gmsh and gives the same mesh.
 /// The names in a mesh cache directory, sorted, after checking that they are one `.geo`
 /// and one `.msh` (nothing temporary left).
 fn only_geo_and_msh(dir: &Path) -> Vec<String> {
@@ -298,6 +296,8 @@ fn only_geo_and_msh(dir: &Path) -> Vec<String> {
     names
 }
 
+/// The same parameters give the same file, byte for byte, from two independent gmsh runs;
+/// a second call on the same cache does not run gmsh and gives the same mesh.
 #[test]
 fn meshing_is_deterministic_and_cached() {
     let p = Mesh3Params {

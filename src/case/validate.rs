@@ -307,22 +307,14 @@ impl Checker<'_> {
 
     /// Mesh sizes (at most the cell radius) and the band quadrature.
     fn mesh(&mut self, m: &Mesh, g: &Geometry) {
-        for (field, h) in [
-            ("mesh.h_bottom", m.h_bottom),
-            ("mesh.h_nucleus", m.h_nucleus),
-        ] {
+        let sizes = [
+            ("mesh.h_bottom", Some(m.h_bottom)),
+            ("mesh.h_nucleus", Some(m.h_nucleus)),
+            ("mesh.h_surface", m.h_surface),
+        ];
+        for (field, h) in sizes.into_iter().filter_map(|(f, h)| Some((f, h?))) {
             let rule = format!("0 < {} <= r_c = {}", short(field), num(g.r_c));
             self.range_given(field, &["geometry.r_c"], h, h > 0.0 && h <= g.r_c, rule);
-        }
-        if let Some(h) = m.h_surface {
-            let rule = format!("0 < h_surface <= r_c = {}", num(g.r_c));
-            self.range_given(
-                "mesh.h_surface",
-                &["geometry.r_c"],
-                h,
-                h > 0.0 && h <= g.r_c,
-                rule,
-            );
         }
         self.positive("mesh.refine", m.refine);
         self.int_range(

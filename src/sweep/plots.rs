@@ -433,8 +433,6 @@ fn colorbar(
     Ok(())
 }
 
-/// The quantity against the axes' values: one panel per axis; `joined` draws lines
-/// between the points (a Grid or Zip axis), else markers only (a sample).
 /// The axes, their descriptions and the light grid of a line or scatter chart.
 fn draw_axes<DB: DrawingBackend>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
@@ -452,6 +450,8 @@ fn draw_axes<DB: DrawingBackend>(
         .map_err(|x| x.to_string())
 }
 
+/// The quantity against the axes' values: one panel per axis; `joined` draws lines
+/// between the points (a Grid or Zip axis), else markers only (a sample).
 fn line_plot(
     path: &Path,
     name: &str,

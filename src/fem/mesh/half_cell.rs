@@ -1588,6 +1588,13 @@ mod tests {
         );
         assert_eq!(
             field_of(MeshParams {
+                h_surface: Some(0.0),
+                ..d.clone()
+            }),
+            "h_surface"
+        );
+        assert_eq!(
+            field_of(MeshParams {
                 h_bottom: 0.0,
                 ..d.clone()
             }),

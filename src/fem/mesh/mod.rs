@@ -127,7 +127,8 @@ pub(crate) fn invalid(
 }
 
 /// The checks both meshers' parameters begin with: every coordinate of `center` finite,
-/// the radii, sizes and refinement of the section `p` finite and positive, and
+/// the radii, sizes (`h_surface` if given) and refinement of the section `p` finite and
+/// positive, and
 /// r_n < r_cp < r_c.
 pub(crate) fn check_cell(center: &[f64], p: &MeshParams) -> Result<(), MeshError> {
     for (v, name) in center.iter().zip(["center[0]", "center[1]", "center[2]"]) {
@@ -143,7 +144,8 @@ pub(crate) fn check_cell(center: &[f64], p: &MeshParams) -> Result<(), MeshError
         ("h_nucleus", p.h_nucleus),
         ("refine", p.refine),
     ];
-    for (field, v) in positive {
+    let surface = p.h_surface.map(|h| ("h_surface", h));
+    for (field, v) in positive.into_iter().chain(surface) {
         if !(v.is_finite() && v > 0.0) {
             return invalid(field, v, "must be finite and > 0");
         }
