@@ -149,6 +149,8 @@ fn robertson_klu_reproduces_sundials_klu_output_exactly() {
         (375, 529, 54)
     );
     assert_eq!((s.error_test_failures, s.newton_failures), (10, 4));
+    // A direct solve: no Krylov iterations to count.
+    assert_eq!((s.linear_iters, s.linear_failures), (0, 0));
 }
 
 #[test]
@@ -188,6 +190,12 @@ fn robertson_with_gmres_preconditioned_by_the_lu_follows_the_published_table() {
     let s = ida.stats();
     // Preconditioner set-ups are the Jacobians, each factorized once.
     assert!(s.jacobian_evals > 0 && s.lu_factorizations == s.jacobian_evals);
+    // Every Newton iteration takes at least one GMRES iteration, each a residual (J v by
+    // a difference quotient) counted with the residuals; a GMRES solve that fails is a
+    // Newton convergence failure.
+    assert!(s.linear_iters >= s.newton_iters, "{s:?}");
+    assert!(s.residual_evals >= s.newton_iters + s.linear_iters, "{s:?}");
+    assert!(s.linear_failures <= s.newton_failures, "{s:?}");
 }
 
 /// idaHeat2D: output times 0.01·2^k, k = 0..10; (umax, k, nst, nni, nje, nre) per row.

@@ -279,6 +279,15 @@ pub struct Stats {
     pub newton_failures: u64,
     /// Local error-test failures (IDA only; 0 for fixed-step BDF2).
     pub error_test_failures: u64,
+    /// Krylov (GMRES) iterations, each a product `J v` and a preconditioner solve (IDA
+    /// with `solver.krylov` only, else 0).
+    #[serde(default)]
+    pub linear_iters: u64,
+    /// Krylov solves that did not reach their tolerance within their iterations: each
+    /// counts as a Newton convergence failure, and IDA sets the preconditioner up again
+    /// (IDA with `solver.krylov` only, else 0).
+    #[serde(default)]
+    pub linear_failures: u64,
     /// Order used on the last step.
     pub last_order: u32,
     /// Size of the last step.
@@ -296,6 +305,8 @@ impl std::ops::AddAssign<&Stats> for Stats {
         self.newton_iters += b.newton_iters;
         self.newton_failures += b.newton_failures;
         self.error_test_failures += b.error_test_failures;
+        self.linear_iters += b.linear_iters;
+        self.linear_failures += b.linear_failures;
         self.last_order = b.last_order;
         self.last_step = b.last_step;
     }

@@ -691,6 +691,14 @@ impl<D: Dae> Integrator for Ida<D> {
                 sys::IDAGetNumNonlinSolvConvFails,
             ),
             error_test_failures: self.getter("IDAGetNumErrTestFails", sys::IDAGetNumErrTestFails),
+            linear_iters: match self.krylov {
+                true => self.getter("IDAGetNumLinIters", sys::IDAGetNumLinIters),
+                false => 0,
+            },
+            linear_failures: match self.krylov {
+                true => self.getter("IDAGetNumLinConvFails", sys::IDAGetNumLinConvFails),
+                false => 0,
+            },
             last_order: order.max(0) as u32,
             last_step: h,
         }
