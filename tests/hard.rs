@@ -152,6 +152,27 @@ fn narrow_pillars_with_a_wide_gap_finish() {
 }
 
 #[test]
+fn a_snap_through_is_followed_not_taken_for_a_stall() {
+    // The J f_as reading of push-pull: at t ≈ 47 200 s the cell's edge lets go of a pillar's
+    // top corner and the cell springs back, a motion over ~1e-5 s with the paper's shear
+    // viscosity that IDA follows in thousands of short steps. The stall rule stopped it at
+    // t = 47 225 s while those steps were still moving the solution (1.0e4 tolerance units
+    // over its window); it must finish, and show the snap: u_y(p_t) rises by more than
+    // 0.5 µm between the outputs at 47 125 and 47 250 s (0.72 µm measured).
+    let s = run_hard("snap-through");
+    assert!(s.finished, "{:?}", s.failure);
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hard-snap-through");
+    let rows = read_csv(&out.join("timeseries.csv"));
+    let at = |t: f64| {
+        rows.iter()
+            .find(|r| (r[0] - t).abs() < 1e-6)
+            .unwrap_or_else(|| panic!("an output at {t} s"))[2]
+    };
+    let (before, after) = (at(47_125.0), at(47_250.0));
+    assert!(after - before > 0.5, "u_y(p_t) {before} -> {after} µm");
+}
+
+#[test]
 fn a_ten_micrometre_fall_lands_and_finishes() {
     // Stalled at t = 49.6 s while the switch looked for the contact carrying the weight on
     // a grid of times 0.01 s apart: after this fall the cell bounces, its impacts last

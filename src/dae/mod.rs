@@ -288,6 +288,12 @@ pub struct Stats {
     /// (IDA with `solver.krylov` only, else 0).
     #[serde(default)]
     pub linear_failures: u64,
+    /// How far the solution has moved over the run: Σ over the steps of ‖yₙ − yₙ₋₁‖ in
+    /// IDA's weighted RMS norm (its error weights 1/(rtol |y| + atol): tolerance units).
+    /// The stall rule's measure of motion ([`crate::run`]); 0 for fixed-step BDF2. Not
+    /// written to the summary.
+    #[serde(skip)]
+    pub path: f64,
     /// Order used on the last step.
     pub last_order: u32,
     /// Size of the last step.
@@ -307,6 +313,7 @@ impl std::ops::AddAssign<&Stats> for Stats {
         self.error_test_failures += b.error_test_failures;
         self.linear_iters += b.linear_iters;
         self.linear_failures += b.linear_failures;
+        self.path += b.path;
         self.last_order = b.last_order;
         self.last_step = b.last_step;
     }

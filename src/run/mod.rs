@@ -138,6 +138,14 @@ pub const STALL_STEPS: usize = 1000;
 /// Stall threshold on the mean step over the window, as a fraction of the regular output
 /// interval t_end / n_times.
 pub const STALL_FRACTION: f64 = 1e-4;
+/// Largest motion of the solution over the stall rule's window, in tolerance units
+/// ([`Stats::path`]), for its short steps to count as a stall: one unit a step on average.
+/// IDA sizes its steps for a local error of about one unit; steps that are short and move
+/// the solution by less than that are held back by something else (Newton failures), while
+/// a fast motion the model really makes (a snap-through, the ringing of a landing with
+/// inertia) moves it by more: 1.0e4 units over the window in the snap of the J f_as
+/// push-pull at t ≈ 47 225 s, 1.2e6 in a ringing landing.
+pub const STALL_PATH: f64 = STALL_STEPS as f64;
 
 /// Why the driver stopped the integrator before its output time (not a failure of the
 /// method itself).
@@ -168,6 +176,8 @@ pub enum StopCause {
         error_test_failures: u64,
         /// Newton convergence failures during those steps.
         newton_failures: u64,
+        /// How far the solution moved during those steps, in tolerance units.
+        path: f64,
     },
 }
 
@@ -190,6 +200,7 @@ impl StopCause {
                 order,
                 error_test_failures,
                 newton_failures,
+                path,
             } => {
                 let kind = if error_test_failures + newton_failures == 0 {
                     "none (the steps were accepted at that size)".to_string()
@@ -207,7 +218,7 @@ impl StopCause {
                 format!(
                     "stalled at t = {t:.6e} s: the last {STALL_STEPS} steps advanced {advanced:.3e} s, \
                      a mean step below {threshold:.3e} s ({STALL_FRACTION:e} of the output \
-                     interval); last step h = {h:.3e} s, order {order}; failures in those \
+                     interval), and moved the solution by {path:.3e} tolerance units; last step h = {h:.3e} s, order {order}; failures in those \
                      steps: {kind}. Tighter tolerances (solver.rtol) or BDF2 may help"
                 )
             }
@@ -220,11 +231,10 @@ impl StopCause {
 /// when its last [`STALL_STEPS`] steps together advanced less than [`STALL_FRACTION`] ×
 /// [`STALL_STEPS`] output intervals, i.e. their mean step is below 1e-4 of the regular
 /// output interval t_end / n_times (12.5 ms on the paper's scenes, 50 µs on the 200-s
-/// test cases). No scene needs that (the landing's few hundred short steps are diluted in
-/// the window; inertia kept on through the ringing of the landing takes 0.5 ms steps,
-/// ten times the threshold of the 200-s cases), and it is what a step size collapsed to a
-/// tolerance the Newton iteration cannot meet looks like (`--rtol 0.5`: h between 1 µs
-/// and 20 µs for thousands of steps).
+/// test cases), and moved the solution by less than [`STALL_PATH`] tolerance units
+/// ([`Stats::path`]): short steps held back by something other than accuracy. Short
+/// steps that move the solution are a motion the model makes (a snap-through, a
+/// landing's ringing with inertia on) and are followed, within `max_steps`.
 struct StepGuard {
     stop: StopFlag,
     start: Instant,
@@ -233,8 +243,8 @@ struct StepGuard {
     threshold: f64,
     steps_in_interval: u64,
     tout: f64,
-    /// (t, error-test failures, Newton failures) after each of the last steps.
-    window: std::collections::VecDeque<(f64, u64, u64)>,
+    /// (t, error-test failures, Newton failures, path) after each of the last steps.
+    window: std::collections::VecDeque<(f64, u64, u64, f64)>,
 }
 
 impl StepGuard {
@@ -275,11 +285,12 @@ impl StepGuard {
             });
         }
         self.window
-            .push_back((t, s.error_test_failures, s.newton_failures));
+            .push_back((t, s.error_test_failures, s.newton_failures, s.path));
         if self.window.len() > STALL_STEPS {
-            let (t0, etf0, nf0) = self.window.pop_front().unwrap_or((t, 0, 0));
+            let (t0, etf0, nf0, p0) = self.window.pop_front().unwrap_or((t, 0, 0, s.path));
             let advanced = t - t0;
-            if advanced < self.threshold * STALL_STEPS as f64 {
+            let path = s.path - p0;
+            if advanced < self.threshold * STALL_STEPS as f64 && path < STALL_PATH {
                 return Some(StopCause::Stalled {
                     threshold: self.threshold,
                     advanced,
@@ -287,6 +298,7 @@ impl StepGuard {
                     order: s.last_order,
                     error_test_failures: s.error_test_failures.saturating_sub(etf0),
                     newton_failures: s.newton_failures.saturating_sub(nf0),
+                    path,
                 });
             }
         }
@@ -1387,6 +1399,60 @@ mod tests {
                 assert!(advanced < threshold * STALL_STEPS as f64, "{advanced}");
             }
             other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn short_steps_that_move_the_solution_are_not_a_stall() {
+        // Output interval 1 s: steps of 1e-6 s, far below the 1e-4 s threshold. Each moves
+        // the solution by 2 tolerance units (a fast motion: no stall, however long), then
+        // by 0.5 (a step held back by Newton failures: a stall within a window).
+        let mut g = StepGuard::new(StopFlag::new(), None, u64::MAX, 1.0);
+        g.next_output(1e9);
+        let (mut t, mut path) = (0.0, 0.0);
+        for k in 0..3 * STALL_STEPS as u64 {
+            t += 1e-6;
+            path += 2.0;
+            let s = Stats {
+                path,
+                ..stats(k, 1e-6)
+            };
+            assert_eq!(g.check(t, &s), None, "step {k}");
+        }
+        let mut stopped = None;
+        for k in 0..2 * STALL_STEPS as u64 {
+            t += 1e-6;
+            path += 0.5;
+            if let Some(c) = g.check(
+                t,
+                &Stats {
+                    path,
+                    ..stats(k, 1e-6)
+                },
+            ) {
+                stopped = Some((k, c));
+                break;
+            }
+        }
+        let (k, cause) = stopped.expect("stall detected");
+        // The window's path falls below STALL_PATH = 1 000 units once two thirds of it
+        // are the slow steps.
+        assert!(
+            k > STALL_STEPS as u64 / 2 && k < STALL_STEPS as u64,
+            "after {k} steps"
+        );
+        match &cause {
+            StopCause::Stalled { path, .. } => assert!(*path < STALL_PATH, "{path}"),
+            other => panic!("{other:?}"),
+        }
+        let reason = cause.reason(1.0);
+        for needle in [
+            "stalled at t = ",
+            "tolerance units",
+            "last step h = ",
+            "failures in",
+        ] {
+            assert!(reason.contains(needle), "{reason}");
         }
     }
 

@@ -152,6 +152,11 @@ pub struct Ida<D: Dae> {
     t_out: f64,
     /// GMRES preconditioned by the LU ([`Krylov`]) rather than the LU alone.
     krylov: bool,
+    /// IDA's error weights after the last step, and y before it ([`Stats::path`]).
+    weights: NVector,
+    before: Vec<f64>,
+    /// [`Stats::path`] so far.
+    path: f64,
     // Dropped last: everything above was created in this context.
     ctx: Context,
 }
@@ -207,6 +212,7 @@ impl<D: Dae> Ida<D> {
         let ctx = Context::new().map_err(IntegratorError::Input)?;
         let vector = |v: &[f64]| NVector::from_slice(v, &ctx).map_err(IntegratorError::Input);
         let (yy, yp, out_y, out_yp) = (vector(&y0)?, vector(&yp0)?, vector(&y0)?, vector(&yp0)?);
+        let weights = vector(&y0)?;
 
         let user = Box::new(UserData {
             dae,
@@ -233,6 +239,9 @@ impl<D: Dae> Ida<D> {
             t_internal: t0,
             t_out: t0,
             krylov: opts.krylov.is_some(),
+            weights,
+            before: y0.clone(),
+            path: 0.0,
             ctx,
         };
         ida.setup(&opts, t0)?;
@@ -549,6 +558,19 @@ impl<D: Dae> Ida<D> {
             .collect())
     }
 
+    /// ‖y − y_before‖ in IDA's weighted RMS norm, with its weights after the step just
+    /// taken ([`Stats::path`]).
+    fn step_length(&mut self) -> Result<f64, IntegratorError> {
+        // SAFETY: valid IDA memory and a vector of the system's length.
+        let flag = unsafe { sys::IDAGetErrWeights(self.mem, self.weights.0) };
+        self.check("IDAGetErrWeights", flag)?;
+        let (y, w) = (self.yy.as_slice(), self.weights.as_slice());
+        let sum: f64 = (y.iter().zip(&self.before).zip(w))
+            .map(|((a, b), w)| ((a - b) * w).powi(2))
+            .sum();
+        Ok((sum / y.len().max(1) as f64).sqrt())
+    }
+
     fn getter(
         &self,
         function: &'static str,
@@ -592,6 +614,7 @@ impl<D: Dae> Integrator for Ida<D> {
                 self.tstop = next;
             }
             self.user.callback_error = None;
+            self.before.copy_from_slice(self.yy.as_slice());
             // One step towards the next breakpoint rather than `tout`: IDA's first step is
             // a fraction of the distance it is given, and the steps must not depend on the
             // output times (runs with other outputs take the same steps, `run::run_all`).
@@ -616,6 +639,7 @@ impl<D: Dae> Integrator for Ida<D> {
                 // IDA clears its stop time once reached.
                 self.tstop = None;
             }
+            self.path += self.step_length()?;
             let stats = self.stats();
             if !on_step(tret, &stats) {
                 return Err(IntegratorError::Interrupted { t: tret });
@@ -699,6 +723,7 @@ impl<D: Dae> Integrator for Ida<D> {
                 true => self.getter("IDAGetNumLinConvFails", sys::IDAGetNumLinConvFails),
                 false => 0,
             },
+            path: self.path,
             last_order: order.max(0) as u32,
             last_step: h,
         }
