@@ -254,6 +254,12 @@ impl<D: Dae> Bdf2<D> {
                     }
                     self.tn = t_new;
                     self.h_prev = Some(h);
+                    // The step's length in the Newton weights ([`Stats::path`]); y_new is
+                    // free until the next predictor.
+                    for i in 0..n {
+                        self.y_new[i] = self.yn[i] - self.y_prev[i];
+                    }
+                    self.stats.path += wrms_norm(&self.y_new, &self.w);
                     self.stats.steps += 1;
                     self.stats.last_step = h;
                     self.stats.last_order = if self.stats.steps == 1 { 1 } else { 2 };

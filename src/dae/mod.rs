@@ -289,9 +289,9 @@ pub struct Stats {
     #[serde(default)]
     pub linear_failures: u64,
     /// How far the solution has moved over the run: Σ over the steps of ‖yₙ − yₙ₋₁‖ in
-    /// IDA's weighted RMS norm (its error weights 1/(rtol |y| + atol): tolerance units).
-    /// The stall rule's measure of motion ([`crate::run`]); 0 for fixed-step BDF2. Not
-    /// written to the summary.
+    /// the weighted RMS norm of the integrator's weights 1/(rtol |y| + atol) (IDA's error
+    /// weights, BDF2's Newton weights): tolerance units. The stall rule's measure of
+    /// motion ([`crate::run`]). Not written to the summary.
     #[serde(skip)]
     pub path: f64,
     /// Order used on the last step.

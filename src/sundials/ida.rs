@@ -18,7 +18,9 @@ use sundials_sys as sys;
 use super::{Context, NVector, guard, ida_flag_name, view, view_mut};
 use crate::dae::linsolve::{FaerFactory, LinearSolver, LinearSolverError, SharedFactory};
 use crate::dae::timing::{self, Phase};
-use crate::dae::{Atol, Dae, DaeError, Integrator, IntegratorError, Setup, State, Stats};
+use crate::dae::{
+    Atol, Dae, DaeError, Integrator, IntegratorError, Setup, State, Stats, wrms_norm,
+};
 
 /// Initial-condition calculation (IDACalcIC) before the first step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -559,16 +561,15 @@ impl<D: Dae> Ida<D> {
     }
 
     /// ‖y − y_before‖ in IDA's weighted RMS norm, with its weights after the step just
-    /// taken ([`Stats::path`]).
+    /// taken ([`Stats::path`]); leaves the difference in `before`.
     fn step_length(&mut self) -> Result<f64, IntegratorError> {
         // SAFETY: valid IDA memory and a vector of the system's length.
         let flag = unsafe { sys::IDAGetErrWeights(self.mem, self.weights.0) };
         self.check("IDAGetErrWeights", flag)?;
-        let (y, w) = (self.yy.as_slice(), self.weights.as_slice());
-        let sum: f64 = (y.iter().zip(&self.before).zip(w))
-            .map(|((a, b), w)| ((a - b) * w).powi(2))
-            .sum();
-        Ok((sum / y.len().max(1) as f64).sqrt())
+        for (d, y) in self.before.iter_mut().zip(self.yy.as_slice()) {
+            *d = y - *d;
+        }
+        Ok(wrms_norm(&self.before, self.weights.as_slice()))
     }
 
     fn getter(
