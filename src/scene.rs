@@ -3,7 +3,7 @@
 //! unknowns with adhesion, active terms with active fibres, inertia per the case).
 
 use crate::case::terms::{
-    MEMORY_ESTIMATE, MESH_GENERATOR, active, adhesion, contact, phases, viscosity,
+    MEMORY_ESTIMATE, MESH_GENERATOR, active, adhesion, contact, fibres, phases, viscosity,
 };
 pub use crate::case::terms::{layer_checks, mesh_params, mesh3_params, substrate};
 use crate::case::{self, Case, InertiaMode};
@@ -79,6 +79,7 @@ pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParam
         contact: contact(case),
         adhesion: adhesion(case),
         active: active(case),
+        fibres: fibres(case),
         inertia,
         drag: case.inertia.drag,
         contact_degree: case.mesh.contact_quadrature_degree as usize,

@@ -36,6 +36,10 @@ fn axisymmetric_global_jacobian_matches_finite_differences() {
     drag.drag = 1e-3;
     let mut active = axisym_params(Case::reference_active(), false);
     active.drag = 1e-3;
+    let mut fibred = Case::reference_active();
+    crate::model::with_fibres(&mut fibred, 1000.0);
+    let mut fibred = axisym_params(fibred, false);
+    fibred.drag = 1e-3;
     for (params, label) in [
         (
             axisym_params(Case::reference(), true),
@@ -43,6 +47,10 @@ fn axisymmetric_global_jacobian_matches_finite_differences() {
         ),
         (drag, "axisymmetric flat, drag"),
         (active, "axisymmetric flat, active strain, drag"),
+        (
+            fibred,
+            "axisymmetric flat, active strain and fibres (k1 = 1000 Pa), drag",
+        ),
     ] {
         check_jacobian(params, 0.5, label);
     }

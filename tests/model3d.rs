@@ -69,6 +69,13 @@ fn jacobian_of_the_quarter_cell_without_inertia_matches_finite_differences() {
 }
 
 #[test]
+fn jacobian_of_the_quarter_cell_with_fibres_matches_finite_differences() {
+    // The cytoplasm's fibres (MODEL.md §11) at k₁ = 1000 Pa, written once for every
+    // kinematics: in 3-D along the meridian tangent T and the radial N.
+    check_jacobian3_of(false, Lattice::FourPillars, &coarse3(), 1000.0);
+}
+
+#[test]
 fn jacobian_of_the_quarter_cell_with_inertia_matches_finite_differences() {
     check_jacobian3(true, Lattice::FourPillars, &coarse3());
 }
@@ -86,10 +93,18 @@ fn jacobian_of_the_eighth_cell_matches_finite_differences() {
 /// bands. On the eighth cell, whose nodes on the diagonal plane carry one unknown for
 /// u_x = u_z, the u and v unknowns of every such node in the lower half are columns.
 fn check_jacobian3(inertia: bool, lattice: Lattice, mesh: &Mesh3) {
+    check_jacobian3_of(inertia, lattice, mesh, 0.0)
+}
+
+/// [`check_jacobian3`] with the cytoplasm's fibres at `k1_pa` (none at 0).
+fn check_jacobian3_of(inertia: bool, lattice: Lattice, mesh: &Mesh3, k1_pa: f64) {
     let wedge = mesh.params.wedge;
     let eighth = wedge == Wedge::Eighth;
     let mut c = Case::reference_active();
     c.substrate = case::Substrate::pillars();
+    if k1_pa > 0.0 {
+        crate::model::with_fibres(&mut c, k1_pa);
+    }
     let mut p = scene::model_params(&c, "pillars-3d", inertia).expect("a valid case");
     p.drag = if inertia { 0.0 } else { 1e-3 };
     // The pillar tops 0.5 µm below the cell's lowest point over them, in 3-D.

@@ -46,7 +46,7 @@ pub use error::{CaseError, Problem};
 pub use locate::Position;
 pub use overrides::Override;
 pub use sections::{
-    Active, Adhesion, AdhesionDirection, Bottom, Contact, Flat, Geometry, Gravity, Inertia,
+    Active, Adhesion, AdhesionDirection, Bottom, Contact, Fibres, Flat, Geometry, Gravity, Inertia,
     InertiaMode, Integrator, KinematicModel, Krylov, LinearSolver, MAX_ATOL, MAX_RTOL, Material,
     Materials, Mesh, Output, Pac, Phases, Pillars, Solver, Substrate, Viscosity, WedgeChoice,
     units,

@@ -231,6 +231,35 @@ pub struct Materials {
     /// Mooney fraction: β = beta_fraction · μ_e / 2, α₁ = μ_e/2 − β (dimensionless).
     /// Default 0.2. Valid: 0 ≤ beta_fraction < 1 (so that α₁ > 0).
     pub beta_fraction: f64,
+    /// Fibres in the cytoplasm (MODEL.md §11): `Some((k1_pa: 100))` adds the fibre term
+    /// along T in the PAC and along N in the bottom region (the regions of `active`, which
+    /// must have at least one). Default none: the paper's isotropic cell.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fibres: Option<Fibres>,
+}
+
+/// The fibre term W_fib = χ (k₁/(2k₂)) [exp(k₂ ⟨I₄ − 1⟩²) − 1], I₄ = a·C_e a, of the
+/// cytoplasm's active regions (MODEL.md §11): the fibres resist stretch, not shortening.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Fibres {
+    /// Stiffness k₁ (Pa). Default 100. Valid: k₁ ≥ 0.
+    pub k1_pa: f64,
+    /// Exponential stiffening k₂ (dimensionless). Default 1. Valid: 0 < k₂ ≤ 10.
+    pub k2: f64,
+    /// Half-width δ of the ramp ⟨x⟩ = x S(x; −δ, δ) that makes the fibres slack in
+    /// shortening. Default 1e-3 (MODEL.md §11). Valid: 0 < δ ≤ 0.1.
+    pub delta: f64,
+}
+
+impl Default for Fibres {
+    fn default() -> Self {
+        Fibres {
+            k1_pa: 100.0,
+            k2: 1.0,
+            delta: 1e-3,
+        }
+    }
 }
 
 impl Default for Materials {
@@ -241,6 +270,7 @@ impl Default for Materials {
             membrane: Material::cytoplasm(),
             gamma: 0.1,
             beta_fraction: 0.2,
+            fibres: None,
         }
     }
 }
@@ -286,6 +316,8 @@ struct MaterialsRepr {
     gamma: f64,
     #[serde(default = "default_beta_fraction")]
     beta_fraction: f64,
+    #[serde(default)]
+    fibres: Option<Fibres>,
 }
 
 /// Functions giving the default of a field of a section (`name: Section.field`), for
@@ -312,6 +344,7 @@ impl From<MaterialsRepr> for Materials {
             membrane: r.membrane.or(d.membrane),
             gamma: r.gamma,
             beta_fraction: r.beta_fraction,
+            fibres: r.fibres,
         }
     }
 }

@@ -124,6 +124,15 @@ pub fn viscosity(case: &Case) -> Viscosity {
     }
 }
 
+/// The fibre law of a case (MODEL.md §11), if it has fibres.
+pub fn fibres(case: &Case) -> Option<physics::Fibres> {
+    case.materials.fibres.as_ref().map(|f| physics::Fibres {
+        k1: f.k1_pa,
+        k2: f.k2,
+        delta: f.delta,
+    })
+}
+
 /// The phase switches of a case (with the gravity flip if the case turns upside down).
 pub fn phases(case: &Case) -> Phases {
     let ph = &case.phases;
@@ -322,6 +331,9 @@ pub fn layer_checks(case: &Case) -> Vec<LayerCheck<'_>> {
         layer_check("viscosity model", &["viscosity"], move || {
             viscosity_refusal(case)
         }),
+        layer_check("fibre law", &["materials.fibres"], move || {
+            fibres_refusal(case)
+        }),
     ]);
     checks
 }
@@ -439,6 +451,20 @@ fn viscosity_refusal(case: &Case) -> Result<(), Refusal> {
     physics_refusal(viscosity(case).validate(), "viscosity", |name| match name {
         "lambda_f" => field("viscosity.lambda_f", case.viscosity.lambda_f),
         "mu_f" => field("viscosity.mu_f", case.viscosity.mu_f),
+        _ => None,
+    })
+}
+
+/// The fibre law's check ([`physics::Fibres::validate`]), traced back to the case fields
+/// (that the fibres have regions to lie in is the case validation's rule).
+fn fibres_refusal(case: &Case) -> Result<(), Refusal> {
+    let (Some(law), Some(written)) = (fibres(case), case.materials.fibres.as_ref()) else {
+        return Ok(());
+    };
+    physics_refusal(law.validate(), "materials.fibres", |name| match name {
+        "k1" => field("materials.fibres.k1_pa", written.k1_pa),
+        "k2" => field("materials.fibres.k2", written.k2),
+        "delta" => field("materials.fibres.delta", written.delta),
         _ => None,
     })
 }

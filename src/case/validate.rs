@@ -266,6 +266,7 @@ impl Case {
         c.contact(&self.contact);
         c.adhesion(self.adhesion.as_ref(), &self.contact);
         c.active(&self.active, g);
+        c.fibres(&self.materials, &self.active);
         c.phases(&self.phases);
         c.inertia(&self.inertia);
         c.solver_and_output(&self.solver, &self.output);
@@ -350,6 +351,38 @@ impl Checker<'_> {
             1.0,
             false,
         );
+    }
+
+    /// Fibres (MODEL.md §11): their law's ranges, and a region of `active` to lie in.
+    fn fibres(&mut self, mat: &Materials, act: &Active) {
+        let Some(f) = &mat.fibres else { return };
+        self.non_negative("materials.fibres.k1_pa", f.k1_pa);
+        self.range(
+            "materials.fibres.k2",
+            f.k2,
+            f.k2 > 0.0 && f.k2 <= 10.0,
+            "0 < k2 <= 10",
+        );
+        self.range(
+            "materials.fibres.delta",
+            f.delta,
+            f.delta > 0.0 && f.delta <= 0.1,
+            "0 < delta <= 0.1",
+        );
+        if act.pac.is_none() && act.bottom.is_none() {
+            self.report(
+                "materials.fibres",
+                &["active"],
+                "Some(..)".into(),
+                Rule::Conflict(
+                    "the fibres lie in the active regions (along T in the PAC, along N in the \
+                     bottom region), but `active` has neither: add `active.pac` or \
+                     `active.bottom` (with e: 0.0 for fibres without contraction), or remove \
+                     `materials.fibres`"
+                        .into(),
+                ),
+            );
+        }
     }
 
     /// Viscosity and gravity: signs.

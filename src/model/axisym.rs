@@ -83,7 +83,8 @@ impl Formulation<DIM, NODES, 12> for Axisymmetric {
     fn solid_residual(s: &Solid<DIM, NODES>, fe: &mut ElementVector) -> Result<(), DaeError> {
         s.each_point(hoop_point, |q, g, w, pt| {
             let h = &s.el.hoop[q];
-            let p = piola_total_hoop(s.law, s.visc, &pt.F, &pt.Fdot, &pt.Fa);
+            let mut p = piola_total_hoop(s.law, s.visc, &pt.F, &pt.Fdot, &pt.Fa);
+            s.el.add_fibres::<1>(s.fibres, q, &pt.F.plane, &pt.Fa, &mut p.plane, None);
             for a in 0..NODES {
                 for i in 0..DIM {
                     fe[a][i] += w * contract::<DIM>(|l| p.plane[(i, l)] * g[a][l]);
@@ -98,7 +99,9 @@ impl Formulation<DIM, NODES, 12> for Axisymmetric {
     fn solid_tangent(s: &Solid<DIM, NODES>, tan: &mut ElementTangent) -> Result<(), DaeError> {
         s.each_point(hoop_point, |q, g, w, pt| {
             let h = &s.el.hoop[q];
-            let mp = material_point_hoop(s.law, s.visc, &pt.F, &pt.Fdot, &pt.Fa);
+            let mut mp = material_point_hoop(s.law, s.visc, &pt.F, &pt.Fdot, &pt.Fa);
+            let plane = &mut mp.P.plane;
+            s.el.add_fibres(s.fibres, q, &pt.F.plane, &pt.Fa, plane, Some(&mut mp.dP_dF));
             for a in 0..NODES {
                 for i in 0..DIM {
                     // ak_β = w Σ_α B_(ai)α A_αβ, the same for C.

@@ -17,7 +17,7 @@ use super::kinematics::NodalOf;
 use super::shape::{Shape, TabOf};
 use super::{ModelError, ModelParams};
 use crate::fem::{CellMesh, Domain, ElementTabulation, GeometryOf};
-use crate::physics::KinematicModel;
+use crate::physics::{Fibre, Fibres, KinematicModel};
 
 /// Degree of the standard (solid and mass) rule: the mass integrand Nₐ N_b is of degree 4
 /// on a straight element.
@@ -35,6 +35,9 @@ pub(crate) struct ElementOf<const D: usize, const N: usize> {
     pub(crate) geo: GeometryOf<D, N>,
     /// `A_q` with `F_a = I − t_a A_q` at the standard points (empty: no active strain).
     pub(crate) active: Vec<SMatrix<f64, D, D>>,
+    /// The fibre families at the standard points (MODEL.md §11; empty: no fibres, which
+    /// is every element but the cytoplasm's when the case has fibres).
+    pub(crate) fibres: Vec<[Fibre<D>; 2]>,
     /// Consistent mass ∫ρ Nₐ N_b (scalar per node pair).
     pub(crate) mass: [[f64; N]; N],
     /// ∫ Nₐ N_b (unit density, for the drag).
@@ -143,6 +146,17 @@ impl<const D: usize, const N: usize> ElementOf<D, N> {
             }
             None => Vec::new(),
         };
+        let fibres = match (params.fibres, params.active) {
+            (Some(_), Some(act)) if domain == Domain::Cytoplasm => {
+                let f: Vec<[Fibre<D>; 2]> = geo.x.iter().map(|p| S::fibres(&act, p, &c)).collect();
+                if f.iter().flatten().all(|fib| fib.chi == 0.0) {
+                    Vec::new()
+                } else {
+                    f
+                }
+            }
+            _ => Vec::new(),
+        };
         let radial = if domain == Domain::Membrane {
             cgeo.x
                 .iter()
@@ -158,6 +172,7 @@ impl<const D: usize, const N: usize> ElementOf<D, N> {
             with_mu: params.adhesion.is_some() && domain == Domain::Membrane,
             geo,
             active,
+            fibres,
             mass,
             mass1,
             cgeo,
@@ -174,6 +189,32 @@ impl<const D: usize, const N: usize> ElementOf<D, N> {
             SMatrix::identity()
         } else {
             SMatrix::identity() - self.active[q] * t_a
+        }
+    }
+
+    /// Adds the fibres' stress at standard point `q` (`F` there, the active strain `fa`)
+    /// to the first Piola–Kirchhoff stress `p`, and with `tangent` their `∂P/∂F` to it
+    /// (MODEL.md §11; nothing where the element has no fibres).
+    #[inline]
+    pub(crate) fn add_fibres<const M: usize>(
+        &self,
+        law: Option<&Fibres>,
+        q: usize,
+        f: &SMatrix<f64, D, D>,
+        fa: &SMatrix<f64, D, D>,
+        p: &mut SMatrix<f64, D, D>,
+        tangent: Option<&mut SMatrix<f64, M, M>>,
+    ) {
+        let (Some(law), Some(families)) = (law, self.fibres.get(q)) else {
+            return;
+        };
+        let mut tangent = tangent;
+        for fib in families.iter().filter(|fib| fib.chi > 0.0) {
+            let af = fib.under(fa);
+            law.add_piola(f, &af, p);
+            if let Some(t) = tangent.as_deref_mut() {
+                law.add_tangent(f, &af, t);
+            }
         }
     }
 }

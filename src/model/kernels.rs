@@ -45,7 +45,7 @@ use super::shape::{Seeded, Shape, TabOf};
 use crate::dae::{DaeError, ElementPoint, Inadmissible};
 use crate::fem::ElementTabulation;
 use crate::physics::{
-    MaterialPointOf, Real, Surface, Viscosity, Yeoh, adhesion_force, adhesion_hoop_factor,
+    Fibres, MaterialPointOf, Real, Surface, Viscosity, Yeoh, adhesion_force, adhesion_hoop_factor,
     adhesion_rate, contact_force, material_point, material_point3, piola_total, piola_total3,
 };
 
@@ -84,6 +84,8 @@ pub(crate) struct Solid<'a, const D: usize, const N: usize> {
     pub(crate) visc: &'a Viscosity,
     pub(crate) st: &'a ElementState<D, N>,
     pub(crate) t_a: f64,
+    /// The fibre law (MODEL.md §11), where the case has fibres.
+    pub(crate) fibres: Option<&'a Fibres>,
 }
 
 impl<const D: usize, const N: usize> Solid<'_, D, N> {
@@ -201,8 +203,9 @@ fn solid_residual<const D: usize, const N: usize>(
     fe: &mut NodalOf<D, N>,
     piola: impl Fn([SMatrix<f64, D, D>; 3]) -> SMatrix<f64, D, D>,
 ) -> Result<(), DaeError> {
-    s.each_point(Solid::point, |_, g, w, pt| {
-        let p = piola(pt);
+    s.each_point(Solid::point, |q, g, w, pt| {
+        let mut p = piola(pt);
+        s.el.add_fibres::<1>(s.fibres, q, &pt[0], &pt[2], &mut p, None);
         for a in 0..N {
             for i in 0..D {
                 fe[a][i] += w * contract::<D>(|l| p[(i, l)] * g[a][l]);
@@ -219,8 +222,9 @@ fn solid_tangent<const D: usize, const N: usize, const E: usize, const DD: usize
     tan: &mut TangentOf<E, N>,
     point: impl Fn([SMatrix<f64, D, D>; 3]) -> MaterialPointOf<D, DD>,
 ) -> Result<(), DaeError> {
-    s.each_point(Solid::point, |_, g, w, pt| {
-        let mp = point(pt);
+    s.each_point(Solid::point, |q, g, w, pt| {
+        let mut mp = point(pt);
+        s.el.add_fibres(s.fibres, q, &pt[0], &pt[2], &mut mp.P, Some(&mut mp.dP_dF));
         for a in 0..N {
             for i in 0..D {
                 // ak_(kL) = w Σ_J ∂Nₐ/∂X_J A_(iJ)(kL), the same for C (D² of 9 used).

@@ -53,7 +53,7 @@ use nalgebra::SVector;
 use crate::dae::{Dae, DaeError, FirstOrderBlocks, Inadmissible, Pattern};
 use crate::fem::{CellMesh, Domain, ElementGeometryError};
 use crate::physics::{
-    ActiveStrain, Adhesion, Contact, KinematicModel, Lattice, Phases, Substrate, Surface,
+    ActiveStrain, Adhesion, Contact, Fibres, KinematicModel, Lattice, Phases, Substrate, Surface,
     Viscosity, Yeoh,
 };
 use dofs::{DofMapOf, NONE};
@@ -97,6 +97,9 @@ pub struct ModelParams {
     pub adhesion: Option<Adhesion>,
     /// Active strain (absent or without fibres: no active terms).
     pub active: Option<ActiveStrain>,
+    /// Fibres in the cytoplasm's active regions (MODEL.md §11; absent: the paper's
+    /// isotropic cell). They lie in the regions of [`Self::active`].
+    pub fibres: Option<Fibres>,
     /// Model inertia (v unknowns and the mass matrix).
     pub inertia: bool,
     /// Medium drag c_d [pN·s/µm⁴] per unit reference volume (MODEL.md §8).
@@ -536,6 +539,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
             visc: &self.params.viscosity,
             st,
             t_a,
+            fibres: self.params.fibres.as_ref(),
         }
     }
 

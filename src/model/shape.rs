@@ -20,7 +20,7 @@ use super::history::LayerField;
 use super::{CellOf, ModelParams};
 use crate::dae::DaeError;
 use crate::fem::{CellMesh, Domain, Mesh, Mesh3};
-use crate::physics::{ActiveStrain, KinematicModel, Real, Substrate, Substrate3};
+use crate::physics::{ActiveStrain, Fibre, KinematicModel, Real, Substrate, Substrate3};
 
 /// Largest number of dual directions a tangent uses (3-D band forces: 3 + 9 + 1).
 pub const MAX_DIRECTIONS: usize = 13;
@@ -100,6 +100,9 @@ pub trait Shape<const D: usize, const N: usize, const E: usize>:
         c: &SVector<f64, D>,
         domain: Domain,
     ) -> SMatrix<f64, D, D>;
+    /// The fibre families (MODEL.md §11) at reference point `x`, about the centre `c`:
+    /// the PAC's along `T`, the bottom region's along `N`, each with its indicator.
+    fn fibres(act: &ActiveStrain, x: &[f64; D], c: &SVector<f64, D>) -> [Fibre<D>; 2];
     /// Whether component `c` of node `i` is eliminated by the symmetry, per node.
     fn eliminated(mesh: &Self::Mesh, constraints: Constraints) -> Vec<[bool; D]>;
     /// The nodes on a diagonal mirror plane, whose last component is tied to the first
@@ -174,6 +177,10 @@ impl Shape<2, 6, 12> for HalfPlane {
         act.fa(&Vector2::new(x[0], x[1]), domain, 1.0)
     }
 
+    fn fibres(act: &ActiveStrain, x: &[f64; 2], _c: &Vector2<f64>) -> [Fibre<2>; 2] {
+        act.fibres(&Vector2::new(x[0], x[1]))
+    }
+
     /// u_x = 0 on the symmetry line.
     fn eliminated(mesh: &Mesh, _: Constraints) -> Vec<[bool; 2]> {
         mark(vec![[false; 2]; mesh.nodes.len()], &mesh.symmetry_nodes, 0)
@@ -219,6 +226,10 @@ impl Shape<3, 10, 30> for Quarter {
         domain: Domain,
     ) -> SMatrix<f64, 3, 3> {
         act.fa3(&Vector3::new(x[0], x[1], x[2]), c.z, domain, 1.0)
+    }
+
+    fn fibres(act: &ActiveStrain, x: &[f64; 3], c: &Vector3<f64>) -> [Fibre<3>; 2] {
+        act.fibres3(&Vector3::new(x[0], x[1], x[2]), c.z)
     }
 
     /// u_x = 0 on the plane x = c_x; u_z = 0 on z = c_z, or everywhere for the slab.

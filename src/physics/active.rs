@@ -42,6 +42,7 @@
 
 #![allow(non_snake_case)]
 
+use super::fibres::Fibre;
 use super::smooth::heaviside;
 use super::{PhysicsError, check};
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
@@ -246,6 +247,33 @@ impl ActiveStrain {
         Fa
     }
 
+    /// The fibre families at reference point `X` (MODEL.md §11): the PAC's along `T` with
+    /// `χ_PAC`, the bottom region's along `N` with `χ_bot` (a family with `χ = 0` where its
+    /// region is absent, and both at `X = c`, where `N` is undefined). The fibres are a
+    /// cytoplasm material: the caller restricts them to that domain.
+    pub fn fibres(&self, X: &Vector2<f64>) -> [Fibre<2>; 2] {
+        let p = self.offset(X);
+        let r = p.norm();
+        if r == 0.0 {
+            return [Fibre {
+                a: Vector2::x(),
+                chi: 0.0,
+            }; 2];
+        }
+        let N = p / r;
+        let T = Vector2::new(-N.y, N.x);
+        [
+            Fibre {
+                a: T,
+                chi: self.chi_pac(X),
+            },
+            Fibre {
+                a: N,
+                chi: self.chi_bottom(X),
+            },
+        ]
+    }
+
     // ---- 3-D (module notes) ---------------------------------------------------------------
 
     /// `(p, (ρ, p_y))` for `X` in 3-D: `p = X − c`, `c = (center[0], center[1], c_z)`, and
@@ -339,6 +367,41 @@ impl ActiveStrain {
     }
 }
 
+impl ActiveStrain {
+    /// The fibre families of the 3-D model at `X` ([`Self::fibres`] about the vertical axis
+    /// through `c = (center[0], center[1], c_z)`): `T` the unit tangent of the meridian, `N`
+    /// the radial direction. On the axis, where `T` is undefined, the PAC family has `χ = 0`
+    /// (no quadrature point lies there: it is an edge of the quarter cell).
+    #[inline]
+    pub fn fibres3(&self, X: &Vector3<f64>, c_z: f64) -> [Fibre<3>; 2] {
+        let (p, q) = self.meridian(X, c_z);
+        let r = p.norm();
+        if r == 0.0 {
+            return [Fibre {
+                a: Vector3::x(),
+                chi: 0.0,
+            }; 2];
+        }
+        let N = p / r;
+        let rho = q.x;
+        let pac = match self.pac {
+            Some(pac) if rho > 0.0 => Fibre {
+                a: Vector3::new(-N.y * (p.x / rho), rho / r, -N.y * (p.z / rho)),
+                chi: self.chi_pac_offset(&pac, &q),
+            },
+            _ => Fibre {
+                a: Vector3::x(),
+                chi: 0.0,
+            },
+        };
+        let bottom = Fibre {
+            a: N,
+            chi: self.bottom.map_or(0.0, |b| self.chi_bottom_offset(&b, &q)),
+        };
+        [pac, bottom]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -352,6 +415,47 @@ mod tests {
     fn at(r: f64, deg: f64) -> Vector2<f64> {
         let t = deg.to_radians();
         Vector2::new(r * t.cos(), 8.5 + r * t.sin())
+    }
+
+    #[test]
+    fn the_fibres_are_the_directions_the_active_strain_contracts() {
+        // F_a a = (1 − e χ) a for each family, in 2-D and 3-D, and in the plane z = c_z,
+        // x > c_x the 3-D families are the 2-D ones (z component 0).
+        let act = both();
+        let e = [act.pac.unwrap().e, act.bottom.unwrap().e];
+        for (r, deg) in [
+            (6.2, 45.0),
+            (8.0, -40.0),
+            (7.0, -18.0),
+            (6.0, -33.0),
+            (9.9, -70.0),
+        ] {
+            let X = at(r, deg);
+            let fa = act.fa(&X, Domain::Cytoplasm, 1.0);
+            let fib = act.fibres(&X);
+            for (k, f) in fib.iter().enumerate() {
+                assert!((f.a.norm() - 1.0).abs() < 1e-14);
+                assert!((fa * f.a - f.a * (1.0 - e[k] * f.chi)).norm() < 1e-14);
+            }
+            assert_eq!(fib[0].chi, act.chi_pac(&X));
+            assert_eq!(fib[1].chi, act.chi_bottom(&X));
+            let X3 = Vector3::new(X.x, X.y, 0.0);
+            let fib3 = act.fibres3(&X3, 0.0);
+            for (f2, f3) in fib.iter().zip(&fib3) {
+                assert!((f3.a - Vector3::new(f2.a.x, f2.a.y, 0.0)).norm() < 1e-14);
+                assert!((f3.chi - f2.chi).abs() < 1e-14);
+            }
+            // and off that plane, a rotation about the vertical axis
+            let (s, c) = 0.7f64.sin_cos();
+            let R = Matrix3::new(c, 0.0, -s, 0.0, 1.0, 0.0, s, 0.0, c);
+            let Xr = Vector3::new(act.center[0], act.center[1], 0.0)
+                + R * (X3 - Vector3::new(act.center[0], act.center[1], 0.0));
+            let fa3 = act.fa3(&Xr, 0.0, Domain::Cytoplasm, 1.0);
+            for (k, (f3, fr)) in fib3.iter().zip(&act.fibres3(&Xr, 0.0)).enumerate() {
+                assert!((fr.a - R * f3.a).norm() < 1e-12);
+                assert!((fa3 * fr.a - fr.a * (1.0 - e[k] * fr.chi)).norm() < 1e-12);
+            }
+        }
     }
 
     #[test]

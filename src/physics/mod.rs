@@ -19,6 +19,7 @@
 //! - [`hoop`]: the same laws with the hoop stretch of the axisymmetric model (§10);
 //! - [`three_d`]: the same laws with a full 3 × 3 `F`, for the 3-D quarter cell (§10), with
 //!   a closed-form tangent;
+//! - [`fibres`]: the fibre term of the cytoplasm (§11), written once for every kinematics;
 //! - [`active`]: the active-strain tensor `F_a` of the PAC and bottom fibres (§6), in 2-D
 //!   and about the vertical axis of the 3-D cell (§10);
 //! - [`substrate`]: flat and micropillared substrates, penetration depth and normal (§5),
@@ -40,6 +41,7 @@
 pub mod active;
 #[cfg(test)]
 mod checks;
+pub mod fibres;
 pub mod hoop;
 pub mod law;
 pub mod loads;
@@ -50,6 +52,7 @@ pub mod substrate;
 pub mod three_d;
 
 pub use active::{ActiveStrain, Bottom, Domain, Pac};
+pub use fibres::{ActiveFibre, Fibre, Fibres};
 pub use hoop::{
     BlockDiag, MaterialPointHoop, admissible_hoop, material_point_hoop, piola_total_hoop,
 };

@@ -31,29 +31,30 @@ pub fn heaviside<T: Real>(d: T, eps: f64) -> T {
     smooth_step(d, -eps, eps)
 }
 
+/// Smooth step with its derivatives, for `f64`: `(S, dS/ds, d²S/ds²)` with
+/// `S' = 30ξ²(1 − ξ)²/(b − a)` and `S'' = 60ξ(1 − ξ)(1 − 2ξ)/(b − a)²`.
+/// Requires `a < b`.
+#[inline]
+pub(crate) fn smooth_step_d(s: f64, a: f64, b: f64) -> (f64, f64, f64) {
+    if s <= a {
+        (0.0, 0.0, 0.0)
+    } else if s >= b {
+        (1.0, 0.0, 0.0)
+    } else {
+        let w = b - a;
+        let xi = (s - a) / w;
+        let om = 1.0 - xi;
+        let v = xi * xi * xi * (xi * (xi * 6.0 - 15.0) + 10.0);
+        let d1 = 30.0 * xi * xi * om * om / w;
+        let d2 = 60.0 * xi * om * (1.0 - 2.0 * xi) / (w * w);
+        (v, d1, d2)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Smooth step with its derivatives, for `f64`: `(S, dS/ds, d²S/ds²)` with
-    /// `S' = 30ξ²(1 − ξ)²/(b − a)` and `S'' = 60ξ(1 − ξ)(1 − 2ξ)/(b − a)²`.
-    /// Requires `a < b`.
-    #[inline]
-    fn smooth_step_d(s: f64, a: f64, b: f64) -> (f64, f64, f64) {
-        if s <= a {
-            (0.0, 0.0, 0.0)
-        } else if s >= b {
-            (1.0, 0.0, 0.0)
-        } else {
-            let w = b - a;
-            let xi = (s - a) / w;
-            let om = 1.0 - xi;
-            let v = xi * xi * xi * (xi * (xi * 6.0 - 15.0) + 10.0);
-            let d1 = 30.0 * xi * xi * om * om / w;
-            let d2 = 60.0 * xi * om * (1.0 - 2.0 * xi) / (w * w);
-            (v, d1, d2)
-        }
-    }
     use num_dual::Dual2_64;
 
     #[test]

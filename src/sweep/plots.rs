@@ -433,21 +433,32 @@ fn colorbar(
     Ok(())
 }
 
-/// The axes, their descriptions and the light grid of a line or scatter chart.
+/// The axes, their descriptions and the light grid of a line or scatter chart; with
+/// `log_x` the x coordinate is log₁₀ of the value and labelled with the value.
 fn draw_axes<DB: DrawingBackend>(
     chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
     x_desc: &str,
     y_desc: &str,
+    log_x: bool,
 ) -> Result<(), String> {
-    chart
-        .configure_mesh()
-        .x_desc(x_desc)
+    let value = |v: &f64| {
+        let x = 10f64.powf(*v);
+        if x >= 1.0 {
+            format!("{x:.0}")
+        } else {
+            format!("{x:.2e}")
+        }
+    };
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(x_desc)
         .y_desc(y_desc)
         .axis_desc_style((FONT, 17))
         .label_style((FONT, 15))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(|x| x.to_string())
+        .light_line_style(RGBColor(235, 235, 235));
+    if log_x {
+        mesh.x_label_formatter(&value);
+    }
+    mesh.draw().map_err(|x| x.to_string())
 }
 
 /// The quantity against the axes' values: one panel per axis; `joined` draws lines
@@ -476,6 +487,14 @@ fn line_plot(
             })
             .collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // Positive values spanning two decades or more (a stiffness 10, 100, 1000): on a
+        // log axis, so that the small ones are not crowded at one end.
+        let log_x = pts.len() >= 3 && pts[0].0 > 0.0 && pts[pts.len() - 1].0 >= 100.0 * pts[0].0;
+        if log_x {
+            for p in &mut pts {
+                p.0 = p.0.log10();
+            }
+        }
         let range = |v: &mut dyn Iterator<Item = f64>| {
             let (lo, hi) = v.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
                 (a.min(x), b.max(x))
@@ -506,7 +525,12 @@ fn line_plot(
             .y_label_area_size(80)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(|x| e(x.to_string()))?;
-        draw_axes(&mut chart, axis, &quantity_label(q)).map_err(&e)?;
+        let x_desc = if log_x {
+            format!("{axis} (log scale)")
+        } else {
+            axis.clone()
+        };
+        draw_axes(&mut chart, &x_desc, &quantity_label(q), log_x).map_err(&e)?;
         if joined {
             chart
                 .draw_series(LineSeries::new(
@@ -645,7 +669,13 @@ pub fn by_spacing(path: &Path, curves: &[GeometryCurve], q: &str) -> Result<(), 
         .y_label_area_size(80)
         .build_cartesian_2d(x0..x1, y0.min(0.0)..y1)
         .map_err(|x| e(x.to_string()))?;
-    draw_axes(&mut chart, "pillar spacing s [µm]", &quantity_label(q)).map_err(&e)?;
+    draw_axes(
+        &mut chart,
+        "pillar spacing s [µm]",
+        &quantity_label(q),
+        false,
+    )
+    .map_err(&e)?;
     let mut widths: Vec<f64> = curves.iter().map(|c| c.width).collect();
     widths.sort_by(f64::total_cmp);
     widths.dedup();
