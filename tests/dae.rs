@@ -732,3 +732,244 @@ fn both_integrators_measure_the_same_path_of_the_solution() {
     assert!(pi > 0.0 && pb > 0.0, "{pi} {pb}");
     assert!((pi / pb - 1.0).abs() < 0.2, "IDA {pi} against BDF2 {pb}");
 }
+
+// ---------------------------------------------------------------------------------------
+// Root finding (the phases a cell starts itself, MODEL.md §11): IDA's against SUNDIALS'
+// published example, both integrators against closed-form roots.
+
+/// A DAE with root functions `g` of the given directions added.
+struct WithRoots<P> {
+    inner: P,
+    directions: Vec<i32>,
+    g: fn(&State, &mut [f64]),
+}
+
+impl<P: Dae> Dae for WithRoots<P> {
+    fn size(&self) -> usize {
+        self.inner.size()
+    }
+    fn residual(&mut self, at: State, r: &mut [f64]) -> Result<(), DaeError> {
+        self.inner.residual(at, r)
+    }
+    fn pattern(&self) -> &Pattern {
+        self.inner.pattern()
+    }
+    fn jacobian(&mut self, at: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+        self.inner.jacobian(at, cj, v)
+    }
+    fn differential(&self) -> Vec<bool> {
+        self.inner.differential()
+    }
+    fn initial(&self) -> (f64, Vec<f64>, Vec<f64>) {
+        self.inner.initial()
+    }
+    fn root_directions(&self) -> Vec<i32> {
+        self.directions.clone()
+    }
+    fn root_functions(&mut self, at: State, g: &mut [f64]) -> Result<(), DaeError> {
+        (self.g)(&at, g);
+        Ok(())
+    }
+}
+
+/// Advances to `tout`, stopping at every root on the way: the roots met, each with the
+/// state there and the steps taken so far.
+fn run_to_collecting_roots(
+    integ: &mut dyn Integrator,
+    tout: f64,
+) -> Vec<(f64, Vec<usize>, Vec<f64>, u64)> {
+    let mut roots = Vec::new();
+    loop {
+        run_to(integ, tout);
+        match integ.root() {
+            Some(r) => {
+                assert!(
+                    r.t <= tout && integ.t() == r.t,
+                    "a root past the output time"
+                );
+                roots.push((
+                    r.t,
+                    r.functions.clone(),
+                    integ.y().to_vec(),
+                    integ.stats().steps,
+                ));
+            }
+            None => {
+                assert_eq!(integ.t(), tout);
+                return roots;
+            }
+        }
+    }
+}
+
+#[test]
+fn ida_finds_the_roots_of_sundials_robertson_example() {
+    // idaRoberts_dns with its root functions g₀ = y₁ − 1e-4, g₁ = y₃ − 0.01: the published
+    // output (SUNDIALS' examples/ida/serial/idaRoberts_dns.out) stops at
+    // "2.6402e-01 9.8997e-01 3.4706e-05 1.0000e-02 | 27 ... rootsfound[] = 0 1", then
+    // prints the table of ROBERTSON_DNS unchanged (root finding does not change the steps),
+    // and finds g₀ falling at 2.0788e+07 (rootsfound[] = -1 0).
+    let opts = IdaOptions {
+        rtol: 1e-4,
+        atol: Atol::Vector(vec![1e-8, 1e-6, 1e-6]),
+        ..Default::default()
+    };
+    let dae = WithRoots {
+        inner: Robertson::new(),
+        directions: vec![0, 0],
+        g: |at, g| {
+            g[0] = at.y[0] - 1e-4;
+            g[1] = at.y[2] - 0.01;
+        },
+    };
+    let mut ida = Ida::new(dae, opts).unwrap();
+    let mut found = Vec::new();
+    for &(t, y1, y2, y3, nst) in &ROBERTSON_DNS {
+        found.extend(run_to_collecting_roots(&mut ida, t));
+        let y = ida.y();
+        for (got, want) in y.iter().zip([y1, y2, y3]) {
+            assert_eq!(printed(*got), printed(want), "at t = {t}");
+        }
+        assert_eq!(ida.stats().steps, nst, "steps at t = {t}");
+    }
+    assert_eq!(found.len(), 1, "{found:?}");
+    let (t, functions, y, nst) = &found[0];
+    assert_eq!(printed(*t), "2.6402e-1");
+    assert_eq!(functions, &vec![1]);
+    let printed_y: Vec<String> = y.iter().map(|v| printed(*v)).collect();
+    assert_eq!(printed_y, ["9.8997e-1", "3.4706e-5", "1.0000e-2"]);
+    assert_eq!(*nst, 27);
+    // g₁ is 0 at its root to IDA's root tolerance (the state is IDA's interpolant there).
+    assert!((y[2] - 0.01).abs() < 1e-9);
+    // Beyond 4e5 round-off decides the path (see robertson_follows_sundials_published_table):
+    // the second root within 1 % of the published time.
+    let later = run_to_collecting_roots(&mut ida, 4e7);
+    assert_eq!(later.len(), 1, "{later:?}");
+    assert_eq!(later[0].1, vec![0]);
+    assert!(
+        ((later[0].0 - 2.0788e7) / 2.0788e7).abs() < 1e-2,
+        "{}",
+        later[0].0
+    );
+    assert!((later[0].2[0] - 1e-4).abs() < 1e-12);
+}
+
+/// The closed-form DAE with three root functions of x₁ = eᵗ (the differential component;
+/// IDA controls the algebraic x₂ only loosely, see ida_error_shrinks_with_rtol…): g₀ =
+/// 1.5 − x₁ falling (at t = ln 1.5), g₁ = x₁ − 2 rising (at t = ln 2), and g₂ = x₁ − 2
+/// falling, which x₁ never does.
+fn analytic_with_roots() -> WithRoots<Analytic> {
+    WithRoots {
+        inner: Analytic::new(10.0),
+        directions: vec![-1, 1, -1],
+        g: |at, g| {
+            g[0] = 1.5 - at.y[0];
+            g[1] = at.y[0] - 2.0;
+            g[2] = at.y[0] - 2.0;
+        },
+    }
+}
+
+/// The exact roots of [`analytic_with_roots`]: ln 1.5 and ln 2.
+fn analytic_roots() -> [f64; 2] {
+    [1.5f64.ln(), 2f64.ln()]
+}
+
+#[test]
+fn ida_locates_closed_form_roots_to_1e_8_and_goes_on_unchanged() {
+    let exact = analytic_roots();
+    let opts = ida_opts_like(1e-10);
+    let mut ida = Ida::new(analytic_with_roots(), opts).unwrap();
+    // Output times 0.1 apart: each root lies between two, and stops the advance there.
+    let mut found = Vec::new();
+    for k in 1..=10 {
+        found.extend(run_to_collecting_roots(&mut ida, 0.1 * k as f64));
+    }
+    let times: Vec<f64> = found.iter().map(|r| r.0).collect();
+    assert_eq!(found.len(), 2, "roots {times:?}");
+    for (k, (t, functions, _, _)) in found.iter().enumerate() {
+        assert_eq!(functions, &vec![k], "the roots in order, g₂ never");
+        assert!(
+            ((t - exact[k]) / exact[k]).abs() < 1e-8,
+            "root {k}: {t} against {}",
+            exact[k]
+        );
+    }
+    // The same run without root functions reaches t = 1 in the same steps to the same state.
+    let mut plain = Ida::new(Analytic::new(10.0), ida_opts_like(1e-10)).unwrap();
+    for k in 1..=10 {
+        run_to(&mut plain, 0.1 * k as f64);
+    }
+    assert_eq!(plain.stats().steps, ida.stats().steps);
+    assert_eq!(plain.y(), ida.y());
+}
+
+/// As ida_analytic's, x₂ out of the error test.
+fn ida_opts_like(rtol: f64) -> IdaOptions {
+    IdaOptions {
+        rtol,
+        atol: Atol::Scalar(rtol * 1e-3),
+        suppress_alg: true,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn bdf2_locates_closed_form_roots_to_its_step_accuracy() {
+    // BDF2's equivalent of IDA's root finding: the zero of g along the step's cubic Hermite
+    // interpolant. The roots' errors shrink with dt as the solution's (order 2), and stay
+    // within a small multiple of the solution's own error.
+    let exact = analytic_roots();
+    let dts = [0.02, 0.01, 0.005, 0.0025];
+    let mut errs = [Vec::new(), Vec::new()];
+    for &dt in &dts {
+        let opts = Bdf2Options {
+            dt,
+            rtol: 1e-12,
+            atol: Atol::Scalar(1e-12),
+            ..Default::default()
+        };
+        let mut b = Bdf2::new(analytic_with_roots(), opts).unwrap();
+        let mut found = Vec::new();
+        for k in 1..=10 {
+            found.extend(run_to_collecting_roots(&mut b, 0.1 * k as f64));
+        }
+        assert_eq!(found.len(), 2, "dt {dt}: {found:?}");
+        for (k, (t, functions, _, _)) in found.iter().enumerate() {
+            assert_eq!(functions, &vec![k]);
+            errs[k].push(((t - exact[k]) / exact[k]).abs());
+        }
+        // Without roots BDF2 takes the same steps to the same state.
+        let mut plain = Bdf2::new(
+            Analytic::new(10.0),
+            Bdf2Options {
+                dt,
+                rtol: 1e-12,
+                atol: Atol::Scalar(1e-12),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        run_to(&mut plain, 1.0);
+        assert_eq!(plain.stats().steps, b.stats().steps);
+        assert_eq!(plain.y(), b.y());
+        let solution_error = analytic_error(b.y(), 1.0);
+        for e in &errs {
+            assert!(
+                *e.last().unwrap() < 10.0 * solution_error,
+                "dt {dt}: root error {:.2e} against the solution's {solution_error:.2e}",
+                e.last().unwrap()
+            );
+        }
+    }
+    // Past BDF2's start (its first steps are a fraction of dt) each halving divides the
+    // errors by about 4: the last ratio, where the start no longer dominates.
+    for (k, e) in errs.iter().enumerate() {
+        assert!(e.windows(2).all(|w| w[1] < w[0]), "root {k}: {e:?}");
+        let ratio = e[e.len() - 2] / e[e.len() - 1];
+        assert!(
+            (3.5..4.6).contains(&ratio),
+            "root {k}: last ratio {ratio:.2} ({e:?})"
+        );
+    }
+}

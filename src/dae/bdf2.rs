@@ -35,7 +35,8 @@
 
 use super::linsolve::{FaerFactory, LinearSolver, LinearSolverError, SharedFactory};
 use super::{
-    Atol, Dae, DaeError, Integrator, IntegratorError, Setup, State, Stats, error_weights, wrms_norm,
+    Atol, Dae, DaeError, Integrator, IntegratorError, Root, Setup, State, Stats, crosses,
+    error_weights, wrms_norm,
 };
 
 /// BDF2 settings.
@@ -108,6 +109,14 @@ pub struct Bdf2<D: Dae> {
     stats: Stats,
     /// Step cuts taken so far (not part of IDA's statistics).
     pub cuts: u64,
+    /// The root functions' directions ([`Dae::root_directions`]) and their values at the
+    /// last accepted step.
+    root_dirs: Vec<i32>,
+    g_n: Vec<f64>,
+    /// The root the last advance stopped at, and one found past its output time, to be
+    /// reported by the next.
+    root: Option<Root>,
+    pending_root: Option<Root>,
     // Work vectors.
     y_new: Vec<f64>,
     beta: Vec<f64>,
@@ -133,6 +142,12 @@ impl<D: Dae> Bdf2<D> {
         let n = dae.size();
         let setup = Setup::new(&dae, opts.linear_solver.as_ref(), &opts.atol)?;
         let (t0, y0, yp0) = (setup.t0, setup.y0, setup.yp0);
+        let mut dae = dae;
+        let root_dirs = dae.root_directions();
+        let mut g_n = vec![0.0; root_dirs.len()];
+        if !root_dirs.is_empty() {
+            root_values(&mut dae, t0, &y0, &yp0, &mut g_n)?;
+        }
         Ok(Self {
             dae,
             opts,
@@ -153,6 +168,10 @@ impl<D: Dae> Bdf2<D> {
             yp_out: yp0,
             stats: Stats::default(),
             cuts: 0,
+            root_dirs,
+            g_n,
+            root: None,
+            pending_root: None,
             y_new: vec![0.0; n],
             beta: vec![0.0; n],
             r: vec![0.0; n],
@@ -386,6 +405,67 @@ impl<D: Dae> Bdf2<D> {
         )))
     }
 
+    /// After an accepted step: the first zero of the root functions in it, located on the
+    /// step's cubic Hermite interpolant ([`Self::interpolate`]) by the Illinois method to
+    /// IDA's tolerance, 100 ε max(|t|, |h|) (the step's accuracy: the interpolant is the
+    /// solution to O(h⁴) locally). Leaves `y_out`, `yp_out` at the root when there is one.
+    fn locate_root(&mut self) -> Result<Option<Root>, IntegratorError> {
+        if self.root_dirs.is_empty() {
+            return Ok(None);
+        }
+        let mut g1 = vec![0.0; self.root_dirs.len()];
+        root_values(&mut self.dae, self.tn, &self.yn, &self.ypn, &mut g1)?;
+        let g0 = std::mem::replace(&mut self.g_n, g1.clone());
+        let crossing: Vec<usize> = (0..g1.len())
+            .filter(|&i| crosses(g0[i], g1[i], self.root_dirs[i]))
+            .collect();
+        if crossing.is_empty() {
+            return Ok(None);
+        }
+        let h = self.tn - self.t_prev;
+        let tol = 100.0 * f64::EPSILON * self.tn.abs().max(h.abs());
+        let mut g = vec![0.0; g1.len()];
+        // The earliest zero over the functions that cross, each by Illinois on [t_prev, tn].
+        let mut first = (self.tn, Vec::new());
+        for &i in &crossing {
+            let (mut a, mut b, mut ga, mut gb) = (self.t_prev, self.tn, g0[i], g1[i]);
+            let mut side = 0;
+            while b - a > tol {
+                let mut m = b - gb * (b - a) / (gb - ga);
+                if !(m > a && m < b) {
+                    m = 0.5 * (a + b);
+                }
+                self.interpolate(m);
+                let (y, yp) = (self.y_out.clone(), self.yp_out.clone());
+                root_values(&mut self.dae, m, &y, &yp, &mut g)?;
+                let gm = g[i];
+                if gm == 0.0 {
+                    (a, b) = (m, m);
+                } else if (gm < 0.0) == (gb < 0.0) {
+                    (b, gb) = (m, gm);
+                    if side == -1 {
+                        ga *= 0.5;
+                    }
+                    side = -1;
+                } else {
+                    (a, ga) = (m, gm);
+                    if side == 1 {
+                        gb *= 0.5;
+                    }
+                    side = 1;
+                }
+            }
+            if b < first.0 - tol {
+                first = (b, vec![i]);
+            } else if (b - first.0).abs() <= tol {
+                first.1.push(i);
+            }
+        }
+        let (t, functions) = first;
+        self.interpolate(t);
+        Ok(Some(Root { t, functions }))
+    }
+
     /// Cubic Hermite interpolation of the last step at time `t`.
     fn interpolate(&mut self, t: f64) {
         let h = self.tn - self.t_prev;
@@ -426,7 +506,18 @@ impl<D: Dae> Integrator for Bdf2<D> {
         on_step: &mut dyn FnMut(f64, &Stats) -> bool,
     ) -> Result<(), IntegratorError> {
         let eps = 8.0 * f64::EPSILON * tout.abs().max(1.0);
-        while self.tn < tout - eps {
+        self.root = None;
+        if let Some(r) = self.pending_root.take() {
+            // A root found past the last output time, in the last step.
+            if r.t <= tout + eps {
+                self.interpolate(r.t);
+                self.t_out = r.t;
+                self.root = Some(r);
+                return Ok(());
+            }
+            self.pending_root = Some(r);
+        }
+        while self.tn < tout - eps && self.pending_root.is_none() {
             let planned = self.planned_step();
             let mut h = match (self.ramping, self.h_prev) {
                 (false, _) => planned,
@@ -462,6 +553,14 @@ impl<D: Dae> Integrator for Bdf2<D> {
             if !on_step(self.tn, &stats) {
                 return Err(IntegratorError::Interrupted { t: self.tn });
             }
+            if let Some(r) = self.locate_root()? {
+                if r.t <= tout + eps {
+                    self.t_out = r.t;
+                    self.root = Some(r);
+                    return Ok(());
+                }
+                self.pending_root = Some(r);
+            }
         }
         if (self.tn - tout).abs() <= eps {
             self.y_out.copy_from_slice(&self.yn);
@@ -488,4 +587,23 @@ impl<D: Dae> Integrator for Bdf2<D> {
     fn stats(&self) -> Stats {
         self.stats.clone()
     }
+
+    fn root(&self) -> Option<&Root> {
+        self.root.as_ref()
+    }
+}
+
+/// The DAE's root functions at (t, y, ẏ) into `g`.
+fn root_values<D: Dae>(
+    dae: &mut D,
+    t: f64,
+    y: &[f64],
+    yp: &[f64],
+    g: &mut [f64],
+) -> Result<(), IntegratorError> {
+    dae.root_functions(State::new(t, y, yp), g)
+        .map_err(|e| IntegratorError::Problem {
+            t,
+            message: format!("root functions: {e}"),
+        })
 }

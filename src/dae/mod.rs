@@ -168,6 +168,19 @@ pub trait Dae {
     fn first_order_blocks(&self) -> Option<FirstOrderBlocks> {
         None
     }
+
+    /// Root functions `g(t, y, ẏ)` whose zeros the integrators locate (MODEL.md §11, the
+    /// phases the cell starts itself): one entry per function, the direction of a crossing
+    /// that counts (+1 rising through 0, −1 falling, 0 either). Default: none.
+    fn root_directions(&self) -> Vec<i32> {
+        Vec::new()
+    }
+
+    /// `g_i(t, y, ẏ)` into `g` (length `root_directions().len()`), continuous in t along
+    /// the solution. Default: nothing.
+    fn root_functions(&mut self, _at: State, _g: &mut [f64]) -> Result<(), DaeError> {
+        Ok(())
+    }
 }
 
 /// A boxed DAE is the DAE it holds (a run's model behind a trait object).
@@ -199,6 +212,30 @@ impl<T: Dae + ?Sized> Dae for Box<T> {
     fn first_order_blocks(&self) -> Option<FirstOrderBlocks> {
         (**self).first_order_blocks()
     }
+    fn root_directions(&self) -> Vec<i32> {
+        (**self).root_directions()
+    }
+    fn root_functions(&mut self, at: State, g: &mut [f64]) -> Result<(), DaeError> {
+        (**self).root_functions(at, g)
+    }
+}
+
+/// A zero of the DAE's root functions ([`Dae::root_directions`]) that an integrator
+/// stopped at.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Root {
+    /// Its time, to the integrator's root tolerance.
+    pub t: f64,
+    /// The functions that crossed zero there (indices into [`Dae::root_directions`]).
+    pub functions: Vec<usize>,
+}
+
+/// Whether `g` going from `g0` to `g1` crosses zero in `direction` (+1 rising, −1
+/// falling, 0 either), the rule of IDA's root finding (a zero at the end counts).
+pub fn crosses(g0: f64, g1: f64, direction: i32) -> bool {
+    let rising = g0 < 0.0 && g1 >= 0.0;
+    let falling = g0 > 0.0 && g1 <= 0.0;
+    (rising && direction >= 0) || (falling && direction <= 0)
 }
 
 /// The kinematic structure of a second-order system written in first order: pairs
@@ -511,6 +548,14 @@ pub trait Integrator {
     fn last_step(&self) -> (f64, &[f64], &[f64]);
     /// Statistics so far.
     fn stats(&self) -> Stats;
+    /// The root of the DAE's root functions the last [`Integrator::advance_to`] stopped at:
+    /// with root functions ([`Dae::root_directions`]) an advance stops at the first zero
+    /// before its output time, and then [`Integrator::t`], `y` and `yp` are the root's
+    /// time and state; the next advance goes on from there. `None` when it reached its
+    /// output time.
+    fn root(&self) -> Option<&Root> {
+        None
+    }
 }
 
 /// Consistent initial values for a restart: solves F(t, y, ẏ) = 0 by Newton's method for

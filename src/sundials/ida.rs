@@ -19,7 +19,7 @@ use super::{Context, NVector, guard, ida_flag_name, view, view_mut};
 use crate::dae::linsolve::{FaerFactory, LinearSolver, LinearSolverError, SharedFactory};
 use crate::dae::timing::{self, Phase};
 use crate::dae::{
-    Atol, Dae, DaeError, Integrator, IntegratorError, Setup, State, Stats, wrms_norm,
+    Atol, Dae, DaeError, Integrator, IntegratorError, Root, Setup, State, Stats, wrms_norm,
 };
 
 /// Initial-condition calculation (IDACalcIC) before the first step.
@@ -136,6 +136,8 @@ struct UserData<D> {
     ls: LsState,
     callback_error: Option<String>,
     ida_message: String,
+    /// The number of root functions ([`Dae::root_directions`]).
+    nroots: usize,
 }
 
 /// SUNDIALS IDA integrating a [`Dae`].
@@ -159,6 +161,11 @@ pub struct Ida<D: Dae> {
     before: Vec<f64>,
     /// [`Stats::path`] so far.
     path: f64,
+    /// The root the last advance stopped at; one found past its output time, reported by
+    /// the next; and whether `before` still holds y before the step that found it.
+    root: Option<Root>,
+    pending_root: Option<Root>,
+    keep_before: bool,
     // Dropped last: everything above was created in this context.
     ctx: Context,
 }
@@ -226,6 +233,7 @@ impl<D: Dae> Ida<D> {
             },
             callback_error: None,
             ida_message: String::new(),
+            nroots: 0,
         });
         let mut ida = Ida {
             mem: ptr::null_mut(),
@@ -244,6 +252,9 @@ impl<D: Dae> Ida<D> {
             weights,
             before: y0.clone(),
             path: 0.0,
+            root: None,
+            pending_root: None,
+            keep_before: false,
             ctx,
         };
         ida.setup(&opts, t0)?;
@@ -276,6 +287,7 @@ impl<D: Dae> Ida<D> {
         }
         self.set_step_limits(opts)?;
         self.set_components(opts)?;
+        self.init_roots()?;
         if let Some(ic) = opts.calc_ic {
             self.correct_initial_conditions(ic)?;
         }
@@ -322,6 +334,63 @@ impl<D: Dae> Ida<D> {
             }
         }
         Ok(())
+    }
+
+    /// Hands the DAE's root functions to IDA's root finding (IDARootInit, with their
+    /// directions), if it has any.
+    fn init_roots(&mut self) -> Result<(), IntegratorError> {
+        let mut dirs: Vec<c_int> = self.user.dae.root_directions();
+        if dirs.is_empty() {
+            return Ok(());
+        }
+        self.user.nroots = dirs.len();
+        let n = dirs.len() as c_int;
+        // SAFETY: valid IDA memory; IDA copies the directions.
+        unsafe {
+            self.check(
+                "IDARootInit",
+                sys::IDARootInit(self.mem, n, Some(root_trampoline::<D>)),
+            )?;
+            self.check(
+                "IDASetRootDirection",
+                sys::IDASetRootDirection(self.mem, dirs.as_mut_ptr()),
+            )?;
+        }
+        Ok(())
+    }
+
+    /// y and ẏ at `t` (within IDA's last step) into the output vectors, and `t` as the
+    /// output time.
+    fn interpolate_output(&mut self, t: f64) -> Result<(), IntegratorError> {
+        // SAFETY: t lies in [tn - hu, tn], where IDAGetDky interpolates.
+        unsafe {
+            let f0 = sys::IDAGetDky(self.mem, t, 0, self.out_y.0);
+            self.check("IDAGetDky", f0)?;
+            let f1 = sys::IDAGetDky(self.mem, t, 1, self.out_yp.0);
+            self.check("IDAGetDky", f1)?;
+        }
+        self.t_out = t;
+        Ok(())
+    }
+
+    /// What IDASolve returned in `yy`, `yp` as the output at `t`.
+    fn output_returned(&mut self, t: f64) {
+        self.out_y
+            .as_mut_slice()
+            .copy_from_slice(self.yy.as_slice());
+        self.out_yp
+            .as_mut_slice()
+            .copy_from_slice(self.yp.as_slice());
+        self.t_out = t;
+    }
+
+    /// The functions IDA found crossing zero at its last root return.
+    fn root_info(&self) -> Result<Vec<usize>, IntegratorError> {
+        let mut found: Vec<c_int> = vec![0; self.user.nroots];
+        // SAFETY: valid IDA memory, an array of nroots entries.
+        let flag = unsafe { sys::IDAGetRootInfo(self.mem, found.as_mut_ptr()) };
+        self.check("IDAGetRootInfo", flag)?;
+        Ok((0..found.len()).filter(|&i| found[i] != 0).collect())
     }
 
     /// Attaches the thin matrix and the linear solver, both pointing at the LsState (the
@@ -600,6 +669,18 @@ impl<D: Dae> Integrator for Ida<D> {
         // that close to its initial time (IDA_ILL_INPUT "tout too close to t0"), which is
         // what a restart at an output time (the inertia switch) asks otherwise.
         let eps = 8.0 * f64::EPSILON * tout.abs().max(1.0);
+        self.root = None;
+        if let Some(r) = self.pending_root.take() {
+            // A root found past the last output time: IDA has not stepped since.
+            if r.t <= tout + eps {
+                self.interpolate_output(r.t)?;
+                self.t_internal = r.t;
+                self.root = Some(r);
+                return Ok(());
+            }
+            self.pending_root = Some(r);
+            return self.interpolate_output(tout);
+        }
         while self.t_internal < tout - eps {
             let next = self
                 .breakpoints
@@ -615,7 +696,9 @@ impl<D: Dae> Integrator for Ida<D> {
                 self.tstop = next;
             }
             self.user.callback_error = None;
-            self.before.copy_from_slice(self.yy.as_slice());
+            if !std::mem::take(&mut self.keep_before) {
+                self.before.copy_from_slice(self.yy.as_slice());
+            }
             // One step towards the next breakpoint rather than `tout`: IDA's first step is
             // a fraction of the distance it is given, and the steps must not depend on the
             // output times (runs with other outputs take the same steps, `run::run_all`).
@@ -632,6 +715,24 @@ impl<D: Dae> Integrator for Ida<D> {
                 )
             });
             self.check("IDASolve", flag)?;
+            if flag == sys::IDA_ROOT_RETURN {
+                // IDA's step went past the root; yy, yp hold the solution at it (tret). The
+                // next IDASolve returns the step itself, so its path is measured then, from
+                // y before it.
+                let root = Root {
+                    t: tret,
+                    functions: self.root_info()?,
+                };
+                self.keep_before = true;
+                self.t_internal = tret;
+                if tret <= tout + eps {
+                    self.output_returned(tret);
+                    self.root = Some(root);
+                    return Ok(());
+                }
+                self.pending_root = Some(root);
+                return self.interpolate_output(tout);
+            }
             self.t_internal = tret;
             self.user
                 .dae
@@ -649,24 +750,10 @@ impl<D: Dae> Integrator for Ida<D> {
         if (tout - self.t_internal).abs() <= eps {
             // At IDA's own time y and ẏ are what it returned (or, before its first step,
             // the initial values: IDAGetDky has no derivative of order 1 to give then).
-            self.out_y
-                .as_mut_slice()
-                .copy_from_slice(self.yy.as_slice());
-            self.out_yp
-                .as_mut_slice()
-                .copy_from_slice(self.yp.as_slice());
-            self.t_out = tout;
+            self.output_returned(tout);
             return Ok(());
         }
-        // SAFETY: tout lies in [tn - hu, tn], where IDAGetDky interpolates.
-        unsafe {
-            let f0 = sys::IDAGetDky(self.mem, tout, 0, self.out_y.0);
-            self.check("IDAGetDky", f0)?;
-            let f1 = sys::IDAGetDky(self.mem, tout, 1, self.out_yp.0);
-            self.check("IDAGetDky", f1)?;
-        }
-        self.t_out = tout;
-        Ok(())
+        self.interpolate_output(tout)
     }
 
     fn y(&self) -> &[f64] {
@@ -729,6 +816,10 @@ impl<D: Dae> Integrator for Ida<D> {
             last_step: h,
         }
     }
+
+    fn root(&self) -> Option<&Root> {
+        self.root.as_ref()
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -774,6 +865,28 @@ unsafe extern "C" fn residual_trampoline<D: Dae>(
             })
         });
         dae_code(user, out, "residual")
+    }
+}
+
+unsafe extern "C" fn root_trampoline<D: Dae>(
+    t: f64,
+    yy: sys::N_Vector,
+    yp: sys::N_Vector,
+    gout: *mut f64,
+    user_data: *mut c_void,
+) -> c_int {
+    // SAFETY: user_data is the boxed UserData<D>; IDA passes valid vectors of length n and
+    // gout with room for the nroots functions given to IDARootInit.
+    unsafe {
+        let user = &mut *(user_data as *mut UserData<D>);
+        let g = std::slice::from_raw_parts_mut(gout, user.nroots);
+        let (y, ypv) = (view(yy), view(yp));
+        let out = guard(|| user.dae.root_functions(State::new(t, y, ypv), g));
+        // IDA has no recoverable failure for root functions: any error ends the solve.
+        match dae_code(user, out, "root functions") {
+            0 => 0,
+            _ => -1,
+        }
     }
 }
 
