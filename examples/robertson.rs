@@ -1,15 +1,18 @@
 //! SUNDIALS' idaRoberts example through cellsim's IDA driver (faer sparse LU, or KLU with
-//! `--klu`), printed in the layout of SUNDIALS' `idaRoberts_dns.out`.
+//! `--klu`), printed in the layout of SUNDIALS' `idaRoberts_dns.out`. With `--roots`, the
+//! example's root functions y₁ − 1e-4 and y₃ − 0.01 as well: a row at each root and its
+//! `rootsfound[]` line, as the published output prints them.
 //!
-//! `cargo run --release --example robertson [-- --klu]`
+//! `cargo run --release --example robertson [-- --klu] [--roots]`
 
-use cellsim::dae::problems::Robertson;
-use cellsim::dae::{Atol, Integrator};
+use cellsim::dae::problems::{Robertson, WithRoots};
+use cellsim::dae::{Atol, Dae, Integrator};
 use cellsim::lu::LinearSolverKind;
 use cellsim::sundials::{Ida, IdaOptions};
 
 fn main() {
     let klu = std::env::args().any(|a| a == "--klu");
+    let roots = std::env::args().any(|a| a == "--roots");
     let (rtol, atol) = (1.0e-4, [1.0e-8, 1.0e-6, 1.0e-6]);
     let opts = IdaOptions {
         rtol,
@@ -21,7 +24,12 @@ fn main() {
         },
         ..Default::default()
     };
-    let mut ida = match Ida::new(Robertson::new(), opts) {
+    let dae: Box<dyn Dae> = if roots {
+        Box::new(WithRoots::robertson())
+    } else {
+        Box::new(Robertson::new())
+    };
+    let mut ida = match Ida::new(dae, opts) {
         Ok(ida) => ida,
         Err(e) => {
             eprintln!("robertson: {e}");
@@ -47,7 +55,8 @@ fn main() {
     let rule = "-----------------------------------------------------------------------";
     println!("{rule}\n  t             y1           y2           y3      | nst  k      h\n{rule}");
     let mut tout = 0.4;
-    for _ in 0..12 {
+    let mut printed = 0;
+    while printed < 12 {
         if let Err(e) = ida.advance_to(tout, &mut |_, _| true) {
             eprintln!("robertson: {e}");
             std::process::exit(1);
@@ -55,7 +64,7 @@ fn main() {
         let (y, s) = (ida.y(), ida.stats());
         println!(
             "{} {} {} {} | {:3}  {} {}",
-            sci(tout, 10),
+            sci(ida.t(), 10),
             sci(y[0], 12),
             sci(y[1], 12),
             sci(y[2], 12),
@@ -63,7 +72,16 @@ fn main() {
             s.last_order,
             sci(s.last_step, 12)
         );
-        tout *= 10.0;
+        match ida.root() {
+            Some(r) => {
+                let found: Vec<String> = r.crossings.iter().map(|c| format!("{c:3}")).collect();
+                println!("    rootsfound[] = {}", found.join(" "));
+            }
+            None => {
+                tout *= 10.0;
+                printed += 1;
+            }
+        }
     }
     let s = ida.stats();
     println!("\nFinal Run Statistics: \n");

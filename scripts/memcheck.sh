@@ -18,6 +18,7 @@ if ! command -v valgrind >/dev/null; then
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends valgrind
 fi
 cargo build --release --quiet
+cargo build --release --quiet --example robertson
 
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -59,4 +60,16 @@ done
 for pid in "${pids[@]}"; do
     wait "$pid" || status=1
 done
+# IDA's root finding (IDARootInit and its callback): SUNDIALS' Robertson example with its
+# root functions, the only run here that has any.
+log="$tmp/robertson-roots.log"
+if valgrind --leak-check=full --errors-for-leak-kinds=definite --error-exitcode=3 \
+    --suppressions=scripts/valgrind.supp \
+    target/release/examples/robertson --roots >/dev/null 2>"$log"; then
+    echo "memcheck: robertson --roots: $(grep -o 'definitely lost: .*' "$log"); $(grep -o 'ERROR SUMMARY: [0-9]* errors' "$log")"
+else
+    echo "memcheck: robertson --roots FAILED:"
+    cat "$log"
+    status=1
+fi
 exit $status

@@ -3,7 +3,7 @@
 
 use cellsim::dae::State;
 use cellsim::dae::bdf2::{Bdf2, Bdf2Options};
-use cellsim::dae::problems::{Analytic, Heat2D, Robertson};
+use cellsim::dae::problems::{Analytic, Heat2D, Robertson, WithRoots};
 use cellsim::dae::{Atol, Dae, DaeError, Inadmissible, Integrator, Pattern, Stats};
 use cellsim::lu::LinearSolverKind;
 use cellsim::sundials::{CalcIc, Ida, IdaOptions, Krylov};
@@ -737,41 +737,6 @@ fn both_integrators_measure_the_same_path_of_the_solution() {
 // Root finding (the phases a cell starts itself, MODEL.md §11): IDA's against SUNDIALS'
 // published example, both integrators against closed-form roots.
 
-/// A DAE with root functions `g` of the given directions added.
-struct WithRoots<P> {
-    inner: P,
-    directions: Vec<i32>,
-    g: fn(&State, &mut [f64]),
-}
-
-impl<P: Dae> Dae for WithRoots<P> {
-    fn size(&self) -> usize {
-        self.inner.size()
-    }
-    fn residual(&mut self, at: State, r: &mut [f64]) -> Result<(), DaeError> {
-        self.inner.residual(at, r)
-    }
-    fn pattern(&self) -> &Pattern {
-        self.inner.pattern()
-    }
-    fn jacobian(&mut self, at: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
-        self.inner.jacobian(at, cj, v)
-    }
-    fn differential(&self) -> Vec<bool> {
-        self.inner.differential()
-    }
-    fn initial(&self) -> (f64, Vec<f64>, Vec<f64>) {
-        self.inner.initial()
-    }
-    fn root_directions(&self) -> Vec<i32> {
-        self.directions.clone()
-    }
-    fn root_functions(&mut self, at: State, g: &mut [f64]) -> Result<(), DaeError> {
-        (self.g)(&at, g);
-        Ok(())
-    }
-}
-
 /// Advances to `tout`, stopping at every root on the way: the roots met, each with the
 /// state there and the steps taken so far.
 fn run_to_collecting_roots(
@@ -814,15 +779,7 @@ fn ida_finds_the_roots_of_sundials_robertson_example() {
         atol: Atol::Vector(vec![1e-8, 1e-6, 1e-6]),
         ..Default::default()
     };
-    let dae = WithRoots {
-        inner: Robertson::new(),
-        directions: vec![0, 0],
-        g: |at, g| {
-            g[0] = at.y[0] - 1e-4;
-            g[1] = at.y[2] - 0.01;
-        },
-    };
-    let mut ida = Ida::new(dae, opts).unwrap();
+    let mut ida = Ida::new(WithRoots::robertson(), opts).unwrap();
     let mut found = Vec::new();
     for &(t, y1, y2, y3, nst) in &ROBERTSON_DNS {
         found.extend(run_to_collecting_roots(&mut ida, t));
@@ -841,17 +798,51 @@ fn ida_finds_the_roots_of_sundials_robertson_example() {
     assert_eq!(*nst, 27);
     // g₁ is 0 at its root to IDA's root tolerance (the state is IDA's interpolant there).
     assert!((y[2] - 0.01).abs() < 1e-9);
-    // Beyond 4e5 round-off decides the path (see robertson_follows_sundials_published_table):
-    // the second root within 1 % of the published time.
+    assert_eq!(ida.root(), None);
+    // With faer the dense table holds beyond 4e5 too (README, examples/robertson.rs): the
+    // second root as published, y₁ falling (rootsfound[] = -1 0) after 280 steps.
     let later = run_to_collecting_roots(&mut ida, 4e7);
     assert_eq!(later.len(), 1, "{later:?}");
     assert_eq!(later[0].1, vec![0]);
-    assert!(
-        ((later[0].0 - 2.0788e7) / 2.0788e7).abs() < 1e-2,
-        "{}",
-        later[0].0
-    );
+    assert_eq!(printed(later[0].0), "2.0788e7");
+    assert_eq!(later[0].3, 280);
     assert!((later[0].2[0] - 1e-4).abs() < 1e-12);
+}
+
+#[test]
+fn a_root_says_which_way_each_function_crossed() {
+    // IDA's rootsfound: y₃ − 0.01 rising at the first root, y₁ − 1e-4 falling at the
+    // second; BDF2 the same on the closed-form DAE (1.5 − x₁ falling, x₁ − 2 rising).
+    let opts = IdaOptions {
+        rtol: 1e-4,
+        atol: Atol::Vector(vec![1e-8, 1e-6, 1e-6]),
+        ..Default::default()
+    };
+    let mut ida = Ida::new(WithRoots::robertson(), opts).unwrap();
+    let mut crossings = Vec::new();
+    for t in [0.4, 4e7] {
+        loop {
+            run_to(&mut ida, t);
+            match ida.root() {
+                Some(r) => crossings.push(r.crossings.clone()),
+                None => break,
+            }
+        }
+    }
+    assert_eq!(crossings, vec![vec![0, 1], vec![-1, 0]]);
+    let opts = Bdf2Options {
+        dt: 0.01,
+        rtol: 1e-12,
+        atol: Atol::Scalar(1e-12),
+        ..Default::default()
+    };
+    let mut b = Bdf2::new(analytic_with_roots(), opts).unwrap();
+    let found: Vec<Vec<i32>> = std::iter::from_fn(|| {
+        run_to(&mut b, 1.0);
+        b.root().map(|r| r.crossings.clone())
+    })
+    .collect();
+    assert_eq!(found, vec![vec![-1, 0, 0], vec![0, 1, 0]]);
 }
 
 /// The closed-form DAE with three root functions of x₁ = eᵗ (the differential component;

@@ -283,7 +283,7 @@ const MESH_READS: [&str; 5] = [
 /// the mesh generator's of the model's mesh ([`MeshSpec::validate`], with its
 /// element-count limit), the run's memory against the limit ([`memory_refusal`]), the
 /// material law [`Yeoh::from_engineering`] of each domain, and the validators of the
-/// phases, the substrate, the active strain, contact, adhesion and viscosity. `cellsim
+/// phases, the substrate, the active strain, contact, adhesion, viscosity and fibres. `cellsim
 /// check` and every command that runs a case load it through these.
 pub fn layer_checks(case: &Case) -> Vec<LayerCheck<'_>> {
     let mut checks = vec![

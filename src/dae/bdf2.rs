@@ -463,7 +463,11 @@ impl<D: Dae> Bdf2<D> {
         }
         let (t, functions) = first;
         self.interpolate(t);
-        Ok(Some(Root { t, functions }))
+        let mut crossings = vec![0; g1.len()];
+        for i in functions {
+            crossings[i] = if g1[i] > g0[i] { 1 } else { -1 };
+        }
+        Ok(Some(Root::new(t, crossings)))
     }
 
     /// Cubic Hermite interpolation of the last step at time `t`.

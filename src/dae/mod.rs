@@ -228,6 +228,23 @@ pub struct Root {
     pub t: f64,
     /// The functions that crossed zero there (indices into [`Dae::root_directions`]).
     pub functions: Vec<usize>,
+    /// Per function, as IDA's `rootsfound`: +1 rising through zero here, −1 falling, 0 not
+    /// crossing.
+    pub crossings: Vec<i32>,
+}
+
+impl Root {
+    /// The root at `t` of the functions with these crossings (+1, −1 or 0 each).
+    pub fn new(t: f64, crossings: Vec<i32>) -> Self {
+        let functions = (0..crossings.len())
+            .filter(|&i| crossings[i] != 0)
+            .collect();
+        Root {
+            t,
+            functions,
+            crossings,
+        }
+    }
 }
 
 /// Whether `g` going from `g0` to `g1` crosses zero in `direction` (+1 rising, −1

@@ -269,3 +269,60 @@ impl Dae for Analytic {
         (0.0, y.to_vec(), yp.to_vec())
     }
 }
+
+/// A problem with root functions added ([`Dae::root_directions`]): `g(at, out)` fills the
+/// values of the functions, `directions` the crossing each counts (+1, −1, 0).
+pub struct WithRoots<P> {
+    /// The problem.
+    pub inner: P,
+    /// One per function: +1 rising, −1 falling, 0 either.
+    pub directions: Vec<i32>,
+    /// The functions' values at a state.
+    pub g: fn(&State, &mut [f64]),
+}
+
+impl<P: Dae> Dae for WithRoots<P> {
+    fn size(&self) -> usize {
+        self.inner.size()
+    }
+    fn residual(&mut self, at: State, r: &mut [f64]) -> Result<(), DaeError> {
+        self.inner.residual(at, r)
+    }
+    fn pattern(&self) -> &Pattern {
+        self.inner.pattern()
+    }
+    fn jacobian(&mut self, at: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+        self.inner.jacobian(at, cj, v)
+    }
+    fn differential(&self) -> Vec<bool> {
+        self.inner.differential()
+    }
+    fn initial(&self) -> (f64, Vec<f64>, Vec<f64>) {
+        self.inner.initial()
+    }
+    fn breakpoints(&self) -> Vec<f64> {
+        self.inner.breakpoints()
+    }
+    fn root_directions(&self) -> Vec<i32> {
+        self.directions.clone()
+    }
+    fn root_functions(&mut self, at: State, g: &mut [f64]) -> Result<(), DaeError> {
+        (self.g)(&at, g);
+        Ok(())
+    }
+}
+
+impl WithRoots<Robertson> {
+    /// SUNDIALS' idaRoberts_dns with its root functions `grob`: y₁ − 1e-4 and y₃ − 0.01,
+    /// either direction.
+    pub fn robertson() -> Self {
+        WithRoots {
+            inner: Robertson::new(),
+            directions: vec![0, 0],
+            g: |at, g| {
+                g[0] = at.y[0] - 1e-4;
+                g[1] = at.y[2] - 0.01;
+            },
+        }
+    }
+}

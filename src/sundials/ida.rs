@@ -384,13 +384,13 @@ impl<D: Dae> Ida<D> {
         self.t_out = t;
     }
 
-    /// The functions IDA found crossing zero at its last root return.
-    fn root_info(&self) -> Result<Vec<usize>, IntegratorError> {
+    /// IDA's `rootsfound` at its last root return: per function +1 rising, −1 falling, 0.
+    fn root_info(&self) -> Result<Vec<i32>, IntegratorError> {
         let mut found: Vec<c_int> = vec![0; self.user.nroots];
         // SAFETY: valid IDA memory, an array of nroots entries.
         let flag = unsafe { sys::IDAGetRootInfo(self.mem, found.as_mut_ptr()) };
         self.check("IDAGetRootInfo", flag)?;
-        Ok((0..found.len()).filter(|&i| found[i] != 0).collect())
+        Ok(found)
     }
 
     /// Attaches the thin matrix and the linear solver, both pointing at the LsState (the
@@ -719,10 +719,7 @@ impl<D: Dae> Integrator for Ida<D> {
                 // IDA's step went past the root; yy, yp hold the solution at it (tret). The
                 // next IDASolve returns the step itself, so its path is measured then, from
                 // y before it.
-                let root = Root {
-                    t: tret,
-                    functions: self.root_info()?,
-                };
+                let root = Root::new(tret, self.root_info()?);
                 self.keep_before = true;
                 self.t_internal = tret;
                 if tret <= tout + eps {
