@@ -964,3 +964,60 @@ fn bdf2_locates_closed_form_roots_to_its_step_accuracy() {
         );
     }
 }
+
+#[test]
+fn a_root_past_an_output_time_is_reported_by_the_next_advance() {
+    // Output times 0.005 apart and steps far longer (IDA at rtol 1e-5, BDF2 at dt 0.05):
+    // the step that crosses a root usually ends past the next output time, so the output
+    // comes first (interpolated, root not yet reported) and the root with a later advance.
+    // Every output time is reached in order, each root once, at its time.
+    let exact = analytic_roots();
+    let integrators: Vec<(Box<dyn Integrator>, f64)> = vec![
+        (
+            Box::new(Ida::new(analytic_with_roots(), ida_opts_like(1e-5)).unwrap()),
+            1e-4,
+        ),
+        (
+            Box::new(
+                Bdf2::new(
+                    analytic_with_roots(),
+                    Bdf2Options {
+                        dt: 0.05,
+                        rtol: 1e-12,
+                        atol: Atol::Scalar(1e-12),
+                        ..Default::default()
+                    },
+                )
+                .unwrap(),
+            ),
+            1e-3,
+        ),
+    ];
+    for (mut integ, tol) in integrators {
+        let mut roots = Vec::new();
+        let mut outputs = 0;
+        for k in 1..=200 {
+            let tout = 0.005 * k as f64;
+            for (t, functions, _, _) in run_to_collecting_roots(integ.as_mut(), tout) {
+                assert!(
+                    t > tout - 0.005 && t <= tout,
+                    "root {t} outside ({}, {tout}]",
+                    tout - 0.005
+                );
+                roots.push((t, functions));
+            }
+            outputs += 1;
+            // x₁ = eᵗ at the output time, to the integrator's accuracy.
+            assert!(
+                ((integ.y()[0] - tout.exp()) / tout.exp()).abs() < tol,
+                "at {tout}"
+            );
+        }
+        assert_eq!(outputs, 200);
+        assert_eq!(roots.len(), 2, "{roots:?}");
+        for (k, (t, functions)) in roots.iter().enumerate() {
+            assert_eq!(functions, &vec![k]);
+            assert!(((t - exact[k]) / exact[k]).abs() < tol, "root {k}: {t}");
+        }
+    }
+}
