@@ -752,12 +752,7 @@ fn run_to_collecting_roots(
                     r.t <= tout && integ.t() == r.t,
                     "a root past the output time"
                 );
-                roots.push((
-                    r.t,
-                    r.functions.clone(),
-                    integ.y().to_vec(),
-                    integ.stats().steps,
-                ));
+                roots.push((r.t, r.functions(), integ.y().to_vec(), integ.stats().steps));
             }
             None => {
                 assert_eq!(integ.t(), tout);

@@ -436,8 +436,7 @@ impl<D: Dae> Bdf2<D> {
                     m = 0.5 * (a + b);
                 }
                 self.interpolate(m);
-                let (y, yp) = (self.y_out.clone(), self.yp_out.clone());
-                root_values(&mut self.dae, m, &y, &yp, &mut g)?;
+                root_values(&mut self.dae, m, &self.y_out, &self.yp_out, &mut g)?;
                 let gm = g[i];
                 if gm == 0.0 {
                     (a, b) = (m, m);

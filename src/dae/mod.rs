@@ -226,8 +226,6 @@ impl<T: Dae + ?Sized> Dae for Box<T> {
 pub struct Root {
     /// Its time, to the integrator's root tolerance.
     pub t: f64,
-    /// The functions that crossed zero there (indices into [`Dae::root_directions`]).
-    pub functions: Vec<usize>,
     /// Per function, as IDA's `rootsfound`: +1 rising through zero here, −1 falling, 0 not
     /// crossing.
     pub crossings: Vec<i32>,
@@ -236,14 +234,14 @@ pub struct Root {
 impl Root {
     /// The root at `t` of the functions with these crossings (+1, −1 or 0 each).
     pub fn new(t: f64, crossings: Vec<i32>) -> Self {
-        let functions = (0..crossings.len())
-            .filter(|&i| crossings[i] != 0)
-            .collect();
-        Root {
-            t,
-            functions,
-            crossings,
-        }
+        Root { t, crossings }
+    }
+
+    /// The functions that crossed zero there (indices into [`Dae::root_directions`]).
+    pub fn functions(&self) -> Vec<usize> {
+        (0..self.crossings.len())
+            .filter(|&i| self.crossings[i] != 0)
+            .collect()
     }
 }
 

@@ -95,7 +95,7 @@ pub struct ModelParams {
     pub contact: Contact,
     /// Adhesion (absent: no μ_as unknowns).
     pub adhesion: Option<Adhesion>,
-    /// Active strain (absent or without fibres: no active terms).
+    /// Active strain (absent or without regions: no active terms).
     pub active: Option<ActiveStrain>,
     /// Fibres in the cytoplasm's active regions (MODEL.md §11; absent: the paper's
     /// isotropic cell). They lie in the regions of [`Self::active`].

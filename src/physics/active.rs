@@ -120,6 +120,14 @@ fn side_of_ray(p: &Vector2<f64>, theta: f64) -> f64 {
     theta.cos() * p.y - theta.sin() * p.x
 }
 
+/// The unit tangent `T = −N_y e_ρ + (ρ/|p|) e_y` of the meridian through the offset `p`
+/// from the centre (`ρ = √(p_x² + p_z²) > 0`, `r = |p|`; module notes).
+#[inline]
+fn meridian_tangent(p: &Vector3<f64>, rho: f64, r: f64) -> Vector3<f64> {
+    let ny = p.y / r;
+    Vector3::new(-ny * (p.x / rho), rho / r, -ny * (p.z / rho))
+}
+
 /// First-order signed distance to the ellipse `(x/a)² + (y/b)² = 1` centred at the origin,
 /// positive inside: `l/|∇l|` with `l = 1 − (x/a)² − (y/b)²` (±∞ at the centre).
 fn inside_ellipse(p: &Vector2<f64>, axes: [f64; 2]) -> f64 {
@@ -224,24 +232,19 @@ impl ActiveStrain {
         if domain == Domain::Nucleus || t_a == 0.0 {
             return I;
         }
-        let p = self.offset(X);
-        let r = p.norm();
-        if r == 0.0 {
-            return I;
-        }
-        let N = p / r;
-        let T = Vector2::new(-N.y, N.x);
+        // The contracting directions are the fibres' (χ = 0 at X = c, so F_a = I there).
+        let [tangential, radial] = self.fibres(X);
         let mut Fa = I;
         if let (Some(pac), Domain::Cytoplasm) = (self.pac, domain) {
-            let a = pac.e * t_a * self.chi_pac(X);
+            let a = pac.e * t_a * tangential.chi;
             if a != 0.0 {
-                Fa -= T * T.transpose() * a;
+                Fa -= tangential.a * tangential.a.transpose() * a;
             }
         }
         if let Some(bot) = self.bottom {
-            let b = bot.e * t_a * self.chi_bottom(X);
+            let b = bot.e * t_a * radial.chi;
             if b != 0.0 {
-                Fa -= N * N.transpose() * b;
+                Fa -= radial.a * radial.a.transpose() * b;
             }
         }
         Fa
@@ -255,10 +258,7 @@ impl ActiveStrain {
         let p = self.offset(X);
         let r = p.norm();
         if r == 0.0 {
-            return [Fibre {
-                a: Vector2::x(),
-                chi: 0.0,
-            }; 2];
+            return [Fibre::absent(); 2];
         }
         let N = p / r;
         let T = Vector2::new(-N.y, N.x);
@@ -349,7 +349,7 @@ impl ActiveStrain {
             if a != 0.0 {
                 let rho = q.x;
                 if rho > 0.0 {
-                    let T = Vector3::new(-N.y * (p.x / rho), rho / r, -N.y * (p.z / rho));
+                    let T = meridian_tangent(&p, rho, r);
                     Fa -= T * T.transpose() * a;
                 } else {
                     Fa[(0, 0)] -= 0.5 * a;
@@ -377,22 +377,16 @@ impl ActiveStrain {
         let (p, q) = self.meridian(X, c_z);
         let r = p.norm();
         if r == 0.0 {
-            return [Fibre {
-                a: Vector3::x(),
-                chi: 0.0,
-            }; 2];
+            return [Fibre::absent(); 2];
         }
         let N = p / r;
         let rho = q.x;
         let pac = match self.pac {
             Some(pac) if rho > 0.0 => Fibre {
-                a: Vector3::new(-N.y * (p.x / rho), rho / r, -N.y * (p.z / rho)),
+                a: meridian_tangent(&p, rho, r),
                 chi: self.chi_pac_offset(&pac, &q),
             },
-            _ => Fibre {
-                a: Vector3::x(),
-                chi: 0.0,
-            },
+            _ => Fibre::absent(),
         };
         let bottom = Fibre {
             a: N,
