@@ -52,12 +52,15 @@ fn mesh_file(mesh: &Mesh3, p: &ModelParams, lattice: Lattice) -> Mesh3File {
         contact_eps: p.contact.eps,
         layer_thickness: p.adhesion.map(|a| a.e_f),
         center: [p.center[0], p.center[1], 0.0],
-        phase_times: [
-            ph.t_g0,
-            ph.t_as0,
-            ph.t_a0,
-            p.extra_breakpoints.last().copied().unwrap_or(ph.t_a0),
-        ],
+        phase_times: {
+            let [tg, tas, ta] = ph.times();
+            [
+                tg,
+                tas,
+                ta,
+                p.extra_breakpoints.last().copied().unwrap_or(ta),
+            ]
+        },
     }
 }
 

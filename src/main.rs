@@ -207,6 +207,11 @@ enum Command {
         /// Run directories (each with a summary.json).
         #[arg(required = true)]
         run_dirs: Vec<PathBuf>,
+        /// The phases' table instead: when adhesion and the active strain started (on
+        /// their conditions, MODEL.md §11, or at the case's times), the end, the cost and
+        /// the final values.
+        #[arg(long)]
+        phases: bool,
     },
 }
 
@@ -490,7 +495,7 @@ fn main() -> ExitCode {
         Command::Plot { run_dir, out, with } => plot_command(&run_dir, out, &with),
         Command::Mesh { case, svg } => mesh_command(&case, svg.as_deref()),
         Command::Check { case, set } => check_command(&case, &set),
-        Command::Table { run_dirs } => table_command(&run_dirs),
+        Command::Table { run_dirs, phases } => table_command(&run_dirs, phases),
     }
 }
 
@@ -995,12 +1000,25 @@ fn check_command(path: &Path, set: &[Override]) -> ExitCode {
     }
 }
 
-fn table_command(run_dirs: &[PathBuf]) -> ExitCode {
-    out!("{}", output::table::HEADER);
+fn table_command(run_dirs: &[PathBuf], phases: bool) -> ExitCode {
+    if phases {
+        out!("{}", output::table::PHASES_HEADER);
+    } else {
+        out!("{}", output::table::HEADER);
+    }
     let mut status = ExitCode::SUCCESS;
     for dir in run_dirs {
-        match cellsim::record::read::read_summary(dir) {
-            Ok(s) => out!("{}", output::table::row(&s)),
+        let row = if phases {
+            cellsim::record::read::RunData::load(dir)
+                .map(|run| output::table::phases_row(&run))
+                .map_err(|e| e.to_string())
+        } else {
+            cellsim::record::read::read_summary(dir)
+                .map(|s| output::table::row(&s))
+                .map_err(|e| e.to_string())
+        };
+        match row {
+            Ok(r) => out!("{r}"),
             Err(e) => {
                 err!("error: {e}");
                 status = ExitCode::from(2);

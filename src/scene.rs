@@ -3,7 +3,8 @@
 //! unknowns with adhesion, active terms with active fibres, inertia per the case).
 
 use crate::case::terms::{
-    MEMORY_ESTIMATE, MESH_GENERATOR, active, adhesion, contact, fibres, phases, viscosity,
+    MEMORY_ESTIMATE, MESH_GENERATOR, active, adhesion, contact, fibres, phase_conditions,
+    phase_starts, phases, scheduled, viscosity,
 };
 pub use crate::case::terms::{layer_checks, mesh_params, mesh3_params, substrate};
 use crate::case::{self, Case, InertiaMode};
@@ -84,7 +85,10 @@ pub fn model_params(case: &Case, file: &str, inertia: bool) -> Result<ModelParam
         drag: case.inertia.drag,
         contact_degree: case.mesh.contact_quadrature_degree as usize,
         contact_subdivisions: case.mesh.contact_subdivisions,
-        extra_breakpoints: vec![case.phases.t_end],
+        extra_breakpoints: scheduled(case, phase_starts(case), case.phases.t_end)
+            .into_iter()
+            .collect(),
+        events: phase_conditions(case).into_iter().flatten().collect(),
     })
 }
 

@@ -5,6 +5,7 @@ mod axisym;
 mod cli;
 mod dae;
 mod deferred;
+mod events;
 mod fd;
 mod fem3;
 mod hard;

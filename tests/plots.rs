@@ -1217,8 +1217,8 @@ fn gravity_is_shown_down_or_flipped() {
     use cellsim::physics::{Flip, Phases};
     let plain = Phases {
         t_g0: 10000.0,
-        t_as0: 40000.0,
-        t_a0: 50000.0,
+        adhesion: Some([10000.0, 40000.0]),
+        active: Some([40000.0, 50000.0]),
         flip: None,
     };
     let g = GravityMark::at(&plain, 50000.0);
@@ -1266,5 +1266,5 @@ fn gravity_is_shown_down_or_flipped() {
     // A run's phases come from its case file (the fixture's has no flip).
     let ph = figures::run_phases(&r).expect("the fixture's case file loads");
     assert!(ph.flip.is_none());
-    assert_eq!(ph.t_a0, r.mesh.phase_times[2]);
+    assert_eq!(ph.times()[2], r.mesh.phase_times[2]);
 }

@@ -48,8 +48,8 @@ pub use overrides::Override;
 pub use sections::{
     Active, Adhesion, AdhesionDirection, Bottom, Contact, Fibres, Flat, Geometry, Gravity, Inertia,
     InertiaMode, Integrator, KinematicModel, Krylov, LinearSolver, MAX_ATOL, MAX_RTOL, Material,
-    Materials, Mesh, Output, Pac, Phases, Pillars, Solver, Substrate, Viscosity, WedgeChoice,
-    units,
+    Materials, Mesh, Output, Pac, Phases, Pillars, Solver, Start, Substrate, Viscosity,
+    WedgeChoice, units,
 };
 pub use validate::{Rule, Violation};
 pub(crate) use validate::{axes, num};

@@ -901,6 +901,36 @@ pub struct Phases {
     pub t_a0: f64,
     /// End of the simulation (s). Required: each scene states it. Valid: > 0.
     pub t_end: f64,
+    /// When the adhesion ramp starts (MODEL.md §11): `At(t)`, or `Settled(speed)` (the
+    /// cell has come to rest: the centre's vertical speed below `speed` µm/s once the
+    /// contact carries half the weight; MODEL.md's choice 1e-5). Default `At(T_g0)`, the
+    /// paper. The ramp lasts T_as0 − T_g0 from its start.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adhesion_start: Option<Start>,
+    /// When the active-strain ramp starts: `At(t)`, or `SpreadingSlows(rate)` (the adhered
+    /// reference radius grows slower than `rate` µm/s, after growing faster since
+    /// adhesion started; MODEL.md's choice 1e-4). Default `At(T_as0)`, the paper. The ramp
+    /// lasts T_a0 − T_as0 from its start.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub active_start: Option<Start>,
+}
+
+/// When a phase starts (MODEL.md §11). A case's times after a phase's paper start
+/// (T_g0 for adhesion, T_as0 for the active strain) — the end time, the output times, the
+/// gravity flip — move with that phase's start: they are read as times after it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Start {
+    /// At a time (s). Valid: finite, ≥ 0.
+    At(f64),
+    /// When the cell has settled on the substrate: the centre's vertical speed falls below
+    /// this (µm/s), once the contact carries half the weight then acting. Adhesion only.
+    /// Valid: > 0.
+    Settled(f64),
+    /// When spreading slows: the adhered reference radius (the adhered length of the
+    /// half cell's outline; √(A/π) of the adhered area A in 3-D) grows slower than this
+    /// (µm/s), once it has grown faster after adhesion started. Active strain only.
+    /// Valid: > 0.
+    SpreadingSlows(f64),
 }
 
 fn default_t_g0() -> f64 {
@@ -922,6 +952,8 @@ impl Phases {
             t_as0: default_t_as0(),
             t_a0: default_t_a0(),
             t_end,
+            adhesion_start: None,
+            active_start: None,
         }
     }
 }

@@ -6,7 +6,7 @@
 
 use super::{self as case, Case};
 use crate::fem::{Mesh3Params, MeshError, MeshParams, Wedge};
-use crate::physics::{self, ActiveStrain, Flip, Phases, Substrate, Viscosity, Yeoh};
+use crate::physics::{self, ActiveStrain, Condition, Flip, Phases, Substrate, Viscosity, Yeoh};
 
 /// Mesh parameters of a case.
 pub fn mesh_params(case: &Case) -> MeshParams {
@@ -133,17 +133,82 @@ pub fn fibres(case: &Case) -> Option<physics::Fibres> {
     })
 }
 
-/// The phase switches of a case (with the gravity flip if the case turns upside down).
+/// The phase switches of a case at its start (with the gravity flip if the case turns
+/// upside down): the phases that start at a time have their ramps, those that start on a
+/// condition have none yet ([`phases_from`]).
 pub fn phases(case: &Case) -> Phases {
+    phases_from(case, phase_starts(case))
+}
+
+/// The starts of the adhesion and active phases known before the run: `At(t)` (`None`
+/// in the case: the paper's T_g0 and T_as0) gives its time, a condition `None`.
+pub fn phase_starts(case: &Case) -> [Option<f64>; 2] {
     let ph = &case.phases;
+    let known = |start: Option<case::Start>, paper: f64| match start {
+        None => Some(paper),
+        Some(case::Start::At(t)) => Some(t),
+        Some(_) => None,
+    };
+    [
+        known(ph.adhesion_start, ph.t_g0),
+        known(ph.active_start, ph.t_as0),
+    ]
+}
+
+/// The conditions that start the adhesion and active phases (MODEL.md §11), `None` for a
+/// phase that starts at a time.
+pub fn phase_conditions(case: &Case) -> [Option<Condition>; 2] {
+    let ph = &case.phases;
+    let condition = |start: Option<case::Start>| match start {
+        Some(case::Start::Settled(speed)) => Some(Condition::Settled { speed }),
+        Some(case::Start::SpreadingSlows(rate)) => Some(Condition::SpreadingSlows { rate }),
+        _ => None,
+    };
+    [condition(ph.adhesion_start), condition(ph.active_start)]
+}
+
+/// The run time of a time `t` of the case's schedule, given the phases' starts (`None`:
+/// not yet known): a time after a phase's paper start (T_g0 for adhesion, T_as0 for the
+/// active strain; strictly after, so that T_as0 itself, the end of the paper's spreading,
+/// belongs to the adhesion phase) is read as a time after that phase's start and moves
+/// with it. `None` when it falls in a phase whose start is not known yet. With the paper's
+/// starts, every time is itself.
+pub fn scheduled(case: &Case, starts: [Option<f64>; 2], t: f64) -> Option<f64> {
+    let ph = &case.phases;
+    let paper = [ph.t_g0, ph.t_as0];
+    match (0..2).rev().find(|&k| t > paper[k]) {
+        None => Some(t),
+        Some(k) => starts[k].map(|s| if s == paper[k] { t } else { t - paper[k] + s }),
+    }
+}
+
+/// The phase switches of a case once the adhesion and active phases started at `starts`
+/// (`None`: not yet): each ramp runs from its start over its paper duration (T_as0 − T_g0,
+/// T_a0 − T_as0; with the paper's starts exactly [T_g0, T_as0] and [T_as0, T_a0]), the
+/// gravity flip from the scheduled T_a0 ([`scheduled`]).
+pub fn phases_from(case: &Case, starts: [Option<f64>; 2]) -> Phases {
+    let ph = &case.phases;
+    let ramp = |start: Option<f64>, paper: [f64; 2]| {
+        start.map(|s| {
+            if s == paper[0] {
+                paper
+            } else {
+                [s, s + (paper[1] - paper[0])]
+            }
+        })
+    };
     Phases {
         t_g0: ph.t_g0,
-        t_as0: ph.t_as0,
-        t_a0: ph.t_a0,
-        flip: case.gravity.upside_down.then_some(Flip {
-            start: ph.t_a0,
-            duration: case.gravity.flip_duration,
-        }),
+        adhesion: ramp(starts[0], [ph.t_g0, ph.t_as0]),
+        active: ramp(starts[1], [ph.t_as0, ph.t_a0]),
+        flip: if case.gravity.upside_down {
+            scheduled(case, starts, ph.t_a0).map(|start| Flip {
+                start,
+                duration: case.gravity.flip_duration,
+            })
+        } else {
+            None
+        },
     }
 }
 

@@ -911,6 +911,8 @@ fn run_cost_estimates_the_measured_scenes() {
         t_as0: 200.0,
         t_a0: 300.0,
         t_end: 300.0,
+        adhesion_start: None,
+        active_start: None,
     };
     assert!((terms::work_fraction(&short) - 1.0).abs() < 1e-12);
 }

@@ -10,7 +10,7 @@ use std::fmt;
 use super::Case;
 use super::sections::{
     Active, Adhesion, Contact, Geometry, Gravity, Inertia, InertiaMode, KinematicModel, Materials,
-    Mesh, Output, Phases, Solver, Substrate, Viscosity,
+    Mesh, Output, Phases, Solver, Start, Substrate, Viscosity,
 };
 
 /// What rule a value broke.
@@ -267,7 +267,7 @@ impl Case {
         c.adhesion(self.adhesion.as_ref(), &self.contact);
         c.active(&self.active, g);
         c.fibres(&self.materials, &self.active);
-        c.phases(&self.phases);
+        c.phases(&self.phases, self.adhesion.is_some());
         c.inertia(&self.inertia);
         c.solver_and_output(&self.solver, &self.output);
         c.layers(self);
@@ -614,12 +614,46 @@ impl Checker<'_> {
         }
     }
 
-    /// Phases: 0 < T_g0 < T_as0 < T_a0, t_end > 0.
-    fn phases(&mut self, ph: &Phases) {
+    /// Phases: 0 < T_g0 < T_as0 < T_a0, t_end > 0; the phase starts (MODEL.md §11): a time
+    /// ≥ 0 or a condition's positive threshold, `Settled` for adhesion (with adhesion
+    /// modelled) and `SpreadingSlows` for the active strain only.
+    fn phases(&mut self, ph: &Phases, adhesion: bool) {
         self.positive("phases.t_g0", ph.t_g0);
         self.less("phases.t_g0", ph.t_g0, "phases.t_as0", ph.t_as0);
         self.less("phases.t_as0", ph.t_as0, "phases.t_a0", ph.t_a0);
         self.positive("phases.t_end", ph.t_end);
+        for (field, start, allowed) in [
+            ("phases.adhesion_start", ph.adhesion_start, "Settled"),
+            ("phases.active_start", ph.active_start, "SpreadingSlows"),
+        ] {
+            let Some(start) = start else { continue };
+            let (name, v) = match start {
+                Start::At(t) => ("At", t),
+                Start::Settled(v) => ("Settled", v),
+                Start::SpreadingSlows(v) => ("SpreadingSlows", v),
+            };
+            if name == "At" {
+                self.range(field, v, v >= 0.0, "At(t) with t >= 0");
+            } else if name != allowed {
+                let rule = format!(
+                    "{name} cannot start this phase: adhesion starts At(t) or Settled(speed), \
+                     the active strain At(t) or SpreadingSlows(rate) (MODEL.md §11)"
+                );
+                self.push(field, format!("{start:?}"), Rule::Conflict(rule));
+            } else if name == "Settled" && !adhesion {
+                let rule = "Settled starts the adhesion phase, and this case has no adhesion \
+                            section"
+                    .to_string();
+                self.report(
+                    field,
+                    &["adhesion"],
+                    format!("{start:?}"),
+                    Rule::Conflict(rule),
+                );
+            } else {
+                self.range(field, v, v > 0.0, format!("{name}(v) with v > 0"));
+            }
+        }
     }
 
     /// Inertia: drag, and a mode the cell can be integrated with.

@@ -552,10 +552,8 @@ impl<D: Dae> Integrator for Bdf2<D> {
                 }
             }
             self.dae.accepted_step(self.tn, &self.yn, &self.ypn);
-            let stats = self.stats.clone();
-            if !on_step(self.tn, &stats) {
-                return Err(IntegratorError::Interrupted { t: self.tn });
-            }
+            // A root in the step is reported first, as IDA does (a driver that stops after
+            // every step still sees it).
             if let Some(r) = self.locate_root()? {
                 if r.t <= tout + eps {
                     self.t_out = r.t;
@@ -563,6 +561,10 @@ impl<D: Dae> Integrator for Bdf2<D> {
                     return Ok(());
                 }
                 self.pending_root = Some(r);
+            }
+            let stats = self.stats.clone();
+            if !on_step(self.tn, &stats) {
+                return Err(IntegratorError::Interrupted { t: self.tn });
             }
         }
         if (self.tn - tout).abs() <= eps {

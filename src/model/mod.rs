@@ -39,6 +39,7 @@
 mod axisym;
 pub mod dofs;
 mod element;
+pub mod events;
 pub mod history;
 pub(crate) mod kernels;
 pub mod kinematics;
@@ -53,8 +54,8 @@ use nalgebra::SVector;
 use crate::dae::{Dae, DaeError, FirstOrderBlocks, Inadmissible, Pattern};
 use crate::fem::{CellMesh, Domain, ElementGeometryError};
 use crate::physics::{
-    ActiveStrain, Adhesion, Contact, Fibres, KinematicModel, Lattice, Phases, Substrate, Surface,
-    Viscosity, Yeoh,
+    ActiveStrain, Adhesion, Condition, Contact, Fibres, KinematicModel, Lattice, Phases, Substrate,
+    Surface, Viscosity, Yeoh,
 };
 use dofs::{DofMapOf, NONE};
 pub use element::STANDARD_DEGREE;
@@ -110,6 +111,10 @@ pub struct ModelParams {
     pub contact_subdivisions: u32,
     /// Extra breakpoints (e.g. the scene's end time).
     pub extra_breakpoints: Vec<f64>,
+    /// The conditions whose root functions the integrators watch (MODEL.md §11: the
+    /// phases the cell starts itself, not yet started), two functions each
+    /// ([`events`]). Empty: no root functions.
+    pub events: Vec<Condition>,
 }
 
 impl ModelParams {
@@ -300,7 +305,11 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         let Some(ad) = params.adhesion else {
             return Self::new(params, mesh);
         };
-        if params.phases.t_g0 <= 0.0 {
+        if params
+            .phases
+            .adhesion
+            .is_some_and(|[start, _]| start <= 0.0)
+        {
             return Self::new(params, mesh);
         }
         let mut m = Self::build(params, mesh, Constraints::Quarter, false)?;
@@ -823,6 +832,16 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> Dae for 
                 h.advance(t, x, xdot);
             }
         }
+    }
+
+    /// Per watched condition: arming counted rising, firing counted falling.
+    fn root_directions(&self) -> Vec<i32> {
+        self.params.events.iter().flat_map(|_| [1, -1]).collect()
+    }
+
+    fn root_functions(&mut self, at: State, g: &mut [f64]) -> Result<(), DaeError> {
+        self.condition_values(at, g);
+        Ok(())
     }
 
     fn breakpoints(&self) -> Vec<f64> {

@@ -113,6 +113,9 @@ pub trait Shape<const D: usize, const N: usize, const E: usize>:
     /// The contact radius in state `y`: the length of the contour in contact in the plane
     /// z = 0, `(deformed, reference)` [µm].
     fn contact_lengths(cell: &CellOf<Self, D, N, E>, y: &[f64]) -> (f64, f64);
+    /// The adhered reference radius and its rate in state (`y`, `yp`) [µm, µm/s]
+    /// ([`super::events`]).
+    fn adhered_radius(cell: &CellOf<Self, D, N, E>, y: &[f64], yp: &[f64]) -> (f64, f64);
     /// The residual or the iteration matrix with the formulation of the case's kinematic
     /// model.
     fn evaluate(cell: &mut CellOf<Self, D, N, E>, what: Evaluation) -> Result<(), DaeError>;
@@ -186,6 +189,10 @@ impl Shape<2, 6, 12> for HalfPlane {
         mark(vec![[false; 2]; mesh.nodes.len()], &mesh.symmetry_nodes, 0)
     }
 
+    fn adhered_radius(cell: &CellOf<Self, 2, 6, 12>, y: &[f64], yp: &[f64]) -> (f64, f64) {
+        cell.adhered_radius(y, yp)
+    }
+
     fn contact_lengths(cell: &CellOf<Self, 2, 6, 12>, y: &[f64]) -> (f64, f64) {
         cell.contact_lengths(y)
     }
@@ -245,6 +252,10 @@ impl Shape<3, 10, 30> for Quarter {
 
     fn tied(mesh: &Mesh3) -> &[usize] {
         &mesh.symmetry_diagonal
+    }
+
+    fn adhered_radius(cell: &CellOf<Self, 3, 10, 30>, y: &[f64], yp: &[f64]) -> (f64, f64) {
+        cell.adhered_radius(y, yp)
     }
 
     fn contact_lengths(cell: &CellOf<Self, 3, 10, 30>, y: &[f64]) -> (f64, f64) {

@@ -1530,9 +1530,13 @@ impl GravityMark {
 pub fn run_phases(run: &RunData) -> Option<Phases> {
     use super::paper::{CONTROL, SCENES};
     let fits = |case: &crate::case::Case| {
-        let ph = crate::case::terms::phases(case);
+        let starts = match &run.summary {
+            Some(sm) if !sm.events.is_empty() => sm.phase_starts(case),
+            _ => crate::case::terms::phase_starts(case),
+        };
+        let ph = crate::case::terms::phases_from(case, starts);
         let [tg, tas, ta, _] = run.mesh.phase_times;
-        (case.name == run.name && [ph.t_g0, ph.t_as0, ph.t_a0] == [tg, tas, ta]).then_some(ph)
+        (case.name == run.name && ph.times() == [tg, tas, ta]).then_some(ph)
     };
     if let Some(sm) = &run.summary {
         if let Some(ph) = crate::case::Case::load(&sm.case_file)

@@ -5,6 +5,7 @@
 use std::fmt::Write as _;
 
 use crate::record::Summary;
+use crate::record::read::RunData;
 
 /// The table's header (markdown).
 pub const HEADER: &str = "| run | outcome | unknowns | wall [s] | steps | Jacobians | t reached [s] | contact radius [µm] | uy_top [µm] | ‖E‖ nucleus | ‖E‖ cytoplasm |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|";
@@ -34,6 +35,58 @@ pub fn row(s: &Summary) -> String {
                 o.t,
                 o.contact_radius,
                 o.uy_top,
+                100.0 * o.strain_nucleus,
+                100.0 * o.strain_cytoplasm
+            );
+        }
+        None => r.push_str(" – | – | – | – | – |"),
+    }
+    r
+}
+
+/// The phases' table's header (markdown): `cellsim table --phases`.
+pub const PHASES_HEADER: &str = "| run | outcome | adhesion starts [s] | active starts [s] | end [s] | steps | wall [s] | u_y(p_t) [µm] | nucleus lowest [µm] | contact radius [µm] | ‖E‖ nucleus | ‖E‖ cytoplasm |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|";
+
+/// One markdown row of the phases' table: when adhesion and the active strain started —
+/// on their conditions (MODEL.md §11, with the condition), else at the case's times (the
+/// run's phase lines) — the end time, the cost and the final values.
+pub fn phases_row(run: &RunData) -> String {
+    let s = run.summary.as_ref();
+    let outcome = match s {
+        Some(s) if s.finished => "finished".to_string(),
+        Some(s) => match &s.failure {
+            Some(f) => format!("stopped: {}", short_reason(&f.reason)).replace('|', "/"),
+            None => "interrupted or running".into(),
+        },
+        None => "no summary".into(),
+    };
+    let [ta, tb, _, t_end] = run.mesh.phase_times;
+    let start = |phase: &str, t: f64| {
+        let event = s.and_then(|s| s.events.iter().find(|e| e.phase == phase));
+        match event {
+            Some(e) => match e.t {
+                Some(t) => format!("{t:.0} ({})", e.condition),
+                None => format!("– ({}, not met)", e.condition),
+            },
+            None => format!("{t:.0}"),
+        }
+    };
+    let mut r = format!(
+        "| {} | {outcome} | {} | {} | {t_end:.0} | {} | {} |",
+        run.name,
+        start("adhesion", ta),
+        start("active", tb),
+        s.map_or("–".into(), |s| s.stats.steps.to_string()),
+        s.map_or("–".into(), |s| format!("{:.1}", s.wall_seconds)),
+    );
+    match s.and_then(|s| s.final_values) {
+        Some(o) => {
+            let _ = write!(
+                r,
+                " {:.3} | {:.3} | {:.3} | {:.1} % | {:.1} % |",
+                o.uy_top,
+                o.uy_nucleus_max,
+                o.contact_radius,
                 100.0 * o.strain_nucleus,
                 100.0 * o.strain_cytoplasm
             );

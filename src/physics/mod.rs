@@ -64,7 +64,7 @@ pub use loads::{
     Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_hoop_factor, adhesion_rate,
     cofactor, contact_force, layer,
 };
-pub use phases::{Flip, Phases};
+pub use phases::{Condition, Flip, Phases};
 pub use plane_strain::{MaterialPoint, admissible, material_point, piola_total};
 pub use smooth::{heaviside, smooth_step};
 pub use substrate::{Lattice, PillarFoot, Pillars, Substrate, Substrate3, Surface};

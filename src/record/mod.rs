@@ -193,6 +193,9 @@ pub enum FailureKind {
     Unphysical,
     /// An output could not be written.
     Output,
+    /// A phase that starts on a condition of the cell's state (MODEL.md §11) had not
+    /// started by the run's deadline (twice the case's end time).
+    NoEvent,
 }
 
 impl FailureKind {
@@ -257,6 +260,16 @@ pub struct Summary {
     /// (before it μ_as is integrated beside the system).
     #[serde(default)]
     pub adhesion_unknowns_added_at: Option<f64>,
+    /// The phases this run's cell started itself (MODEL.md §11), in order; empty when
+    /// every phase starts at a time.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<Event>,
+    /// The run's phase lines when the cell started phases itself: the adhesion ramp's
+    /// start, the active ramp's start and end, and the end time [s] (what `mesh.json`'s
+    /// `phase_times`, written before the run, holds for a run on the paper's clock); null
+    /// where not reached.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phase_times: Option<[Option<f64>; 4]>,
     /// Where this run was computed together with other cases up to some time and parted
     /// from them (`cellsim paper`, [`crate::run::run_all`]); empty for a run on its own.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -270,6 +283,37 @@ pub struct Summary {
     /// Where the integration's wall time went (built with the `timers` feature only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub timers: Option<TimeBreakdown>,
+}
+
+/// A phase started by a condition on the cell's state (MODEL.md §11).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Event {
+    /// The phase: `adhesion` or `active`.
+    pub phase: String,
+    /// The condition, as in the case (`Settled(1e-5)`, `SpreadingSlows(0.0001)`).
+    pub condition: String,
+    /// When it was armed [s], if it was.
+    pub armed_at: Option<f64>,
+    /// When it held and the phase started [s], if it did.
+    pub t: Option<f64>,
+    /// The phase's time in the paper's schedule (T_g0, T_as0) [s].
+    pub paper_t: f64,
+}
+
+impl Summary {
+    /// The starts of the adhesion and active phases: those the run's events record, the
+    /// case's times (`At`) for the others.
+    pub fn phase_starts(&self, case: &crate::case::Case) -> [Option<f64>; 2] {
+        let mut starts = crate::case::terms::phase_starts(case);
+        for e in &self.events {
+            match e.phase.as_str() {
+                "adhesion" => starts[0] = e.t,
+                "active" => starts[1] = e.t,
+                _ => {}
+            }
+        }
+        starts
+    }
 }
 
 /// A time where a run computed together with other cases parted from some of them: their

@@ -430,11 +430,20 @@ impl RunData {
                 }
             }
         }
-        let three_d = mesh3.map(|mesh| Run3Data {
+        let mut three_d = mesh3.map(|mesh| Run3Data {
             mesh,
             series: series3,
             states: states3,
         });
+        // The phase lines of a run whose cell started its phases itself.
+        let mut mesh = mesh;
+        if let Some(times) = summary.as_ref().and_then(|s| s.phase_times) {
+            let times = times.map(|t| t.unwrap_or(f64::NAN));
+            mesh.phase_times = times;
+            if let Some(t3) = three_d.as_mut() {
+                t3.mesh.phase_times = times;
+            }
+        }
         if let Some(s) = &summary {
             if !s.finished {
                 let why = s

@@ -41,6 +41,8 @@ pub(crate) trait RunModel: Dae + Send {
     fn branched(&self, params: ModelParams, at: State<'_>) -> Result<Cell, ModelError>;
     /// The time the integration starts from.
     fn initial_time(&self) -> f64;
+    /// The watched conditions' root functions at `at` ([`crate::model::events`]).
+    fn condition_values(&self, at: State<'_>, g: &mut [f64]);
     /// The scene's observables at `t`, and the 3-D ones for the 3-D model.
     fn observe(&self, t: f64, y: &[f64]) -> (Observables, Option<Observables3>);
     /// The node that moved furthest in `y` and the length of its displacement [µm].
@@ -126,6 +128,10 @@ where
 
     fn initial_time(&self) -> f64 {
         CellOf::initial_time(self)
+    }
+
+    fn condition_values(&self, at: State<'_>, g: &mut [f64]) {
+        CellOf::condition_values(self, at, g)
     }
 
     fn observe(&self, t: f64, y: &[f64]) -> (Observables, Option<Observables3>) {

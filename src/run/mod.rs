@@ -33,6 +33,7 @@ use crate::stop::{StopFlag, signal_name};
 use crate::sundials::{Ida, IdaOptions, Krylov};
 
 mod cell;
+mod events;
 mod shared;
 use cell::{Cell, ModelView, RunModel};
 pub use shared::{Member, run_all, shared_until};
@@ -588,6 +589,9 @@ where
 enum Advance {
     /// The output time was reached.
     Reached,
+    /// A phase started on its condition (0 adhesion, 1 active) before it, at the
+    /// driver's current time: the integrator restarted there.
+    Started,
     /// The run stops.
     Stopped(Stop),
 }
@@ -635,12 +639,17 @@ struct Driver {
     adhesion_at: Option<f64>,
     /// When they joined it.
     adhesion_added_at: Option<f64>,
+    /// The phases' starts and the conditions watched (MODEL.md §11).
+    schedule: events::Schedule,
 }
 
 impl Driver {
     fn new(case: &Case, opts: &RunOptions, model: Cell) -> Result<Self, IntegratorError> {
         let ph = &case.phases;
-        let adhesion_at = (model.adhesion_deferred() && ph.t_g0 < ph.t_end).then_some(ph.t_g0);
+        // The μ_as unknowns join at adhesion's start: a known one before the end, else at
+        // the condition's root.
+        let adhesion_at = events::Schedule::new(case).starts[0]
+            .filter(|&t| model.adhesion_deferred() && t < ph.t_end);
         let solver = Solver::new(model, &opts.settings)?;
         Ok(Self {
             adhesion_at,
@@ -670,6 +679,7 @@ impl Driver {
             switched_at: None,
             adhesion_at: None,
             adhesion_added_at: None,
+            schedule: events::Schedule::new(case),
         }
     }
 
@@ -677,6 +687,25 @@ impl Driver {
     fn relabel(&mut self, progress: Progress, t_end: f64) {
         self.reporter.finish();
         self.reporter = Reporter::new(&progress, t_end);
+    }
+
+    /// The run time of `case`'s end (infinite while it waits for a phase's start).
+    fn t_end(&self, case: &Case) -> f64 {
+        if self.schedule.has_events() {
+            self.schedule.t_end()
+        } else {
+            case.phases.t_end
+        }
+    }
+
+    /// The output times of `case` known now (with the phase starts found so far).
+    fn output_times(&self, case: &Case) -> Vec<f64> {
+        let nominal = output_times(case);
+        if self.schedule.has_events() {
+            self.schedule.output_times(&nominal)
+        } else {
+            nominal
+        }
     }
 
     /// Statistics of the run so far (all systems).
@@ -716,26 +745,74 @@ impl Driver {
                     ..Stop::new(kind, reason)
                 })
             }
-            (None, Ok(())) => Advance::Reached,
+            (None, Ok(Some(_))) => Advance::Started,
+            (None, Ok(None)) => Advance::Reached,
         }
     }
 
-    /// Advances to `tout`, adding the μ_as unknowns on the way at their time.
+    /// Advances to `tout`, adding the μ_as unknowns on the way at their time; stops early
+    /// where a phase starts on its condition (returned).
     fn advance_inner(
         &mut self,
         tout: f64,
         stopped: &mut Option<(StopCause, f64)>,
-    ) -> Result<(), String> {
+    ) -> Result<Option<usize>, String> {
         if let Some(ta) = self.adhesion_at {
             if tout >= ta {
-                self.advance_system(ta, stopped)?;
-                if stopped.is_some() {
-                    return Ok(());
+                let started = self.advance_system(ta, stopped)?;
+                if stopped.is_some() || started.is_some() {
+                    return Ok(started);
                 }
                 self.add_adhesion_unknowns()?;
             }
         }
         self.advance_system(tout, stopped)
+    }
+
+    /// At a root of the watched conditions: what it means; at a phase's start, the
+    /// integrator restarted there with the phase's ramp from that time (and the μ_as
+    /// unknowns added if they wait for adhesion).
+    fn on_root(&mut self, root: &crate::dae::Root) -> Result<Option<usize>, String> {
+        let integ = self.solver.integ_ref();
+        let at = State {
+            t: integ.t(),
+            y: integ.y(),
+            yp: integ.yp(),
+        };
+        let model = self.solver.model();
+        let mut g = vec![0.0; root.crossings.len()];
+        model.condition_values(at, &mut g);
+        let meaning = self.schedule.on_root(root, |j| g[2 * j + 1]);
+        let events::Meaning::Starts(k) = meaning else {
+            return Ok(None);
+        };
+        let t = at.t;
+        let params = scene::model_params(self.schedule.case(), "", model.inertia())
+            .map_err(|e| e.to_string())?;
+        let restart = |e: String| {
+            format!(
+                "restart where the {} phase starts, t = {t} s: {e}",
+                events::PHASES[k]
+            )
+        };
+        let mut m2 = model
+            .branched(self.schedule.params(params), at)
+            .map_err(|e| restart(e.to_string()))?;
+        if k == 0 && m2.adhesion_deferred() {
+            m2 = m2
+                .with_adhesion_unknowns(at)
+                .map_err(|e| restart(e.to_string()))?;
+            self.adhesion_added_at = Some(t);
+        }
+        let mut settings = self.settings.clone();
+        let last = integ.stats().last_step;
+        if last > 0.0 {
+            settings.initial_step = Some(0.1 * last);
+        }
+        let new = Solver::new(m2, &settings).map_err(|e| restart(e.to_string()))?;
+        let old = std::mem::replace(&mut self.solver, new);
+        self.stats_before += &old.integ_ref().stats();
+        Ok(Some(k))
     }
 
     /// Swaps the system for the same one with its μ_as unknowns, at the current time.
@@ -768,8 +845,30 @@ impl Driver {
         Ok(())
     }
 
-    /// Advances the current system to `tout`, switching inertia off on the way when due.
+    /// Advances the current system to `tout`, switching inertia off on the way when due,
+    /// and stopping where a phase starts on its condition (returned).
     fn advance_system(
+        &mut self,
+        tout: f64,
+        stopped: &mut Option<(StopCause, f64)>,
+    ) -> Result<Option<usize>, String> {
+        loop {
+            self.advance_system_once(tout, stopped)?;
+            if stopped.is_some() {
+                return Ok(None);
+            }
+            let Some(root) = self.solver.integ_ref().root().cloned() else {
+                return Ok(None);
+            };
+            if let Some(k) = self.on_root(&root)? {
+                return Ok(Some(k));
+            }
+        }
+    }
+
+    /// Advances the current system to `tout` or its first root, switching inertia off on
+    /// the way when due.
+    fn advance_system_once(
         &mut self,
         tout: f64,
         stopped: &mut Option<(StopCause, f64)>,
@@ -789,12 +888,14 @@ impl Driver {
                 let base = stats_before.clone();
                 let mut on_step =
                     |t: f64, s: &Stats| after_step(guard, reporter, stopped, &base, t, s);
-                if let Some((old_stats, t_switch)) =
-                    advance_switching(solver, ts, tout, settings, &mut on_step)?
-                {
-                    *stats_before += &old_stats;
-                    *switched_at = Some(t_switch);
-                    *switch_after = None;
+                match advance_switching(solver, ts, tout, settings, &mut on_step)? {
+                    Switch::Switched(old_stats, t_switch) => {
+                        *stats_before += &old_stats;
+                        *switched_at = Some(t_switch);
+                        *switch_after = None;
+                    }
+                    Switch::Root => return Ok(()),
+                    Switch::Reached => {}
                 }
             }
         }
@@ -1015,13 +1116,15 @@ impl RunWriter {
             outputs: 0,
             inertia_switched_off_at: None,
             adhesion_unknowns_added_at: None,
+            events: Vec::new(),
+            phase_times: None,
             shared: Vec::new(),
             states: Vec::new(),
             cellsim_version: env!("CARGO_PKG_VERSION").to_string(),
             sundials_version: crate::sundials::SUNDIALS_VERSION.to_string(),
             timers: None,
         };
-        Ok(Self {
+        let mut writer = Self {
             out,
             csv_path,
             csv,
@@ -1038,7 +1141,30 @@ impl RunWriter {
             summary,
             summary_written: None,
             states_in_summary: 0,
-        })
+        };
+        let schedule = events::Schedule::new(case);
+        if schedule.has_events() {
+            writer.set_schedule(&schedule);
+        }
+        Ok(writer)
+    }
+
+    /// The phase ends and the summary's events and phase lines as the schedule knows them
+    /// (a run whose cell starts phases itself).
+    fn set_schedule(&mut self, schedule: &events::Schedule) {
+        let [end, gravity, spreading, active] = schedule.phase_ends();
+        self.phases = [
+            (end, "end"),
+            (gravity, "gravity"),
+            (spreading, "spreading"),
+            (active, "active"),
+        ];
+        self.summary.events = schedule.events();
+        self.summary.phase_times = Some(
+            schedule
+                .phase_times()
+                .map(|t| if t.is_finite() { Some(t) } else { None }),
+        );
     }
 
     /// The phase that ends at `t`, if any.
@@ -1256,6 +1382,16 @@ fn after_step(
     true
 }
 
+/// How [`advance_switching`] ended.
+enum Switch {
+    /// Inertia switched off: the old integrator's statistics and the switch time.
+    Switched(Stats, f64),
+    /// The output time came first.
+    Reached,
+    /// A root of the watched conditions came first (the integrator stopped there).
+    Root,
+}
+
 /// Longest stretch watched with inertia, after the requested switch time, for the moment
 /// the contact carries the cell [s].
 const SWITCH_PROBE_LIMIT: f64 = 50.0;
@@ -1268,14 +1404,15 @@ const SWITCH_PROBE_LIMIT: f64 = 50.0;
 /// microseconds (`cases/hard/gap-large.ron`), between which it is in the air and cannot be
 /// set at rest on the substrate. The steps do not depend on the output times, so runs with
 /// other outputs switch at the same moment. Returns the old integrator's statistics and
-/// the switch time once switched, `None` if `tout` came first.
+/// the switch time once switched, or whether `tout` or a root of the watched conditions
+/// came first.
 fn advance_switching(
     solver: &mut Solver,
     ts: f64,
     tout: f64,
     settings: &RunSettings,
     on_step: &mut dyn FnMut(f64, &Stats) -> bool,
-) -> Result<Option<(Stats, f64)>, String> {
+) -> Result<Switch, String> {
     loop {
         let integ = solver.integ_ref();
         let (t, y, yp) = integ.last_step();
@@ -1294,10 +1431,10 @@ fn advance_switching(
             let new = Solver::new(m2, settings)
                 .map_err(|e| format!("restart without inertia at t = {t}: {e}"))?;
             let old = std::mem::replace(solver, new);
-            return Ok(Some((old.integ_ref().stats(), t)));
+            return Ok(Switch::Switched(old.integ_ref().stats(), t));
         }
         if integ.t() >= tout {
-            return Ok(None);
+            return Ok(Switch::Reached);
         }
         // One step (or the interpolation to `tout` once a step is past it).
         let mut driver_stop = false;
@@ -1306,6 +1443,7 @@ fn advance_switching(
             false
         };
         match solver.integ().advance_to(tout, &mut one_step) {
+            Ok(()) if solver.integ_ref().root().is_some() => return Ok(Switch::Root),
             Ok(()) => {}
             Err(IntegratorError::Interrupted { .. }) if !driver_stop => {}
             Err(e) => return Err(e.to_string()),

@@ -17,9 +17,8 @@
 use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
-use super::{
-    Advance, Driver, Progress, RunError, RunOptions, RunWriter, Solver, build_model, output_times,
-};
+use super::events::Schedule;
+use super::{Advance, Driver, Progress, RunError, RunOptions, RunWriter, Solver, build_model};
 use super::{Cell, Stop};
 use crate::case::{Case, Output, Phases};
 use crate::dae::Stats;
@@ -42,6 +41,10 @@ pub fn shared_until(a: &Case, b: &Case) -> f64 {
             ..c.phases
         };
         c
+    }
+    if [a, b].iter().any(|c| Schedule::new(c).has_events()) {
+        // Phases the cell starts itself: its clock is its own.
+        return 0.0;
     }
     let (mut x, mut y) = (plain(a), plain(b));
     let mut t = a.phases.t_end.min(b.phases.t_end);
@@ -279,11 +282,12 @@ impl Context<'_, '_> {
         }
     }
 
-    /// Where a stretch of `tracks` from `t0` ends: where they part, or the only member's end.
-    fn stretch_end(&self, tracks: &[Track]) -> f64 {
+    /// Where a stretch of `tracks` from `t0` ends: where they part, or the only member's
+    /// end (infinite while it waits for a phase the cell starts itself).
+    fn stretch_end(&self, driver: &Driver, tracks: &[Track]) -> f64 {
         let mut end = f64::INFINITY;
         for (a, ta) in tracks.iter().enumerate() {
-            end = end.min(self.case(ta).phases.t_end);
+            end = end.min(driver.t_end(self.case(ta)));
             for tb in &tracks[a + 1..] {
                 end = end.min(shared_until(self.case(ta), self.case(tb)));
             }
@@ -401,7 +405,7 @@ impl Context<'_, '_> {
                 .map(|tr| self.case(tr).phases.t_end)
                 .fold(0.0, f64::max);
             let tol = 1e-9 * t_max.max(1.0);
-            let mut end = self.stretch_end(&tracks);
+            let mut end = self.stretch_end(driver, &tracks);
             if end <= t0 + tol && tracks.len() > 1 {
                 // Parted already (only if sharing is not transitive): each on its own.
                 end = t0;
@@ -412,6 +416,10 @@ impl Context<'_, '_> {
             } else {
                 None
             };
+            if end.is_infinite() {
+                // A run that waited for its phases: it ended where its end became known.
+                end = driver.solver.integ_ref().t();
+            }
             let wall = start.elapsed().as_secs_f64();
             for tr in &mut tracks {
                 tr.wall_before += wall;
@@ -439,7 +447,7 @@ impl Context<'_, '_> {
             let names: Vec<String> = tracks.iter().map(|tr| self.case(tr).name.clone()).collect();
             let (ending, going): (Vec<Track>, Vec<Track>) = tracks
                 .into_iter()
-                .partition(|tr| self.case(tr).phases.t_end <= end + tol);
+                .partition(|tr| driver.t_end(self.case(tr)) <= end + tol);
             for mut tr in ending {
                 // Computed with the others to its end.
                 let others: Vec<String> = going.iter().map(|g| self.case(g).name.clone()).collect();
@@ -516,24 +524,61 @@ impl Context<'_, '_> {
         end: f64,
         start: Instant,
     ) -> Option<Stop> {
-        let t0 = driver.solver.integ_ref().t();
-        let tol = 1e-9 * end.max(1.0);
-        let per_member: Vec<Vec<f64>> = tracks
-            .iter()
-            .map(|tr| output_times(self.case(tr)))
-            .collect();
-        let mut times: Vec<f64> = per_member
-            .iter()
-            .flatten()
-            .copied()
-            .filter(|&t| t > t0 + tol && t <= end + tol)
-            .collect();
-        times.sort_by(f64::total_cmp);
-        times.dedup_by(|a, b| (*a - *b).abs() <= tol);
-        for tout in times {
-            if let Advance::Stopped(stop) = driver.advance_to(tout) {
-                return Some(stop);
-            }
+        let tol = 1e-9 * self.case(&tracks[0]).phases.t_end.max(1.0);
+        // The output times, those of the phases the cell starts itself as they become
+        // known: recomputed after each start.
+        let member_times = |driver: &Driver, tracks: &[Track]| -> Vec<Vec<f64>> {
+            tracks
+                .iter()
+                .map(|tr| driver.output_times(self.case(tr)))
+                .collect()
+        };
+        let mut per_member = member_times(driver, tracks);
+        loop {
+            let t_now = driver.solver.integ_ref().t();
+            let next = per_member
+                .iter()
+                .flatten()
+                .copied()
+                .filter(|&t| t > t_now + tol && t <= end + tol)
+                .min_by(f64::total_cmp);
+            let (tout, deadline) = match next {
+                Some(t) => (t, false),
+                None if driver.schedule.t_end().is_infinite() => (driver.schedule.deadline(), true),
+                None => return None,
+            };
+            let tout = match driver.advance_to(tout) {
+                Advance::Stopped(stop) => return Some(stop),
+                Advance::Started => {
+                    per_member = member_times(driver, tracks);
+                    let t = driver.solver.integ_ref().t();
+                    for tr in tracks.iter_mut() {
+                        if let Some(f) = tr.files.as_mut() {
+                            f.set_schedule(&driver.schedule);
+                        }
+                    }
+                    t
+                }
+                Advance::Reached if deadline => {
+                    let waiting: Vec<String> = driver
+                        .schedule
+                        .events()
+                        .into_iter()
+                        .filter(|e| e.t.is_none())
+                        .map(|e| format!("the {} phase's {}", e.phase, e.condition))
+                        .collect();
+                    let reason = format!(
+                        "{} did not hold by t = {tout} s ({} × the case's t_end)",
+                        waiting.join(" and "),
+                        super::events::DEADLINE
+                    );
+                    return Some(Stop {
+                        t: Some(tout),
+                        ..Stop::new(FailureKind::NoEvent, reason)
+                    });
+                }
+                Advance::Reached => tout,
+            };
             let mut failed = Vec::new();
             for (i, tr) in tracks.iter_mut().enumerate() {
                 if !per_member[i].iter().any(|t| (t - tout).abs() <= tol) {
@@ -571,7 +616,6 @@ impl Context<'_, '_> {
                 return Some(Stop::new(FailureKind::Integration, reason));
             }
         }
-        None
     }
 
     /// Queues `sub` to restart from the driver's state with its leader's model.

@@ -165,6 +165,8 @@ pub struct Ida<D: Dae> {
     /// the next; and whether `before` still holds y before the step that found it.
     root: Option<Root>,
     pending_root: Option<Root>,
+    /// The end of the last step the problem was told of ([`Dae::accepted_step`]).
+    accepted_to: f64,
     keep_before: bool,
     // Dropped last: everything above was created in this context.
     ctx: Context,
@@ -254,6 +256,7 @@ impl<D: Dae> Ida<D> {
             path: 0.0,
             root: None,
             pending_root: None,
+            accepted_to: f64::NEG_INFINITY,
             keep_before: false,
             ctx,
         };
@@ -720,6 +723,20 @@ impl<D: Dae> Integrator for Ida<D> {
                 // next IDASolve returns the step itself, so its path is measured then, from
                 // y before it.
                 let root = Root::new(tret, self.root_info()?);
+                // The step that holds the root is accepted: the problem is told now, at
+                // its end t_n (a restart at the root needs what it integrates beside the
+                // system up to there), and not again when IDA returns the step itself.
+                let mut tn = tret;
+                // SAFETY: valid IDA memory.
+                let flag = unsafe { sys::IDAGetCurrentTime(self.mem, &mut tn) };
+                self.check("IDAGetCurrentTime", flag)?;
+                if tn > self.accepted_to {
+                    self.interpolate_output(tn)?;
+                    self.user
+                        .dae
+                        .accepted_step(tn, self.out_y.as_slice(), self.out_yp.as_slice());
+                    self.accepted_to = tn;
+                }
                 self.keep_before = true;
                 self.t_internal = tret;
                 if tret <= tout + eps {
@@ -731,9 +748,12 @@ impl<D: Dae> Integrator for Ida<D> {
                 return self.interpolate_output(tout);
             }
             self.t_internal = tret;
-            self.user
-                .dae
-                .accepted_step(tret, self.yy.as_slice(), self.yp.as_slice());
+            if tret > self.accepted_to {
+                self.user
+                    .dae
+                    .accepted_step(tret, self.yy.as_slice(), self.yp.as_slice());
+                self.accepted_to = tret;
+            }
             if flag == sys::IDA_TSTOP_RETURN {
                 // IDA clears its stop time once reached.
                 self.tstop = None;

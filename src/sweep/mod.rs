@@ -750,6 +750,10 @@ pub fn read_row(id: &str, values: &[String], dir: &Path) -> Row {
             s.final_values_3d.map(|o| o.contact_area_ref),
             s.strain_nucleus_max,
         ],
+        events: (!s.events.is_empty()).then(|| {
+            let start = |phase: &str| s.events.iter().find(|e| e.phase == phase).and_then(|e| e.t);
+            [start("adhesion"), start("active")]
+        }),
         reason: table::one_line(&reason),
     }
 }
@@ -902,7 +906,8 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize), ShardError> {
 
 /// The rows and counts the threads running a sweep's points share.
 struct Shared {
-    csv: Option<std::fs::File>,
+    /// sweep.csv as it is appended to, and whether it has the phase starts' columns.
+    csv: Option<(std::fs::File, bool)>,
     rows: Vec<Option<Row>>,
     done: usize,
     failed: usize,
@@ -930,7 +935,15 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
     // sweep.csv as points finish (not when sharded: shards share the directory).
     let csv_path = out.join("sweep.csv");
     let csv = match opts.shard {
-        None => Some(start_csv(&csv_path, &axes, &todo.rows)?),
+        None => {
+            // The phase starts' columns when some point's cell starts its phases itself.
+            let events = plan.points.iter().any(|p| {
+                p.case.as_ref().is_ok_and(|(c, _)| {
+                    c.phases.adhesion_start.is_some() || c.phases.active_start.is_some()
+                })
+            });
+            Some((start_csv(&csv_path, &axes, &todo.rows, events)?, events))
+        }
         Some(_) => None,
     };
     let log = Log::new(plan, opts, total);
@@ -1089,11 +1102,12 @@ fn start_csv(
     path: &Path,
     axes: &[String],
     rows: &[Option<Row>],
+    events: bool,
 ) -> Result<std::fs::File, SweepError> {
     let mut f = std::fs::File::create(path).map_err(SweepError::io(path))?;
-    let mut text = table::header(axes) + "\n";
+    let mut text = table::header(axes, events) + "\n";
     for r in rows.iter().flatten() {
-        text += &(table::line(r) + "\n");
+        text += &(table::line(r, events) + "\n");
     }
     f.write_all(text.as_bytes()).map_err(SweepError::io(path))?;
     Ok(f)
@@ -1282,9 +1296,9 @@ impl<'a> Runner<'a> {
             if row.status == Status::Failed {
                 sh.failed += 1;
             }
-            if let Some(f) = sh.csv.as_mut() {
+            if let Some((f, events)) = sh.csv.as_mut() {
                 let _ = f
-                    .write_all((table::line(&row) + "\n").as_bytes())
+                    .write_all((table::line(&row, *events) + "\n").as_bytes())
                     .and_then(|_| f.flush());
             }
             let total = self.log.total;

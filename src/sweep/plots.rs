@@ -937,6 +937,7 @@ mod tests {
             steps: Some(10),
             stopped: Default::default(),
             extras: [None; 3],
+            events: None,
             reason: String::new(),
         }
     }

@@ -76,9 +76,17 @@ pub struct Row {
     /// Further final values: [`EXTRA_COLUMNS`], in order (the contact areas of a 3-D run,
     /// the largest nucleus strain); `None` where the run or its cellsim has none.
     pub extras: [Option<f64>; 3],
+    /// When the adhesion and active phases started, for a run whose cell starts them
+    /// itself (MODEL.md §11): [`EVENT_COLUMNS`] (`None` for a run on the paper's clock; a
+    /// start not reached is `Some(None)`).
+    pub events: Option<[Option<f64>; 2]>,
     /// Why the point failed, is invalid or was interrupted (one line).
     pub reason: String,
 }
+
+/// The phase starts of [`Row::events`], after the further values, in a sweep whose points
+/// start phases on conditions.
+pub const EVENT_COLUMNS: [&str; 2] = ["t_adhesion_start", "t_active_start"];
 
 /// The further final values of [`Row::extras`], after the stop's columns: the deformed and
 /// reference contact areas of a 3-D run (whole cell [µm²]) and the largest ‖E‖_F at a
@@ -138,6 +146,7 @@ impl Row {
             steps: None,
             stopped: Stopped::of_status(status),
             extras: [None; 3],
+            events: None,
             reason: one_line(reason),
         }
     }
@@ -151,7 +160,10 @@ impl Row {
             "steps" => self.steps.map(|s| s as f64),
             _ => match EXTRA_COLUMNS.iter().position(|c| *c == name) {
                 Some(k) => self.extras[k],
-                None => self.last.and_then(|o| o.get(name)),
+                None => match EVENT_COLUMNS.iter().position(|c| *c == name) {
+                    Some(k) => self.events.and_then(|e| e[k]),
+                    None => self.last.and_then(|o| o.get(name)),
+                },
             },
         }
     }
@@ -162,6 +174,7 @@ pub fn quantities() -> Vec<&'static str> {
     let mut q: Vec<&str> = COLUMNS[1..].to_vec();
     q.extend(["penetration_depth", "wall_seconds", "steps"]);
     q.extend(EXTRA_COLUMNS);
+    q.extend(EVENT_COLUMNS);
     q
 }
 
@@ -205,8 +218,8 @@ fn num(v: Option<f64>) -> String {
     v.map(|x| x.to_string()).unwrap_or_default()
 }
 
-/// The header line for `axes`.
-pub fn header(axes: &[String]) -> String {
+/// The header line for `axes`, with the [`EVENT_COLUMNS`] when `events`.
+pub fn header(axes: &[String], events: bool) -> String {
     let mut cols: Vec<String> = vec!["id".into()];
     cols.extend(axes.iter().map(|a| field(a)));
     cols.push("status".into());
@@ -218,12 +231,15 @@ pub fn header(axes: &[String]) -> String {
     ]);
     cols.extend(STOP_COLUMNS.iter().map(|c| c.to_string()));
     cols.extend(EXTRA_COLUMNS.iter().map(|c| c.to_string()));
+    if events {
+        cols.extend(EVENT_COLUMNS.iter().map(|c| c.to_string()));
+    }
     cols.push("reason".into());
     cols.join(",")
 }
 
-/// One row's line.
-pub fn line(r: &Row) -> String {
+/// One row's line, with the [`EVENT_COLUMNS`] when `events`.
+pub fn line(r: &Row, events: bool) -> String {
     let mut cols: Vec<String> = vec![field(&r.id)];
     cols.extend(r.values.iter().map(|v| field(v)));
     cols.push(r.status.as_str().into());
@@ -240,16 +256,21 @@ pub fn line(r: &Row) -> String {
     cols.push(s.element.map(|e| e.to_string()).unwrap_or_default());
     cols.extend(s.x.iter().map(|&v| num(v)));
     cols.extend(r.extras.iter().map(|&v| num(v)));
+    if events {
+        let e = r.events.unwrap_or([None; 2]);
+        cols.extend(e.iter().map(|&v| num(v)));
+    }
     cols.push(field(&r.reason));
     cols.join(",")
 }
 
-/// The whole file.
+/// The whole file (with the [`EVENT_COLUMNS`] when some row has events).
 pub fn render(axes: &[String], rows: &[Row]) -> String {
-    let mut s = header(axes);
+    let events = rows.iter().any(|r| r.events.is_some());
+    let mut s = header(axes, events);
     s.push('\n');
     for r in rows {
-        s.push_str(&line(r));
+        s.push_str(&line(r, events));
         s.push('\n');
     }
     s
@@ -310,10 +331,13 @@ pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), CsvError> {
         return Err(header("the first column is not `id`".into()));
     }
     let axes: Vec<String> = head[1..status_at].to_vec();
-    let expected = status_at + 1 + N_COLUMNS + 4 + STOP_COLUMNS.len() + EXTRA_COLUMNS.len();
+    let has_events = head.iter().any(|h| h == EVENT_COLUMNS[0]);
+    let n_events = if has_events { EVENT_COLUMNS.len() } else { 0 };
+    let expected =
+        status_at + 1 + N_COLUMNS + 4 + STOP_COLUMNS.len() + EXTRA_COLUMNS.len() + n_events;
     // Written before the further values, or before the stop's fields too: read with
     // those empty.
-    let without_extras = expected - EXTRA_COLUMNS.len();
+    let without_extras = expected - n_events - EXTRA_COLUMNS.len();
     let without_stop = without_extras - STOP_COLUMNS.len();
     let has_extras = head.len() == expected;
     let has_stop = has_extras || head.len() == without_extras;
@@ -395,6 +419,11 @@ pub fn parse(text: &str) -> Result<(Vec<String>, Vec<Row>), CsvError> {
             } else {
                 [None; 3]
             },
+            events: if has_events {
+                Some([number(&rest[12])?, number(&rest[13])?])
+            } else {
+                None
+            },
             reason: rest[rest.len() - 1].clone(),
         });
     }
@@ -424,6 +453,7 @@ mod tests {
                 steps: Some(775),
                 stopped: Stopped::default(),
                 extras: [Some(817.9), Some(620.5), Some(1.31)],
+                events: None,
                 reason: String::new(),
             },
             Row {
@@ -441,6 +471,7 @@ mod tests {
                     x: [Some(6.2), Some(-4.1), None],
                 },
                 extras: [None, None, Some(0.42)],
+                events: None,
                 reason: "element 246, contact point 35: det F = -2.4e-5".into(),
             },
             Row::bare(
@@ -505,6 +536,39 @@ mod tests {
         assert_eq!(r[1].stopped, Stopped::default());
         assert_eq!(r[1].reason, rows[1].reason);
         assert_eq!(r[1].steps, Some(90));
+    }
+
+    #[test]
+    fn phase_starts_are_columns_when_a_row_has_them() {
+        let axes = vec!["phases.adhesion_start".to_string()];
+        let mut rows = vec![
+            Row::bare("g0", vec!["Settled(1e-5)".into()], Status::Finished, ""),
+            Row::bare(
+                "g1",
+                vec!["Settled(1e-6)".into()],
+                Status::Failed,
+                "no event",
+            ),
+        ];
+        rows[0].events = Some([Some(5580.8), Some(21993.2)]);
+        rows[1].events = Some([Some(9049.0), None]);
+        let text = render(&axes, &rows);
+        assert!(
+            text.lines()
+                .next()
+                .unwrap()
+                .ends_with(",t_adhesion_start,t_active_start,reason")
+        );
+        let (_, r) = parse(&text).unwrap();
+        assert_eq!(r, rows);
+        assert_eq!(r[0].quantity("t_active_start"), Some(21993.2));
+        assert_eq!(r[1].quantity("t_active_start"), None);
+        assert!(quantities().contains(&"t_adhesion_start"));
+        // Without events, no such columns.
+        for r in &mut rows {
+            r.events = None;
+        }
+        assert!(!render(&axes, &rows).contains("t_adhesion_start"));
     }
 
     #[test]
