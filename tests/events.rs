@@ -133,6 +133,29 @@ fn a_scene_starts_its_phases_itself_and_bdf2_finds_the_same_times() {
         );
     }
     assert!((rows.last().unwrap()[0] - pt[3]).abs() < 1e-9);
+    // The same scene with the phases started At those times: no root functions, no
+    // restart at the starts, the same clock; the same answer to the tolerance.
+    let (a, at_rows, _) = run_changed_case(
+        path,
+        "events-at",
+        |c| {
+            c.phases.adhesion_start = Some(Start::At(t_ad));
+            c.phases.active_start = Some(Start::At(t_act));
+        },
+        |_| {},
+    );
+    assert!(a.finished && a.events.is_empty());
+    let (x, z) = (rows.last().unwrap(), at_rows.last().unwrap());
+    assert_eq!(x[0], z[0]);
+    for k in 1..x.len() {
+        let d = (x[k] - z[k]).abs() / z[k].abs().max(1e-3);
+        assert!(
+            d < 1e-4,
+            "column {k}: {} with events, {} with At",
+            x[k],
+            z[k]
+        );
+    }
     // The fixed-step BDF2 (dt = 1 s) locates the same events to within its step.
     let (b, _, _) = run_changed_case(path, "events-bdf2", with_events, |st| {
         st.integrator = cellsim::case::Integrator::Bdf2;

@@ -166,7 +166,10 @@ impl<D: Dae> Bdf2<D> {
             t_out: t0,
             y_out: y0,
             yp_out: yp0,
-            stats: Stats::default(),
+            stats: Stats {
+                root_evals: u64::from(!g_n.is_empty()),
+                ..Stats::default()
+            },
             cuts: 0,
             root_dirs,
             g_n,
@@ -415,6 +418,7 @@ impl<D: Dae> Bdf2<D> {
         }
         let mut g1 = vec![0.0; self.root_dirs.len()];
         root_values(&mut self.dae, self.tn, &self.yn, &self.ypn, &mut g1)?;
+        self.stats.root_evals += 1;
         let g0 = std::mem::replace(&mut self.g_n, g1.clone());
         let crossing: Vec<usize> = (0..g1.len())
             .filter(|&i| crosses(g0[i], g1[i], self.root_dirs[i]))
@@ -437,6 +441,7 @@ impl<D: Dae> Bdf2<D> {
                 }
                 self.interpolate(m);
                 root_values(&mut self.dae, m, &self.y_out, &self.yp_out, &mut g)?;
+                self.stats.root_evals += 1;
                 let gm = g[i];
                 if gm == 0.0 {
                     (a, b) = (m, m);

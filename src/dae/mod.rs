@@ -340,6 +340,10 @@ pub struct Stats {
     /// (IDA with `solver.krylov` only, else 0).
     #[serde(default)]
     pub linear_failures: u64,
+    /// Evaluations of the root functions (with root functions only, else 0 and not
+    /// written to the summary).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub root_evals: u64,
     /// How far the solution has moved over the run: Σ over the steps of ‖yₙ − yₙ₋₁‖ in
     /// the weighted RMS norm of the integrator's weights 1/(rtol |y| + atol) (IDA's error
     /// weights, BDF2's Newton weights): tolerance units. The stall rule's measure of
@@ -350,6 +354,10 @@ pub struct Stats {
     pub last_order: u32,
     /// Size of the last step.
     pub last_step: f64,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 /// Statistics of consecutive integrations (e.g. before and after a system change): counts
@@ -365,6 +373,7 @@ impl std::ops::AddAssign<&Stats> for Stats {
         self.error_test_failures += b.error_test_failures;
         self.linear_iters += b.linear_iters;
         self.linear_failures += b.linear_failures;
+        self.root_evals += b.root_evals;
         self.path += b.path;
         self.last_order = b.last_order;
         self.last_step = b.last_step;

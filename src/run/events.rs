@@ -60,6 +60,13 @@ impl Schedule {
         &self.case
     }
 
+    /// Whether the case keeps the paper's clock: both phases start at T_g0 and T_as0
+    /// (absent starts, or `At` those times).
+    pub fn is_paper(&self) -> bool {
+        let ph = &self.case.phases;
+        !self.has_events() && self.starts == [Some(ph.t_g0), Some(ph.t_as0)]
+    }
+
     /// Whether some phase starts on a condition.
     pub fn has_events(&self) -> bool {
         self.conditions.iter().any(Option::is_some)

@@ -127,6 +127,14 @@ impl Reporter {
         }
     }
 
+    /// The run's end moved to `t_end` (a phase started on its condition).
+    fn set_end(&mut self, t_end: f64) {
+        self.t_end = t_end;
+        if let Progress::Bar(bar) = &self.progress {
+            bar.set_length((t_end * 1000.0).round().max(1.0) as u64);
+        }
+    }
+
     fn finish(&self) {
         if let Progress::Bar(bar) = &self.progress {
             bar.finish_and_clear();
@@ -691,20 +699,20 @@ impl Driver {
 
     /// The run time of `case`'s end (infinite while it waits for a phase's start).
     fn t_end(&self, case: &Case) -> f64 {
-        if self.schedule.has_events() {
-            self.schedule.t_end()
-        } else {
+        if self.schedule.is_paper() {
             case.phases.t_end
+        } else {
+            self.schedule.t_end()
         }
     }
 
     /// The output times of `case` known now (with the phase starts found so far).
     fn output_times(&self, case: &Case) -> Vec<f64> {
         let nominal = output_times(case);
-        if self.schedule.has_events() {
-            self.schedule.output_times(&nominal)
-        } else {
+        if self.schedule.is_paper() {
             nominal
+        } else {
+            self.schedule.output_times(&nominal)
         }
     }
 
@@ -812,6 +820,10 @@ impl Driver {
         let new = Solver::new(m2, &settings).map_err(|e| restart(e.to_string()))?;
         let old = std::mem::replace(&mut self.solver, new);
         self.stats_before += &old.integ_ref().stats();
+        let t_end = self.schedule.t_end();
+        if t_end.is_finite() {
+            self.reporter.set_end(t_end);
+        }
         Ok(Some(k))
     }
 
@@ -1143,7 +1155,7 @@ impl RunWriter {
             states_in_summary: 0,
         };
         let schedule = events::Schedule::new(case);
-        if schedule.has_events() {
+        if !schedule.is_paper() {
             writer.set_schedule(&schedule);
         }
         Ok(writer)

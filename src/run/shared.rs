@@ -42,8 +42,8 @@ pub fn shared_until(a: &Case, b: &Case) -> f64 {
         };
         c
     }
-    if [a, b].iter().any(|c| Schedule::new(c).has_events()) {
-        // Phases the cell starts itself: its clock is its own.
+    if [a, b].iter().any(|c| !Schedule::new(c).is_paper()) {
+        // Phases that start on conditions or at other times: its clock is its own.
         return 0.0;
     }
     let (mut x, mut y) = (plain(a), plain(b));

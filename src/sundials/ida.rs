@@ -828,6 +828,10 @@ impl<D: Dae> Integrator for Ida<D> {
                 true => self.getter("IDAGetNumLinConvFails", sys::IDAGetNumLinConvFails),
                 false => 0,
             },
+            root_evals: match self.user.nroots {
+                0 => 0,
+                _ => self.getter("IDAGetNumGEvals", sys::IDAGetNumGEvals),
+            },
             path: self.path,
             last_order: order.max(0) as u32,
             last_step: h,
