@@ -622,34 +622,31 @@ impl Checker<'_> {
         self.less("phases.t_g0", ph.t_g0, "phases.t_as0", ph.t_as0);
         self.less("phases.t_as0", ph.t_as0, "phases.t_a0", ph.t_a0);
         self.positive("phases.t_end", ph.t_end);
-        for (field, start, allowed) in [
-            ("phases.adhesion_start", ph.adhesion_start, "Settled"),
-            ("phases.active_start", ph.active_start, "SpreadingSlows"),
+        for (field, start, adhesion_phase) in [
+            ("phases.adhesion_start", ph.adhesion_start, true),
+            ("phases.active_start", ph.active_start, false),
         ] {
             let Some(start) = start else { continue };
             let (name, v) = match start {
-                Start::At(t) => ("At", t),
+                Start::At(t) => {
+                    self.range(field, t, t >= 0.0, "At(t) with t >= 0");
+                    continue;
+                }
                 Start::Settled(v) => ("Settled", v),
                 Start::SpreadingSlows(v) => ("SpreadingSlows", v),
             };
-            if name == "At" {
-                self.range(field, v, v >= 0.0, "At(t) with t >= 0");
-            } else if name != allowed {
+            let shown = format!("{start:?}");
+            if (name == "Settled") != adhesion_phase {
                 let rule = format!(
                     "{name} cannot start this phase: adhesion starts At(t) or Settled(speed), \
                      the active strain At(t) or SpreadingSlows(rate) (MODEL.md §11)"
                 );
-                self.push(field, format!("{start:?}"), Rule::Conflict(rule));
-            } else if name == "Settled" && !adhesion {
+                self.push(field, shown, Rule::Conflict(rule));
+            } else if adhesion_phase && !adhesion {
                 let rule = "Settled starts the adhesion phase, and this case has no adhesion \
                             section"
                     .to_string();
-                self.report(
-                    field,
-                    &["adhesion"],
-                    format!("{start:?}"),
-                    Rule::Conflict(rule),
-                );
+                self.report(field, &["adhesion"], shown, Rule::Conflict(rule));
             } else {
                 self.range(field, v, v > 0.0, format!("{name}(v) with v > 0"));
             }

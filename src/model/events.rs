@@ -23,7 +23,7 @@ use num_dual::Dual64;
 use super::{CellModel, CellOf, Shape, State};
 use crate::fem::tet10::face_map;
 use crate::fem::tri6::edge_map;
-use crate::fem::{CellMesh, TriangleRule};
+use crate::fem::{CellMesh, EdgeRule, TriangleRule};
 use crate::physics::{Adhesion, Condition, KinematicModel, Surface, layer};
 
 /// The least fraction of the full weight the `Settled` arming counts as acting: at t = 0
@@ -32,8 +32,8 @@ use crate::physics::{Adhesion, Condition, KinematicModel, Surface, layer};
 /// fixed-step BDF2 counts a crossing only from a nonzero value).
 const MIN_WEIGHT: f64 = 1e-6;
 
-/// Sub-intervals of each outline edge, each with a 3-point Gauss rule.
-const EDGE_SUBS: usize = 8;
+/// Halvings of each outline edge, each piece with a 3-point Gauss rule (8 pieces).
+const EDGE_LEVELS: u32 = 3;
 
 /// Sub-triangle levels of the rule on each surface face (as the contact area's).
 const FACE_LEVELS: u32 = 3;
@@ -86,39 +86,32 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
 
 impl CellModel {
     /// The adhered reference radius L and its rate L̇ [µm, µm/s] (module documentation):
-    /// each outline edge sampled by [`EDGE_SUBS`] 3-point Gauss rules. (0, 0) without
+    /// each outline edge sampled by 3-point Gauss rules on 2^[`EDGE_LEVELS`] pieces. (0, 0) without
     /// adhesion.
     pub fn adhered_radius(&self, y: &[f64], yp: &[f64]) -> (f64, f64) {
         let Some(ad) = &self.params.adhesion else {
             return (0.0, 0.0);
         };
         let axisymmetric = self.params.kinematics == KinematicModel::Axisymmetric;
-        const GAUSS: [(f64, f64); 3] = [
-            (0.112_701_665_379_258_31, 5.0 / 18.0),
-            (0.5, 8.0 / 18.0),
-            (0.887_298_334_620_741_7, 5.0 / 18.0),
-        ];
+        let rule = EdgeRule::degree(5).subdivided(EDGE_LEVELS);
         let (mut m, mut mdot) = (0.0, 0.0);
         for edge in &self.mesh.outer_edges {
             let p = edge.map(|i| self.mesh.nodes[i]);
             let u = edge.map(|i| self.dofs.node_u(y, i));
             let v = edge.map(|i| self.dofs.node_velocity(y, yp, i));
-            for sub in 0..EDGE_SUBS {
-                for (s, w) in GAUSS {
-                    let s = (sub as f64 + s) / EDGE_SUBS as f64;
-                    let (x_ref, tangent) = edge_map(&p, s);
-                    let (du, _) = edge_map(&u, s);
-                    let (dv, _) = edge_map(&v, s);
-                    let x = SVector::<f64, 2>::new(x_ref[0] + du[0], x_ref[1] + du[1]);
-                    let xdot = SVector::<f64, 2>::new(dv[0], dv[1]);
-                    let (h, hdot) = layer_and_rate(ad, &self.substrate, &x, &xdot);
-                    let mut dl = w / EDGE_SUBS as f64 * tangent[0].hypot(tangent[1]);
-                    if axisymmetric {
-                        dl *= x_ref[0];
-                    }
-                    m += h * dl;
-                    mdot += hdot * dl;
+            for (&s, &w) in rule.points.iter().zip(&rule.weights) {
+                let (x_ref, tangent) = edge_map(&p, s);
+                let (du, _) = edge_map(&u, s);
+                let (dv, _) = edge_map(&v, s);
+                let x = SVector::<f64, 2>::new(x_ref[0] + du[0], x_ref[1] + du[1]);
+                let xdot = SVector::<f64, 2>::new(dv[0], dv[1]);
+                let (h, hdot) = layer_and_rate(ad, &self.substrate, &x, &xdot);
+                let mut dl = w * tangent[0].hypot(tangent[1]);
+                if axisymmetric {
+                    dl *= x_ref[0];
                 }
+                m += h * dl;
+                mdot += hdot * dl;
             }
         }
         if axisymmetric {

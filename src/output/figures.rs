@@ -1531,8 +1531,8 @@ pub fn run_phases(run: &RunData) -> Option<Phases> {
     use super::paper::{CONTROL, SCENES};
     let fits = |case: &crate::case::Case| {
         let starts = match &run.summary {
-            Some(sm) if !sm.events.is_empty() => sm.phase_starts(case),
-            _ => crate::case::terms::phase_starts(case),
+            Some(sm) => sm.phase_starts(case),
+            None => crate::case::terms::phase_starts(case),
         };
         let ph = crate::case::terms::phases_from(case, starts);
         let [tg, tas, ta, _] = run.mesh.phase_times;

@@ -56,6 +56,16 @@ pub enum Condition {
     },
 }
 
+/// As a case writes it: `Settled(1e-5)`, `SpreadingSlows(1e-4)`.
+impl std::fmt::Display for Condition {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Condition::Settled { speed } => write!(f, "Settled({speed:e})"),
+            Condition::SpreadingSlows { rate } => write!(f, "SpreadingSlows({rate:e})"),
+        }
+    }
+}
+
 impl Phases {
     /// Checks `T_g0 > 0` and that each known ramp has `0 ≤ start < end`, and for a flip
     /// `start ≥ 0`, `duration > 0`, all finite.

@@ -10,8 +10,8 @@
 //! end time, the output times, the gravity flip — are read as times after the phase they
 //! fall in ([`crate::case::terms::scheduled`]) and become known when it starts.
 
+use crate::case::Case;
 use crate::case::terms::{phase_conditions, phase_starts, phases_from, scheduled};
-use crate::case::{Case, Start};
 use crate::dae::Root;
 use crate::model::ModelParams;
 use crate::physics::Condition;
@@ -159,19 +159,15 @@ impl Schedule {
     pub fn events(&self) -> Vec<Event> {
         let ph = &self.case.phases;
         let paper = [ph.t_g0, ph.t_as0];
-        let starts = [ph.adhesion_start, ph.active_start];
         (0..2)
-            .filter(|&k| self.conditions[k].is_some())
-            .map(|k| Event {
-                phase: PHASES[k].to_string(),
-                condition: match starts[k] {
-                    Some(Start::Settled(v)) => format!("Settled({v:e})"),
-                    Some(Start::SpreadingSlows(v)) => format!("SpreadingSlows({v:e})"),
-                    other => format!("{other:?}"),
-                },
-                armed_at: self.armed[k],
-                t: self.starts[k],
-                paper_t: paper[k],
+            .filter_map(|k| {
+                self.conditions[k].map(|c| Event {
+                    phase: PHASES[k].to_string(),
+                    condition: c.to_string(),
+                    armed_at: self.armed[k],
+                    t: self.starts[k],
+                    paper_t: paper[k],
+                })
             })
             .collect()
     }
@@ -196,6 +192,7 @@ impl Schedule {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::case::Start;
 
     fn case(adhesion: Option<Start>, active: Option<Start>) -> Case {
         let mut c = Case::reference();
