@@ -177,6 +177,7 @@ fn contact(c: &mut Criterion) {
         mu_ct: 2e3,
         eps: 0.1,
         stiffening: 0.0,
+        self_contact: false,
     };
     let p = pillars();
     let s2 = Substrate::Pillars(p);

@@ -196,3 +196,105 @@ fn a_ten_micrometre_fall_lands_and_finishes() {
         "switched at {t_switch} s, the cell lands at {t_land} s"
     );
 }
+
+/// The outline of a run's state `state` (mesh.json's outer edges at mesh.json's nodes
+/// moved by the state's u), as a polyline through every outer node.
+fn outline_at(out: &Path, state: &str) -> Vec<[f64; 2]> {
+    let read = |f: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join(f)).expect(f)).expect(f)
+    };
+    let (mesh, st) = (read("mesh.json"), read(state));
+    let at = |i: usize| -> [f64; 2] {
+        let x = &mesh["nodes"][i];
+        let u = &st["u"][i];
+        [0, 1].map(|k| x[k].as_f64().unwrap() + u[k].as_f64().unwrap())
+    };
+    let mut line = Vec::new();
+    for (k, e) in mesh["outer_edges"].as_array().unwrap().iter().enumerate() {
+        let e: Vec<usize> = e
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap() as usize)
+            .collect();
+        if k == 0 {
+            line.push(at(e[0]));
+        }
+        line.extend([at(e[1]), at(e[2])]);
+    }
+    line
+}
+
+/// How deep a polyline (the cell on its left) passes through itself: over the pairs of
+/// its pieces that cross (pieces sharing an end excepted), the larger of the depths at
+/// which the crossing ends of each lie behind the other piece, the smaller of the two.
+/// A penalty contact holds its faces a few hundredths of a µm into each other; a fold
+/// passing through itself goes as deep as the fold.
+fn deepest_crossing(line: &[[f64; 2]]) -> f64 {
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    // Depth of `p` behind the piece a → b (its outward normal (e_y, −e_x)/|e|).
+    let behind =
+        |p: [f64; 2], a: [f64; 2], b: [f64; 2]| -cross(a, b, p) / (b[0] - a[0]).hypot(b[1] - a[1]);
+    let mut deepest: f64 = 0.0;
+    for i in 0..line.len() - 1 {
+        for j in i + 2..line.len() - 1 {
+            let (p, q, r, s) = (line[i], line[i + 1], line[j], line[j + 1]);
+            if cross(r, s, p) * cross(r, s, q) < 0.0 && cross(p, q, r) * cross(p, q, s) < 0.0 {
+                let into_j = behind(p, r, s).max(behind(q, r, s));
+                let into_i = behind(r, p, q).max(behind(s, p, q));
+                deepest = deepest.max(into_j.min(into_i));
+            }
+        }
+    }
+    deepest
+}
+
+#[test]
+fn a_fold_against_a_pillar_wall_closes_on_itself_and_the_scene_finishes() {
+    // The geometry map's w = 12, s = 12 µm point: without the outline's self-contact the
+    // membrane's fold passes through itself and an element at its tip turns inside out
+    // (t ≈ 48 257 s, classified `inverted`); with it the scene finishes, and its outline
+    // at the end passes through itself nowhere deeper than the contact band (measured:
+    // 0.044 µm, the fold's faces held in each other's band).
+    let s = run_hard("wide-gap-fold");
+    assert!(s.finished, "{:?}", s.failure);
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hard-wide-gap-fold");
+    let line = outline_at(&out, "state_end.json");
+    assert!(line.len() > 100, "{} outline nodes", line.len());
+    let (_, case) = hard_case("wide-gap-fold");
+    let depth = deepest_crossing(&line);
+    assert!(
+        depth < case.contact.eps_ct,
+        "the outline passes {depth} µm through itself"
+    );
+    // The fold is there: two stretches of the outline more than 1 µm apart along it lie
+    // within 0.2 µm of each other beside the pillar's wall.
+    let arc: Vec<f64> = std::iter::once(0.0)
+        .chain(line.windows(2).scan(0.0, |a, w| {
+            *a += (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]);
+            Some(*a)
+        }))
+        .collect();
+    let folded = (0..line.len()).any(|i| {
+        (0..line.len()).any(|j| {
+            arc[j] - arc[i] > 1.0
+                && arc[j] - arc[i] < 4.0
+                && (line[i][0] - line[j][0]).hypot(line[i][1] - line[j][1]) < 0.2
+        })
+    });
+    assert!(folded, "no fold in the outline at the end");
+}
+
+#[test]
+fn without_self_contact_the_fold_passes_through_itself_and_an_element_inverts() {
+    // The model as MODEL.md states it: the same scene stops where the fold's faces have
+    // passed through each other, with an inverted element as its classified reason.
+    let s = run_hard_with("wide-gap-fold", "-without", |c| {
+        c.contact.self_contact = false
+    });
+    let f = s.failure.as_ref().expect("stops without self-contact");
+    assert_eq!(f.kind, FailureKind::Inverted, "{}", f.reason);
+    assert!(f.t_stop.unwrap() > 45_000.0, "{}", f.reason);
+}

@@ -703,10 +703,25 @@ pub struct Contact {
     /// paper's). Default 0: the paper's force, which stays μ_ct however deep. Valid: ≥ 0.
     #[serde(skip_serializing_if = "is_zero")]
     pub stiffening: f64,
+    /// Whether the cell's outer surface is kept from passing through itself, by the same
+    /// penalty (plane strain and axisymmetric; ignored in 3-D). Where the membrane folds
+    /// against a pillar (wide gaps, late in the active phase) the fold's two faces meet;
+    /// without it they pass through each other and the element at the fold's tip turns
+    /// inside out (README, "Maps without holes"). The pressure on a point of the outline
+    /// behind a face of it: μ_ct H_ε(d)(d + ε)/2 at depth d, for faces turned towards the
+    /// point and within 1.5ε (released by 2.5ε), within 4 µm of it along the reference
+    /// outline. Default true (cellsim's choice, beyond MODEL.md); false: the model as
+    /// MODEL.md states it.
+    #[serde(skip_serializing_if = "is_true")]
+    pub self_contact: bool,
 }
 
 fn is_zero(x: &f64) -> bool {
     *x == 0.0
+}
+
+fn is_true(x: &bool) -> bool {
+    *x
 }
 
 impl Default for Contact {
@@ -715,6 +730,7 @@ impl Default for Contact {
             mu_ct_n_m3: 2e9,
             eps_ct: 0.1,
             stiffening: 0.0,
+            self_contact: true,
         }
     }
 }

@@ -237,6 +237,7 @@ pub fn contact(case: &Case) -> physics::Contact {
         mu_ct: case.contact.mu_ct(),
         eps: case.contact.eps_ct,
         stiffening: case.contact.stiffening,
+        self_contact: case.contact.self_contact,
     }
 }
 

@@ -46,6 +46,7 @@ pub mod kinematics;
 pub mod observe;
 pub(crate) mod plan;
 mod quarter;
+mod self_contact;
 pub mod shape;
 mod switch;
 
@@ -186,6 +187,8 @@ pub struct CellOf<S: Shape<D, N, E>, const D: usize, const N: usize, const E: us
     /// The element the last evaluation found inadmissible, with the centroid of its nodes
     /// in that state; `None` after an evaluation that succeeded ([`Self::last_inadmissible`]).
     inadmissible: Option<(Inadmissible, Domain, [f64; D])>,
+    /// The outline's self-contact (half-plane models with `contact.self_contact`).
+    self_contact: Option<self_contact::SelfContact>,
 }
 
 /// The half-plane models (plane strain, axisymmetric) on six-node triangles.
@@ -350,7 +353,32 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         let ReferenceElements { elements, ctab } =
             ReferenceElements::new::<S, E>(&params, &mesh, adhesion_unknowns)?;
         let plan_elements: Vec<_> = elements.iter().map(|el| (el.nodes, el.with_mu)).collect();
-        let plan = PlanOf::new(&dofs, &plan_elements);
+        let outline = if D == 2 && params.contact.self_contact {
+            S::outline(&mesh)
+        } else {
+            Vec::new()
+        };
+        let mut self_contact = (!outline.is_empty()).then(|| {
+            let nodes = mesh.nodes();
+            self_contact::SelfContact::new(
+                outline,
+                |i| [nodes[i][0], nodes[i][1]],
+                params.kinematics == KinematicModel::Axisymmetric,
+            )
+        });
+        let extra: Vec<Vec<usize>> = self_contact
+            .iter()
+            .flat_map(|sc| sc.node_sets().map(|n| n.to_vec()))
+            .collect();
+        let plan = PlanOf::new(&dofs, &plan_elements, &extra);
+        if let Some(sc) = &mut self_contact {
+            let two = |m: [usize; D]| [m[0], m[1]];
+            sc.locate(
+                &plan.pattern,
+                |i| two(dofs.momentum_rows(i)),
+                |i| two(dofs.u[i]),
+            );
+        }
         Ok(Self {
             substrate: S::substrate(&params),
             params,
@@ -365,6 +393,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
             parallel: false,
             scratch: Scratch::default(),
             inadmissible: None,
+            self_contact,
         })
     }
 
@@ -643,6 +672,18 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         SVector::<f64, D>::from_fn(|k, _| xn[k] + u[k])
     }
 
+    /// The first two components of node `i`'s current position (the half-plane models').
+    fn position2(&self, y: &[f64], i: usize) -> [f64; 2] {
+        let p = self.position(y, i);
+        [p[0], p[1]]
+    }
+
+    /// The first two of node `i`'s momentum rows (the half-plane models').
+    fn rows2(&self, i: usize) -> [usize; 2] {
+        let m = self.dofs.momentum_rows(i);
+        [m[0], m[1]]
+    }
+
     /// Whether an element can reach the contact or adhesion band in the configuration `ue`:
     /// some node lies within the band's reach plus 1.5 × the element's current diameter
     /// of the substrate (every point of the element is within one diameter of a node, and
@@ -713,6 +754,14 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         });
         self.scratch.vectors = buf;
         result?;
+        if let Some(sc) = &self.self_contact {
+            sc.residual(
+                &self.params.contact,
+                |i| self.position2(y, i),
+                |i| self.rows2(i),
+                r,
+            );
+        }
         let mu_off = self.dofs.mu_offset();
         for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
             let row = mu_off + k;
@@ -763,6 +812,9 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         });
         self.scratch.tangents = buf;
         result?;
+        if let Some(sc) = &self.self_contact {
+            sc.tangent(&self.params.contact, |i| self.position2(y, i), v);
+        }
         if self.params.adhesion.is_some() {
             for (k, &i) in self.dofs.mu_nodes.iter().enumerate() {
                 let x = self.position(y, i);

@@ -111,7 +111,14 @@ impl<const N: usize, const E: usize> ElementDofs<N, E> {
 impl<const D: usize, const N: usize, const E: usize> PlanOf<D, N, E> {
     /// The plan for elements given as (nodes, whether the element carries μ_as), in mesh
     /// order, under the numbering `dofs`.
-    pub(crate) fn new(dofs: &DofMapOf<D>, elements: &[([usize; N], bool)]) -> Self {
+    ///
+    /// `extra`: further sets of nodes whose momentum rows are coupled to their u columns
+    /// (the outline's self-contact pairs).
+    pub(crate) fn new(
+        dofs: &DofMapOf<D>,
+        elements: &[([usize; N], bool)],
+        extra: &[Vec<usize>],
+    ) -> Self {
         assert_eq!(E, D * N, "element unknowns E must be D·N");
         let inertia = dofs.inertia;
         let el_dofs: Vec<ElementDofs<N, E>> = elements
@@ -127,6 +134,11 @@ impl<const D: usize, const N: usize, const E: usize> PlanOf<D, N, E> {
             if *with_mu {
                 b.add_block(&d.rows, &d.mu);
             }
+        }
+        for nodes in extra {
+            let rows: Vec<usize> = nodes.iter().flat_map(|&n| dofs.momentum_rows(n)).collect();
+            let cols: Vec<usize> = nodes.iter().flat_map(|&n| dofs.u[n]).collect();
+            b.add_block(&rows, &cols);
         }
         // One kinematic row per u unknown (a tied component shares its row).
         let kinematic_pairs: Vec<(usize, usize)> = if inertia {

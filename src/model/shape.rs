@@ -110,6 +110,12 @@ pub trait Shape<const D: usize, const N: usize, const E: usize>:
     fn tied(_mesh: &Self::Mesh) -> &[usize] {
         &[]
     }
+    /// The nodes of the outer surface in order along it, the cell on the left, where the
+    /// model keeps that surface from passing through itself ([`super::self_contact`]);
+    /// empty where it does not (3-D).
+    fn outline(_mesh: &Self::Mesh) -> Vec<usize> {
+        Vec::new()
+    }
     /// The contact radius in state `y`: the length of the contour in contact in the plane
     /// z = 0, `(deformed, reference)` [µm].
     fn contact_lengths(cell: &CellOf<Self, D, N, E>, y: &[f64]) -> (f64, f64);
@@ -191,6 +197,18 @@ impl Shape<2, 6, 12> for HalfPlane {
 
     fn adhered_radius(cell: &CellOf<Self, 2, 6, 12>, y: &[f64], yp: &[f64]) -> (f64, f64) {
         cell.adhered_radius(y, yp)
+    }
+
+    /// The outer edges' nodes, from the cell's bottom counter-clockwise to its top.
+    fn outline(mesh: &Mesh) -> Vec<usize> {
+        let mut nodes = Vec::with_capacity(2 * mesh.outer_edges.len() + 1);
+        for (k, &[a, m, b]) in mesh.outer_edges.iter().enumerate() {
+            if k == 0 {
+                nodes.push(a);
+            }
+            nodes.extend([m, b]);
+        }
+        nodes
     }
 
     fn contact_lengths(cell: &CellOf<Self, 2, 6, 12>, y: &[f64]) -> (f64, f64) {

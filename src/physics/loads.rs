@@ -12,7 +12,7 @@
 use super::smooth::{heaviside, smooth_step};
 use super::substrate::Surface;
 use super::{PhysicsError, Real, check, cst, re, sqrt};
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{SMatrix, SVector, Vector2};
 use serde::{Deserialize, Serialize};
 
 /// Penalty contact with the substrate.
@@ -26,6 +26,9 @@ pub struct Contact {
     /// `ξ = (d − ε)/ε`, C² at `d = ε` (MODEL.md: 0, the paper's force that stays at
     /// `J μ_ct` however deep material sinks).
     pub stiffening: f64,
+    /// Whether the cell's outer surface is kept from passing through itself
+    /// ([`self_contact_force`]; half-plane models).
+    pub self_contact: bool,
 }
 
 impl Contact {
@@ -155,6 +158,82 @@ pub fn contact_force<T: Real, const D: usize>(
         h += xi * xi * xi * c.stiffening;
     }
     n * (J * h * c.mu_ct)
+}
+
+/// How far a point may sit behind a face before the self-contact lets go of it: from
+/// `1.5 ε` on the pressure is switched off, fully at `2.5 ε` (0.15 and 0.25 µm with
+/// MODEL.md's ε = 0.1 µm). A fold's two faces are pushed apart from `d = −ε` on and never
+/// meet that deep; the other side of the cell's outer layer (two membranes and the
+/// cytoplasm between, 0.5 µm and more) is never that shallow.
+pub const SELF_CONTACT_RELEASE: [f64; 2] = [1.5, 2.5];
+
+/// Which faces may press on a point: those whose outward normal `n` opposes the point's
+/// own, `c = −n_p·n` from 0.2 (no pressure) to 0.5 (all of it) — faces turned more than
+/// about 100° from the point's, as the two faces of a closing fold are (`c → 1`), where the
+/// neighbours round a convex corner of the outline are not (`c ≤ 0` up to a 90° corner).
+pub const SELF_CONTACT_FACING: [f64; 2] = [0.2, 0.5];
+
+/// Where along a face its pressure acts: the face's parameter `s` of the point's
+/// projection, the weight rising over `[−τ, τ]` and falling over `[1 − τ, 1 + τ]`, so that
+/// two faces meeting at a node share a point passing it (`½ + ½`).
+pub const SELF_CONTACT_TAPER: f64 = 0.05;
+
+/// The self-contact of the outline of a half-plane cell: the force [pN/µm, per unit
+/// thickness in plane strain, per radian with `radius`] on an outline node at `x_p`
+/// (its neighbours along the outline `x_prev`, `x_next`) from the straight face
+/// `x_a → x_b` of the outline (traversed with the cell on its left, so that its outward
+/// normal is `n = (e_y, −e_x)/|e|`, `e = x_b − x_a`), and the reactions on the face's ends.
+///
+/// With `d = −(x_p − x_a)·n` the depth behind the face and `s = (x_p − x_a)·e/|e|²` the
+/// projection's parameter, the pressure is the substrate contact's `μ_ct` integrated over
+/// the depth, `p = μ_ct H_ε(d) (d + ε)/2` (C², increasing, `μ_ct ε` at `d = ε`), times the
+/// taper in `s` ([`SELF_CONTACT_TAPER`]), the facing switch on `c = −n_p·n` with `n_p` the
+/// node's outward normal from its neighbours ([`SELF_CONTACT_FACING`]) and the release in
+/// depth ([`SELF_CONTACT_RELEASE`]). The node takes `p ℓ n` with `ℓ = |e|/2` (times its
+/// current radius `x_p,0` in the axisymmetric model, work per radian), the face's ends
+/// `−(1 − s)` and `−s` of it: the three forces sum to zero. Returns `None` where the
+/// pressure is zero (the caller skips the pair), else the forces on
+/// `[x_prev, x_p, x_next, x_a, x_b]`.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn self_contact_force<T: Real>(
+    c: &Contact,
+    [x_prev, x_p, x_next, x_a, x_b]: [Vector2<T>; 5],
+    axisymmetric: bool,
+) -> Option<[Vector2<T>; 5]> {
+    let e = x_b - x_a;
+    let l2 = e.norm_squared();
+    let rel = x_p - x_a;
+    let s = rel.dot(&e) / l2;
+    let tau = SELF_CONTACT_TAPER;
+    if re(s) <= -tau || re(s) >= 1.0 + tau {
+        return None;
+    }
+    let len = sqrt(l2);
+    let n = Vector2::new(e[1], -e[0]) / len;
+    let d = -rel.dot(&n);
+    let eps = c.eps;
+    let [r0, r1] = SELF_CONTACT_RELEASE;
+    if re(d) <= -eps || re(d) >= r1 * eps {
+        return None;
+    }
+    let t = x_next - x_prev;
+    let np = Vector2::new(t[1], -t[0]) / t.norm();
+    let facing = -np.dot(&n);
+    let [f0, f1] = SELF_CONTACT_FACING;
+    if re(facing) <= f0 {
+        return None;
+    }
+    let taper = smooth_step(s, -tau, tau) * (-smooth_step(s, 1.0 - tau, 1.0 + tau) + 1.0);
+    let release = -smooth_step(d, r0 * eps, r1 * eps) + 1.0;
+    let pressure = heaviside(d, eps) * (d + eps) * (0.5 * c.mu_ct);
+    let mut scale = pressure * taper * smooth_step(facing, f0, f1) * release * len * 0.5;
+    if axisymmetric {
+        scale *= x_p[0];
+    }
+    let f = n * scale;
+    let zero = Vector2::zeros();
+    Some([zero, f, zero, f * (s - 1.0), -(f * s)])
 }
 
 /// Fibronectin-layer indicator at a current position `x` [µm], from the substrate's
@@ -820,6 +899,112 @@ mod tests {
                         assert!(
                             (fd[cpt] - eps(&f[cpt])[k]).abs() < 1e-6 * scale,
                             "{s:?} contact f_{cpt} k={k} at ({x}, {y}, {z})"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// A fold of the outline: node `x_p` (neighbours 0.2 µm either side along x, so its
+    /// outward normal is −y... turned by `tilt`) at `depth` behind the face from
+    /// (−0.3, 0) to (0.3, 0) whose outward normal is +y (traversed towards −x... see below).
+    fn fold(depth: f64, along: f64, tilt: f64) -> [Vector2<f64>; 5] {
+        // The face runs from x = 0.3 to x = −0.3 at y = 0: e = (−0.6, 0), n = (e_y, −e_x)/|e|
+        // = (0, 1). The node below it by `depth` runs the other way (its neighbours at
+        // x ∓ 0.2), so its normal is (0, −1): the two faces of a fold.
+        let (c, s) = (tilt.cos(), tilt.sin());
+        let p = Vector2::new(along, -depth);
+        let t = Vector2::new(0.2 * c, 0.2 * s);
+        [
+            p - t,
+            p,
+            p + t,
+            Vector2::new(0.3, 0.0),
+            Vector2::new(-0.3, 0.0),
+        ]
+    }
+
+    #[test]
+    fn self_contact_pushes_the_faces_of_a_fold_apart_and_balances() {
+        let c = reference::contact();
+        // At d = ε (taper, facing and release all 1): p = μ_ct ε, on ℓ = |e|/2 = 0.3 µm.
+        let f = self_contact_force(&c, fold(c.eps, 0.1, 0.0), false).expect("in contact");
+        let expect = c.mu_ct * c.eps * 0.3;
+        assert!(
+            (f[1] - Vector2::new(0.0, expect)).norm() < 1e-9 * expect,
+            "{:?}",
+            f[1]
+        );
+        // The node is pushed out along the face's normal; the face's ends take the
+        // reaction in proportion to the projection (s = (0.3 − 0.1)/0.6 from x_a).
+        let s = (0.3 - 0.1) / 0.6;
+        assert!((f[3] + f[1] * (1.0 - s)).norm() < 1e-9 * expect);
+        assert!((f[4] + f[1] * s).norm() < 1e-9 * expect);
+        let sum: Vector2<f64> = f.iter().sum();
+        assert!(sum.norm() < 1e-9 * expect, "forces sum to {sum}");
+        // Axisymmetric: per radian, times the node's current radius.
+        let mut at = fold(c.eps, 0.1, 0.0);
+        for x in at.iter_mut() {
+            x.x += 5.0;
+        }
+        let fa = self_contact_force(&c, at, true).unwrap();
+        assert!((fa[1].y - 5.1 * expect).abs() < 1e-9 * expect);
+        // Nothing where the node is in front of the face by ε or more, behind it beyond
+        // the release, beyond the face's ends, or where the faces do not oppose (a convex
+        // corner's neighbours: the node's normal turned by 90° or more from the face's).
+        assert!(self_contact_force(&c, fold(-c.eps, 0.1, 0.0), false).is_none());
+        assert!(self_contact_force(&c, fold(2.6 * c.eps, 0.1, 0.0), false).is_none());
+        assert!(self_contact_force(&c, fold(0.05, 0.35, 0.0), false).is_none());
+        assert!(self_contact_force(&c, fold(0.05, 0.1, 1.6), false).is_none());
+        // And it grows with the depth.
+        let depth = |d: f64| self_contact_force(&c, fold(d, 0.1, 0.0), false).unwrap()[1].y;
+        assert!(depth(-0.05) < depth(0.0) && depth(0.0) < depth(0.05) && depth(0.05) < depth(0.1));
+    }
+
+    #[test]
+    fn self_contact_force_derivatives_match_finite_differences() {
+        type D = DualSVec64<10>;
+        let c = reference::contact();
+        let h = 1e-7;
+        // Inside the band, the taper, the facing switch and the release, plane strain and
+        // axisymmetric.
+        for (depth, along, tilt, axisym) in [
+            (0.03, 0.1, 0.2, false),
+            (-0.05, 0.28, 0.9, false),
+            (0.18, -0.31, 1.1, true),
+            (0.07, 0.0, 0.0, true),
+        ] {
+            let mut x = fold(depth, along, tilt);
+            if axisym {
+                for p in x.iter_mut() {
+                    p.x += 4.0;
+                }
+            }
+            let xd: [Vector2<D>; 5] = std::array::from_fn(|a| {
+                Vector2::new(
+                    D::from_re(x[a].x).derivative(2 * a),
+                    D::from_re(x[a].y).derivative(2 * a + 1),
+                )
+            });
+            let fd = self_contact_force(&c, xd, axisym).expect("in contact");
+            let scale = c.mu_ct * 0.3;
+            for col in 0..10 {
+                let shifted = |sign: f64| {
+                    let mut y = x;
+                    y[col / 2][col % 2] += sign * h;
+                    self_contact_force(&c, y, axisym).expect("still in contact")
+                };
+                let (fp, fm) = (shifted(1.0), shifted(-1.0));
+                for a in 0..5 {
+                    for k in 0..2 {
+                        let num = (fp[a][k] - fm[a][k]) / (2.0 * h);
+                        let exact = fd[a][k]
+                            .eps
+                            .unwrap_generic(nalgebra::Const::<10>, nalgebra::Const::<1>)[col];
+                        assert!(
+                            (num - exact).abs() < 1e-6 * scale,
+                            "depth {depth}, along {along}: ∂f[{a}][{k}]/∂x[{col}] {exact} against {num}"
                         );
                     }
                 }
