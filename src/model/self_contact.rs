@@ -90,12 +90,15 @@ impl SelfContact {
             .collect();
     }
 
-    /// The pairs' current positions.
-    fn positions(&self, pair: &Pair, x: &impl Fn(usize) -> [f64; 2]) -> [Vector2<f64>; 5] {
-        pair.map(|k| {
-            let p = x(self.outline[k]);
-            Vector2::new(p[0], p[1])
-        })
+    /// The current positions of the outline's nodes, in its order.
+    fn current(&self, x: &impl Fn(usize) -> [f64; 2]) -> Vec<Vector2<f64>> {
+        self.outline
+            .iter()
+            .map(|&i| {
+                let p = x(i);
+                Vector2::new(p[0], p[1])
+            })
+            .collect()
     }
 
     /// Subtracts the self-contact forces from the momentum rows of `r`: `x` the current
@@ -107,8 +110,9 @@ impl SelfContact {
         rows: impl Fn(usize) -> [usize; 2],
         r: &mut [f64],
     ) {
+        let at = self.current(&x);
         for pair in &self.pairs {
-            let xs = self.positions(pair, &x);
+            let xs = pair.map(|k| at[k]);
             let Some(f) = self_contact_force(law, xs, self.axisymmetric) else {
                 continue;
             };
@@ -126,8 +130,9 @@ impl SelfContact {
     /// (dual numbers along the pair's ten coordinates).
     pub(crate) fn tangent(&self, law: &Contact, x: impl Fn(usize) -> [f64; 2], v: &mut [f64]) {
         type Dual = DualSVec64<10>;
+        let at = self.current(&x);
         for (pair, block) in self.pairs.iter().zip(&self.blocks) {
-            let xs = self.positions(pair, &x);
+            let xs = pair.map(|k| at[k]);
             // The f64 evaluation first: most pairs are apart.
             if self_contact_force(law, xs, self.axisymmetric).is_none() {
                 continue;
