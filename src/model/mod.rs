@@ -366,10 +366,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
                 params.kinematics == KinematicModel::Axisymmetric,
             )
         });
-        let extra: Vec<Vec<usize>> = self_contact
-            .iter()
-            .flat_map(|sc| sc.node_sets().map(|n| n.to_vec()))
-            .collect();
+        let extra: Vec<[usize; 5]> = self_contact.iter().flat_map(|sc| sc.node_sets()).collect();
         let plan = PlanOf::new(&dofs, &plan_elements, &extra);
         if let Some(sc) = &mut self_contact {
             let two = |m: [usize; D]| [m[0], m[1]];

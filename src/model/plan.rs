@@ -112,12 +112,12 @@ impl<const D: usize, const N: usize, const E: usize> PlanOf<D, N, E> {
     /// The plan for elements given as (nodes, whether the element carries μ_as), in mesh
     /// order, under the numbering `dofs`.
     ///
-    /// `extra`: further sets of nodes whose momentum rows are coupled to their u columns
-    /// (the outline's self-contact pairs).
+    /// `extra`: further sets of five nodes whose momentum rows are coupled to their u
+    /// columns (the outline's self-contact pairs).
     pub(crate) fn new(
         dofs: &DofMapOf<D>,
         elements: &[([usize; N], bool)],
-        extra: &[Vec<usize>],
+        extra: &[[usize; 5]],
     ) -> Self {
         assert_eq!(E, D * N, "element unknowns E must be D·N");
         let inertia = dofs.inertia;

@@ -13,6 +13,7 @@
 use nalgebra::Vector2;
 use num_dual::DualSVec64;
 
+use super::shape::Seeded;
 use crate::fem::assembly::{BlockPositions, NONE, Pattern};
 use crate::physics::{Contact, self_contact_force};
 
@@ -140,8 +141,8 @@ impl SelfContact {
             }
             let xd: [Vector2<Dual>; 5] = std::array::from_fn(|a| {
                 Vector2::new(
-                    Dual::from_re(xs[a][0]).derivative(2 * a),
-                    Dual::from_re(xs[a][1]).derivative(2 * a + 1),
+                    Dual::seeded(xs[a][0], 2 * a),
+                    Dual::seeded(xs[a][1], 2 * a + 1),
                 )
             });
             let Some(f) = self_contact_force(law, xd, self.axisymmetric) else {
@@ -150,11 +151,9 @@ impl SelfContact {
             let mut k = [[0.0; 10]; 10];
             for (a, fa) in f.iter().enumerate() {
                 for c in 0..2 {
-                    let g = fa[c]
-                        .eps
-                        .unwrap_generic(nalgebra::Const::<10>, nalgebra::Const::<1>);
-                    for (col, gc) in g.iter().enumerate() {
-                        k[2 * a + c][col] = -gc;
+                    let g = fa[c].gradient();
+                    for (col, kc) in k[2 * a + c].iter_mut().enumerate() {
+                        *kc = -g[col];
                     }
                 }
             }

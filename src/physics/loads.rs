@@ -194,7 +194,6 @@ pub const SELF_CONTACT_TAPER: f64 = 0.05;
 /// `−(1 − s)` and `−s` of it: the three forces sum to zero. Returns `None` where the
 /// pressure is zero (the caller skips the pair), else the forces on
 /// `[x_prev, x_p, x_next, x_a, x_b]`.
-#[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn self_contact_force<T: Real>(
     c: &Contact,
@@ -906,13 +905,11 @@ mod tests {
         }
     }
 
-    /// A fold of the outline: node `x_p` (neighbours 0.2 µm either side along x, so its
-    /// outward normal is −y... turned by `tilt`) at `depth` behind the face from
-    /// (−0.3, 0) to (0.3, 0) whose outward normal is +y (traversed towards −x... see below).
+    /// Two faces of a fold: the face from (0.3, 0) to (−0.3, 0), whose outward normal is
+    /// (0, 1), and the node at (`along`, −`depth`) with its neighbours 0.2 µm either side
+    /// along the direction turned by `tilt` from +x, so that its own outward normal is
+    /// (sin tilt, −cos tilt): opposite the face's for `tilt = 0`.
     fn fold(depth: f64, along: f64, tilt: f64) -> [Vector2<f64>; 5] {
-        // The face runs from x = 0.3 to x = −0.3 at y = 0: e = (−0.6, 0), n = (e_y, −e_x)/|e|
-        // = (0, 1). The node below it by `depth` runs the other way (its neighbours at
-        // x ∓ 0.2), so its normal is (0, −1): the two faces of a fold.
         let (c, s) = (tilt.cos(), tilt.sin());
         let p = Vector2::new(along, -depth);
         let t = Vector2::new(0.2 * c, 0.2 * s);
