@@ -778,6 +778,15 @@ pub struct Adhesion {
     /// (MODEL.md §5: H_ε(d_sub + e_f), substrate included). Valid when true:
     /// e_f >= eps + contact.eps_ct (so that the indicator stays in [0, 1]).
     pub layer_excludes_substrate: bool,
+    /// Whether the spreading force lets go of membrane turned over onto the cell: times a
+    /// switch on the cosine c between the membrane's current outward normal (cof(F) N)
+    /// and its reference one N, whole for c ≥ −0.3 (turned up to 107°), none for
+    /// c ≤ −0.6 (beyond 127°) ([`crate::physics::ADHESION_TURN`]). Default true
+    /// (docs/MODEL.md §5: the paper's force pulls a fold's inner face beside a pillar wall
+    /// along its turned normal, into the cell, deeper the finer the mesh; spreading turns no
+    /// adhered membrane that far). `false`: the paper's force however far the membrane
+    /// turns.
+    pub fold_release: bool,
 }
 
 impl Default for Adhesion {
@@ -790,6 +799,7 @@ impl Default for Adhesion {
             direction: AdhesionDirection::Cofactor,
             jacobian_factor: false,
             layer_excludes_substrate: false,
+            fold_release: true,
         }
     }
 }

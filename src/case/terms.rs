@@ -251,6 +251,7 @@ pub fn adhesion(case: &Case) -> Option<physics::Adhesion> {
         direction: a.direction,
         jacobian_factor: a.jacobian_factor,
         exclude_substrate: a.layer_excludes_substrate.then_some(case.contact.eps_ct),
+        fold_release: a.fold_release,
     })
 }
 

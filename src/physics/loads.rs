@@ -92,7 +92,22 @@ pub struct Adhesion {
     /// Eqs. (26) and (28)), with `ε` the half-width of the substrate's own indicator (the
     /// contact band's `ε_ct`). `None` (MODEL.md): `H_ε_f(d + e_f)`, substrate included.
     pub exclude_substrate: Option<f64>,
+    /// Whether the force lets go of membrane turned over onto the cell
+    /// ([`ADHESION_TURN`]): `true` (docs/MODEL.md §5) or the paper's force on all membrane
+    /// in the layer, however far it has turned (`false`).
+    pub fold_release: bool,
 }
+
+/// Which membrane the spreading force pulls, by how far it has turned: the force is
+/// multiplied by `S(c; c₀, c₁)` with `c = a·N/|a|` the cosine between the membrane's
+/// current outward normal (`a = cof(F) N`, Nanson) and its reference one `N`: whole up to
+/// a turn of 107° (`c ≥ −0.3`), none beyond 127° (`c ≤ −0.6`). The paper's force pulls
+/// the membrane in the layer outward along its current normal; where the membrane has
+/// turned over — the inner face of a fold beside a pillar wall, late in the active phase —
+/// that normal points into the cell, and the pull drives the fold into the cytoplasm as
+/// deep as the layer reaches, deeper the finer the mesh (docs/MODEL.md §5). Spreading turns
+/// no adhered membrane that far: in the paper's scenes `c ≥ −0.17` wherever the force acts.
+pub const ADHESION_TURN: [f64; 2] = [-0.6, -0.3];
 
 impl Adhesion {
     /// Checks `e_f ≥ 0`, `ε > 0`, `μ_as0 ≥ 0`, `μ_as,max > 0`, finite; when the layer
@@ -270,7 +285,9 @@ pub fn cofactor<T: Real, const D: usize>(F: &SMatrix<T, D, D>) -> SMatrix<T, D, 
 /// from the substrate's penetration depth `d = d(x)`, `N` the outward radial reference
 /// direction `(p − c)/|p − c|`, `μ_as` [pN/µm³] the local adhesion coefficient, `t_as` the
 /// adhesion switch and `a(F)` by the readings of `ad`: `cof(F) N` (MODEL.md) or
-/// `cof(F) N/|cof(F) N|` ([`AdhesionDirection`]), times `J = det F` when `jacobian_factor`.
+/// `cof(F) N/|cof(F) N|` ([`AdhesionDirection`]), times `J = det F` when `jacobian_factor`,
+/// and with `fold_release` times the switch [`ADHESION_TURN`] on the cosine between
+/// `cof(F) N` and `N`.
 #[inline(always)]
 pub fn adhesion_force<T: Real, const D: usize>(
     ad: &Adhesion,
@@ -284,13 +301,26 @@ pub fn adhesion_force<T: Real, const D: usize>(
     let N: SVector<T, D> = N_ref.map(cst::<T>);
     let cof = cofactor(F);
     let mut a = cof * N;
-    if ad.direction == AdhesionDirection::Unit {
-        // |cof(F) N| = J |F⁻ᵀ N| > 0 for an admissible F.
+    let unit = ad.direction == AdhesionDirection::Unit;
+    // |cof(F) N| = J |F⁻ᵀ N| > 0 for an admissible F.
+    let len = (ad.fold_release || unit).then(|| {
         let mut len2 = a[0] * a[0];
         for k in 1..D {
             len2 += a[k] * a[k];
         }
-        a /= sqrt(len2);
+        sqrt(len2)
+    });
+    let mut turn = T::one();
+    if let (true, Some(len)) = (ad.fold_release, len) {
+        let [c0, c1] = ADHESION_TURN;
+        let c = a.dot(&N) / len;
+        if re(c) <= c0 {
+            return SVector::zeros();
+        }
+        turn = smooth_step(c, c0, c1);
+    }
+    if let (true, Some(len)) = (unit, len) {
+        a /= len;
     }
     if ad.jacobian_factor {
         a *= if D == 2 {
@@ -300,7 +330,7 @@ pub fn adhesion_force<T: Real, const D: usize>(
             F[(0, 0)] * cof[(0, 0)] + F[(0, 1)] * cof[(0, 1)] + F[(0, 2)] * cof[(0, 2)]
         };
     }
-    a * (h * mu_as * t_as)
+    a * (h * turn * mu_as * t_as)
 }
 
 /// The factor by which a hoop stretch `λ = F₃₃` (axisymmetric model, MODEL.md §10)
@@ -450,13 +480,17 @@ mod tests {
         }
     }
 
-    /// MODEL.md's adhesion and each reading of the paper it leaves open, alone and all
-    /// together.
+    /// MODEL.md's adhesion, the paper's force on turned-over membrane too, and each
+    /// reading of the paper it leaves open, alone and all together.
     fn adhesion_readings() -> Vec<Adhesion> {
         let d = crate::physics::reference::adhesion();
         let eps_ct = crate::physics::reference::contact().eps;
         vec![
             d,
+            Adhesion {
+                fold_release: false,
+                ..d
+            },
             Adhesion {
                 direction: AdhesionDirection::Unit,
                 ..d
@@ -482,13 +516,17 @@ mod tests {
     fn adhesion_force_and_rate_derivatives_match_finite_differences() {
         // variables: x (2), F (4), μ_as (1)
         let h = 1e-6;
-        let N = Vector2::new(0.6, -0.8);
         let F0 = Matrix2::new(1.1, 0.2, -0.3, 0.9);
         let y_top = crate::physics::reference::pillars().y_top;
-        for (ad, s) in adhesion_readings()
-            .into_iter()
-            .flat_map(|ad| substrates().map(|s| (ad, s)))
-        {
+        // F0 turns the normal N by −20° (c = 0.94: the release's switch at 1); rotated by
+        // 135° after it, by 115° (c = −0.42, inside the switch's transition)
+        let N = Vector2::new(0.6, -0.8);
+        let turned = nalgebra::Rotation2::new(135.0_f64.to_radians()).into_inner() * F0;
+        for (ad, s, F) in adhesion_readings().into_iter().flat_map(|ad| {
+            substrates()
+                .into_iter()
+                .flat_map(move |s| [F0, turned].map(|F| (ad, s, F)))
+        }) {
             // in the layer's transition (d + e_f ∈ (−ε, ε)), the cap's transition and
             // the substrate's own transition (d ∈ (−ε, ε), flat and pillar top)
             for (x, y, mu) in [
@@ -500,7 +538,7 @@ mod tests {
                 (3.0, -2.05, 400.0),
                 (8.5, y_top + 0.03, 1200.0),
             ] {
-                let v = [x, y, F0[(0, 0)], F0[(0, 1)], F0[(1, 0)], F0[(1, 1)], mu];
+                let v = [x, y, F[(0, 0)], F[(0, 1)], F[(1, 0)], F[(1, 1)], mu];
                 check_adhesion_derivatives(&s, &ad, &N, v, h);
             }
         }
@@ -622,6 +660,44 @@ mod tests {
             let g = layer(&excl, s.eval(&x).0);
             assert!((0.0..=1.0).contains(&g), "y = {}: {g}", x.y);
         }
+    }
+
+    #[test]
+    fn adhesion_lets_go_of_membrane_turned_over() {
+        let d = crate::physics::reference::adhesion();
+        assert!(d.fold_release, "MODEL.md's default");
+        let paper = Adhesion {
+            fold_release: false,
+            ..d
+        };
+        let s = Substrate::Flat { y_s: -2.0 };
+        let X = Vector2::new(0.0_f64, -1.0); // in the layer
+        let N = Vector2::new(0.6, -0.8);
+        // F a rotation by φ after a stretch along y (which turns the normal too)
+        let force = |ad: &Adhesion, phi: f64, stretch: f64| {
+            let r = nalgebra::Rotation2::new(phi.to_radians()).into_inner();
+            let F = r * Matrix2::new(1.0, 0.0, 0.0, stretch);
+            adhesion_force(ad, s.eval(&X).0, &F, &N, 100.0, 0.5)
+        };
+        // Turned up to 107° (c ≥ −0.3): the paper's force, to the bit.
+        for phi in [0.0, 45.0, -90.0, 105.0] {
+            assert_eq!(force(&d, phi, 1.0), force(&paper, phi, 1.0), "φ = {phi}°");
+            assert!(force(&d, phi, 1.0).norm() > 0.0);
+        }
+        // Beyond 127° (c ≤ −0.6): none, where the paper's pulls the membrane back along
+        // its turned normal.
+        for phi in [130.0, 180.0, -150.0] {
+            assert_eq!(force(&d, phi, 1.0), Vector2::zeros(), "φ = {phi}°");
+            assert!(force(&paper, phi, 1.0).norm() > 0.0);
+        }
+        // In between, the C² switch S(c; −0.6, −0.3): ½ at c = −0.45 (φ = 116.7°).
+        let phi = (-0.45_f64).acos().to_degrees();
+        let ratio = force(&d, phi, 1.0).norm() / force(&paper, phi, 1.0).norm();
+        assert!((ratio - 0.5).abs() < 1e-12, "{ratio}");
+        // The cosine is the normal's, cof(F) N, not F N: stretched 3× along y, N turns by
+        // 29° more than F's rotation, here 129° in all.
+        assert_eq!(force(&d, 100.0, 3.0), Vector2::zeros());
+        assert!(force(&paper, 100.0, 3.0).norm() > 0.0);
     }
 
     #[test]

@@ -61,8 +61,8 @@ pub use law::{
     dual_material_point,
 };
 pub use loads::{
-    Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_hoop_factor, adhesion_rate,
-    cofactor, contact_force, layer, self_contact_force,
+    ADHESION_TURN, Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_hoop_factor,
+    adhesion_rate, cofactor, contact_force, layer, self_contact_force,
 };
 pub use phases::{Condition, Flip, Phases};
 pub use plane_strain::{MaterialPoint, admissible, material_point, piola_total};
