@@ -5,6 +5,7 @@ mod axisym;
 mod cli;
 mod dae;
 mod deferred;
+mod docs;
 mod events;
 mod fd;
 mod fem3;
