@@ -427,6 +427,21 @@ enum SweepAction {
         #[arg(long)]
         quantity: Option<String>,
     },
+    /// The difference of a column between two sweeps over the same Grid of two axes (a map
+    /// and the same map on a refined mesh): B − A point by point, as a heat map
+    /// (diff-<quantity>.png) and a table (diff-<quantity>.csv); prints the largest.
+    Diff {
+        /// The first sweep directory (e.g. plots/sweeps/pillar-geometry-fine).
+        a: PathBuf,
+        /// The second (e.g. plots/sweeps/pillar-geometry-fine-refined).
+        b: PathBuf,
+        /// Where the figure and the table go [default: B].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Column compared [default: penetration_depth].
+        #[arg(long)]
+        quantity: Option<String>,
+    },
 }
 
 /// Loads a case with its `--set` overrides; a bad case prints its located error and exits
@@ -731,6 +746,33 @@ fn sweep_command(a: SweepArgs) -> ExitCode {
             return match sweep::plane_and_3d(plane, three_d, &out, q) {
                 Ok(path) => {
                     out!("{}", path.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => sweep_error(&e),
+            };
+        }
+        Some(SweepAction::Diff {
+            a: da,
+            b: db,
+            out,
+            quantity,
+        }) => {
+            let out = out.clone().unwrap_or_else(|| db.clone());
+            return match sweep::difference(da, db, &out, quantity.as_deref()) {
+                Ok(d) => {
+                    for p in &d.written {
+                        out!("{}", p.display());
+                    }
+                    let (n, all) = d.compared;
+                    match d.largest {
+                        Some((id, x, y)) => out!(
+                            "{n} of {all} points finished in both; the largest difference \
+                             at {id}: {y} − {x} = {} ({:+.2} %)",
+                            y - x,
+                            100.0 * (y - x) / x.abs()
+                        ),
+                        None => out!("{n} of {all} points finished in both"),
+                    }
                     ExitCode::SUCCESS
                 }
                 Err(e) => sweep_error(&e),

@@ -1570,6 +1570,143 @@ pub fn plane_and_3d(
     Ok(out.to_path_buf())
 }
 
+/// What [`difference`] found: the figure and table written, and the largest difference.
+#[derive(Debug, Clone)]
+pub struct Difference {
+    /// `diff-<quantity>.png` and `diff-<quantity>.csv`.
+    pub written: Vec<PathBuf>,
+    /// Points finished in both sweeps, and in all.
+    pub compared: (usize, usize),
+    /// The largest |b − a| over the points finished in both: (id, a, b).
+    pub largest: Option<(String, f64, f64)>,
+}
+
+/// The difference of `quantity` (default: penetration depth) between two sweeps over the
+/// same Grid of two axes (a map and the same map on a refined mesh, say): point by point
+/// `b − a`, drawn as a heat map (`diff-<quantity>.png`: crossed where either run stopped
+/// early, at the last values written) and listed in `diff-<quantity>.csv` (the id, the axes'
+/// values, both statuses and values, b − a and (b − a)/|a|), both written into `out`.
+pub fn difference(
+    a: &Path,
+    b: &Path,
+    out: &Path,
+    quantity: Option<&str>,
+) -> Result<Difference, SweepError> {
+    check_quantity(quantity)?;
+    let q = quantity.unwrap_or("penetration_depth");
+    let (ra, rows_a) = load_table(a)?;
+    let (rb, rows_b) = load_table(b)?;
+    let grid = |r: &Record| {
+        (r.design.kind == design::Kind::Grid && r.design.axes.len() == 2).then(|| {
+            r.design
+                .axes
+                .iter()
+                .map(|x| (x.path.clone(), x.values.clone()))
+                .collect::<Vec<_>>()
+        })
+    };
+    match (grid(&ra), grid(&rb)) {
+        (Some(ga), Some(gb)) if ga == gb => {}
+        (Some(_), Some(_)) => {
+            return Err(SweepError::Input(format!(
+                "{} and {}: the two sweeps' axes or their values differ",
+                a.display(),
+                b.display()
+            )));
+        }
+        _ => {
+            return Err(SweepError::Input(format!(
+                "{} and {}: a difference map needs two sweeps over the same Grid of two axes",
+                a.display(),
+                b.display()
+            )));
+        }
+    }
+    let partner = |r: &Row| rows_a.iter().find(|x| x.values == r.values);
+    let both = |r: &Row| {
+        let x = partner(r)?;
+        Some((x.quantity(q)?, r.quantity(q)?))
+    };
+    // A point is as finished as the less finished of its two runs.
+    let rows: Vec<Row> = rows_b
+        .iter()
+        .map(|r| {
+            let mut d = r.clone();
+            if let Some(x) = partner(r)
+                && x.status != Status::Finished
+            {
+                d.status = x.status;
+                d.stopped = x.stopped.clone();
+            }
+            d
+        })
+        .collect();
+    let value = |r: &Row| both(r).map(|(x, y)| y - x);
+    let shown = plots::Shown {
+        value: &value,
+        label: format!(
+            "difference, {} − {}",
+            b.file_name()
+                .map_or(String::new(), |n| n.to_string_lossy().into()),
+            a.file_name()
+                .map_or(String::new(), |n| n.to_string_lossy().into())
+        ),
+    };
+    std::fs::create_dir_all(out)
+        .map_err(|e| SweepError::Input(format!("{}: {e}", out.display())))?;
+    let png = out.join(format!("diff-{q}.png"));
+    let name = format!("{} − {}: {q}", rb.name, ra.name);
+    plots::heat_map_of(&png, &rb, &rows, &shown, &name)?;
+    let mut csv = format!(
+        "id,{},status_a,status_b,{q}_a,{q}_b,difference,relative\n",
+        rb.axes().join(",")
+    );
+    let mut largest: Option<(String, f64, f64)> = None;
+    let mut compared = 0;
+    for r in &rows_b {
+        let x = partner(r);
+        let (va, vb) = (x.and_then(|x| x.quantity(q)), r.quantity(q));
+        let cell = |v: Option<f64>| v.map_or(String::new(), |v| v.to_string());
+        let diff = va.zip(vb).map(|(x, y)| y - x);
+        let rel = va.zip(diff).map(|(x, d)| d / x.abs());
+        csv += &format!(
+            "{},{},{},{},{},{},{},{}\n",
+            r.id,
+            r.values
+                .iter()
+                .map(|v| table::field(v))
+                .collect::<Vec<_>>()
+                .join(","),
+            x.map_or("missing", |x| x.status.as_str()),
+            r.status.as_str(),
+            cell(va),
+            cell(vb),
+            cell(diff),
+            cell(rel)
+        );
+        if let (Some(x), Some((va, vb))) = (x, va.zip(vb))
+            && x.status == Status::Finished
+            && r.status == Status::Finished
+        {
+            compared += 1;
+            if largest
+                .as_ref()
+                .is_none_or(|l| (vb - va).abs() > (l.2 - l.1).abs())
+            {
+                largest = Some((r.id.clone(), va, vb));
+            }
+        }
+    }
+    let csv_path = out.join(format!("diff-{q}.csv"));
+    std::fs::write(&csv_path, csv)
+        .map_err(|e| SweepError::Input(format!("{}: {e}", csv_path.display())))?;
+    Ok(Difference {
+        written: vec![png, csv_path],
+        compared: (compared, rows_b.len()),
+        largest,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1631,6 +1768,39 @@ mod tests {
             .collect();
         let (a, r) = table::parse(&table::render(&axes, &rows)).unwrap();
         assert_eq!((a, r), (axes, rows));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_difference_map_finds_the_point_that_moved() {
+        // The committed pillar-geometry map against a copy of it in which one point's
+        // penetration depth moved by 0.25 µm and another stopped early.
+        let dir = std::env::temp_dir().join(format!("cellsim-sweep-diff-{}", std::process::id()));
+        let (a, b) = (dir.join("a"), dir.join("b"));
+        for d in [&a, &b] {
+            std::fs::create_dir_all(d).unwrap();
+            for f in ["sweep.json", "sweep.csv"] {
+                std::fs::copy(repo("plots/sweeps/pillar-geometry").join(f), d.join(f)).unwrap();
+            }
+        }
+        let (axes, mut rows) =
+            table::parse(&std::fs::read_to_string(b.join("sweep.csv")).unwrap()).unwrap();
+        let moved = rows[7].penetration.unwrap() + 0.25;
+        rows[7].penetration = Some(moved);
+        rows[3].status = Status::Failed;
+        std::fs::write(b.join("sweep.csv"), table::render(&axes, &rows)).unwrap();
+        let d = difference(&a, &b, &dir, None).unwrap();
+        assert_eq!(d.compared, (24, 25));
+        let (id, x, y) = d.largest.unwrap();
+        assert_eq!((id.as_str(), y), (rows[7].id.as_str(), moved));
+        assert!((y - x - 0.25).abs() < 1e-12);
+        let csv = std::fs::read_to_string(dir.join("diff-penetration_depth.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 26);
+        assert!(csv.lines().nth(4).unwrap().contains(",finished,failed,"));
+        assert!(dir.join("diff-penetration_depth.png").exists());
+        // Sweeps over other axes are refused.
+        let other = repo("plots/sweeps/contractility");
+        assert!(difference(&a, &other, &dir, None).is_err());
         std::fs::remove_dir_all(&dir).ok();
     }
 

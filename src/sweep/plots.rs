@@ -146,6 +146,36 @@ fn quantity_label(q: &str) -> String {
     }
 }
 
+/// A sweep axis as a reader names it: the quantity and its unit for the case fields the
+/// sweeps vary ("pillar spacing s [µm]"), else the axis's path or variant name itself.
+pub fn axis_label(path: &str) -> String {
+    let label = match path {
+        "substrate.width" => "pillar width w [µm]",
+        "substrate.spacing" => "pillar spacing s [µm]",
+        "substrate.height" => "pillar height h [µm]",
+        "substrate.y_s" => "substrate height y_s [µm]",
+        "active.pac.e" => "PAC contraction e_PAC (push)",
+        "active.bottom.e" => "bottom contraction e_bottom (pull)",
+        "adhesion.e_f" => "fibronectin layer e_f [µm]",
+        "adhesion.mu_as_max_n_m3" => "adhesion cap μ_as,max [N/m³]",
+        "adhesion.mu_as0_n_m3s" => "adhesion rate μ_as0 [N/(m³·s)]",
+        "contact.eps_ct" => "contact band ε_ct [µm]",
+        "contact.mu_ct_n_m3" => "contact penalty μ_ct [N/m³]",
+        "materials.nucleus.e" => "nucleus modulus E_n [Pa]",
+        "materials.nucleus.nu" => "nucleus Poisson ratio ν_n",
+        "materials.cytoplasm.e" => "cytoplasm modulus E_cp [Pa]",
+        "materials.cytoplasm.nu" => "cytoplasm Poisson ratio ν_cp",
+        "materials.gamma" => "Yeoh stiffening γ",
+        "materials.fibres.k1_pa" => "fibre stiffness k₁ [Pa]",
+        "phases.adhesion_start" => "adhesion starts when",
+        "phases.active_start" => "contraction starts when",
+        "mesh.refine" => "mesh refinement",
+        "solver.rtol" => "relative tolerance rtol",
+        other => other,
+    };
+    label.to_string()
+}
+
 fn draw_err(path: &Path) -> impl Fn(String) -> OutputError + '_ {
     move |m| OutputError::draw(path, m)
 }
@@ -157,14 +187,39 @@ type GridChart<'a, 'b> = ChartContext<
     Cartesian2d<SegmentedCoord<RangedCoordusize>, SegmentedCoord<RangedCoordusize>>,
 >;
 
+/// What a heat map shows: a value per row (`None`: not shown) and its label (the quantity
+/// and unit, for the colour bar and the title).
+pub struct Shown<'a> {
+    /// The value of a row.
+    pub value: &'a dyn Fn(&Row) -> Option<f64>,
+    /// The quantity and its unit.
+    pub label: String,
+}
+
 /// Draws `heatmap-<q>.png`: `q` over a Grid of two axes, each cell coloured and labelled
 /// with its value or its status, with a colour bar.
 fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), OutputError> {
+    let value = |r: &Row| r.quantity(q);
+    let shown = Shown {
+        value: &value,
+        label: quantity_label(q),
+    };
+    heat_map_of(path, record, rows, &shown, &record.name)
+}
+
+/// Draws a heat map of `shown` over the Grid of two axes of `record`, titled `name`.
+pub fn heat_map_of(
+    path: &Path,
+    record: &Record,
+    rows: &[Row],
+    shown: &Shown<'_>,
+    name: &str,
+) -> Result<(), OutputError> {
     let e = draw_err(path);
     let xs = &record.design.axes[0].values;
     let ys = &record.design.axes[1].values;
-    let (lo, hi) = colour_range(rows, q);
-    let title = heat_map_title(record, rows, q);
+    let (lo, hi) = colour_range(rows, shown);
+    let title = heat_map_title(name, rows, &shown.label);
     // The title over the whole figure, which is widened to hold it.
     let title_font = (FONT, 22).into_font();
     let title_w = title_font.box_size(&title).map_or(0, |(w, _)| w);
@@ -183,22 +238,22 @@ fn heat_map(path: &Path, record: &Record, rows: &[Row], q: &str) -> Result<(), O
     };
     for r in rows {
         let Some((i, j)) = cell(r) else { continue };
-        let (fill, text) = cell_look(r, q, lo, hi);
+        let (fill, text) = cell_look(r, shown, lo, hi);
         let stop = (r.status == Status::Failed).then_some(r.stopped.class.as_str());
         draw_grid_cell(&mut chart, (i, j), fill, stop, text).map_err(&e)?;
     }
-    colorbar(&side, lo, hi, &quantity_label(q)).map_err(&e)?;
+    colorbar(&side, lo, hi, &shown.label).map_err(&e)?;
     root.present().map_err(|x| e(x.to_string()))?;
     Ok(())
 }
 
-/// The range of the colour scale: that of the finite values of `q` of the runs (finished
+/// The range of the colour scale: that of the finite values shown of the runs (finished
 /// or failed), widened around a single value; [0, 1] without any.
-fn colour_range(rows: &[Row], q: &str) -> (f64, f64) {
+fn colour_range(rows: &[Row], shown: &Shown<'_>) -> (f64, f64) {
     let shown: Vec<f64> = rows
         .iter()
         .filter(|r| matches!(r.status, Status::Finished | Status::Failed))
-        .filter_map(|r| r.quantity(q))
+        .filter_map(|r| (shown.value)(r))
         .filter(|v| v.is_finite())
         .collect();
     let (mut lo, mut hi) = shown
@@ -217,11 +272,9 @@ fn colour_range(rows: &[Row], q: &str) -> (f64, f64) {
 
 /// The heat map's title: the sweep, the quantity, and what a cross means if a run failed
 /// (its colour and the word under the value say how it stopped).
-fn heat_map_title(record: &Record, rows: &[Row], q: &str) -> String {
+fn heat_map_title(name: &str, rows: &[Row], label: &str) -> String {
     format!(
-        "{}: {}{}",
-        record.name,
-        quantity_label(q),
+        "{name}: {label}{}",
         if rows.iter().any(|r| r.status == Status::Failed) {
             " (crossed: stopped early, how under the value; last value written)"
         } else {
@@ -281,8 +334,8 @@ fn grid_chart<'a, 'b>(
         .y_labels(ny + 1)
         .x_label_formatter(&|v| label(&ax.values, v))
         .y_label_formatter(&|v| label(&ay.values, v))
-        .x_desc(&ax.path)
-        .y_desc(&ay.path)
+        .x_desc(axis_label(&ax.path))
+        .y_desc(axis_label(&ay.path))
         .axis_desc_style((FONT, 18))
         .label_style((FONT, 16))
         .draw()
@@ -292,8 +345,8 @@ fn grid_chart<'a, 'b>(
 
 /// A cell's fill and label: the value's colour and the value for a run, else grey or
 /// white and the status.
-fn cell_look(r: &Row, q: &str, lo: f64, hi: f64) -> (RGBColor, String) {
-    let v = r.quantity(q).filter(|v| v.is_finite());
+fn cell_look(r: &Row, shown: &Shown<'_>, lo: f64, hi: f64) -> (RGBColor, String) {
+    let v = (shown.value)(r).filter(|v| v.is_finite());
     match (r.status, v) {
         (Status::Finished | Status::Failed, Some(v)) => {
             (colormap((v - lo) / (hi - lo)), fmt_value(v))
@@ -526,9 +579,9 @@ fn line_plot(
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(|x| e(x.to_string()))?;
         let x_desc = if log_x {
-            format!("{axis} (log scale)")
+            format!("{} (log scale)", axis_label(axis))
         } else {
-            axis.clone()
+            axis_label(axis)
         };
         draw_axes(&mut chart, &x_desc, &quantity_label(q), log_x).map_err(&e)?;
         if joined {
@@ -849,7 +902,7 @@ fn tornado(path: &Path, name: &str, axes: &[String], s: &[Sensitivity]) -> Resul
             .max(1e-3)
             * 1.25;
         let n = bars.len().max(1);
-        let labels: Vec<String> = bars.iter().map(|b| b.axis.clone()).collect();
+        let labels: Vec<String> = bars.iter().map(|b| axis_label(&b.axis)).collect();
         let mut chart = ChartBuilder::on(area)
             .caption(quantity_label(q), (FONT, 18))
             .margin(10)

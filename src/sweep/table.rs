@@ -206,7 +206,7 @@ pub fn penetration_depth(case: &Case, uy_bottom: f64) -> f64 {
 }
 
 /// A CSV field, quoted when it holds a comma, a quote or a line break.
-fn field(s: &str) -> String {
+pub(crate) fn field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
