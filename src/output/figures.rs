@@ -23,6 +23,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::geometry::{Backdrop, Bounds, CellShape, Pt, Rect, substrate_floor};
+pub use super::scenes::run_phases;
 use super::{DrawError, OutputError, draw_png};
 use crate::fem::Domain;
 use crate::physics::Phases;
@@ -1521,41 +1522,6 @@ impl GravityMark {
         };
         GravityMark { factor, note }
     }
-}
-
-/// The loading phases of a run, with the gravity flip, which the run's files do not
-/// record: from the case file its summary names (if it loads, has the run's name and its
-/// phase times), else from the compiled-in paper scene of that name (the control:
-/// push-pull's, without a flip). `None` if neither applies.
-pub fn run_phases(run: &RunData) -> Option<Phases> {
-    use super::paper::{CONTROL, SCENES};
-    let fits = |case: &crate::case::Case| {
-        let starts = match &run.summary {
-            Some(sm) => sm.phase_starts(case),
-            None => crate::case::terms::phase_starts(case),
-        };
-        let ph = crate::case::terms::phases_from(case, starts);
-        let [tg, tas, ta, _] = run.mesh.phase_times;
-        (case.name == run.name && ph.times() == [tg, tas, ta]).then_some(ph)
-    };
-    if let Some(sm) = &run.summary {
-        if let Some(ph) = crate::case::Case::load(&sm.case_file)
-            .ok()
-            .as_ref()
-            .and_then(fits)
-        {
-            return Some(ph);
-        }
-    }
-    let (scene, name) = if run.name == CONTROL {
-        ("pillars-push-pull", CONTROL)
-    } else {
-        (run.name.as_str(), run.name.as_str())
-    };
-    let s = SCENES.iter().find(|s| s.name == scene)?;
-    let mut case = crate::case::Case::from_str(s.text, s.file).ok()?;
-    case.name = name.to_string();
-    fits(&case)
 }
 
 /// Points [x, y] as plotters' coordinate pairs.

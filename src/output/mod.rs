@@ -21,7 +21,9 @@
 //! - [`movie`]: the deformation as an animated GIF, for either model;
 //! - [`snapshot`]: what the run loop hands over at each output time, and the writer that
 //!   feeds [`vtu`] and [`movie`];
-//! - [`paper`]: `cellsim paper` — the five scenes, the paper's reported values and the
+//! - [`scenes`]: the paper's five scenes compiled in, the control's name, and a run's
+//!   loading phases recovered from its case file or its scene;
+//! - [`paper`]: `cellsim paper` — the paper's reported values, its figures and the
 //!   comparison table;
 //! - [`table`]: `cellsim table` — a markdown row per run from its summary.
 
@@ -30,6 +32,7 @@ pub mod figures;
 pub mod geometry;
 pub mod movie;
 pub mod paper;
+pub mod scenes;
 pub mod snapshot;
 pub mod table;
 pub mod vtu;

@@ -2,10 +2,10 @@
 //! table drawn from their runs (`cellsim paper`; the runs themselves are made by
 //! [`crate::paper`]).
 //!
-//! The scenes are the case files of `cases/`, compiled into the binary. Beside them runs a
-//! **control**: the push-pull scene continued to the upside-down scene's end time with
-//! gravity unchanged, the "control" curve of the paper's Fig. 9 — the paper's 0.006 µm is
-//! the difference between the two at the same time.
+//! The scenes are the case files of `cases/`, compiled into the binary ([`super::scenes`],
+//! re-exported here). Beside them runs a **control**: the push-pull scene continued to the
+//! upside-down scene's end time with gravity unchanged, the "control" curve of the paper's
+//! Fig. 9 — the paper's 0.006 µm is the difference between the two at the same time.
 //!
 //! Each reported value is compared with the cellsim measure that matches how the paper
 //! measures it (MODEL.md §7, "How the paper measures"; [`Quantity::measures`]): the contact
@@ -23,46 +23,13 @@ use std::sync::Mutex;
 use super::OutputError;
 use super::figures::{
     Compared, DisplacementMarks, StrainBars, contact_radius_figure, displacement_figure,
-    run_phases, shape_figure_cached, shape_view, strain_bars_figure, strain_time_figure,
-    upside_down_figure,
+    shape_figure_cached, shape_view, strain_bars_figure, strain_time_figure, upside_down_figure,
 };
 use super::geometry::{Backdrop, Bounds};
+use super::scenes::run_phases;
+pub use super::scenes::{CONTROL, SCENES, Scene};
 use crate::fem::Domain;
 use crate::record::{MeshFile, Observables, RunData, StateFile};
-
-/// One of the paper's scenes: its name and case file.
-#[derive(Debug, Clone, Copy)]
-pub struct Scene {
-    /// Scene name (= the case's `name` and its run directory).
-    pub name: &'static str,
-    /// Case file, relative to the repository root.
-    pub file: &'static str,
-    /// The case file's text as compiled in.
-    pub text: &'static str,
-}
-
-/// The [`Scene`] named `name`: its case file `cases/<name>.ron`, compiled in.
-macro_rules! scene {
-    ($name:literal) => {
-        Scene {
-            name: $name,
-            file: concat!("cases/", $name, ".ron"),
-            text: include_str!(concat!("../../cases/", $name, ".ron")),
-        }
-    };
-}
-
-/// The five scenes of MODEL.md §7, in the paper's order.
-pub const SCENES: [Scene; 5] = [
-    scene!("flat"),
-    scene!("pillars-push"),
-    scene!("pillars-pull"),
-    scene!("pillars-push-pull"),
-    scene!("upside-down"),
-];
-
-/// Name of the control run of the upside-down comparison.
-pub const CONTROL: &str = "push-pull-control";
 
 /// When a reported value applies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
