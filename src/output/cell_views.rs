@@ -1,6 +1,6 @@
 //! The figures of the 3-D quarter cell (MODEL.md §10) — sections through its axis and the
 //! shaded surface view — drawn from a [`Mesh3File`] and a [`Snapshot3`] only, in the
-//! colours and styles of the 2-D figures ([`super::figures`]).
+//! colours and styles of the 2-D figures ([`super::draw`]).
 //!
 //! **Sections** ([`section_figure`]): the deformed cell cut by a vertical plane through its
 //! axis, mirrored to both sides as the 2-D shape figures are — nucleus red, cytoplasm
@@ -56,9 +56,9 @@ use nalgebra::Vector3;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::figures::{
+use super::draw::{
     FONT, GravityMark, MEMBRANE, PlaneDrawing, SHAPE_SIZE, SUBSTRATE, ShapeScale,
-    ShapeStyleOptions, check_displacements, draw_in_plane,
+    ShapeStyleOptions, check_displacements, draw_in_plane, phase_title,
 };
 use super::geometry::{
     ACTIVE_LEVEL, ActiveRegion, Backdrop, Bounds, CellShape, Pt, contour, element_polygon,
@@ -806,7 +806,7 @@ pub fn gravity_at(mesh: &Mesh3File, t: f64) -> GravityMark {
 }
 
 /// Draws the deformed whole cell of `mesh` displaced by `u`, cut by `plane`, into `area`
-/// over `view`, with equal aspect (the 3-D twin of [`super::figures::draw_shape`]).
+/// over `view`, with equal aspect (the 3-D twin of [`super::shapes::draw_shape`]).
 /// `backdrop` caches the substrate drawing between calls with the same view and plane
 /// (pass `&mut None` for a single drawing).
 pub fn draw_section<DB: DrawingBackend>(
@@ -1705,9 +1705,8 @@ pub fn surface_figure(
 /// `shape-<phase>-z0.png` and `shape-<phase>-diagonal.png` ([`section_figure`]),
 /// `surface-<phase>.png` and `surface-<phase>-strain.png` ([`surface_figure`]).
 pub fn plot_run3(run: &RunData, r3: &Run3Data, out: &Path) -> Result<Vec<PathBuf>, OutputError> {
-    use super::figures::{
-        Curve, PALETTE, Stroke, TimePlot, after_active_name, points, time_figure,
-    };
+    use super::draw::{Curve, PALETTE, Stroke};
+    use super::time_plots::{TimePlot, after_active_name, points, time_figure};
     let mut written = Vec::new();
     let t3: Vec<(f64, &crate::record::Observables3)> =
         run.series.iter().map(|o| o.t).zip(&r3.series).collect();
@@ -1771,7 +1770,7 @@ pub fn plot_run3(run: &RunData, r3: &Run3Data, out: &Path) -> Result<Vec<PathBuf
         let title = format!(
             "{}, {} (t = {} s)",
             run.name,
-            super::figures::phase_title(&s.phase),
+            phase_title(&s.phase),
             s.state.t
         );
         for (plane, name) in [(Section::Z0, "z0"), (Section::Diagonal, "diagonal")] {

@@ -12,7 +12,13 @@
 //! Module map:
 //! - [`geometry`]: the deformed cell as polygons (curved P2 edges), active-region outlines,
 //!   substrate and fibronectin-layer profiles — pure geometry, no drawing;
-//! - [`figures`]: the PNG figures (time series, strain bars, shapes);
+//! - [`draw`]: the drawing primitives every figure uses — sizes, font, colours, curves
+//!   and marks, axis helpers, and the plane drawing of the 2-D cell or a 3-D section;
+//! - [`time_plots`]: the time plots (contact radius, displacement, strain, upside down);
+//! - [`strain_bars`]: the paper's strain norms beside ours, as bars;
+//! - [`shapes`]: the 2-D cell's shape figures;
+//! - [`figures`]: `cellsim plot` — which figures a run gets ([`figures::plot_run`]), and
+//!   the curves of several runs compared; it re-exports the figure modules' public items;
 //! - [`cell_views`]: the figures of the 3-D quarter cell (a [`crate::record::Mesh3File`]
 //!   and its [`crate::record::Snapshot3`]s): sections through the axis and a shaded view
 //!   of the whole cell;
@@ -28,13 +34,17 @@
 //! - [`table`]: `cellsim table` — a markdown row per run from its summary.
 
 pub mod cell_views;
+pub mod draw;
 pub mod figures;
 pub mod geometry;
 pub mod movie;
 pub mod paper;
 pub mod scenes;
+pub mod shapes;
 pub mod snapshot;
+pub mod strain_bars;
 pub mod table;
+pub mod time_plots;
 pub mod vtu;
 
 pub use crate::record::RunData;

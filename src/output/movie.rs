@@ -24,8 +24,9 @@ use super::cell_views::{
     Camera, Coloring, Section, SectionBackdrop, SurfaceFrame, SurfaceStyleOptions, draw_section,
     draw_surface, gravity_at,
 };
-use super::figures::{ShapeStyleOptions, draw_shape};
+use super::draw::ShapeStyleOptions;
 use super::geometry::{Backdrop, Bounds, substrate_floor};
+use super::shapes::draw_shape;
 use super::{DrawError, OutputError};
 use crate::record::{Mesh3File, MeshFile, Snapshot, Snapshot3, Timed};
 

@@ -21,15 +21,18 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use super::OutputError;
-use super::figures::{
-    Compared, DisplacementMarks, StrainBars, contact_radius_figure, displacement_figure,
-    shape_figure_cached, shape_view, strain_bars_figure, strain_time_figure, upside_down_figure,
-};
 use super::geometry::{Backdrop, Bounds};
 use super::scenes::run_phases;
-pub use super::scenes::{CONTROL, SCENES, Scene};
+use super::shapes::{shape_figure_cached, shape_view};
+use super::strain_bars::{StrainBars, strain_bars_figure};
+use super::time_plots::{
+    Compared, DisplacementMarks, contact_radius_figure, displacement_figure, strain_time_figure,
+    upside_down_figure,
+};
 use crate::fem::Domain;
 use crate::record::{MeshFile, Observables, RunData, StateFile};
+
+pub use super::scenes::{CONTROL, SCENES, Scene};
 
 /// When a reported value applies.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
