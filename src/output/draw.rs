@@ -308,7 +308,7 @@ pub(crate) fn check_displacements<const D: usize>(
 }
 
 /// What [`draw_in_plane`] draws: the deformed full cell in a drawing plane, borrowed from
-/// the 2-D [`CellShape`] or a 3-D [`super::cell_views::SectionShape`] (mirrored), and what
+/// the 2-D [`CellShape`] or a 3-D [`super::cell3d_views::SectionShape`] (mirrored), and what
 /// else differs between the two drawings.
 pub(crate) struct PlaneDrawing<'a> {
     /// Label of the horizontal axis.
@@ -330,9 +330,9 @@ pub(crate) struct PlaneDrawing<'a> {
 /// axis so 1 µm has the same length in pixels on both. The substrate drawing is
 /// `backdrop_for(cached, final view [x0, x1, y0, y1], plotting area width in pixels)`,
 /// `cached` taken from `backdrop`, which keeps the one drawn: a 2-D [`Backdrop`], or a 3-D
-/// section's [`super::cell_views::SectionBackdrop`] (a [`Backdrop`] in the plane's
+/// section's [`super::cell3d_views::SectionBackdrop`] (a [`Backdrop`] in the plane's
 /// coordinates, with its plane). What [`super::shapes::draw_shape`] and
-/// [`super::cell_views::draw_section`] share.
+/// [`super::cell3d_views::draw_section`] share.
 pub(crate) fn draw_in_plane<DB: DrawingBackend, B: AsRef<Backdrop>>(
     area: &DrawingArea<DB, Shift>,
     cell: &PlaneDrawing<'_>,

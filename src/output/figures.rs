@@ -1,11 +1,11 @@
 //! `cellsim plot`: which figures a run directory gets ([`plot_run`]: the time plots, then
 //! the 2-D cell's shapes, or for a 3-D run the sections and surface views of
-//! [`super::cell_views`]) and the time curves of several runs on the same axes
+//! [`super::cell3d_views`]) and the time curves of several runs on the same axes
 //! ([`compare_runs`]). The figures themselves are drawn by [`super::draw`] (the
-//! primitives), [`super::time_plots`], [`super::strain_bars`], [`super::shapes`] and
-//! [`super::cell_views`] (the 3-D cell); their public items are re-exported here, at the
-//! paths they had when this file drew them. This file may import any of them; none of
-//! them imports it.
+//! primitives), [`super::time_plots`], [`super::strain_bars`] and [`super::shapes`] (the
+//! 2-D figures: their public items are re-exported here, at the paths they had when this
+//! file drew them) and [`super::cell3d_views`] (the 3-D cell). This file may import any of
+//! them; none of them imports it.
 
 use std::path::{Path, PathBuf};
 
@@ -66,7 +66,7 @@ pub fn compare_runs(runs: &[&RunData], out: &Path) -> Result<Vec<PathBuf>, Outpu
 
 /// All of one run's figures into `out`: `contact-radius.png` (both frames), `displacement.png`
 /// (p_t, c, p_b and the nucleus's lowest point), `strain.png` (mean ‖E‖ over time) and `shape-<phase>.png` for each
-/// state file written; for a 3-D run, [`super::cell_views::plot_run3`]'s instead of the shapes. Works on partial runs (fewer rows, missing states). Returns the
+/// state file written; for a 3-D run, [`super::cell3d_views::plot_run3`]'s instead of the shapes. Works on partial runs (fewer rows, missing states). Returns the
 /// files written.
 pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> {
     super::create_dir(out)?;
@@ -135,7 +135,7 @@ pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> 
         written.push(p);
     }
     if let Some(r3) = &run.three_d {
-        written.extend(super::cell_views::plot_run3(run, r3, out)?);
+        written.extend(super::cell3d_views::plot_run3(run, r3, out)?);
     }
     Ok(written)
 }

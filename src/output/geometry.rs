@@ -111,7 +111,7 @@ impl ActiveRegion {
 }
 
 /// The deformed half cell, ready to draw; in 3-D, a section of it
-/// ([`super::cell_views::SectionShape`]).
+/// ([`super::cell3d_views::SectionShape`]).
 #[derive(Debug, Clone, Default)]
 pub struct CellShape {
     /// Each element's domain and deformed boundary polygon.

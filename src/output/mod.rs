@@ -19,7 +19,7 @@
 //! - [`shapes`]: the 2-D cell's shape figures;
 //! - [`figures`]: `cellsim plot` — which figures a run gets ([`figures::plot_run`]), and
 //!   the curves of several runs compared; it re-exports the figure modules' public items;
-//! - [`cell_views`]: the figures of the 3-D quarter cell (a [`crate::record::Mesh3File`]
+//! - [`cell3d_views`]: the figures of the 3-D quarter cell (a [`crate::record::Mesh3File`]
 //!   and its [`crate::record::Snapshot3`]s): sections through the axis and a shaded view
 //!   of the whole cell;
 //! - [`vtu`]: `.vtu` files (quadratic triangles or tetrahedra) and the `.pvd` collection,
@@ -33,7 +33,7 @@
 //!   comparison table;
 //! - [`table`]: `cellsim table` — a markdown row per run from its summary.
 
-pub mod cell_views;
+pub mod cell3d_views;
 pub mod draw;
 pub mod figures;
 pub mod geometry;
@@ -49,6 +49,10 @@ pub mod vtu;
 
 pub use crate::record::RunData;
 pub use snapshot::{FrameSink, SnapshotOptions, SnapshotWriter, SnapshotWriter3, SnapshotWriterOf};
+
+/// The 3-D cell's views under the module's former name, so that `output::cell_views::…`
+/// paths keep working.
+pub use cell3d_views as cell_views;
 
 use std::path::Path;
 

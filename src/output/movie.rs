@@ -7,11 +7,11 @@
 //! titles; a [`FramePainter`] draws each frame — [`ShapePainter`] the 2-D cell,
 //! [`View3Painter`] a view of the 3-D cell ([`Movie3`], `--gif` on a 3-D run).
 //!
-//! A 3-D frame is either the section z = 0 drawn as [`super::cell_views::section_figure`]
-//! draws it (the default: cheap, and the 2-D movie's picture), or any other [`MovieView`]:
-//! the diagonal section, or the shaded surface view of the whole cell
-//! ([`super::cell_views::draw_surface`]; about three times the cost of a section frame on
-//! the default mesh: 0.13 s against 0.04 s).
+//! A 3-D frame is either the section z = 0 drawn as
+//! [`super::cell3d_views::section_figure`] draws it (the default: cheap, and the 2-D
+//! movie's picture), or any other [`MovieView`]: the diagonal section, or the shaded surface
+//! view of the whole cell ([`super::cell3d_views::draw_surface`]; about three times the
+//! cost of a section frame on the default mesh: 0.13 s against 0.04 s).
 
 use std::fs::File;
 use std::io::BufWriter;
@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::cell_views::{
+use super::cell3d_views::{
     Camera, Coloring, Section, SectionBackdrop, SurfaceFrame, SurfaceStyleOptions, draw_section,
     draw_surface, gravity_at,
 };

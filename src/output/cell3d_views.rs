@@ -47,6 +47,12 @@
 //! **Accuracy.** The sections of the reference cell through its centre are the disks of
 //! the three balls to 1e-4 of their areas (the P2 spheres and the chords that trace them;
 //! `tests/output3.rs`).
+//!
+//! What it may import of [`super`]: [`super::draw`] (the primitives and the plane drawing
+//! it shares with the 2-D shapes), [`super::geometry`], [`super::time_plots`] (the time
+//! plots of [`plot_run3`]) and [`super::vtu`] (the snapshot's check), and the error types
+//! and [`super::draw_png`] of [`super`]; [`super::figures`] and [`super::movie`] import it.
+//! Its public items are also reachable at their former paths, `output::cell_views::…`.
 
 use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
