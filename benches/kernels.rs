@@ -18,7 +18,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use cellsim::dae::{Dae, LinearSolver};
-use cellsim::lu::LinearSolverKind;
+use cellsim::solver;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 
 const REFINES: [f64; 4] = [0.5, 1.0, 2.0, 4.0];
@@ -85,9 +85,9 @@ fn kernels(c: &mut Criterion) {
         m.jacobian(State::new(T, &y, &yp), 0.1, &mut vals).unwrap();
         let rhs: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).sin()).collect();
         for kind in [
-            LinearSolverKind::Faer,
-            LinearSolverKind::Klu,
-            LinearSolverKind::KluMetis,
+            solver::LinearSolver::Faer,
+            solver::LinearSolver::Klu,
+            solver::LinearSolver::KluMetis,
         ] {
             let name = kind.build().name();
             let mut g = c.benchmark_group(format!("lu-symbolic-{name}"));
@@ -118,10 +118,10 @@ fn kernels(c: &mut Criterion) {
         let rhs: Vec<f64> = (0..ni).map(|i| (0.37 * i as f64).sin()).collect();
         eprintln!("refine {refine} with inertia: n = {ni}");
         for kind in [
-            LinearSolverKind::Faer,
-            LinearSolverKind::FaerCondensed,
-            LinearSolverKind::Klu,
-            LinearSolverKind::KluMetis,
+            solver::LinearSolver::Faer,
+            solver::LinearSolver::FaerCondensed,
+            solver::LinearSolver::Klu,
+            solver::LinearSolver::KluMetis,
         ] {
             let mut s = kind.build_for(&mi).unwrap();
             s.analyse(mi.pattern()).unwrap();

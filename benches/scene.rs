@@ -14,10 +14,9 @@ use std::path::Path;
 use std::time::Duration;
 
 use cellsim::case::{Case, InertiaMode};
-use cellsim::lu::LinearSolverKind;
 use cellsim::output::SnapshotOptions;
-use cellsim::record::RunSettings;
 use cellsim::run::{self, Progress, RunOptions};
+use cellsim::solver::LinearSolver;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 
 fn case(refine: f64, t_end: f64, inertia_on: bool) -> (Case, String) {
@@ -39,12 +38,13 @@ fn unknowns(case: &Case, file: &str) -> usize {
     cellsim::model::CellModel::new(p, mesh).unwrap().dofs.n
 }
 
-fn run_once(case: &Case, file: &str, kind: LinearSolverKind, out: &Path) -> u64 {
-    let mut settings = RunSettings::from_case(case);
+fn run_once(case: &Case, file: &str, kind: LinearSolver, out: &Path) -> u64 {
+    let mut settings = case.solver.clone();
     settings.linear_solver = kind;
     let opts = RunOptions {
         out: out.to_path_buf(),
         settings,
+        limits: Default::default(),
         progress: Progress::Hidden,
         interrupt: cellsim::stop::StopFlag::new(),
         snapshots: SnapshotOptions::default(),
@@ -60,10 +60,10 @@ fn scenes(c: &mut Criterion) {
     for refine in [0.5, 1.0] {
         let (case, file) = case(refine, 30.0, false);
         let n = unknowns(&case, &file);
-        let steps = run_once(&case, &file, LinearSolverKind::Faer, &out);
+        let steps = run_once(&case, &file, LinearSolver::Faer, &out);
         eprintln!("scene refine {refine}: n = {n}, {steps} steps");
         g.bench_with_input(BenchmarkId::new("flat-gravity-30s", n), &n, |b, _| {
-            b.iter(|| run_once(&case, &file, LinearSolverKind::Faer, &out))
+            b.iter(|| run_once(&case, &file, LinearSolver::Faer, &out))
         });
     }
     g.finish();
@@ -71,7 +71,7 @@ fn scenes(c: &mut Criterion) {
     for refine in [0.5, 1.0] {
         let (case, file) = case(refine, 12.0, true);
         let n = unknowns(&case, &file);
-        for kind in [LinearSolverKind::Faer, LinearSolverKind::FaerCondensed] {
+        for kind in [LinearSolver::Faer, LinearSolver::FaerCondensed] {
             let steps = run_once(&case, &file, kind, &out);
             let name = kind.build().name();
             eprintln!("inertial fall refine {refine} {name}: n = {n}, {steps} steps");

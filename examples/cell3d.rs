@@ -21,10 +21,10 @@ use cellsim::case::Case;
 use cellsim::dae::linsolve::{ColumnOrdering, FaerLu, LinearSolver, LinearSolverError};
 use cellsim::dae::{Atol, Dae, Integrator, LinearSolverFactory, SharedFactory};
 use cellsim::fem::{Mesh3, Mesh3Params};
-use cellsim::lu::LinearSolverKind;
 use cellsim::model::{Cell3, ModelParams};
 use cellsim::physics::Lattice;
 use cellsim::scene;
+use cellsim::solver;
 use cellsim::sundials::{Ida, IdaOptions};
 use cellsim::sundials::{UmfpackLu, UmfpackOrdering, nested_dissection_ata};
 
@@ -35,8 +35,8 @@ struct Lu(&'static str);
 impl LinearSolverFactory for Lu {
     fn build_for(&self, _dae: &dyn Dae) -> Result<Box<dyn LinearSolver>, LinearSolverError> {
         Ok(match self.0 {
-            "klu" => LinearSolverKind::Klu.build(),
-            "klu-metis" => LinearSolverKind::KluMetis.build(),
+            "klu" => solver::LinearSolver::Klu.build(),
+            "klu-metis" => solver::LinearSolver::KluMetis.build(),
             "umfpack" => Box::new(UmfpackLu::new(UmfpackOrdering::Amd)),
             "umfpack-metis" => Box::new(UmfpackLu::new(UmfpackOrdering::Metis)),
             "umfpack-noir" => Box::new(UmfpackLu::new(UmfpackOrdering::Amd).without_refinement()),
@@ -44,12 +44,12 @@ impl LinearSolverFactory for Lu {
                 name: "faer-metis-ata",
                 order: nested_dissection_ata,
             })),
-            "faer-metis" => Box::new(FaerLu::with_ordering(cellsim::lu::METIS_ORDERING)),
+            "faer-metis" => Box::new(FaerLu::with_ordering(cellsim::solver::METIS_ORDERING)),
             "faer-par" => Box::new(FaerLu::with_options(
                 faer::Par::rayon(2),
                 faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL,
             )),
-            _ => LinearSolverKind::Faer.build(),
+            _ => solver::LinearSolver::Faer.build(),
         })
     }
 }

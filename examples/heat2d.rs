@@ -6,7 +6,7 @@
 
 use cellsim::dae::problems::Heat2D;
 use cellsim::dae::{Atol, Integrator};
-use cellsim::lu::LinearSolverKind;
+use cellsim::solver::LinearSolver;
 use cellsim::sundials::{CalcIc, Ida, IdaOptions};
 
 fn arg(name: &str, default: f64) -> f64 {
@@ -30,9 +30,9 @@ fn main() {
         rtol: 0.0,
         atol: Atol::Scalar(atol),
         linear_solver: if klu {
-            LinearSolverKind::Klu.into()
+            LinearSolver::Klu.into()
         } else {
-            LinearSolverKind::Faer.into()
+            LinearSolver::Faer.into()
         },
         calc_ic: Some(CalcIc::AlgebraicAndDerivatives { tout1: 0.01 }),
         constraints: Some(dae.constraints()),

@@ -10,10 +10,10 @@
 use cellsim::case::Case;
 use cellsim::dae::{Atol, Dae, Integrator};
 use cellsim::fem::Mesh3;
-use cellsim::lu::LinearSolverKind;
 use cellsim::model::{Cell3, ModelParams};
 use cellsim::physics::Lattice;
 use cellsim::scene;
+use cellsim::solver::LinearSolver;
 use cellsim::sundials::{Ida, IdaOptions};
 
 /// The example's options (see the module's doc).
@@ -80,7 +80,7 @@ fn main() {
         IdaOptions {
             rtol: case.solver.rtol,
             atol,
-            linear_solver: LinearSolverKind::UmfpackNd.into(),
+            linear_solver: LinearSolver::UmfpackNd.into(),
             delta_cj: Some(case.solver.delta_cj),
             ..Default::default()
         },

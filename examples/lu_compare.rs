@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use cellsim::dae::Dae;
 use cellsim::dae::problems::Heat2D;
-use cellsim::lu::LinearSolverKind;
+use cellsim::solver::LinearSolver;
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -46,7 +46,7 @@ fn main() {
         let b: Vec<f64> = (0..n)
             .map(|i| ((i * 7919) % 1000) as f64 / 1000.0 - 0.5)
             .collect();
-        let kinds = [LinearSolverKind::Faer, LinearSolverKind::Klu];
+        let kinds = [LinearSolver::Faer, LinearSolver::Klu];
         let mut solvers: Vec<_> = kinds.iter().map(|k| k.build()).collect();
         let mut analyse = [0.0; 2];
         for (k, s) in solvers.iter_mut().enumerate() {

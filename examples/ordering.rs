@@ -20,7 +20,7 @@ use std::time::Instant;
 use cellsim::dae::condensed::CondensedLu;
 use cellsim::dae::linsolve::{ColumnOrdering, FaerLu, Permuted};
 use cellsim::dae::{Dae, LinearSolver, Pattern};
-use cellsim::lu::METIS_ORDERING;
+use cellsim::solver::METIS_ORDERING;
 use cellsim::sundials::{
     KluLu, UmfpackLu, UmfpackOrdering, nested_dissection, nested_dissection_ata,
 };

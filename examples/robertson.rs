@@ -7,7 +7,7 @@
 
 use cellsim::dae::problems::{Robertson, WithRoots};
 use cellsim::dae::{Atol, Dae, Integrator};
-use cellsim::lu::LinearSolverKind;
+use cellsim::solver::LinearSolver;
 use cellsim::sundials::{Ida, IdaOptions};
 
 fn main() {
@@ -18,9 +18,9 @@ fn main() {
         rtol,
         atol: Atol::Vector(atol.to_vec()),
         linear_solver: if klu {
-            LinearSolverKind::Klu.into()
+            LinearSolver::Klu.into()
         } else {
-            LinearSolverKind::Faer.into()
+            LinearSolver::Faer.into()
         },
         ..Default::default()
     };

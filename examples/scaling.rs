@@ -16,7 +16,6 @@ use std::path::PathBuf;
 use cellsim::case::Case;
 use cellsim::dae::linsolve::FaerLu;
 use cellsim::dae::{Dae, LinearSolver};
-use cellsim::record::RunSettings;
 use cellsim::run::{self, Progress, RunOptions};
 use cellsim::study::fit_loglog;
 use cellsim::study::plots::{LogLogPanel, LogLogSeries, loglog_figure};
@@ -57,7 +56,8 @@ fn main() {
         case.mesh.refine = refine;
         let opts = RunOptions {
             out: root.join("target/scaling").join(&case.name),
-            settings: RunSettings::from_case(&case),
+            settings: case.solver.clone(),
+            limits: Default::default(),
             progress: Progress::Hidden,
             interrupt: cellsim::stop::StopFlag::new(),
             snapshots: Default::default(),

@@ -12,7 +12,6 @@
 pub mod case;
 pub mod dae;
 pub mod fem;
-pub mod lu;
 pub mod model;
 pub mod output;
 pub mod paper;
@@ -20,6 +19,7 @@ pub mod physics;
 pub mod record;
 pub mod run;
 pub mod scene;
+pub mod solver;
 pub mod stop;
 pub mod study;
 pub mod sundials;

@@ -6,14 +6,13 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
-use cellsim::case::{self, Case, Override};
+use cellsim::case::{Case, Override};
 use cellsim::fem::Mesh;
-use cellsim::lu::LinearSolverKind;
 use cellsim::output::{self, RunData, SnapshotOptions};
 use cellsim::paper;
-use cellsim::record::RunSettings;
 use cellsim::run::{self, Progress, RunOptions};
 use cellsim::scene;
+use cellsim::solver::{self, Limits};
 use cellsim::stop::{self, StopFlag};
 use cellsim::study;
 use cellsim::sweep;
@@ -65,40 +64,6 @@ struct Cli {
     command: Command,
 }
 
-/// The sparse LU of the Newton systems.
-#[derive(Clone, Copy, ValueEnum)]
-enum LinearSolverArg {
-    /// faer's sparse LU (pure Rust).
-    Faer,
-    /// SuiteSparse's KLU, through SUNDIALS.
-    Klu,
-    /// faer's LU after eliminating the velocities while inertia is on (half-size system);
-    /// the full LU once inertia is off (the default).
-    FaerCondensed,
-    /// KLU on the matrix ordered by METIS's nested dissection.
-    KluMetis,
-    /// SuiteSparse's UMFPACK (AMD ordering).
-    Umfpack,
-    /// UMFPACK on METIS's nested dissection (symmetric strategy, no iterative refinement).
-    UmfpackNd,
-    /// umfpack-nd on the condensed system while inertia is on.
-    UmfpackCondensed,
-}
-
-impl From<LinearSolverArg> for LinearSolverKind {
-    fn from(a: LinearSolverArg) -> Self {
-        match a {
-            LinearSolverArg::Faer => LinearSolverKind::Faer,
-            LinearSolverArg::Klu => LinearSolverKind::Klu,
-            LinearSolverArg::FaerCondensed => LinearSolverKind::FaerCondensed,
-            LinearSolverArg::KluMetis => LinearSolverKind::KluMetis,
-            LinearSolverArg::Umfpack => LinearSolverKind::Umfpack,
-            LinearSolverArg::UmfpackNd => LinearSolverKind::UmfpackNd,
-            LinearSolverArg::UmfpackCondensed => LinearSolverKind::UmfpackCondensed,
-        }
-    }
-}
-
 /// A quantity of interest of a study.
 #[derive(Clone, Copy, ValueEnum)]
 enum QuantityArg {
@@ -144,14 +109,6 @@ macro_rules! err {
     ($($arg:tt)*) => {{
         let _ = writeln!(std::io::stderr(), $($arg)*);
     }};
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum IntegratorArg {
-    /// SUNDIALS IDA (variable-order BDF).
-    Ida,
-    /// Fixed-step BDF2.
-    Bdf2,
 }
 
 #[derive(Subcommand)]
@@ -228,24 +185,30 @@ struct RunArgs {
     /// Output directory [default: runs/<case name>].
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Integrator [default: the case's].
-    #[arg(long, value_enum)]
-    integrator: Option<IntegratorArg>,
-    /// Relative tolerance, 0 < rtol <= 0.1 [default: the case's]. Looser tolerances let the
-    /// error test pass nonsense; a state that leaves the scene anyway (a node moved
-    /// further than the cell's diameter plus its height above the substrate) stops the
-    /// run with exit status 1.
-    #[arg(long, allow_hyphen_values = true)]
-    rtol: Option<f64>,
-    /// Absolute tolerance on displacements, µm, 0 < atol <= 0.01 [default: the case's].
-    #[arg(long, allow_hyphen_values = true)]
-    atol: Option<f64>,
-    /// BDF2 time step, s, > 0 [default: the case's].
-    #[arg(long, allow_hyphen_values = true)]
-    dt: Option<f64>,
-    /// Sparse LU [default: the case's].
-    #[arg(long, value_enum)]
-    linear_solver: Option<LinearSolverArg>,
+    /// Integrator: ida (SUNDIALS IDA, variable-order BDF) or bdf2 (fixed-step BDF2); the
+    /// same as --set solver.integrator=Ida or Bdf2 [default: the case's].
+    #[arg(long, value_name = "NAME")]
+    integrator: Option<String>,
+    /// Relative tolerance, 0 < rtol <= 0.1: the same as --set solver.rtol=R, checked by the
+    /// case's rule [default: the case's]. Looser tolerances let the error test pass
+    /// nonsense; a state that leaves the scene anyway (a node moved further than the
+    /// cell's diameter plus its height above the substrate) stops the run with exit
+    /// status 1.
+    #[arg(long, value_name = "R", allow_hyphen_values = true)]
+    rtol: Option<String>,
+    /// Absolute tolerance on displacements, µm, 0 < atol <= 0.01: the same as --set
+    /// solver.atol=A [default: the case's].
+    #[arg(long, value_name = "A", allow_hyphen_values = true)]
+    atol: Option<String>,
+    /// BDF2 time step, s, > 0: the same as --set solver.bdf2_dt=DT [default: the case's].
+    #[arg(long, value_name = "DT", allow_hyphen_values = true)]
+    dt: Option<String>,
+    /// Sparse LU: faer, klu, faer-condensed (the velocities eliminated while inertia is
+    /// on), klu-metis, umfpack, umfpack-nd (UMFPACK on METIS's nested dissection) or
+    /// umfpack-condensed, or the case file's names (FaerCondensed, ...); the same as --set
+    /// solver.linear_solver=FaerCondensed, ... [default: the case's].
+    #[arg(long, value_name = "NAME")]
+    linear_solver: Option<String>,
     /// BDF2 time step while the cell falls with inertia, s, when smaller than --dt
     /// [default: --dt throughout].
     #[arg(long, allow_hyphen_values = true)]
@@ -468,6 +431,55 @@ fn check_positive(name: &str, v: Option<f64>, upper: Option<f64>) -> Result<(), 
     Ok(())
 }
 
+/// The case file's name of the variant of `T` that `typed` names by that name or by its
+/// command-line alias (`umfpack-nd` → `UmfpackNd`); else `typed` itself, as a RON raw
+/// identifier where it is not a plain one, for the case to refuse with its list of names.
+fn variant_name<T: serde::Serialize + serde::de::DeserializeOwned>(typed: &str) -> String {
+    let named = serde_json::from_value::<T>(serde_json::Value::String(typed.to_string()))
+        .ok()
+        .and_then(|v| serde_json::to_value(v).ok());
+    match named {
+        Some(serde_json::Value::String(name)) => name,
+        _ if typed.contains('-') => format!("r#{typed}"),
+        _ => typed.to_string(),
+    }
+}
+
+/// The `--set` overrides that `cellsim run`'s solver flags stand for (`--rtol R` is
+/// `--set solver.rtol=R`), each named in messages by the flag as typed, so that a bad value
+/// gets the case's own check and message. Applied after the `--set` arguments: a flag wins.
+fn flag_overrides(a: &RunArgs) -> Result<Vec<Override>, ExitCode> {
+    let flags = [
+        (
+            "--integrator",
+            "integrator",
+            &a.integrator,
+            variant_name::<solver::Integrator> as fn(&str) -> String,
+        ),
+        ("--rtol", "rtol", &a.rtol, str::to_string),
+        ("--atol", "atol", &a.atol, str::to_string),
+        ("--dt", "bdf2_dt", &a.dt, str::to_string),
+        (
+            "--linear-solver",
+            "linear_solver",
+            &a.linear_solver,
+            variant_name::<solver::LinearSolver>,
+        ),
+    ];
+    let mut set = Vec::new();
+    for (flag, field, typed, value) in flags {
+        let Some(typed) = typed else { continue };
+        match Override::new(&format!("solver.{field}"), &value(typed)) {
+            Ok(o) => set.push(o.from_source(format!("{flag} {typed}"))),
+            Err(e) => {
+                err!("error: {flag} {typed}: {e}");
+                return Err(ExitCode::from(2));
+            }
+        }
+    }
+    Ok(set)
+}
+
 /// Installs the handler of SIGINT, SIGTERM and SIGHUP: the first asks the run to stop
 /// cleanly (finish the step, write the outputs and the summary, exit 128 + signal); a
 /// second one exits at once with that status.
@@ -525,38 +537,22 @@ macro_rules! tryc {
 }
 
 fn run_command(a: RunArgs) -> ExitCode {
-    let case = tryc!(load_case(&a.case, &a.set));
-    for (name, v, upper) in [
-        ("rtol", a.rtol, Some(case::MAX_RTOL)),
-        ("atol", a.atol, Some(case::MAX_ATOL)),
-        ("dt", a.dt, None),
-        ("dt-inertia", a.dt_inertia, None),
-        ("max-wall", a.max_wall, None),
-    ] {
-        tryc!(check_positive(name, v, upper));
-    }
-    let mut settings = RunSettings::from_case(&case);
-    if let Some(i) = a.integrator {
-        settings.integrator = match i {
-            IntegratorArg::Ida => case::Integrator::Ida,
-            IntegratorArg::Bdf2 => case::Integrator::Bdf2,
-        };
-    }
-    settings.rtol = a.rtol.unwrap_or(settings.rtol);
-    settings.atol = a.atol.unwrap_or(settings.atol);
-    settings.dt = a.dt.unwrap_or(settings.dt);
-    if let Some(l) = a.linear_solver {
-        settings.linear_solver = l.into();
-    }
-    settings.dt_inertia = a.dt_inertia;
-    settings.max_wall_seconds = a.max_wall;
+    let mut set = a.set.clone();
+    set.extend(tryc!(flag_overrides(&a)));
+    let case = tryc!(load_case(&a.case, &set));
+    tryc!(check_positive("dt-inertia", a.dt_inertia, None));
+    tryc!(check_positive("max-wall", a.max_wall, None));
     let out = a
         .out
         .unwrap_or_else(|| PathBuf::from("runs").join(&case.name));
     let stop = stop_on_signals();
     let opts = RunOptions {
         out: out.clone(),
-        settings,
+        settings: case.solver.clone(),
+        limits: Limits {
+            dt_inertia: a.dt_inertia,
+            max_wall_seconds: a.max_wall,
+        },
         progress: Progress::for_stderr(&case, a.quiet),
         interrupt: stop.clone(),
         snapshots: SnapshotOptions {
@@ -654,8 +650,8 @@ fn paper_command(a: PaperArgs) -> ExitCode {
 fn study_command(a: StudyArgs) -> ExitCode {
     let case = tryc!(load_case(&a.case, &a.set));
     let mut checks = vec![
-        ("ref-rtol", Some(a.ref_rtol), Some(case::MAX_RTOL)),
-        ("bdf2-rtol", Some(a.bdf2_rtol), Some(case::MAX_RTOL)),
+        ("ref-rtol", Some(a.ref_rtol), Some(solver::MAX_RTOL)),
+        ("bdf2-rtol", Some(a.bdf2_rtol), Some(solver::MAX_RTOL)),
         ("dt-max", a.dt_max, None),
         ("dt-inertia", a.dt_inertia, None),
         ("max-wall", a.max_wall, None),
@@ -663,7 +659,7 @@ fn study_command(a: StudyArgs) -> ExitCode {
     checks.extend(
         a.rtols
             .iter()
-            .map(|r| ("rtols", Some(*r), Some(case::MAX_RTOL))),
+            .map(|r| ("rtols", Some(*r), Some(solver::MAX_RTOL))),
     );
     for (name, v, upper) in checks {
         tryc!(check_positive(name, v, upper));

@@ -14,8 +14,9 @@ use indicatif::MultiProgress;
 use crate::case::Case;
 use crate::output::paper::{CONTROL, PaperReport, SCENES, SceneOutcome, draw_paper};
 use crate::output::{OutputError, RunData, SnapshotOptions};
-use crate::record::{RunSettings, Summary};
+use crate::record::Summary;
 use crate::run::{self, Member, Progress, RunError, RunOptions};
+use crate::solver::Limits;
 use crate::stop::StopFlag;
 
 /// Options of [`run_paper`].
@@ -145,7 +146,8 @@ pub fn run_cases(cases: &[(Case, String)], opts: &PaperOptions) -> Vec<SceneOutc
                 file: label,
                 opts: RunOptions {
                     out: runs_dir.join(&case.name),
-                    settings: RunSettings::from_case(case),
+                    settings: case.solver.clone(),
+                    limits: Limits::default(),
                     progress: Progress::Hidden,
                     interrupt: opts.interrupt.clone(),
                     snapshots: opts.snapshots,

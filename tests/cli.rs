@@ -65,15 +65,35 @@ fn bad_command_line_values_and_missing_files_exit_with_status_2() {
     for (args, needle) in [
         (
             vec!["run", "cases/fast/flat-gravity.ron", "--rtol", "2"],
-            "--rtol = 2 is out of range",
+            "error: --rtol 2: solver.rtol = 2 is out of range",
         ),
         (
             vec!["run", "cases/fast/flat-gravity.ron", "--dt=-1"],
-            "--dt = -1 is out of range",
+            "error: --dt -1: solver.bdf2_dt = -1 is out of range (must satisfy bdf2_dt > 0)",
         ),
         (
             vec!["run", "cases/does-not-exist.ron"],
             "does-not-exist.ron",
+        ),
+        (
+            vec![
+                "run",
+                "cases/fast/flat-gravity.ron",
+                "--linear-solver",
+                "lu",
+            ],
+            "error: --linear-solver lu: solver.linear_solver: unknown variant `lu`; expected \
+             one of `Faer`, `Klu`, `FaerCondensed`, `KluMetis`, `Umfpack`, `UmfpackNd`, \
+             `UmfpackCondensed`",
+        ),
+        (
+            vec!["run", "cases/fast/flat-gravity.ron", "--integrator", "rk4"],
+            "error: --integrator rk4: solver.integrator: unknown variant `rk4`; expected one \
+             of `Ida`, `Bdf2`",
+        ),
+        (
+            vec!["run", "cases/fast/flat-gravity.ron", "--max-wall", "0"],
+            "error: --max-wall = 0 is out of range (must satisfy max-wall > 0)",
         ),
         (
             vec!["check", "cases/bad/nu-half.ron"],

@@ -5,7 +5,7 @@ use cellsim::dae::State;
 use cellsim::dae::bdf2::{Bdf2, Bdf2Options};
 use cellsim::dae::problems::{Analytic, Heat2D, Robertson, WithRoots};
 use cellsim::dae::{Atol, Dae, DaeError, Inadmissible, Integrator, Pattern, Stats};
-use cellsim::lu::LinearSolverKind;
+use cellsim::solver::LinearSolver;
 use cellsim::sundials::{CalcIc, Ida, IdaOptions, Krylov};
 
 fn run_to(integ: &mut dyn Integrator, t: f64) {
@@ -14,7 +14,7 @@ fn run_to(integ: &mut dyn Integrator, t: f64) {
         .unwrap_or_else(|e| panic!("integration to {t} failed: {e}"));
 }
 
-fn robertson(kind: LinearSolverKind) -> Ida<Robertson> {
+fn robertson(kind: LinearSolver) -> Ida<Robertson> {
     let opts = IdaOptions {
         rtol: 1e-4,
         atol: Atol::Vector(vec![1e-8, 1e-6, 1e-6]),
@@ -94,7 +94,7 @@ const ROBERTSON_DNS: [(f64, f64, f64, f64, u64); 7] = [
 
 #[test]
 fn robertson_follows_sundials_published_table() {
-    for kind in [LinearSolverKind::Faer, LinearSolverKind::Klu] {
+    for kind in [LinearSolver::Faer, LinearSolver::Klu] {
         let mut ida = robertson(kind);
         for &(t, y1, y2, y3, nst) in &ROBERTSON_DNS {
             run_to(&mut ida, t);
@@ -140,7 +140,7 @@ fn robertson_follows_sundials_published_table() {
 #[test]
 fn robertson_klu_reproduces_sundials_klu_output_exactly() {
     // Same solver as SUNDIALS' idaRoberts_klu, so the same round-off: identical table.
-    let mut ida = robertson(LinearSolverKind::Klu);
+    let mut ida = robertson(LinearSolver::Klu);
     run_to(&mut ida, 4e10);
     assert_eq!(printed(ida.y()[0]), "5.1251e-8");
     let s = ida.stats();
@@ -202,7 +202,7 @@ fn robertson_with_gmres_preconditioned_by_the_lu_follows_the_published_table() {
 /// (umax, order, steps, Newton iterations, Jacobians, residuals) at one output time.
 type HeatRow = (f64, u32, u64, u64, u64, u64);
 
-fn heat2d_table(kind: LinearSolverKind, atol: f64, boundary: f64) -> (Vec<HeatRow>, Stats) {
+fn heat2d_table(kind: LinearSolver, atol: f64, boundary: f64) -> (Vec<HeatRow>, Stats) {
     let dae = Heat2D::new(10, boundary);
     let opts = IdaOptions {
         rtol: 0.0,
@@ -246,7 +246,7 @@ fn heat2d_bnd_reproduces_sundials_counters() {
         (4.50382e-02, 4, 28, 35, 12, 37),
         (2.14520e-03, 5, 34, 43, 13, 45),
     ];
-    let (rows, _) = heat2d_table(LinearSolverKind::Faer, 1e-3, 0.1);
+    let (rows, _) = heat2d_table(LinearSolver::Faer, 1e-3, 0.1);
     for (got, want) in rows.iter().zip(&published) {
         assert_eq!(format!("{:.5e}", got.0), format!("{:.5e}", want.0));
         assert_eq!(
@@ -274,7 +274,7 @@ fn heat2d_klu_reproduces_sundials_counters() {
         (1.98864e-03, 5, 173, 193, 29, 195),
         (3.83238e-06, 5, 210, 233, 31, 235),
     ];
-    for kind in [LinearSolverKind::Klu, LinearSolverKind::Faer] {
+    for kind in [LinearSolver::Klu, LinearSolver::Faer] {
         let (rows, _) = heat2d_table(kind, 1e-8, 0.0);
         for (got, want) in rows.iter().zip(&published) {
             assert_eq!(
@@ -461,8 +461,8 @@ fn faer_and_klu_give_the_same_answers() {
         let (rows, stats) = heat2d_table(kind, 1e-8, 0.0);
         (rows.iter().map(|r| r.0).collect::<Vec<f64>>(), stats)
     };
-    let (a, sa) = run(LinearSolverKind::Faer);
-    let (b, sb) = run(LinearSolverKind::Klu);
+    let (a, sa) = run(LinearSolver::Faer);
+    let (b, sb) = run(LinearSolver::Klu);
     for (x, y) in a.iter().zip(&b).take(7) {
         assert!((x - y).abs() <= 1e-10 * x.abs(), "faer {x} vs KLU {y}");
     }
@@ -471,7 +471,7 @@ fn faer_and_klu_give_the_same_answers() {
         (sb.steps, sb.newton_iters, sb.jacobian_evals)
     );
     // And on BDF2 (same Newton path up to round-off).
-    let solve = |kind: LinearSolverKind| {
+    let solve = |kind: LinearSolver| {
         let opts = Bdf2Options {
             dt: 0.01,
             linear_solver: kind.into(),
@@ -481,7 +481,7 @@ fn faer_and_klu_give_the_same_answers() {
         run_to(&mut b, 1.0);
         b.y().to_vec()
     };
-    let (p, q) = (solve(LinearSolverKind::Faer), solve(LinearSolverKind::Klu));
+    let (p, q) = (solve(LinearSolver::Faer), solve(LinearSolver::Klu));
     assert!(
         (p[0] - q[0]).abs() < 1e-13 && (p[1] - q[1]).abs() < 1e-13,
         "{p:?} vs {q:?}"
@@ -689,7 +689,7 @@ fn ida_reports_the_weighted_local_errors_of_its_last_step() {
     // Before the first step IDA has no estimate (zeros); after it, one finite value per
     // unknown, IDA's local error estimate times its error weight, whose norm IDA's error
     // test accepted: at most of order one.
-    let mut ida = robertson(LinearSolverKind::Faer);
+    let mut ida = robertson(LinearSolver::Faer);
     assert_eq!(ida.weighted_local_errors().unwrap(), vec![0.0; 3]);
     run_to(&mut ida, 0.4);
     let e = ida.weighted_local_errors().unwrap();

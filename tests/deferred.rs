@@ -5,7 +5,7 @@ use cellsim::case::{self, Case};
 use cellsim::dae::Dae;
 use cellsim::dae::State;
 use cellsim::model::CellModel;
-use cellsim::record::{RunData, RunSettings};
+use cellsim::record::RunData;
 use cellsim::run::{self, Progress, RunOptions};
 use oorandom::Rand64;
 
@@ -96,7 +96,7 @@ fn short_flat() -> (Case, String) {
 
 fn run_short_flat(out: &str, defer: bool, rtol: f64) -> RunData {
     let (case, file) = short_flat();
-    let mut settings = RunSettings::from_case(&case);
+    let mut settings = case.solver.clone();
     settings.defer_adhesion = defer;
     settings.rtol = rtol;
     settings.atol = rtol * 1e-2;
@@ -105,6 +105,7 @@ fn run_short_flat(out: &str, defer: bool, rtol: f64) -> RunData {
     let opts = RunOptions {
         out: dir.clone(),
         settings,
+        limits: Default::default(),
         progress: Progress::Hidden,
         interrupt: cellsim::stop::StopFlag::new(),
         snapshots: Default::default(),

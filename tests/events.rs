@@ -159,7 +159,7 @@ fn a_scene_starts_its_phases_itself_and_bdf2_finds_the_same_times() {
     // The fixed-step BDF2 (dt = 1 s) locates the same events to within its step.
     let (b, _, _) = run_changed_case(path, "events-bdf2", with_events, |st| {
         st.integrator = cellsim::case::Integrator::Bdf2;
-        st.dt = 1.0;
+        st.bdf2_dt = 1.0;
     });
     assert!(b.finished, "{:?}", b.failure);
     for (i, e) in s.events.iter().enumerate() {

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use cellsim::case::Case;
-use cellsim::record::{FailureKind, RunSettings, Summary};
+use cellsim::record::{FailureKind, Summary};
 use cellsim::run::{self, Progress, RunError, RunOptions};
 
 use crate::scenes::read_csv;
@@ -31,7 +31,8 @@ fn run_hard_with(name: &str, tag: &str, change: impl Fn(&mut Case)) -> Summary {
     let _ = std::fs::remove_dir_all(&out);
     let opts = RunOptions {
         out: out.clone(),
-        settings: RunSettings::from_case(&case),
+        settings: case.solver.clone(),
+        limits: Default::default(),
         progress: Progress::Hidden,
         interrupt: cellsim::stop::StopFlag::new(),
         snapshots: Default::default(),

@@ -7,7 +7,7 @@ use cellsim::dae::bdf2::{Bdf2, Bdf2Options};
 use cellsim::dae::linsolve::LinearSolverError;
 use cellsim::dae::{Atol, Dae, Integrator, IntegratorError, Pattern};
 use cellsim::fem::Mesh;
-use cellsim::lu::LinearSolverKind;
+use cellsim::solver::LinearSolver;
 
 use cellsim::model::CellModel;
 use cellsim::scene;
@@ -41,7 +41,7 @@ fn norm(v: &[f64]) -> f64 {
     v.iter().map(|a| a * a).sum::<f64>().sqrt()
 }
 
-fn solve(kind: LinearSolverKind, m: &CellModel, values: &[f64], b: &[f64]) -> Vec<f64> {
+fn solve(kind: LinearSolver, m: &CellModel, values: &[f64], b: &[f64]) -> Vec<f64> {
     let mut s = kind.build_for(m).unwrap();
     s.analyse(m.pattern()).unwrap();
     s.factorize(values).unwrap();
@@ -74,11 +74,11 @@ fn condensed_solve_matches_the_full_lu_on_the_cell_jacobian() {
         // A right-hand side with every block populated, at the scales of a Newton
         // residual (velocity rows large where cj is).
         let b: Vec<f64> = (0..n).map(|_| rng.rand_float() - 0.5).collect();
-        let full = solve(LinearSolverKind::Faer, &m, &values, &b);
-        let klu = solve(LinearSolverKind::Klu, &m, &values, &b);
-        let cond = solve(LinearSolverKind::FaerCondensed, &m, &values, &b);
+        let full = solve(LinearSolver::Faer, &m, &values, &b);
+        let klu = solve(LinearSolver::Klu, &m, &values, &b);
+        let cond = solve(LinearSolver::FaerCondensed, &m, &values, &b);
         // The same condensation factorized by UMFPACK without refinement.
-        let cond_u = solve(LinearSolverKind::UmfpackCondensed, &m, &values, &b);
+        let cond_u = solve(LinearSolver::UmfpackCondensed, &m, &values, &b);
         let du: Vec<f64> = full.iter().zip(&cond_u).map(|(a, c)| a - c).collect();
         let rel_u = norm(&du) / norm(&full);
         assert!(
@@ -129,12 +129,12 @@ fn every_backend_and_ordering_solves_the_cell_jacobian() {
             m.jacobian(State::new(45_000.0, &y, &yp), cj, &mut values)
                 .unwrap();
             let b: Vec<f64> = (0..m.size()).map(|_| rng.rand_float() - 0.5).collect();
-            let reference = solve(LinearSolverKind::Faer, &m, &values, &b);
+            let reference = solve(LinearSolver::Faer, &m, &values, &b);
             for kind in [
-                LinearSolverKind::Klu,
-                LinearSolverKind::KluMetis,
-                LinearSolverKind::Umfpack,
-                LinearSolverKind::UmfpackNd,
+                LinearSolver::Klu,
+                LinearSolver::KluMetis,
+                LinearSolver::Umfpack,
+                LinearSolver::UmfpackNd,
             ] {
                 let x = solve(kind, &m, &values, &b);
                 let d: Vec<f64> = x.iter().zip(&reference).map(|(a, c)| a - c).collect();
@@ -167,12 +167,12 @@ fn condensed_solver_refuses_a_system_without_velocities() {
     let m = pillars_model(false);
     assert!(m.first_order_blocks().is_none());
     assert!(matches!(
-        LinearSolverKind::FaerCondensed.build_for(&m),
+        LinearSolver::FaerCondensed.build_for(&m),
         Err(LinearSolverError::Unsupported(_))
     ));
     // Through IDA: a clear error naming the solver, not a crash.
     let opts = IdaOptions {
-        linear_solver: LinearSolverKind::FaerCondensed.into(),
+        linear_solver: LinearSolver::FaerCondensed.into(),
         ..Default::default()
     };
     match Ida::new(m, opts) {
@@ -186,8 +186,8 @@ fn condensed_solver_refuses_a_system_without_velocities() {
         Ok(_) => panic!("IDA accepted the condensed solver without velocities"),
     }
     assert_eq!(
-        LinearSolverKind::FaerCondensed.uncondensed(),
-        LinearSolverKind::Faer
+        LinearSolver::FaerCondensed.uncondensed(),
+        LinearSolver::Faer
     );
 }
 
@@ -209,7 +209,7 @@ struct Output {
 }
 
 /// IDA on [`flat_gravity_with_inertia`] with the case's tolerances, outputs every second.
-fn inertial_fall(kind: LinearSolverKind, t_end: f64) -> Vec<Output> {
+fn inertial_fall(kind: LinearSolver, t_end: f64) -> Vec<Output> {
     let (case, model) = flat_gravity_with_inertia();
     let opts = IdaOptions {
         rtol: case.solver.rtol,
@@ -240,8 +240,8 @@ fn ida_with_the_condensed_solver_follows_the_full_lu_through_a_fall_and_landing(
     // first bounce, with inertia on throughout.
     let (_, model) = flat_gravity_with_inertia();
     let n_u = model.dofs.n_u;
-    let full = inertial_fall(LinearSolverKind::Faer, 12.0);
-    let cond = inertial_fall(LinearSolverKind::FaerCondensed, 12.0);
+    let full = inertial_fall(LinearSolver::Faer, 12.0);
+    let cond = inertial_fall(LinearSolver::FaerCondensed, 12.0);
     for (f, c) in full.iter().zip(&cond) {
         let du = f.y[..n_u]
             .iter()
@@ -295,7 +295,7 @@ fn ida_with_the_condensed_solver_follows_the_full_lu_through_a_fall_and_landing(
 #[test]
 fn bdf2_takes_the_same_steps_with_either_solver() {
     // Fixed steps: the two runs differ only by the linear solves' round-off.
-    let run = |kind: LinearSolverKind| {
+    let run = |kind: LinearSolver| {
         let (case, model) = flat_gravity_with_inertia();
         let opts = Bdf2Options {
             dt: 0.25,
@@ -308,8 +308,8 @@ fn bdf2_takes_the_same_steps_with_either_solver() {
         b.advance_to(4.0, &mut |_, _| true).unwrap();
         (b.stats(), b.y().to_vec())
     };
-    let (sf, yf) = run(LinearSolverKind::Faer);
-    let (sc, yc) = run(LinearSolverKind::FaerCondensed);
+    let (sf, yf) = run(LinearSolver::Faer);
+    let (sc, yc) = run(LinearSolver::FaerCondensed);
     assert_eq!(
         (sf.steps, sf.newton_iters, sf.lu_factorizations),
         (sc.steps, sc.newton_iters, sc.lu_factorizations)

@@ -7,11 +7,11 @@ use cellsim::dae::State;
 use cellsim::dae::{Atol, Dae, Integrator};
 use cellsim::fem::tet10::{TET_FACES, face_map};
 use cellsim::fem::{Domain, Lagrange, Mesh, Mesh3, Mesh3Params, MeshParams, TriangleRule, Wedge};
-use cellsim::lu::LinearSolverKind;
 use cellsim::model::{Cell3, Constraints};
 use cellsim::model::{CellModel, ModelParams};
 use cellsim::physics::{KinematicModel, Lattice, Substrate, Viscosity, Yeoh, piola_total3};
 use cellsim::scene;
+use cellsim::solver::LinearSolver;
 use cellsim::sundials::{Ida, IdaOptions};
 use nalgebra::{Matrix3, Vector3};
 
@@ -312,7 +312,7 @@ fn quasi_static_flat(t_end: f64) -> ModelParams {
 }
 
 /// IDA on `m` to `t` at rtol 1e-5 with the sparse LU `lu`.
-fn ida_to<D: Dae>(m: D, atol: Vec<f64>, t: f64, lu: LinearSolverKind) -> Ida<D> {
+fn ida_to<D: Dae>(m: D, atol: Vec<f64>, t: f64, lu: LinearSolver) -> Ida<D> {
     let mut ida = Ida::new(
         m,
         IdaOptions {
@@ -353,12 +353,12 @@ fn flat_gravity_phase_against_the_axisymmetric_model(mesh: Mesh3) {
     let mesh2 = Mesh::generate(&case::terms::mesh_params(&Case::reference())).unwrap();
     let ma = CellModel::new(pa, mesh2).unwrap();
     let atola = ma.atol_vector(1e-7);
-    let idaa = ida_to(ma, atola, t_end, LinearSolverKind::Faer);
+    let idaa = ida_to(ma, atola, t_end, LinearSolver::Faer);
     let oa = idaa.dae().observe(t_end, idaa.y());
     let wedge = mesh.params.wedge;
     let m3 = Cell3::new(params3(p.clone()), mesh).unwrap();
     let atol3 = m3.atol_vector(1e-7);
-    let ida3 = ida_to(m3, atol3, t_end, LinearSolverKind::UmfpackNd);
+    let ida3 = ida_to(m3, atol3, t_end, LinearSolver::UmfpackNd);
     let (m3, y3) = (ida3.dae(), ida3.y());
     let (w, f) = (m3.weight(), m3.contact_force_total(y3));
     assert!(
@@ -408,12 +408,12 @@ fn a_slab_with_u_z_fixed_reproduces_plane_strain() {
     let p = quasi_static_flat(t_end);
     let m2 = CellModel::new(p.clone(), mesh2.clone()).unwrap();
     let atol2 = m2.atol_vector(1e-7);
-    let ida2 = ida_to(m2, atol2, t_end, LinearSolverKind::Faer);
+    let ida2 = ida_to(m2, atol2, t_end, LinearSolver::Faer);
     let o2 = ida2.dae().observe(t_end, ida2.y());
     let slab = Mesh3::extruded(&mesh2, 1.0);
     let m3 = Cell3::with_constraints(params3(p), slab, Constraints::Slab).unwrap();
     let atol3 = m3.atol_vector(1e-7);
-    let ida3 = ida_to(m3, atol3, t_end, LinearSolverKind::UmfpackNd);
+    let ida3 = ida_to(m3, atol3, t_end, LinearSolver::UmfpackNd);
     let o3 = ida3.dae().observe(t_end, ida3.y());
     eprintln!(
         "slab: uy_top {:.6}, contact radius {:.5}; plane strain: {:.6}, {:.5}",
@@ -722,7 +722,7 @@ fn hertz3(e: f64, h_bottom: f64, eps_ct: f64, mu_ct: f64, degree: u32, sub: u32)
     let p = scene::model_params(&case, "hertz-3d.ron", false).unwrap();
     let m = Cell3::new(params3(p), mesh3(h_bottom, 1.5)).unwrap();
     let atol = m.atol_vector(1e-6);
-    let ida = ida_to(m, atol, 150.0, LinearSolverKind::Faer);
+    let ida = ida_to(m, atol, 150.0, LinearSolver::Faer);
     let (m, y) = (ida.dae(), ida.y());
     // Whole ball: four quarters.
     let weight = 4.0 * m.weight();

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use cellsim::case::{self, Case};
-use cellsim::record::{RunSettings, Summary};
+use cellsim::record::Summary;
 use cellsim::run::{self, Progress, RunOptions};
 
 pub fn tmp(name: &str) -> PathBuf {
@@ -15,7 +15,7 @@ pub fn tmp(name: &str) -> PathBuf {
 pub fn run_case(
     path: &str,
     out: &str,
-    tweak: impl FnOnce(&mut RunSettings),
+    tweak: impl FnOnce(&mut cellsim::solver::Settings),
 ) -> (Summary, Vec<Vec<f64>>, PathBuf) {
     run_changed_case(path, out, |_| {}, tweak)
 }
@@ -25,18 +25,19 @@ pub fn run_changed_case(
     path: &str,
     out: &str,
     change: impl FnOnce(&mut Case),
-    tweak: impl FnOnce(&mut RunSettings),
+    tweak: impl FnOnce(&mut cellsim::solver::Settings),
 ) -> (Summary, Vec<Vec<f64>>, PathBuf) {
     let file = format!("{}/{path}", env!("CARGO_MANIFEST_DIR"));
     let mut case = Case::load(&file).unwrap();
     change(&mut case);
     case.validate().unwrap_or_else(|e| panic!("{path}: {e:?}"));
-    let mut settings = RunSettings::from_case(&case);
+    let mut settings = case.solver.clone();
     tweak(&mut settings);
     let dir = tmp(out);
     let opts = RunOptions {
         out: dir.clone(),
         settings,
+        limits: Default::default(),
         progress: Progress::Hidden,
         interrupt: cellsim::stop::StopFlag::new(),
         snapshots: Default::default(),
@@ -106,7 +107,7 @@ fn ida_and_bdf2_agree_on_a_short_scene() {
     });
     let (sb, bdf, _) = run_case("cases/fast/push-pull-short-drag.ron", "agree-bdf2", |s| {
         s.integrator = case::Integrator::Bdf2;
-        s.dt = 2.0;
+        s.bdf2_dt = 2.0;
         s.rtol = 1e-6;
     });
     assert!(si.finished && sb.finished);
@@ -143,7 +144,7 @@ fn ida_and_bdf2_agree_on_a_short_scene() {
             s.parallel_elements = true;
         },
     );
-    assert!(sp.finished && sp.settings.parallel_elements);
+    assert!(sp.finished && sp.settings.solver.parallel_elements);
     assert_eq!(ida, par);
 
     // IDA with its Newton systems solved by GMRES preconditioned by the kept LU
@@ -153,7 +154,7 @@ fn ida_and_bdf2_agree_on_a_short_scene() {
         s.krylov = Some(case::Krylov::default());
     });
     assert!(sk.finished);
-    assert_eq!(sk.settings.krylov, Some(case::Krylov::default()));
+    assert_eq!(sk.settings.solver.krylov, Some(case::Krylov::default()));
     assert_eq!(ida.len(), kry.len());
     for (a, b) in ida.iter().zip(&kry).filter(|(a, _)| a[0] >= 20.0) {
         for c in 1..tol.len() {

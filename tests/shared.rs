@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use cellsim::case::Case;
-use cellsim::record::{RunSettings, Summary};
+use cellsim::record::Summary;
 use cellsim::run::{self, Member, Progress, RunOptions};
 
 use crate::scenes::{read_csv, tmp};
@@ -39,7 +39,8 @@ fn family() -> Vec<Case> {
 fn options(case: &Case, dir: PathBuf) -> RunOptions {
     RunOptions {
         out: dir,
-        settings: RunSettings::from_case(case),
+        settings: case.solver.clone(),
+        limits: Default::default(),
         progress: Progress::Hidden,
         interrupt: cellsim::stop::StopFlag::new(),
         snapshots: Default::default(),

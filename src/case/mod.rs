@@ -248,8 +248,16 @@ fn parse_error(e: ron::error::SpannedError, text: &str, file: &str) -> CaseError
     let end = Position::from(e.span.end);
     // ron's span may start on the whitespace before the offending token: point at the token.
     let start = skip_whitespace(text, Position::from(e.span.start), end);
+    // Each name once: an alias that differs from a name before it only in case and dashes
+    // (the command line's `faer-condensed` after `FaerCondensed`) is left out.
     let one_of = |names: &[&str]| {
-        let names: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
+        let key = |n: &str| n.replace('-', "").to_ascii_lowercase();
+        let names: Vec<String> = names
+            .iter()
+            .enumerate()
+            .filter(|&(k, n)| !names[..k].iter().any(|m| key(m) == key(n)))
+            .map(|(_, n)| format!("`{n}`"))
+            .collect();
         names.join(", ")
     };
     if let Some((position, number)) = decimal_for_integer(&e.code, text, start)

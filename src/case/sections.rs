@@ -9,6 +9,9 @@
 use serde::{Deserialize, Deserializer, Serialize};
 
 pub use crate::physics::{AdhesionDirection, KinematicModel};
+// The `solver` section is the solver's own settings type, with its defaults and its range
+// check ([`crate::solver::Settings`]).
+pub use crate::solver::{Integrator, Krylov, LinearSolver, MAX_ATOL, MAX_RTOL, Settings as Solver};
 
 /// Conversion factors from the SI units of the paper to the solver's µm–s–pN system
 /// (MODEL.md §1).
@@ -1019,143 +1022,6 @@ impl Default for Inertia {
         Inertia {
             mode: InertiaMode::On,
             drag: 0.0,
-        }
-    }
-}
-
-// ---------------------------------------------------------------------------------------
-// Solver
-
-/// Time integrator.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Integrator {
-    /// SUNDIALS IDA: variable-order, variable-step BDF.
-    Ida,
-    /// Fixed-step BDF2 (the paper's scheme), used to verify IDA.
-    Bdf2,
-}
-
-/// Sparse direct solver for the Newton systems.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum LinearSolver {
-    /// faer's sparse LU (pure Rust).
-    Faer,
-    /// SUNDIALS' KLU.
-    Klu,
-    /// faer's LU on the half-size system left after eliminating the velocities (inertia
-    /// on); the full-size faer LU once inertia is off.
-    FaerCondensed,
-    /// SuiteSparse's UMFPACK on METIS's nested dissection (symmetric strategy, no
-    /// iterative refinement), on the condensed system while inertia is on and the full one
-    /// after: the faster LU on the 3-D cell's Jacobians (docs/benchmarks.md).
-    UmfpackCondensed,
-}
-
-/// Loosest relative tolerance a run accepts (`solver.rtol`, `--rtol`, a study's rtols).
-/// Looser, the error test controls no digit and lets nonsense pass: the fall of
-/// `cases/fast/flat-gravity.ron` to 12 s ends 0.41 µm down at every rtol up to 0.2, and
-/// 13 cm up at 0.5. The study's ladder starts at 1e-2.
-pub const MAX_RTOL: f64 = 0.1;
-/// Loosest absolute tolerance on displacements a run accepts [µm] (`solver.atol`,
-/// `--atol`): a tenth of the contact band ε_ct = 0.1 µm. At atol 0.1 µm the fall above
-/// stalled, at 1 µm it crossed into the substrate.
-pub const MAX_ATOL: f64 = 0.01;
-
-/// Time integration and linear algebra settings.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Solver {
-    /// `Ida` or `Bdf2`. Default `Ida`.
-    pub integrator: Integrator,
-    /// Relative tolerance of the local error test (dimensionless). Default 1e-4.
-    /// Valid: 0 < rtol ≤ 0.1 ([`MAX_RTOL`]).
-    pub rtol: f64,
-    /// Absolute tolerance on the displacement unknowns (µm). Default 1e-6 (a thousandth
-    /// of the 3e-4 µm to which the paper's mesh converged, MODEL.md §9). Valid:
-    /// 0 < atol ≤ 0.01 ([`MAX_ATOL`]).
-    pub atol: f64,
-    /// Time step of the fixed-step BDF2 integrator (s). Default 1. Valid: > 0. Unused by
-    /// IDA.
-    pub bdf2_dt: f64,
-    /// Highest BDF order IDA may use. Default 5. Valid: 1 ≤ max_order ≤ 5.
-    pub max_order: u32,
-    /// Maximum number of internal steps between two output times (IDA's mxstep).
-    /// Default 5000. Valid: ≥ 1.
-    pub max_steps: u64,
-    /// `Faer`, `Klu`, `FaerCondensed` or `UmfpackCondensed`. Default `FaerCondensed`: faer's LU with the
-    /// velocities eliminated while inertia is on (0.75× the CPU time of `Faer` on the flat
-    /// gravity phase), the same faer LU once inertia is off. faer is 1.3× faster than KLU
-    /// on the fine mesh, 1.05× slower on the default one (whole runs, docs/benchmarks.md).
-    pub linear_solver: LinearSolver,
-    /// First step size tried by IDA (s). Default none (IDA's estimate). Valid: > 0.
-    pub initial_step: Option<f64>,
-    /// Leave the μ_as unknowns out of the system until adhesion can act (T_g0), and
-    /// integrate μ_as beside it until then, along the accepted steps. Default true: before
-    /// T_g0 the μ_as rows change nothing else but limit the steps (MODEL.md §8). `false`
-    /// keeps them in the system from t = 0.
-    pub defer_adhesion: bool,
-    /// IDA re-forms and factorizes the Jacobian when its coefficient cj = α/h changed by
-    /// more than this fraction since the last factorization (IDASetDeltaCjLSetup; the
-    /// solution is rescaled by 2/(1 + cj/cj_old) in between). Default 0.25 (IDA's).
-    /// Larger values keep a factorization across more step-size changes: worth it where a
-    /// factorization costs many residuals (the 3-D cell). Valid: 0 < delta_cj < 1.
-    pub delta_cj: f64,
-    /// Most Newton iterations per IDA step (IDASetMaxNonlinIters). Default 4 (IDA's).
-    /// Valid: 1 ≤ newton_iters ≤ 50.
-    pub newton_iters: u32,
-    /// Solve IDA's Newton systems by GMRES preconditioned by the last LU instead of by that
-    /// LU alone: the factorization is kept across steps where plain Newton on it would fail
-    /// (`Some(Krylov(max_dim: 5, eps_lin: 0.05))`). Default none. Unused by BDF2.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub krylov: Option<Krylov>,
-    /// Compute the residual's and the Jacobian's element loops on rayon's thread pool
-    /// (one thread per core; blocks of 64 elements, added in element order: the same bits
-    /// either way). Default false: on the 2-D meshes the pool's synchronisation costs
-    /// more than it saves (docs/benchmarks.md); the 3-D scenes turn it on.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub parallel_elements: bool,
-}
-
-/// GMRES (SUNDIALS' SPGMR) on IDA's Newton systems, `J v` by IDA's difference quotients of
-/// the residual, preconditioned by the LU of the iteration matrix factorized at IDA's
-/// preconditioner set-ups.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Krylov {
-    /// Largest Krylov subspace (SPGMR's maxl). Default 5 (IDA's). Valid: 1 ≤ max_dim ≤ 100.
-    pub max_dim: u32,
-    /// Tolerance of the linear iterations as a fraction of the Newton tolerance
-    /// (IDASetEpsLin). Default 0.05 (IDA's). Valid: 0 < eps_lin < 1.
-    pub eps_lin: f64,
-}
-
-impl Default for Krylov {
-    /// IDA's own defaults ([`crate::sundials::Krylov`]).
-    fn default() -> Self {
-        let ida = crate::sundials::Krylov::default();
-        Krylov {
-            max_dim: ida.max_dim.unsigned_abs(),
-            eps_lin: ida.eps_lin,
-        }
-    }
-}
-
-impl Default for Solver {
-    fn default() -> Self {
-        Solver {
-            integrator: Integrator::Ida,
-            rtol: 1e-4,
-            atol: 1e-6,
-            bdf2_dt: 1.0,
-            max_order: 5,
-            max_steps: 5000,
-            linear_solver: LinearSolver::FaerCondensed,
-            initial_step: None,
-            defer_adhesion: true,
-            delta_cj: 0.25,
-            newton_iters: 4,
-            krylov: None,
-            parallel_elements: false,
         }
     }
 }

@@ -553,9 +553,9 @@ fn refining_fields(case: &Case) -> Vec<(String, String)> {
     fields.into_iter().filter_map(|(_, f)| f).collect()
 }
 
-/// A run's estimated peak memory ([`crate::lu::estimated_run_memory`], from the elements
+/// A run's estimated peak memory ([`crate::solver::estimated_run_memory`], from the elements
 /// estimated before meshing) against the memory it may use
-/// ([`crate::lu::MemoryLimit`]): a mesh the machine cannot factor is refused before
+/// ([`crate::solver::MemoryLimit`]): a mesh the machine cannot factor is refused before
 /// meshing, with the estimate. Passes a mesh the generator refuses (its own check says
 /// why) and where no limit can be read.
 pub fn memory_refusal(case: &Case) -> Result<(), Refusal> {
@@ -563,7 +563,7 @@ pub fn memory_refusal(case: &Case) -> Result<(), Refusal> {
     if spec.validate().is_err() {
         return Ok(());
     }
-    let limit = crate::lu::MemoryLimit::of_this_process().map_err(|e| Refusal {
+    let limit = crate::solver::MemoryLimit::of_this_process().map_err(|e| Refusal {
         fields: refining_fields(case),
         message: e.to_string(),
     })?;
@@ -571,7 +571,7 @@ pub fn memory_refusal(case: &Case) -> Result<(), Refusal> {
         return Ok(());
     };
     let elements = spec.expected_elements();
-    let need = crate::lu::estimated_run_memory(spec.dimension(), elements);
+    let need = crate::solver::estimated_run_memory(spec.dimension(), elements);
     if need <= limit.bytes {
         return Ok(());
     }
@@ -600,7 +600,7 @@ pub struct RunCost {
     pub elements: f64,
     /// Wall time on one core of this project's machines [s] ([`estimated_run_seconds`]).
     pub seconds: f64,
-    /// Peak memory [bytes] ([`crate::lu::estimated_run_memory`]).
+    /// Peak memory [bytes] ([`crate::solver::estimated_run_memory`]).
     pub bytes: f64,
 }
 
@@ -613,7 +613,7 @@ pub fn run_cost(case: &Case) -> Option<RunCost> {
         dimension,
         elements,
         seconds: estimated_run_seconds(dimension, elements, &case.phases),
-        bytes: crate::lu::estimated_run_memory(dimension, elements),
+        bytes: crate::solver::estimated_run_memory(dimension, elements),
     })
 }
 

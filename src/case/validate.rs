@@ -63,15 +63,7 @@ impl fmt::Display for Violation {
     }
 }
 
-/// Formats a number for a message: plain for ordinary magnitudes, scientific otherwise.
-pub(crate) fn num(v: f64) -> String {
-    let a = v.abs();
-    if v == 0.0 || (1e-4..1e7).contains(&a) || !v.is_finite() {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
-}
+pub(crate) use crate::solver::num;
 
 /// Collects violations. `written(path)` tells whether the file states a field, to choose
 /// which side of a two-field rule to blame.
@@ -680,41 +672,12 @@ impl Checker<'_> {
         }
     }
 
-    /// Solver tolerances, steps and order; output times.
+    /// The solver section, by its own range check ([`crate::solver::Settings::validate`]);
+    /// the output times.
     fn solver_and_output(&mut self, s: &Solver, output: &Output) {
-        self.range(
-            "solver.rtol",
-            s.rtol,
-            s.rtol > 0.0 && s.rtol <= super::MAX_RTOL,
-            format!("0 < rtol <= {}", super::MAX_RTOL),
-        );
-        self.range(
-            "solver.atol",
-            s.atol,
-            s.atol > 0.0 && s.atol <= super::MAX_ATOL,
-            format!("0 < atol <= {} µm", super::MAX_ATOL),
-        );
-        self.positive("solver.bdf2_dt", s.bdf2_dt);
-        self.int_range("solver.max_order", s.max_order.into(), 1, Some(5));
-        self.int_range("solver.max_steps", s.max_steps, 1, None);
-        self.range(
-            "solver.delta_cj",
-            s.delta_cj,
-            s.delta_cj > 0.0 && s.delta_cj < 1.0,
-            "0 < delta_cj < 1",
-        );
-        self.int_range("solver.newton_iters", s.newton_iters.into(), 1, Some(50));
-        if let Some(k) = &s.krylov {
-            self.int_range("solver.krylov.max_dim", k.max_dim.into(), 1, Some(100));
-            self.range(
-                "solver.krylov.eps_lin",
-                k.eps_lin,
-                k.eps_lin > 0.0 && k.eps_lin < 1.0,
-                "0 < eps_lin < 1",
-            );
-        }
-        if let Some(h0) = s.initial_step {
-            self.positive("solver.initial_step", h0);
+        for bad in s.validate().err().unwrap_or_default() {
+            let field = format!("solver.{}", bad.field);
+            self.push(&field, bad.value, Rule::Range(bad.range));
         }
         self.int_range(
             "output.n_times",

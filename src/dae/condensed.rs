@@ -118,7 +118,7 @@ impl CondensedLu {
     }
 
     /// A solver that does not know the problem's pairs: `analyse` fails with
-    /// [`LinearSolverError::Unsupported`]. What [`crate::lu::LinearSolverKind::build`] returns
+    /// [`LinearSolverError::Unsupported`]. What [`crate::solver::LinearSolver::build`] returns
     /// for the condensed kind, which has no problem to ask.
     pub fn unconfigured() -> Self {
         Self {
@@ -188,7 +188,7 @@ impl LinearSolver for CondensedLu {
         let Some(blocks) = &self.blocks else {
             return Err(LinearSolverError::Unsupported(
                 "the condensed solver (faer-condensed) was built without the problem's \
-                 (u, v) pairs: build it with LinearSolverKind::build_for"
+                 (u, v) pairs: build it with LinearSolver::build_for"
                     .into(),
             ));
         };

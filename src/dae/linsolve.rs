@@ -13,7 +13,7 @@
 //! the half-size system left after eliminating the velocities of a first-order (u, v)
 //! system ([`super::condensed::CondensedLu`]). docs/benchmarks.md ("Fill-reducing
 //! ordering") compares them. Which one an integrator uses is given by a
-//! [`LinearSolverFactory`] in its options ([`crate::lu::LinearSolverKind`] for users).
+//! [`LinearSolverFactory`] in its options ([`crate::solver::LinearSolver`] for users).
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::perm::{Perm, PermRef};
@@ -148,7 +148,7 @@ pub trait LinearSolver {
 }
 
 /// Builds the linear solver of an integrator for a problem. The driver chooses the
-/// factory (e.g. [`crate::lu::LinearSolverKind`], which knows every backend, KLU from
+/// factory (e.g. [`crate::solver::LinearSolver`], which knows every backend, KLU from
 /// [`crate::sundials`] included); the integrators only call it, so this layer does not
 /// depend on the backends above it.
 pub trait LinearSolverFactory: std::fmt::Debug + Send + Sync {
@@ -214,7 +214,7 @@ pub enum ColumnOrdering {
     /// whose pivots stay near the diagonal.
     Amd,
     /// An ordering computed by `order` (e.g. METIS's nested dissection, from
-    /// [`crate::lu`]); the solver is reported as `name`.
+    /// [`crate::solver`]); the solver is reported as `name`.
     External {
         /// The solver's short name for reports ("faer-metis").
         name: &'static str,

@@ -3,7 +3,7 @@
 //! `cellsim run` writes, into its directory and as it goes: `mesh.json` ([`MeshFile`])
 //! first, `timeseries.csv` row by row (one [`Observables`] per output time), a
 //! `state_<phase>.json` ([`StateFile`]) at each phase end and `summary.json`
-//! ([`Summary`], with [`RunSettings`], [`Unknowns`], the integrator statistics and, for a
+//! ([`Summary`], with [`SettingsUsed`], [`Unknowns`], the integrator statistics and, for a
 //! run that stopped early, a typed [`Failure`]) after every row. The drivers (run, study,
 //! paper) write these records and the figures read them back, so neither side imports the
 //! other: this module sits below both. [`read`] loads a run directory back ([`RunData`]).
@@ -18,98 +18,49 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::case::{self, Case};
 use crate::dae::Stats;
 use crate::fem::Domain;
-use crate::lu::LinearSolverKind;
 use crate::physics::{ActiveStrain, Substrate, Substrate3};
+use crate::solver;
 
-/// Integration settings of one run: the case's `solver` section, possibly overridden on
-/// the command line.
+/// summary.json's `settings`: what the run integrated with, in one object: the solver
+/// settings (the case's `solver` section, with the command line's flags applied to it)
+/// and the run's own limits, both defined by [`crate::solver`]. Summaries of an older
+/// cellsim read as well: their `dt` is `bdf2_dt`, their linear solver is named in kebab
+/// case (`faer-condensed`, an alias of [`solver::LinearSolver`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RunSettings {
-    /// "ida" or "bdf2".
-    pub integrator: case::Integrator,
-    /// Relative tolerance (IDA's error test; BDF2's Newton weights).
-    pub rtol: f64,
-    /// Absolute tolerance on displacements [µm] (scaled per block, see
-    /// [`CellModel::atol_vector`]).
-    pub atol: f64,
-    /// BDF2 step [s].
-    pub dt: f64,
-    /// Sparse LU.
-    pub linear_solver: LinearSolverKind,
-    /// IDA's maximum order.
-    pub max_order: u32,
-    /// IDA's step limit between outputs.
-    pub max_steps: u64,
-    /// IDA's first step [s].
-    pub initial_step: Option<f64>,
-    /// BDF2's step while the system has inertia (the fall, before inertia is switched
-    /// off), when smaller than `dt` [s]. A fixed step much longer than the fall cannot land
-    /// the cell on the penalty contact (Newton diverges at contact onset), so a dt ladder
-    /// over a whole scene caps the step of the fall. `None`: `dt` throughout.
+#[serde(from = "SettingsOnDisk")]
+pub struct SettingsUsed {
+    /// The solver settings.
+    #[serde(flatten)]
+    pub solver: solver::Settings,
+    /// The run's limits.
+    #[serde(flatten)]
+    pub limits: solver::Limits,
+}
+
+/// [`SettingsUsed`] as summaries of any cellsim write it.
+#[derive(Deserialize)]
+struct SettingsOnDisk {
+    #[serde(flatten)]
+    solver: solver::Settings,
+    #[serde(flatten)]
+    limits: solver::Limits,
+    /// `bdf2_dt` as summaries before the settings had one type named it. (Not an alias
+    /// of `bdf2_dt`: a case file's `solver` section has no `dt`.)
     #[serde(default)]
-    pub dt_inertia: Option<f64>,
-    /// Wall-clock budget of the integration [s]: past it the run stops cleanly, with
-    /// its outputs so far and the reason in the summary. `None`: no limit.
-    #[serde(default)]
-    pub max_wall_seconds: Option<f64>,
-    /// Leave the μ_as unknowns out of the system until adhesion acts (T_g0), integrating
-    /// μ_as beside it until then ([`crate::model::history`]).
-    #[serde(default = "yes")]
-    pub defer_adhesion: bool,
-    /// IDA's change of cj that triggers a new Jacobian (IDASetDeltaCjLSetup).
-    #[serde(default = "default_delta_cj")]
-    pub delta_cj: f64,
-    /// IDA's most Newton iterations per step.
-    #[serde(default = "default_newton_iters")]
-    pub newton_iters: u32,
-    /// IDA's Newton systems by GMRES preconditioned by the LU (`None`: the LU alone).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub krylov: Option<case::Krylov>,
-    /// The element loops on rayon's thread pool.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub parallel_elements: bool,
+    dt: Option<f64>,
 }
 
-fn default_delta_cj() -> f64 {
-    0.25
-}
-
-fn default_newton_iters() -> u32 {
-    4
-}
-
-fn yes() -> bool {
-    true
-}
-
-impl RunSettings {
-    /// The case's own settings.
-    pub fn from_case(case: &Case) -> Self {
-        let s = &case.solver;
-        Self {
-            integrator: s.integrator,
-            rtol: s.rtol,
-            atol: s.atol,
-            dt: s.bdf2_dt,
-            linear_solver: match s.linear_solver {
-                case::LinearSolver::Faer => LinearSolverKind::Faer,
-                case::LinearSolver::Klu => LinearSolverKind::Klu,
-                case::LinearSolver::FaerCondensed => LinearSolverKind::FaerCondensed,
-                case::LinearSolver::UmfpackCondensed => LinearSolverKind::UmfpackCondensed,
-            },
-            max_order: s.max_order,
-            max_steps: s.max_steps,
-            initial_step: s.initial_step,
-            dt_inertia: None,
-            max_wall_seconds: None,
-            defer_adhesion: s.defer_adhesion,
-            delta_cj: s.delta_cj,
-            newton_iters: s.newton_iters,
-            krylov: s.krylov,
-            parallel_elements: s.parallel_elements,
+impl From<SettingsOnDisk> for SettingsUsed {
+    fn from(d: SettingsOnDisk) -> Self {
+        let mut solver = d.solver;
+        if let Some(dt) = d.dt {
+            solver.bdf2_dt = dt;
+        }
+        SettingsUsed {
+            solver,
+            limits: d.limits,
         }
     }
 }
@@ -222,7 +173,7 @@ pub struct Summary {
     /// Case file.
     pub case_file: String,
     /// Integration settings used.
-    pub settings: RunSettings,
+    pub settings: SettingsUsed,
     /// Inertia mode of the case.
     pub inertia: String,
     /// Unknown counts (u and v of the system at the start; μ_as counted even while its

@@ -25,10 +25,11 @@ use crate::output::{SnapshotOptions, SnapshotWriter, SnapshotWriter3};
 use crate::record::Observables;
 use crate::record::read::STOPPED;
 use crate::record::{
-    self, Failure, FailureKind, MeshFile, RunSettings, Snapshot, StateFile, StopPlace, Summary,
+    self, Failure, FailureKind, MeshFile, SettingsUsed, Snapshot, StateFile, StopPlace, Summary,
     TimeBreakdown, Unknowns,
 };
 use crate::scene::{self, SceneError};
+use crate::solver::{self, Limits, Settings};
 use crate::stop::{StopFlag, signal_name};
 use crate::sundials::{Ida, IdaOptions, Krylov};
 
@@ -332,8 +333,11 @@ impl StopCause {
 pub struct RunOptions {
     /// Output directory.
     pub out: PathBuf,
-    /// Integration settings.
-    pub settings: RunSettings,
+    /// The solver settings: the case's `solver` section (`case.solver.clone()`), or what a
+    /// study makes of it.
+    pub settings: Settings,
+    /// The run's own limits (not case fields).
+    pub limits: Limits,
     /// Progress display.
     pub progress: Progress,
     /// Set to stop the run cleanly (SIGINT, SIGTERM, SIGHUP).
@@ -426,7 +430,7 @@ enum Solver {
 }
 
 impl Solver {
-    fn new(model: Cell, s: &RunSettings) -> Result<Self, IntegratorError> {
+    fn new(model: Cell, s: &Settings, limits: &Limits) -> Result<Self, IntegratorError> {
         let atol = Atol::Vector(model.atol_vector(s.atol));
         // The condensed solver needs the (u, v) pairs: without inertia, its full-size LU.
         let linear_solver = if model.first_order_blocks().is_some() {
@@ -435,36 +439,12 @@ impl Solver {
             s.linear_solver.uncondensed()
         };
         Ok(match s.integrator {
-            case::Integrator::Ida => {
-                let opts = IdaOptions {
-                    rtol: s.rtol,
-                    atol,
-                    max_order: s.max_order,
-                    init_step: s.initial_step,
-                    max_steps: s.max_steps as i64,
-                    linear_solver: linear_solver.into(),
-                    delta_cj: Some(s.delta_cj),
-                    max_newton_iters: Some(s.newton_iters as i32),
-                    krylov: s.krylov.map(|k| Krylov {
-                        max_dim: k.max_dim as i32,
-                        eps_lin: k.eps_lin,
-                    }),
-                    ..Default::default()
-                };
+            solver::Integrator::Ida => {
+                let opts = ida_options(s, atol, linear_solver);
                 Solver::Ida(Box::new(Ida::new(model, opts)?))
             }
-            case::Integrator::Bdf2 => {
-                let dt = match s.dt_inertia {
-                    Some(h) if model.inertia() => s.dt.min(h),
-                    _ => s.dt,
-                };
-                let opts = Bdf2Options {
-                    dt,
-                    rtol: s.rtol,
-                    atol,
-                    linear_solver: linear_solver.into(),
-                    ..Default::default()
-                };
+            solver::Integrator::Bdf2 => {
+                let opts = bdf2_options(s, limits, model.inertia(), atol, linear_solver);
                 Solver::Bdf2(Box::new(Bdf2::new(model, opts)?))
             }
         })
@@ -489,6 +469,59 @@ impl Solver {
             Solver::Ida(i) => i.dae(),
             Solver::Bdf2(b) => b.dae(),
         }
+    }
+}
+
+/// IDA's options for a run: every field from the settings `s`, or none where IDA's own
+/// behaviour is meant (no largest step, no constraints, IDA's failure counts).
+fn ida_options(s: &Settings, atol: Atol, linear_solver: solver::LinearSolver) -> IdaOptions {
+    IdaOptions {
+        rtol: s.rtol,
+        atol,
+        max_order: s.max_order,
+        init_step: s.initial_step,
+        max_step: None,
+        max_steps: s.max_steps as i64,
+        suppress_alg: false,
+        calc_ic: None,
+        linear_solver: linear_solver.into(),
+        constraints: None,
+        max_newton_iters: Some(s.newton_iters as i32),
+        max_conv_fails: None,
+        max_err_test_fails: None,
+        delta_cj: Some(s.delta_cj),
+        krylov: s.krylov.map(|k| Krylov {
+            max_dim: k.max_dim as i32,
+            eps_lin: k.eps_lin,
+        }),
+    }
+}
+
+/// BDF2's options for a run: its step `bdf2_dt` (capped by `limits.dt_inertia` while the
+/// system has inertia), the tolerances and the LU from the settings `s`; the method's own
+/// constants, which no setting changes, written out.
+fn bdf2_options(
+    s: &Settings,
+    limits: &Limits,
+    inertia: bool,
+    atol: Atol,
+    linear_solver: solver::LinearSolver,
+) -> Bdf2Options {
+    let dt = match limits.dt_inertia {
+        Some(h) if inertia => s.bdf2_dt.min(h),
+        _ => s.bdf2_dt,
+    };
+    Bdf2Options {
+        dt,
+        rtol: s.rtol,
+        atol,
+        linear_solver: linear_solver.into(),
+        newton_tol: 0.33,
+        max_newton_iters: 4,
+        max_cuts: 10,
+        start_fraction: 0.25,
+        max_growth: 1.5,
+        cj_reuse_tol: 1e-9,
     }
 }
 
@@ -553,7 +586,7 @@ pub fn run(case: &Case, file: &str, opts: &RunOptions) -> Result<Summary, RunErr
 /// The mesh and the cell model of a case, with the system it starts with
 /// (`settings.defer_adhesion`: the μ_as unknowns join it at T_g0,
 /// [`CellModel::deferring_adhesion`]) and its element loops in parallel or not.
-fn build_model(case: &Case, file: &str, settings: &RunSettings) -> Result<Cell, RunError> {
+fn build_model(case: &Case, file: &str, settings: &Settings) -> Result<Cell, RunError> {
     let (defer_adhesion, parallel) = (settings.defer_adhesion, settings.parallel_elements);
     let mesh_err = |source| RunError::Mesh {
         file: file.into(),
@@ -634,7 +667,8 @@ impl Stop {
 /// its limits ([`StepGuard`]), the progress display and the pending inertia switch.
 struct Driver {
     solver: Solver,
-    settings: RunSettings,
+    settings: Settings,
+    limits: Limits,
     guard: StepGuard,
     reporter: Reporter,
     /// Statistics of the systems before the current one.
@@ -658,7 +692,7 @@ impl Driver {
         // the condition's root.
         let adhesion_at = events::Schedule::new(case).starts[0]
             .filter(|&t| model.adhesion_deferred() && t < ph.t_end);
-        let solver = Solver::new(model, &opts.settings)?;
+        let solver = Solver::new(model, &opts.settings, &opts.limits)?;
         Ok(Self {
             adhesion_at,
             ..Self::with_solver(case, opts, solver)
@@ -672,9 +706,10 @@ impl Driver {
         Self {
             solver,
             settings: opts.settings.clone(),
+            limits: opts.limits,
             guard: StepGuard::new(
                 opts.interrupt.clone(),
-                opts.settings.max_wall_seconds,
+                opts.limits.max_wall_seconds,
                 opts.settings.max_steps,
                 ph.t_end / case.output.n_times.max(1) as f64,
             ),
@@ -817,7 +852,7 @@ impl Driver {
         if last > 0.0 {
             settings.initial_step = Some(0.1 * last);
         }
-        let new = Solver::new(m2, &settings).map_err(|e| restart(e.to_string()))?;
+        let new = Solver::new(m2, &settings, &self.limits).map_err(|e| restart(e.to_string()))?;
         let old = std::mem::replace(&mut self.solver, new);
         self.stats_before += &old.integ_ref().stats();
         let t_end = self.schedule.t_end();
@@ -848,7 +883,7 @@ impl Driver {
         if last > 0.0 {
             settings.initial_step = Some(0.1 * last);
         }
-        let new = Solver::new(m2, &settings)
+        let new = Solver::new(m2, &settings, &self.limits)
             .map_err(|e| format!("restart with the adhesion unknowns at t = {t}: {e}"))?;
         let old = std::mem::replace(&mut self.solver, new);
         self.stats_before += &old.integ_ref().stats();
@@ -888,6 +923,7 @@ impl Driver {
         let Self {
             solver,
             settings,
+            limits,
             guard,
             reporter,
             stats_before,
@@ -900,7 +936,7 @@ impl Driver {
                 let base = stats_before.clone();
                 let mut on_step =
                     |t: f64, s: &Stats| after_step(guard, reporter, stopped, &base, t, s);
-                match advance_switching(solver, ts, tout, settings, &mut on_step)? {
+                match advance_switching(solver, ts, tout, settings, limits, &mut on_step)? {
                     Switch::Switched(old_stats, t_switch) => {
                         *stats_before += &old_stats;
                         *switched_at = Some(t_switch);
@@ -1107,7 +1143,10 @@ impl RunWriter {
         let summary = Summary {
             case: case.name.clone(),
             case_file: file.to_string(),
-            settings: opts.settings.clone(),
+            settings: SettingsUsed {
+                solver: opts.settings.clone(),
+                limits: opts.limits,
+            },
             inertia: format!("{:?}", case.inertia.mode),
             unknowns: Unknowns {
                 total: nu + nv + nm,
@@ -1422,7 +1461,8 @@ fn advance_switching(
     solver: &mut Solver,
     ts: f64,
     tout: f64,
-    settings: &RunSettings,
+    settings: &Settings,
+    limits: &Limits,
     on_step: &mut dyn FnMut(f64, &Stats) -> bool,
 ) -> Result<Switch, String> {
     loop {
@@ -1440,7 +1480,7 @@ fn advance_switching(
                 .model()
                 .without_inertia_at_rest(State { t, y, yp }, &restart)
                 .map_err(|e| e.to_string())?;
-            let new = Solver::new(m2, settings)
+            let new = Solver::new(m2, settings, limits)
                 .map_err(|e| format!("restart without inertia at t = {t}: {e}"))?;
             let old = std::mem::replace(solver, new);
             return Ok(Switch::Switched(old.integ_ref().stats(), t));
@@ -1645,7 +1685,7 @@ mod admissible {
         // The cell's diameter, 20 µm, plus its 0.5 µm above the substrate.
         let reach = scene_reach(&case);
         assert!((reach - 20.5).abs() < 1e-12, "{reach}");
-        let model = build_model(&case, "flat-gravity", &RunSettings::from_case(&case)).unwrap();
+        let model = build_model(&case, "flat-gravity", &case.solver).unwrap();
         let (_, mut y, _) = model.initial();
         assert!(observe_admissible(&model, 0.0, &y, reach).is_ok());
         // The first displacement unknown: 0.99 of the reach is a state, 1.01 is not.

@@ -324,7 +324,7 @@ impl Context<'_, '_> {
                     settings.initial_step = Some(0.1 * b.last_step);
                 }
                 let t = b.model.initial_time();
-                Solver::new(b.model, &settings)
+                Solver::new(b.model, &settings, &ropts.limits)
                     .map(|solver| {
                         Some(Driver {
                             stats_before: b.stats,

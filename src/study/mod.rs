@@ -52,8 +52,9 @@ use crate::case::{self, Case};
 use crate::dae::Stats;
 use crate::record::Observables;
 use crate::record::read::parse_timeseries;
-use crate::record::{FailureKind, RunSettings, Summary};
+use crate::record::{FailureKind, SettingsUsed, Summary};
 use crate::run::{self, Progress, RunError, RunOptions};
+use crate::solver::{Limits, Settings};
 use crate::stop::StopFlag;
 
 use analysis::analyse;
@@ -154,8 +155,8 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> StudyError + '_ {
 }
 
 /// The settings of the case scaled to `rtol`: atol keeps the case's atol/rtol ratio.
-fn scaled_settings(case: &Case, integrator: case::Integrator, rtol: f64) -> RunSettings {
-    let mut s = RunSettings::from_case(case);
+fn scaled_settings(case: &Case, integrator: case::Integrator, rtol: f64) -> Settings {
+    let mut s = case.solver.clone();
     s.integrator = integrator;
     s.atol = case.solver.atol * rtol / case.solver.rtol;
     s.rtol = rtol;
@@ -173,10 +174,14 @@ struct Study<'a> {
 impl Study<'_> {
     /// The case's settings for `integrator` scaled to `rtol` ([`scaled_settings`]), with
     /// the study's wall budget per run.
-    fn settings(&self, integrator: case::Integrator, rtol: f64) -> RunSettings {
-        let mut s = scaled_settings(self.case, integrator, rtol);
-        s.max_wall_seconds = self.opts.settings.max_wall;
-        s
+    fn settings(&self, integrator: case::Integrator, rtol: f64) -> SettingsUsed {
+        SettingsUsed {
+            solver: scaled_settings(self.case, integrator, rtol),
+            limits: Limits {
+                dt_inertia: None,
+                max_wall_seconds: self.opts.settings.max_wall,
+            },
+        }
     }
 }
 
@@ -191,14 +196,14 @@ fn one_run(
     study: Study<'_>,
     role: Role,
     label: String,
-    settings: RunSettings,
+    used: SettingsUsed,
 ) -> Result<Outcome, StudyError> {
     let Study { case, file, opts } = study;
     let dir = opts.out.join("runs").join(&label);
     let mut summary: Option<Summary> = None;
     let mut reused = false;
     if opts.reuse {
-        if let Some(s) = reusable(&dir, &settings) {
+        if let Some(s) = reusable(&dir, &used) {
             summary = Some(s);
             reused = true;
         }
@@ -217,7 +222,8 @@ fn one_run(
         };
         let ropts = RunOptions {
             out: dir.clone(),
-            settings: settings.clone(),
+            settings: used.solver.clone(),
+            limits: used.limits,
             progress,
             interrupt: opts.interrupt.clone(),
             snapshots: Default::default(),
@@ -230,12 +236,14 @@ fn one_run(
             }
             Err(e) => {
                 // The integrator could not be set up with these settings: a failed row.
+                let settings = &used.solver;
                 return Ok(Outcome {
                     row: StudyRow {
                         label,
                         role,
-                        dt: (settings.integrator == case::Integrator::Bdf2).then_some(settings.dt),
-                        dt_inertia: settings.dt_inertia,
+                        dt: (settings.integrator == case::Integrator::Bdf2)
+                            .then_some(settings.bdf2_dt),
+                        dt_inertia: used.limits.dt_inertia,
                         rtol: settings.rtol,
                         atol: settings.atol,
                         finished: false,
@@ -253,6 +261,7 @@ fn one_run(
         });
     }
     let summary = summary.unwrap_or_else(|| unreachable!("set above"));
+    let (settings, limits) = (&used.solver, &used.limits);
     let csv = dir.join("timeseries.csv");
     let text = std::fs::read_to_string(&csv).map_err(io_err(&csv))?;
     let (series, _) = parse_timeseries(&csv, &text)?;
@@ -261,8 +270,8 @@ fn one_run(
         row: StudyRow {
             label,
             role,
-            dt: bdf2.then_some(settings.dt),
-            dt_inertia: if bdf2 { settings.dt_inertia } else { None },
+            dt: bdf2.then_some(settings.bdf2_dt),
+            dt_inertia: if bdf2 { limits.dt_inertia } else { None },
             rtol: settings.rtol,
             atol: settings.atol,
             finished: summary.finished,
@@ -278,23 +287,23 @@ fn one_run(
     })
 }
 
-/// The summary of a finished run in `dir` made with `settings` (the wall budget aside, and
+/// The summary of a finished run in `dir` made with `used` (the wall budget aside, and
 /// for BDF2 the Krylov option, which only IDA uses: a study of IDA with GMRES reuses the
 /// BDF2 ladder of one without).
-fn reusable(dir: &Path, settings: &RunSettings) -> Option<Summary> {
+fn reusable(dir: &Path, used: &SettingsUsed) -> Option<Summary> {
     let text = std::fs::read_to_string(dir.join("summary.json")).ok()?;
     let s: Summary = serde_json::from_str(&text).ok()?;
     let mut a = s.settings.clone();
-    let mut b = settings.clone();
-    a.max_wall_seconds = None;
-    b.max_wall_seconds = None;
-    if b.integrator == case::Integrator::Bdf2 {
-        a.krylov = None;
-        b.krylov = None;
+    let mut b = used.clone();
+    a.limits.max_wall_seconds = None;
+    b.limits.max_wall_seconds = None;
+    if b.solver.integrator == case::Integrator::Bdf2 {
+        a.solver.krylov = None;
+        b.solver.krylov = None;
     }
     // Compared as read back from JSON: the parser may round a float differently in the
     // last bit, so `b` takes the same path.
-    let b: RunSettings = serde_json::from_str(&serde_json::to_string(&b).ok()?).ok()?;
+    let b: SettingsUsed = serde_json::from_str(&serde_json::to_string(&b).ok()?).ok()?;
     (s.finished && a == b && dir.join("timeseries.csv").exists()).then_some(s)
 }
 
@@ -452,8 +461,8 @@ fn bdf2_ladder(study: Study<'_>, runs: &mut Runs) -> Result<(), StudyError> {
     let mut leading_failures = 0;
     while counted < set.rungs && !opts.interrupt.is_set() {
         let mut settings = study.settings(case::Integrator::Bdf2, set.bdf2_rtol);
-        settings.dt = dt;
-        settings.dt_inertia = dt_inertia;
+        settings.solver.bdf2_dt = dt;
+        settings.limits.dt_inertia = dt_inertia;
         let label = format!("bdf2-dt{}", fmt_num(dt));
         let o = one_run(study, Role::Bdf2, label, settings)?;
         let row = runs.record(o)?;

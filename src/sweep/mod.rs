@@ -54,8 +54,9 @@ use serde::{Deserialize, Serialize};
 use crate::case::overrides::{self, parse_number, value_at};
 use crate::case::{Case, CaseError, Override, Substrate};
 use crate::output::OutputError;
-use crate::record::{FailureKind, RunSettings};
+use crate::record::FailureKind;
 use crate::run::{self, Progress, RunError, RunOptions};
+use crate::solver::Limits;
 use crate::stop::StopFlag;
 
 pub use compare::TableSpec;
@@ -1414,11 +1415,13 @@ fn run_point(p: &Point, dir: &Path, opts: &SweepOptions) -> Result<Row, SweepErr
     };
     reset_point_dir(dir, "case.ron", text)?;
     write_atomic(&dir.join(RESOLVED), &resolved(case))?;
-    let mut settings = RunSettings::from_case(case);
-    settings.max_wall_seconds = opts.max_wall;
     let ropts = RunOptions {
         out: dir.to_path_buf(),
-        settings,
+        settings: case.solver.clone(),
+        limits: Limits {
+            dt_inertia: None,
+            max_wall_seconds: opts.max_wall,
+        },
         progress: Progress::Hidden,
         interrupt: opts.interrupt.clone(),
         snapshots: Default::default(),
