@@ -722,3 +722,165 @@ fn loose_tolerances_are_refused_and_the_loosest_allowed_stays_physical() {
     // The fall is 0.5 µm less the 0.1 µm contact band.
     assert!((-0.5..=-0.3).contains(&uy), "uy_top {uy}");
 }
+
+/// The case's `flat-gravity` with a `solver` section `solver` (RON fields) written into a
+/// copy; returns the copy's path and the line and column of the section's first field.
+fn flat_gravity_with_solver(name: &str, solver: &str) -> (String, usize, usize) {
+    let anchor = "inertia: (mode: OffAfter(9.0)),";
+    let line = format!("solver: ({solver}),");
+    let path = variant(
+        name,
+        "cases/fast/flat-gravity.ron",
+        &[(anchor, &format!("{line}\n    {anchor}"))],
+    );
+    let text = std::fs::read_to_string(&path).unwrap();
+    let row = text
+        .lines()
+        .position(|l| l == format!("    {line}"))
+        .unwrap()
+        + 1;
+    (path, row, 4 + line.find('(').unwrap() + 2)
+}
+
+/// `--rtol R`, `--set solver.rtol=R` and a case file's `rtol: R` are one setting with one
+/// check: a bad value gets the same message from each, after the place that wrote it, and
+/// exit status 2 before anything is written.
+#[test]
+fn a_bad_rtol_gets_one_message_from_the_flag_the_set_and_the_file() {
+    let (file, row, col) = flat_gravity_with_solver("rtol-half", "rtol: 0.5");
+    let message = "solver.rtol = 0.5 is out of range (must satisfy 0 < rtol <= 0.1)";
+    let out = tmp("rtol-half");
+    let base = "cases/fast/flat-gravity.ron";
+    for (source, place) in [
+        (vec![base, "--rtol", "0.5"], "--rtol 0.5".to_string()),
+        (
+            vec![base, "--set", "solver.rtol=0.5"],
+            "--set solver.rtol=0.5".to_string(),
+        ),
+        (vec![file.as_str()], format!("{file}:{row}:{col}")),
+    ] {
+        let mut args = vec!["run"];
+        args.extend(source);
+        args.extend(["--quiet", "--out", out.as_str()]);
+        let res = cellsim(&args);
+        let stderr = String::from_utf8_lossy(&res.stderr);
+        assert_eq!(res.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim_end(), format!("error: {place}: {message}"));
+        assert!(!std::path::Path::new(&out).exists());
+    }
+    // A flag is applied after the `--set` arguments: it wins.
+    let out = tmp("rtol-flag-wins");
+    let res = cellsim(&[
+        "run",
+        base,
+        "--set",
+        "solver.rtol=0.5",
+        "--rtol",
+        "1e-3",
+        "--set",
+        "phases.t_end=1.0",
+        "--quiet",
+        "--out",
+        &out,
+    ]);
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    assert_eq!(summary_of(&out)["settings"]["rtol"], 1e-3);
+}
+
+/// The same rtol from the flag, from `--set` and from the case file gives the same run, bit
+/// for bit, and the same settings in summary.json.
+#[test]
+fn rtol_from_the_flag_the_set_or_the_file_gives_the_same_run() {
+    let (file, _, _) = flat_gravity_with_solver("rtol-1e-3", "rtol: 1e-3");
+    let base = "cases/fast/flat-gravity.ron";
+    let mut runs = Vec::new();
+    for (dir, source) in [
+        ("rtol-by-flag", vec![base, "--rtol", "1e-3"]),
+        ("rtol-by-set", vec![base, "--set", "solver.rtol=1e-3"]),
+        ("rtol-by-file", vec![file.as_str()]),
+    ] {
+        let out = tmp(dir);
+        let mut args = vec!["run"];
+        args.extend(source);
+        args.extend(["--quiet", "--out", out.as_str()]);
+        let res = cellsim(&args);
+        assert!(
+            res.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&res.stderr)
+        );
+        let csv = std::fs::read(format!("{out}/timeseries.csv")).unwrap();
+        runs.push((csv, summary_of(&out)["settings"].clone()));
+    }
+    assert_eq!(runs[0].1["rtol"], 1e-3);
+    for (csv, settings) in &runs[1..] {
+        assert!(csv == &runs[0].0, "timeseries.csv differs");
+        assert_eq!(settings, &runs[0].1);
+    }
+}
+
+/// `--linear-solver` takes the command line's names; summary.json writes the case file's,
+/// and reads back as the same solver.
+#[test]
+fn the_linear_solver_flag_takes_kebab_case_names() {
+    let out = tmp("umfpack-nd");
+    let res = cellsim(&[
+        "run",
+        "cases/fast/flat-gravity.ron",
+        "--linear-solver",
+        "umfpack-nd",
+        "--set",
+        "phases.t_end=20.0",
+        "--quiet",
+        "--out",
+        &out,
+    ]);
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    assert_eq!(summary_of(&out)["settings"]["linear_solver"], "UmfpackNd");
+    let summary = cellsim::record::read::read_summary(std::path::Path::new(&out)).unwrap();
+    assert!(summary.finished);
+    assert_eq!(
+        summary.settings.solver.linear_solver,
+        cellsim::solver::LinearSolver::UmfpackNd
+    );
+}
+
+/// A summary.json as cellsim wrote it before the settings had one type (583760b: `dt`, the
+/// linear solver in kebab case, the limits beside the solver's fields) still reads, for
+/// `cellsim table`, a study's `--reuse` and a sweep's resume.
+#[test]
+fn a_summary_of_the_format_before_reads() {
+    let fixture = format!(
+        "{}/tests/data/summary-583760b.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(&fixture).unwrap();
+    assert!(text.contains("\"dt\": 1.0") && text.contains("\"faer-condensed\""));
+    let s: cellsim::record::Summary = serde_json::from_str(&text).unwrap();
+    assert_eq!(s.settings.solver, cellsim::solver::Settings::default());
+    assert_eq!(s.settings.limits, cellsim::solver::Limits::default());
+    assert!(s.finished);
+    // Its `dt` is BDF2's step.
+    let text = text.replace("\"dt\": 1.0", "\"dt\": 2.5");
+    let s: cellsim::record::Summary = serde_json::from_str(&text).unwrap();
+    assert_eq!(s.settings.solver.bdf2_dt, 2.5);
+    // `cellsim table` on a directory holding it.
+    let dir = tmp("old-summary");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(&fixture, format!("{dir}/summary.json")).unwrap();
+    let res = cellsim(&["table", &dir]);
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    assert!(String::from_utf8_lossy(&res.stdout).contains("| flat-gravity | finished |"));
+}
