@@ -41,9 +41,9 @@ Exit status:
 wall-clock budget) or reached a state that left the scene (a node moved further than the \
 cell's diameter plus its height above the substrate: not written); the outputs so far and \
 summary.json (with the reason) are kept
-  2    bad input: a case file, a command-line value (--rtol above 0.1, --atol above \
-0.01 µm), a missing file, or a mesh too large for this machine's memory (refused before \
-meshing, with the estimate): nothing is run
+  2    bad input: a case file, a value on the command line (--set, --rtol above 0.1, \
+--atol above 0.01 µm, ...), a missing file, or a mesh too large for this machine's memory \
+(refused before meshing, with the estimate): nothing is run
   129  stopped by SIGHUP, 130 by SIGINT (Ctrl-C), 143 by SIGTERM: the current step is \
 finished, the outputs and summary.json are written, with the signal and time as reason";
 

@@ -149,7 +149,7 @@ pub struct OutOfRange {
     /// The field's path in [`Settings`], e.g. `rtol`, `krylov.max_dim` (in a case it is
     /// under `solver.`).
     pub field: &'static str,
-    /// Its value, formatted ([`num`] for a real number).
+    /// Its value, formatted as the case's messages write numbers.
     pub value: String,
     /// The rule it breaks, e.g. `0 < rtol <= 0.1`.
     pub range: String,
