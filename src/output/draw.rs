@@ -3,7 +3,7 @@
 //! (and how either is drawn on a chart, with its legend entry), the helpers of axes and
 //! labels, and the plane drawing of a cell — the deformed 2-D cell or a section of the 3-D
 //! one, with its substrate, fibronectin layer, active regions and gravity arrow
-//! ([`draw_in_plane`], [`PlaneDrawing`]). What it may import of [`super`]: [`super::geometry`]
+//! (`draw_in_plane`, `PlaneDrawing`). What it may import of [`super`]: [`super::geometry`]
 //! (pure geometry) and the error types of [`super`] — no figure module, so that every
 //! figure module, 2-D or 3-D, can import it.
 
