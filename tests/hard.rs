@@ -155,8 +155,9 @@ fn narrow_pillars_with_a_wide_gap_finish() {
 #[test]
 fn a_snap_through_is_followed_not_taken_for_a_stall() {
     // The J f_as reading of push-pull, without the fold release (with it this reading does
-    // not snap): at t ≈ 47 200 s the cell's edge lets go of a pillar's top corner and the cell springs back, a motion over ~1e-5 s with the paper's shear
-    // viscosity that IDA follows in thousands of short steps. The stall rule stopped it at
+    // not snap): at t ≈ 47 200 s the cell's edge lets go of a pillar's top corner and the
+    // cell springs back, a motion over ~1e-5 s with the paper's shear viscosity that IDA
+    // follows in thousands of short steps. The stall rule stopped it at
     // t = 47 225 s while those steps were still moving the solution (1.0e4 tolerance units
     // over its window); it must finish, and show the snap: u_y(p_t) rises by more than
     // 0.5 µm between the outputs at 47 125 and 47 250 s (0.72 µm measured).
