@@ -32,7 +32,7 @@ pub enum Integrator {
 /// `cases/fast/flat-gravity.ron` to 12 s ends 0.41 µm down at every rtol up to 0.2, and
 /// 13 cm up at 0.5. The study's ladder starts at 1e-2.
 pub const MAX_RTOL: f64 = 0.1;
-/// Loosest absolute tolerance on displacements a run accepts [µm] (`solver.atol`,
+/// Loosest absolute tolerance on displacements a run accepts \[µm\] (`solver.atol`,
 /// `--atol`): a tenth of the contact band ε_ct = 0.1 µm. At atol 0.1 µm the fall above
 /// stalled, at 1 µm it crossed into the substrate.
 pub const MAX_ATOL: f64 = 0.01;
@@ -264,12 +264,12 @@ pub(crate) fn num(v: f64) -> String {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Limits {
     /// BDF2's step while the system has inertia (the fall, before inertia is switched
-    /// off), when smaller than `bdf2_dt` [s]. A fixed step much longer than the fall cannot
+    /// off), when smaller than `bdf2_dt` \[s\]. A fixed step much longer than the fall cannot
     /// land the cell on the penalty contact (Newton diverges at contact onset), so a dt
     /// ladder over a whole scene caps the step of the fall. `None`: `bdf2_dt` throughout.
     #[serde(default)]
     pub dt_inertia: Option<f64>,
-    /// Wall-clock budget of the integration [s]: past it the run stops cleanly, with
+    /// Wall-clock budget of the integration \[s\]: past it the run stops cleanly, with
     /// its outputs so far and the reason in the summary. `None`: no limit.
     #[serde(default)]
     pub max_wall_seconds: Option<f64>,
@@ -478,7 +478,7 @@ impl MemoryLimit {
     }
 }
 
-/// Peak memory [bytes] of a run of the cell on a mesh of `elements` elements in `dim`
+/// Peak memory \[bytes\] of a run of the cell on a mesh of `elements` elements in `dim`
 /// dimensions (2: six-node triangles, plane strain or axisymmetric; 3: ten-node
 /// tetrahedra) with the scenes' LUs (faer-condensed in 2-D, umfpack-condensed in 3-D):
 /// the model, its Jacobian and the LU's factors, with inertia and the μ_as unknowns.

@@ -1,7 +1,7 @@
 //! `--set PATH=VALUE`: changes to a case file's text made before it is parsed and
 //! validated, so that a bad override gets the same located errors as a bad file.
 //!
-//! `PATH` is a dotted path into the case as [`super::locate`] names fields: enum variants
+//! `PATH` is a dotted path into the case as `super::locate` names fields: enum variants
 //! and `Some(...)` are transparent (`substrate.width` reaches the `width` of
 //! `substrate: Pillars(width: 8.0)`, `active.pac.e` the `e` of `pac: Some((e: 0.7))`), and
 //! a number indexes a tuple or list (`active.pac.inner_semi_axes.0`). `VALUE` is one RON

@@ -495,7 +495,7 @@ pub struct Pillars {
     /// floor and pillar, a kink in the concave corner at the pillar's foot; k > 0 their
     /// smooth maximum where the two depths are within k of each other (the normal turns
     /// continuously round the corner; the surface moves out by at most k/4 there).
-    /// Default 0.25 ([`DEFAULT_FILLET`]: the sharp corner of MODEL.md §5 stalls Newton's
+    /// Default 0.25 (`DEFAULT_FILLET`: the sharp corner of MODEL.md §5 stalls Newton's
     /// method where the membrane reaches it). Valid: 0 ≤ k ≤ min(h, s)/2.
     pub fillet: f64,
 }

@@ -268,7 +268,7 @@ pub struct Refusal {
     pub message: String,
 }
 
-/// One check of a lower layer run on a case: [`model_params`] runs the physics ones
+/// One check of a lower layer run on a case: [`crate::scene::model_params`] runs the physics ones
 /// before building, and [`Case::load`] runs them all so that a case it accepts is one
 /// the run accepts.
 pub struct LayerCheck<'c> {
@@ -598,9 +598,9 @@ pub struct RunCost {
     pub dimension: usize,
     /// Elements expected ([`MeshSpec::expected_elements`]).
     pub elements: f64,
-    /// Wall time on one core of this project's machines [s] ([`estimated_run_seconds`]).
+    /// Wall time on one core of this project's machines \[s\] ([`estimated_run_seconds`]).
     pub seconds: f64,
-    /// Peak memory [bytes] ([`crate::solver::estimated_run_memory`]).
+    /// Peak memory \[bytes\] ([`crate::solver::estimated_run_memory`]).
     pub bytes: f64,
 }
 
@@ -617,7 +617,7 @@ pub fn run_cost(case: &Case) -> Option<RunCost> {
     })
 }
 
-/// Wall time [s] of a run of the scene phases `phases` (to its `t_end`) on a mesh of
+/// Wall time \[s\] of a run of the scene phases `phases` (to its `t_end`) on a mesh of
 /// `elements` expected elements in `dim` dimensions, at the scenes' tolerances, on one
 /// core of this project's kind of machine.
 ///

@@ -54,7 +54,7 @@ pub enum Inadmissible {
     /// (`det F`, or the hoop stretch `1 + u_r/r`) is `value ≤ 0` there.
     #[error("element {element}, {point}: {quantity} = {value:.3e}")]
     Element {
-        /// Time of the residual that met it [s] (NaN where not known).
+        /// Time of the residual that met it \[s\] (NaN where not known).
         t: f64,
         /// Index of the element in the mesh.
         element: usize,

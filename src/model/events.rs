@@ -86,7 +86,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
 
 impl CellModel {
     /// The adhered reference radius L and its rate L̇ [µm, µm/s] (module documentation):
-    /// each outline edge sampled by 3-point Gauss rules on 2^[`EDGE_LEVELS`] pieces. (0, 0) without
+    /// each outline edge sampled by 3-point Gauss rules on 2^`EDGE_LEVELS` pieces. (0, 0) without
     /// adhesion.
     pub fn adhered_radius(&self, y: &[f64], yp: &[f64]) -> (f64, f64) {
         let Some(ad) = &self.params.adhesion else {
@@ -139,7 +139,7 @@ fn area_radius(a: f64, adot: f64) -> (f64, f64) {
 impl super::Cell3 {
     /// The adhered reference radius √(A/π) of the whole cell's adhered reference area A
     /// and its rate [µm, µm/s] (module documentation): each surface face sampled by a
-    /// degree-2 rule on 4^[`FACE_LEVELS`] sub-triangles. (0, 0) without adhesion.
+    /// degree-2 rule on 4^`FACE_LEVELS` sub-triangles. (0, 0) without adhesion.
     pub fn adhered_radius(&self, y: &[f64], yp: &[f64]) -> (f64, f64) {
         let Some(ad) = &self.params.adhesion else {
             return (0.0, 0.0);

@@ -34,11 +34,11 @@ impl<S: Surface<D> + Copy + std::fmt::Debug, const D: usize> LayerField<D> for S
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[error("the adhesion history holds t in [{from}, {to}], not t = {t}")]
 pub struct OutsideHistory {
-    /// The time asked for [s].
+    /// The time asked for \[s\].
     pub t: f64,
-    /// The start of the last step [s].
+    /// The start of the last step \[s\].
     pub from: f64,
-    /// Its end [s].
+    /// Its end \[s\].
     pub to: f64,
 }
 

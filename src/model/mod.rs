@@ -4,7 +4,7 @@
 //! (six-node triangles, plane strain or axisymmetric: [`CellModel`]) and the 3-D quarter
 //! cell (ten-node tetrahedra: [`Cell3`]), generic over the [`Shape`] (dimension, element,
 //! mesh, substrate) and, inside the element loops, the kinematic model's
-//! [`kernels::Formulation`].
+//! `kernels::Formulation`.
 //!
 //! Unknowns y = (u, v, μ_as) with inertia, (u, μ_as) without ([`dofs::DofMapOf`]).
 //! Residual:
@@ -77,7 +77,7 @@ pub struct ModelParams {
     /// (x, y) half-plane is the meridian (r, y) of a 3-D cell, every integral per radian)
     /// or 3-D (the quarter cell, [`Cell3`]).
     pub kinematics: KinematicModel,
-    /// Cell centre c [µm] in the plane z = 0 (the 3-D cell's is (c_x, c_y, 0)).
+    /// Cell centre c \[µm\] in the plane z = 0 (the 3-D cell's is (c_x, c_y, 0)).
     pub center: [f64; 2],
     /// Solid law of the nucleus, cytoplasm and membrane.
     pub solids: [Yeoh; 3],
@@ -85,7 +85,7 @@ pub struct ModelParams {
     pub densities: [f64; 3],
     /// Kelvin–Voigt viscosity (whole cell).
     pub viscosity: Viscosity,
-    /// Gravity g [µm/s²].
+    /// Gravity g \[µm/s²\].
     pub gravity: f64,
     /// Phase switches and the optional gravity flip.
     pub phases: Phases,
@@ -153,7 +153,7 @@ pub enum ModelError {
     Restart {
         /// The change of system (e.g. "switching inertia off").
         what: &'static str,
-        /// Time of the change [s].
+        /// Time of the change \[s\].
         t: f64,
         /// The consistent-initialisation failure.
         source: Box<crate::dae::IntegratorError>,
@@ -486,7 +486,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         self.initial_state.as_ref().map_or(0.0, |s| s.0)
     }
 
-    /// Per-component absolute tolerances: `atol` [µm] on displacements, `atol`/s on
+    /// Per-component absolute tolerances: `atol` \[µm\] on displacements, `atol`/s on
     /// velocities, `atol` · μ_as,max/µm on the exposures (so each block is measured
     /// against its own scale).
     pub fn atol_vector(&self, atol: f64) -> Vec<f64> {

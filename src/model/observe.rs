@@ -20,13 +20,13 @@ use crate::record::Observables;
 const EDGE_SAMPLES: usize = 64;
 
 /// Reference-area integrals of ‖E‖_F and reference areas per domain (nucleus,
-/// cytoplasm, membrane), from [`CellModel::mean_strain_norms`]; in the axisymmetric
+/// cytoplasm, membrane), from [`super::CellOf::mean_strain_norms`]; in the axisymmetric
 /// model reference volumes per radian (∫ r dA) and the integrals with that weight.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StrainNorms {
-    /// ∫ ‖E‖_F dA over each domain [µm²] (axisymmetric: ∫ ‖E‖_F r dA [µm³]).
+    /// ∫ ‖E‖_F dA over each domain \[µm²\] (axisymmetric: ∫ ‖E‖_F r dA \[µm³\]).
     pub integral: [f64; 3],
-    /// Reference area of each domain [µm²] (half cell; axisymmetric: ∫ r dA [µm³], the
+    /// Reference area of each domain \[µm²\] (half cell; axisymmetric: ∫ r dA \[µm³\], the
     /// volume per radian).
     pub area: [f64; 3],
 }
@@ -75,7 +75,7 @@ impl StrainNorms {
 
 /// Adds to `total` the length of the part of one P2 edge whose current position `x` has
 /// `depth(x) > 0`, measured along the current curve and along the reference curve:
-/// `[deformed, reference]`. The edge's parameter s ∈ [0, 1] is cut into [`EDGE_SAMPLES`] equal
+/// `[deformed, reference]`. The edge's parameter s ∈ [0, 1] is cut into `EDGE_SAMPLES` equal
 /// steps; each step counts with the fraction of it where the depth, interpolated
 /// linearly between its ends, is positive, times its chord in the current frame and in
 /// the reference frame. The fraction is that of the same material sub-segment in both
@@ -171,7 +171,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
     }
 
     /// The smallest vertical displacement (the largest downward one, negative = down)
-    /// over every node of the nucleus elements, vertices and mid-side nodes [µm].
+    /// over every node of the nucleus elements, vertices and mid-side nodes \[µm\].
     pub fn nucleus_lowest_uy(&self, y: &[f64]) -> f64 {
         self.elements
             .iter()
@@ -203,8 +203,8 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
 
     /// Total contact force on the modelled part of the cell, integrated with the band rule
     /// over the elements in the band's reach (the others add exact zeros, as in the
-    /// residual): half cell [pN/µm] per unit thickness; axisymmetric [pN] per radian (the
-    /// whole cell's is 2π times it); quarter cell [pN].
+    /// residual): half cell [pN/µm] per unit thickness; axisymmetric \[pN\] per radian (the
+    /// whole cell's is 2π times it); quarter cell \[pN\].
     pub fn contact_force_total(&self, y: &[f64]) -> SVector<f64, D> {
         let axisymmetric = self.params.kinematics == KinematicModel::Axisymmetric;
         let p = &self.params;
@@ -238,7 +238,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
     }
 
     /// Weight of the modelled part of the cell at full gravity: g ∫ ρ dV (half cell
-    /// [pN/µm]; axisymmetric [pN] per radian, g ∫ ρ r dA; quarter cell [pN]).
+    /// [pN/µm]; axisymmetric \[pN\] per radian, g ∫ ρ r dA; quarter cell \[pN\]).
     pub fn weight(&self) -> f64 {
         self.elements
             .iter()
@@ -247,8 +247,8 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
             * self.params.gravity
     }
 
-    /// Reference size of domain `d` (all domains: `None`): area of the half cell [µm²],
-    /// volume per radian (axisymmetric) or volume of the quarter cell [µm³].
+    /// Reference size of domain `d` (all domains: `None`): area of the half cell \[µm²\],
+    /// volume per radian (axisymmetric) or volume of the quarter cell \[µm³\].
     pub fn volume(&self, d: Option<Domain>) -> f64 {
         self.elements
             .iter()
@@ -274,8 +274,8 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
 impl super::CellModel {
     /// Length of the part of the outer boundary in contact, i.e. whose current position
     /// lies within ε_ct of the substrate (depth > −ε_ct), measured along the deformed
-    /// contour and along the reference contour: `(deformed, reference)` [µm]. Each P2
-    /// boundary edge is sampled in [`EDGE_SAMPLES`] sub-segments of its parameter
+    /// contour and along the reference contour: `(deformed, reference)` \[µm\]. Each P2
+    /// boundary edge is sampled in `EDGE_SAMPLES` sub-segments of its parameter
     /// ([`add_band_lengths`]).
     pub fn contact_lengths(&self, y: &[f64]) -> (f64, f64) {
         let eps = self.params.contact.eps;

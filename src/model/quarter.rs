@@ -41,7 +41,7 @@ impl Cell3 {
 
     /// Length of the meridian (the outer boundary in the plane z = c_z) in contact, i.e.
     /// whose current position lies within ε_ct of the substrate, along the deformed and
-    /// the reference curve: `(deformed, reference)` [µm], as the half-plane models'
+    /// the reference curve: `(deformed, reference)` \[µm\], as the half-plane models'
     /// contact radius. The points of that plane stay in it (u_z = 0 there).
     pub fn meridian_contact_lengths(&self, y: &[f64]) -> (f64, f64) {
         let eps = self.params.contact.eps;
@@ -78,9 +78,9 @@ impl Cell3 {
     }
 
     /// Area of the cell surface in contact (current depth > −ε_ct), deformed and on the
-    /// reference sphere, whole cell (4 × the quarter, 8 × the eighth) [µm²]: each P2 face
+    /// reference sphere, whole cell (4 × the quarter, 8 × the eighth) \[µm²\]: each P2 face
     /// sampled by a
-    /// degree-2 rule on 4^[`FACE_LEVELS`] sub-triangles, a point counting with its area
+    /// degree-2 rule on 4^`FACE_LEVELS` sub-triangles, a point counting with its area
     /// element where its current position is within the band.
     pub fn contact_areas(&self, y: &[f64]) -> (f64, f64) {
         let eps = self.params.contact.eps;

@@ -18,7 +18,7 @@ use crate::fem::assembly::{BlockPositions, NONE, Pattern};
 use crate::physics::{Contact, self_contact_force};
 
 /// How far apart along the reference outline a node and a face may be and still touch
-/// [µm]: what the deepest fold of the fine geometry map needs (at w = 10, s = 14 µm the fold
+/// \[µm\]: what the deepest fold of the fine geometry map needs (at w = 10, s = 14 µm the fold
 /// forms at the pillar's foot; with 2 µm it passes through itself and an element inverts at
 /// t = 49 410 s). README, "What the sweeps answer".
 pub(crate) const SELF_CONTACT_REACH: f64 = 4.0;

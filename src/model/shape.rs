@@ -111,13 +111,13 @@ pub trait Shape<const D: usize, const N: usize, const E: usize>:
         &[]
     }
     /// The nodes of the outer surface in order along it, the cell on the left, where the
-    /// model keeps that surface from passing through itself ([`super::self_contact`]);
+    /// model keeps that surface from passing through itself (`super::self_contact`);
     /// empty where it does not (3-D).
     fn outline(_mesh: &Self::Mesh) -> Vec<usize> {
         Vec::new()
     }
     /// The contact radius in state `y`: the length of the contour in contact in the plane
-    /// z = 0, `(deformed, reference)` [µm].
+    /// z = 0, `(deformed, reference)` \[µm\].
     fn contact_lengths(cell: &CellOf<Self, D, N, E>, y: &[f64]) -> (f64, f64);
     /// The adhered reference radius and its rate in state (`y`, `yp`) [µm, µm/s]
     /// ([`super::events`]).

@@ -12,7 +12,7 @@ pub struct Restart<'a> {
     pub linear_solver: &'a dyn LinearSolverFactory,
     /// Relative tolerance.
     pub rtol: f64,
-    /// Absolute tolerance on displacements [µm] (scaled per block by
+    /// Absolute tolerance on displacements \[µm\] (scaled per block by
     /// [`CellOf::atol_vector`]).
     pub atol: f64,
 }

@@ -93,7 +93,7 @@ const CONTOUR_DIVISIONS: usize = 6;
 /// Pieces per boundary edge of the section z = 0 when clipping it to an active region.
 const EDGE_CLIP_PIECES: usize = 16;
 
-/// Step of the contour of the fibronectin layer's edge [µm].
+/// Step of the contour of the fibronectin layer's edge \[µm\].
 const LAYER_STEP: f64 = 0.05;
 
 /// Divisions per side of a curved outer face in the surface view.
@@ -174,9 +174,9 @@ impl Section {
 /// A point of a section: where it is in the reference configuration and where it is drawn.
 #[derive(Debug, Clone, Copy)]
 struct SPt {
-    /// Reference position [µm].
+    /// Reference position \[µm\].
     x: [f64; 3],
-    /// Deformed position in the plane's coordinates [µm].
+    /// Deformed position in the plane's coordinates \[µm\].
     p: Pt,
 }
 
@@ -211,7 +211,7 @@ fn chi3(region: ActiveRegion, a: &ActiveStrain, x: [f64; 3], c_z: f64) -> f64 {
 }
 
 /// The deformed cell cut by a [`Section`] plane, ready to draw: everything in the plane's
-/// coordinates (horizontal, y) [µm].
+/// coordinates (horizontal, y) \[µm\].
 #[derive(Debug, Clone)]
 pub struct SectionShape {
     /// The plane.
@@ -668,7 +668,7 @@ impl SectionShape {
         }
     }
 
-    /// The area of the filled pieces of domain `d` [µm²].
+    /// The area of the filled pieces of domain `d` \[µm²\].
     pub fn area(&self, d: Domain) -> f64 {
         self.cell
             .elements
@@ -969,9 +969,9 @@ fn rgb(c: RGBColor) -> [f64; 3] {
 pub struct SurfaceFrame {
     /// The camera.
     pub camera: Camera,
-    /// Half-widths of the floor drawn, in x and in z, about the cell's axis [µm].
+    /// Half-widths of the floor drawn, in x and in z, about the cell's axis \[µm\].
     pub floor: [f64; 2],
-    /// The box (right, up) in the camera's coordinates [µm] the picture shows.
+    /// The box (right, up) in the camera's coordinates \[µm\] the picture shows.
     pub screen: Bounds,
     /// The box the view from below ([`Camera::below`], the cell alone) shows: the cell,
     /// with room for its contact to spread to 1.4 r_c.
@@ -1496,7 +1496,7 @@ struct SurfaceAreas<DB: DrawingBackend> {
     bar: DrawingArea<DB, Shift>,
     /// The strip under the picture holding the caption (empty without the legend).
     caption: DrawingArea<DB, Shift>,
-    /// Width of the picture [px].
+    /// Width of the picture \[px\].
     pw: u32,
 }
 

@@ -26,7 +26,7 @@ pub const SHAPE_SIZE: (u32, u32) = (1400, 1000);
 /// Pixel size of the two-panel upside-down figure.
 pub const UPSIDE_DOWN_SIZE: (u32, u32) = (1200, 1000);
 
-/// Width of a curve's sample in a legend [px].
+/// Width of a curve's sample in a legend \[px\].
 pub(super) const LEGEND_GLYPH: i32 = 40;
 
 /// Font family of every text.
@@ -99,7 +99,7 @@ pub enum Stroke {
 pub struct Curve {
     /// Legend text.
     pub label: String,
-    /// (t [s], value) points.
+    /// (t \[s\], value) points.
     pub points: Vec<(f64, f64)>,
     /// Colour.
     pub color: RGBColor,
@@ -113,11 +113,11 @@ pub struct Curve {
 pub struct Marks {
     /// Legend text (empty: no legend entry).
     pub label: String,
-    /// (t [s], value) points.
+    /// (t \[s\], value) points.
     pub points: Vec<(f64, f64)>,
     /// Colour.
     pub color: RGBColor,
-    /// Circle radius [px].
+    /// Circle radius \[px\].
     pub radius: i32,
     /// Filled (a cellsim value) instead of hollow (the paper's).
     pub filled: bool,

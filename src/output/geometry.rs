@@ -10,7 +10,7 @@ use crate::fem::{Lagrange, Tri6};
 use crate::physics::{ActiveStrain, Substrate};
 use crate::record::MeshFile;
 
-/// A point [µm].
+/// A point \[µm\].
 pub type Pt = [f64; 2];
 
 /// Straight pieces per curved element edge when tracing polygons.
@@ -291,7 +291,7 @@ impl CellShape {
         out
     }
 
-    /// Bounding box (x_min, x_max, y_min, y_max) of the cell [µm].
+    /// Bounding box (x_min, x_max, y_min, y_max) of the cell \[µm\].
     pub fn bounds(&self) -> Bounds {
         let mut b = Bounds::empty();
         for (_, poly) in &self.elements {
@@ -303,7 +303,7 @@ impl CellShape {
     }
 }
 
-/// An axis-aligned box [µm].
+/// An axis-aligned box \[µm\].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Bounds {
     /// Smallest x.
@@ -366,13 +366,13 @@ impl Bounds {
     }
 }
 
-/// Step of the vertical scans and of the contouring grid [µm].
+/// Step of the vertical scans and of the contouring grid \[µm\].
 const SCAN_STEP: f64 = 0.05;
 
 /// Points per pillar outline in [`Backdrop`].
 const OUTLINE_POINTS: usize = 400;
 
-/// A rectangle (x_a, x_b, y_lo, y_hi) [µm].
+/// A rectangle (x_a, x_b, y_lo, y_hi) \[µm\].
 pub type Rect = [f64; 4];
 
 /// The intervals of `[y0, y1]` where `f(y) ≥ 0`, found by a downward scan in steps of
@@ -506,7 +506,7 @@ pub(crate) fn contour(f: impl Fn(f64, f64) -> f64, b: [f64; 4], h: f64) -> Vec<[
 /// The substrate and the fibronectin layer over a view, ready to draw.
 #[derive(Debug, Clone, Default)]
 pub struct Backdrop {
-    /// The view (x0, x1, y0, y1) it was computed for [µm].
+    /// The view (x0, x1, y0, y1) it was computed for \[µm\].
     pub view: [f64; 4],
     /// The fibronectin layer `{d_sub ≥ −e_f}` as thin column rectangles.
     pub layer: Vec<Rect>,
@@ -583,7 +583,7 @@ impl AsRef<Backdrop> for Backdrop {
     }
 }
 
-/// The lowest height any drawing of `sub` needs [µm]: the floor for pillars, the surface
+/// The lowest height any drawing of `sub` needs \[µm\]: the floor for pillars, the surface
 /// for a flat substrate.
 pub fn substrate_floor(sub: &Substrate) -> f64 {
     match sub {

@@ -37,7 +37,7 @@ type Frame<'b> = DrawingArea<BitMapBackend<'b>, Shift>;
 pub const FRAME_SIZE: (u32, u32) = (800, 560);
 /// Largest number of frames in a movie.
 pub const MAX_FRAMES: usize = 120;
-/// Display time of a frame [ms].
+/// Display time of a frame \[ms\].
 pub const FRAME_DELAY_MS: u32 = 80;
 /// NeuQuant speed of the colour quantisation (1 best … 30 fastest): the drawings of the
 /// cell (the 2-D cell, a section of the 3-D one) have few colours, so the fastest setting

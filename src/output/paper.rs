@@ -14,7 +14,7 @@
 //! are shown beside it.
 //!
 //! The figures and `comparison.md` are drawn from the run directories' files only (see
-//! [`super::read`]), so they can be redrawn from runs that stopped early.
+//! [`crate::record::read`]), so they can be redrawn from runs that stopped early.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -48,9 +48,9 @@ pub enum When {
 /// A quantity the paper reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Quantity {
-    /// Contact radius [µm].
+    /// Contact radius \[µm\].
     ContactRadius(When),
-    /// Downward displacement of the nucleus, −u_y [µm]; at T_g0 and T_as0 the nucleus top
+    /// Downward displacement of the nucleus, −u_y \[µm\]; at T_g0 and T_as0 the nucleus top
     /// p_t's; at the end the paper's "maximum displacement of the nucleus", the largest
     /// over the nucleus and the run (see [`Quantity::measures`]).
     NucleusDisplacement(When),
@@ -59,7 +59,7 @@ pub enum Quantity {
     /// Mean ‖E‖ over the paper's cytoplasm Ω_cp, which includes the membrane, at the end
     /// (fraction).
     StrainCytoplasm,
-    /// |u_y(p_t)| difference between the upside-down run and the control at the end [µm]
+    /// |u_y(p_t)| difference between the upside-down run and the control at the end \[µm\]
     /// (p_t, the point the paper's Fig. 9 plots).
     UpsideDownDifference,
 }
@@ -353,9 +353,9 @@ pub enum NoValue {
     /// The run stopped before the time the value is taken at.
     #[error("the run stopped at t = {} s, before t = {} s", fmt_num(*.stopped, 0), fmt_num(*.needed, 0))]
     Stopped {
-        /// The run's last time [s].
+        /// The run's last time \[s\].
         stopped: f64,
-        /// The time the value is taken at [s].
+        /// The time the value is taken at \[s\].
         needed: f64,
     },
     /// The measure asked for a largest displacement is not a displacement.

@@ -10,7 +10,7 @@ use crate::record::read::RunData;
 /// The table's header (markdown).
 pub const HEADER: &str = "| run | outcome | unknowns | wall [s] | steps | Jacobians | t reached [s] | contact radius [µm] | uy_top [µm] | ‖E‖ nucleus | ‖E‖ cytoplasm |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|";
 
-/// One markdown row for a run: "finished", or "stopped: <reason>" (shortened to its
+/// One markdown row for a run: "finished", or "stopped: \<reason\>" (shortened to its
 /// first sentence and the callback's report, if any).
 pub fn row(s: &Summary) -> String {
     let outcome = match (&s.failure, s.finished) {

@@ -27,9 +27,9 @@ use crate::record::{Observables, RunData};
 /// where several runs are the same run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SpanNote {
-    /// Start of the interval [s].
+    /// Start of the interval \[s\].
     pub from: f64,
-    /// End of the interval [s].
+    /// End of the interval \[s\].
     pub to: f64,
     /// Text above the bracket.
     pub text: String,
@@ -54,12 +54,12 @@ pub struct TimePlot {
     /// The value axis starts at 0 (for quantities that cannot be negative), unless a value
     /// is negative.
     pub from_zero: bool,
-    /// T_g0, T_as0, T_a0 and the end time [s]: boundaries are drawn at the first three
+    /// T_g0, T_as0, T_a0 and the end time \[s\]: boundaries are drawn at the first three
     /// where they lie inside the time axis.
     pub phase_times: [f64; 4],
     /// Name of the interval after T_a0, if shown ("rest", "gravity flipped", …).
     pub after_active: String,
-    /// Right end of the time axis [s].
+    /// Right end of the time axis \[s\].
     pub t_max: f64,
     /// Where the legend goes.
     pub legend: SeriesLabelPosition,
@@ -177,9 +177,9 @@ fn phase_intervals(plot: &TimePlot) -> Vec<(f64, f64, String)> {
     out
 }
 
-/// Margin around a time plot [px].
+/// Margin around a time plot \[px\].
 const TIME_MARGIN: u32 = 18;
-/// Height of the time axis' label area [px].
+/// Height of the time axis' label area \[px\].
 const TIME_X_LABELS: u32 = 60;
 
 /// Draws a time plot into `area` on its own value axis ([`value_range`]).
@@ -369,7 +369,7 @@ pub fn run_label(r: &RunData) -> String {
 /// the curve it is drawn on).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Compared {
-    /// Time of the cellsim value [s]: the time the paper gives, or when our extreme is
+    /// Time of the cellsim value \[s\]: the time the paper gives, or when our extreme is
     /// reached.
     pub t: f64,
     /// The paper's value.

@@ -4,8 +4,8 @@
 //! **The 2-D cell.** Each file holds the **reference** mesh — points (X, Y, 0) in µm, the six-node P2
 //! triangles as VTK quadratic triangles (cell type 22, whose node order — three corners
 //! counter-clockwise, then the mid-sides of edges 0–1, 1–2, 2–0 — is ours) — with
-//! - point data `displacement` (u_x, u_y, 0) [µm] (ParaView: *Warp By Vector* on it shows
-//!   the deformed cell), `velocity` (v_x, v_y, 0) [µm/s] (the v unknowns with inertia, u̇
+//! - point data `displacement` (u_x, u_y, 0) \[µm\] (ParaView: *Warp By Vector* on it shows
+//!   the deformed cell), `velocity` (v_x, v_y, 0) \[µm/s\] (the v unknowns with inertia, u̇
 //!   without), `mu_as` [pN/µm³] (0 off the membrane, where it is not an unknown);
 //! - cell data `domain` (0 nucleus, 1 cytoplasm, 2 membrane), `mean_E_norm` (the element's
 //!   reference-area mean of ‖E‖_F) and `det_F` (its mean det F).
@@ -16,9 +16,9 @@
 //! **The 3-D quarter cell.** Each file holds the **reference** quarter mesh — points (X, Y, Z) in µm, the ten-node
 //! tetrahedra as VTK quadratic tetrahedra (cell type 24) — with the arrays of the 2-D file
 //! under the same names, so a ParaView state made for a 2-D run works on a 3-D one:
-//! - point data `displacement` (u_x, u_y, u_z) [µm] (*Warp By Vector* on it shows the
+//! - point data `displacement` (u_x, u_y, u_z) \[µm\] (*Warp By Vector* on it shows the
 //!   deformed cell; *Reflect* about x = 0 and then z = 0 gives the whole cell),
-//!   `velocity` [µm/s] (the v unknowns with inertia, u̇ without), `mu_as` [pN/µm³] (0 off
+//!   `velocity` \[µm/s\] (the v unknowns with inertia, u̇ without), `mu_as` [pN/µm³] (0 off
 //!   the membrane, where it is not an unknown, as in 2-D);
 //! - cell data `domain` (0 nucleus, 1 cytoplasm, 2 membrane), `mean_E_norm` (the element's
 //!   reference-volume mean of ‖E‖_F) and `det_F` (its mean det F).
@@ -102,7 +102,7 @@ fn vtk_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
 /// coordinates and whose elements have `N` nodes, and a snapshot on it (arrays already
 /// checked against the mesh): what [`VtuMesh::grid`] hands to [`vtk_model`].
 pub(crate) struct GridData<'a, const D: usize, const N: usize> {
-    /// Reference node coordinates [µm] (z = 0 when `D` is 2).
+    /// Reference node coordinates \[µm\] (z = 0 when `D` is 2).
     pub nodes: &'a [[f64; D]],
     /// The elements' nodes, in the mesh's local order.
     pub elements: &'a [[usize; N]],
@@ -112,9 +112,9 @@ pub(crate) struct GridData<'a, const D: usize, const N: usize> {
     pub cell_type: CellType,
     /// Domain of each element.
     pub domains: &'a [Domain],
-    /// Displacement of every node [µm].
+    /// Displacement of every node \[µm\].
     pub u: &'a [[f64; D]],
-    /// Velocity of every node [µm/s].
+    /// Velocity of every node \[µm/s\].
     pub v: &'a [[f64; D]],
     /// μ_as per node [pN/µm³] (`None`: written as 0).
     pub mu_as: &'a [Option<f64>],
@@ -185,7 +185,7 @@ pub trait VtuMesh: Clone {
     type Snapshot: Timed;
     /// Checks that the arrays of `s` fit the mesh.
     fn check(&self, s: &Self::Snapshot) -> Result<(), SnapshotMismatch>;
-    /// The VTK model of `s`, its arrays already checked ([`GridData::into_vtk`]).
+    /// The VTK model of `s`, its arrays already checked (`GridData::into_vtk`).
     fn grid(&self, s: &Self::Snapshot) -> Vtk;
 }
 
@@ -341,7 +341,7 @@ pub fn read_vtu(path: &Path) -> Result<VtuSummary, OutputError> {
 pub struct VtuGrid {
     /// Counts, cell types, array names and the displacement.
     pub summary: VtuSummary,
-    /// The points [µm].
+    /// The points \[µm\].
     pub points: Vec<[f64; 3]>,
     /// Each cell's point indices, in the file's (VTK's) order.
     pub cells: Vec<Vec<usize>>,
@@ -426,7 +426,7 @@ impl<M: VtuMesh> VtuSeriesOf<M> {
     }
 }
 
-/// Writes the `.pvd` collection `pvd` listing `entries` (time [s], file path relative to
+/// Writes the `.pvd` collection `pvd` listing `entries` (time \[s\], file path relative to
 /// the collection), through a temporary file and a rename so that ParaView never reads half
 /// a file.
 pub fn write_pvd(pvd: &Path, entries: &[(f64, String)]) -> Result<(), OutputError> {

@@ -81,11 +81,11 @@ impl std::fmt::Display for Domain {
 pub struct Pac {
     /// Contraction amplitude `e_PAC` (dimensionless, in [0, 1); target fibre stretch `1 − e`).
     pub e: f64,
-    /// Bounding angle `θ_PAC` [degrees], measured from the +x axis; the PAC is `θ ≥ θ_PAC`.
+    /// Bounding angle `θ_PAC` \[degrees\], measured from the +x axis; the PAC is `θ ≥ θ_PAC`.
     pub theta_deg: f64,
-    /// Semi-axes (along x, along y) of the inner ellipse [µm].
+    /// Semi-axes (along x, along y) of the inner ellipse \[µm\].
     pub inner_axes: [f64; 2],
-    /// Semi-axes (along x, along y) of the outer ellipse [µm].
+    /// Semi-axes (along x, along y) of the outer ellipse \[µm\].
     pub outer_axes: [f64; 2],
 }
 
@@ -95,7 +95,7 @@ pub struct Pac {
 pub struct Bottom {
     /// Contraction amplitude `e_bot` (dimensionless, in [0, 1)).
     pub e: f64,
-    /// Bounding angle `θ_bot` [degrees]; the bottom region is `θ ≤ θ_bot`.
+    /// Bounding angle `θ_bot` \[degrees\]; the bottom region is `θ ≤ θ_bot`.
     pub theta_deg: f64,
 }
 
@@ -107,9 +107,9 @@ pub struct ActiveStrain {
     pub pac: Option<Pac>,
     /// Bottom fibres, if active in this scene.
     pub bottom: Option<Bottom>,
-    /// Smoothing half-width `ε_a` of the indicator Heavisides [µm] (MODEL.md: 0.25).
+    /// Smoothing half-width `ε_a` of the indicator Heavisides \[µm\] (MODEL.md: 0.25).
     pub eps: f64,
-    /// Cell centre `c` [µm] (MODEL.md: (0, 8.5)).
+    /// Cell centre `c` \[µm\] (MODEL.md: (0, 8.5)).
     pub center: [f64; 2],
 }
 
@@ -138,8 +138,8 @@ fn inside_ellipse(p: &Vector2<f64>, axes: [f64; 2]) -> f64 {
 }
 
 impl ActiveStrain {
-    /// Checks `ε_a > 0`, amplitudes in [0, 1) (so `det F_a ≥ (1 − e_PAC)(1 − e_bot) > 0`),
-    /// angles in (−90°, 90°], positive semi-axes with the inner ellipse smaller than the
+    /// Checks `ε_a > 0`, amplitudes in \[0, 1) (so `det F_a ≥ (1 − e_PAC)(1 − e_bot) > 0`),
+    /// angles in (−90°, 90°\], positive semi-axes with the inner ellipse smaller than the
     /// outer one, all finite.
     pub fn validate(&self) -> Result<(), PhysicsError> {
         check(

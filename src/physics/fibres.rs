@@ -34,7 +34,7 @@ use super::{PhysicsError, check};
 /// The fibre law's parameters (MODEL.md §11).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Fibres {
-    /// Stiffness `k₁` [Pa].
+    /// Stiffness `k₁` \[Pa\].
     pub k1: f64,
     /// Exponential stiffening `k₂` (dimensionless).
     pub k2: f64,
@@ -173,7 +173,7 @@ impl Fibres {
         (psi, d1, d2)
     }
 
-    /// Energy per unit reference volume `J_a χ ψ(|Fb|² − 1)` [Pa].
+    /// Energy per unit reference volume `J_a χ ψ(|Fb|² − 1)` \[Pa\].
     pub fn energy<const D: usize>(&self, F: &SMatrix<f64, D, D>, f: &ActiveFibre<D>) -> f64 {
         let x = (F * f.b).norm_squared() - 1.0;
         f.weight * self.scalars(x).0

@@ -54,7 +54,7 @@ pub fn admissible_hoop(F: &BlockDiag<f64>) -> bool {
 }
 
 impl Yeoh {
-    /// Strain energy `W(C_e)` per unit intermediate volume [Pa] from the in-plane block of
+    /// Strain energy `W(C_e)` per unit intermediate volume \[Pa\] from the in-plane block of
     /// the symmetric `C_e` and its hoop entry `c = λ_e²`.
     fn strain_energy_hoop_sym<T: Real>(&self, Ce: Sym<T>, c: T) -> T {
         let tr = Ce.tr();
@@ -66,14 +66,14 @@ impl Yeoh {
         })
     }
 
-    /// Energy per unit reference volume `Ψ(F) = J_a W(C_e)` [Pa] for `F = F₂ ⊕ λ`,
+    /// Energy per unit reference volume `Ψ(F) = J_a W(C_e)` \[Pa\] for `F = F₂ ⊕ λ`,
     /// `F_a = F_a2 ⊕ 1`.
     pub fn energy_hoop<T: Real>(&self, F: &BlockDiag<T>, Fa: &Matrix2<f64>) -> T {
         let (Ce, _, Ja) = elastic_right_cauchy_green(&F.plane, Fa);
         self.strain_energy_hoop_sym(Ce, F.hoop * F.hoop) * Ja
     }
 
-    /// `S_e = 2∂W/∂C_e` [Pa], in-plane block and hoop entry, from `C_e = C_e2 ⊕ c`:
+    /// `S_e = 2∂W/∂C_e` \[Pa\], in-plane block and hoop entry, from `C_e = C_e2 ⊕ c`:
     /// `S_e = a I + k C_e⁻¹ − 2β C_e` with `a = 2(A + βI₁)`,
     /// `k = λ_Y ln J_e − 2A I₃^{1/3} − 4β I₃^{2/3}`, `A = α₁ + 2α₂X + 3α₃X²`; in-plane
     /// `C_e⁻¹ = adj(C_e2)/det C_e2`, hoop `1/c`.
@@ -101,7 +101,7 @@ impl Yeoh {
         }
     }
 
-    /// First Piola–Kirchhoff stress of the solid phase `P_s = F S_s` [Pa], block diagonal
+    /// First Piola–Kirchhoff stress of the solid phase `P_s = F S_s` \[Pa\], block diagonal
     /// (`P₃₃ = λ S₃₃`); it equals `∂Ψ/∂F` (in-plane entries and `∂Ψ/∂λ`).
     pub fn piola_solid_hoop<T: Real>(&self, F: &BlockDiag<T>, Fa: &Matrix2<f64>) -> BlockDiag<T> {
         let (S, s33) = self.pk2_solid_hoop_sym(F, Fa);
@@ -125,7 +125,7 @@ impl Viscosity {
         (plane, c33_inv * vol + rate * c33_inv * 2.0 * J * self.mu_f)
     }
 
-    /// Viscous first Piola–Kirchhoff stress `P_f = F S_f` [Pa] with the hoop stretch;
+    /// Viscous first Piola–Kirchhoff stress `P_f = F S_f` \[Pa\] with the hoop stretch;
     /// linear in `Ḟ`.
     pub fn piola_viscous_hoop<T: Real>(
         &self,
@@ -137,7 +137,7 @@ impl Viscosity {
     }
 }
 
-/// Total first Piola–Kirchhoff stress `P = F(S_s + S_f)` [Pa] with the hoop stretch,
+/// Total first Piola–Kirchhoff stress `P = F(S_s + S_f)` \[Pa\] with the hoop stretch,
 /// block diagonal.
 pub fn piola_total_hoop<T: Real>(
     yeoh: &Yeoh,
@@ -164,11 +164,11 @@ pub const HOOP: usize = 4;
 /// for `P`, columns for `F` (or `Ḟ`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MaterialPointHoop {
-    /// Total first Piola–Kirchhoff stress `P` [Pa].
+    /// Total first Piola–Kirchhoff stress `P` \[Pa\].
     pub P: BlockDiag<f64>,
-    /// `∂P_α/∂F_β` [Pa].
+    /// `∂P_α/∂F_β` \[Pa\].
     pub dP_dF: SMatrix<f64, HOOP_ENTRIES, HOOP_ENTRIES>,
-    /// `∂P_α/∂Ḟ_β` [Pa·s] (viscous part only).
+    /// `∂P_α/∂Ḟ_β` \[Pa·s\] (viscous part only).
     pub dP_dFdot: SMatrix<f64, HOOP_ENTRIES, HOOP_ENTRIES>,
 }
 

@@ -20,15 +20,15 @@ use serde::{Deserialize, Serialize};
 /// Units: all coefficients in Pa = pN/µm².
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Yeoh {
-    /// `α₁ = μ_e/2 − β` [Pa].
+    /// `α₁ = μ_e/2 − β` \[Pa\].
     pub alpha1: f64,
-    /// `α₂ = −γα₁` [Pa].
+    /// `α₂ = −γα₁` \[Pa\].
     pub alpha2: f64,
-    /// `α₃ = γα₁` [Pa].
+    /// `α₃ = γα₁` \[Pa\].
     pub alpha3: f64,
-    /// Mooney coefficient `β = f_β μ_e/2` (`f_β = 0.2` in MODEL.md) [Pa].
+    /// Mooney coefficient `β = f_β μ_e/2` (`f_β = 0.2` in MODEL.md) \[Pa\].
     pub beta: f64,
-    /// Volumetric coefficient `λ_Y = λ_e + (2/3)μ_e` (the bulk modulus) [Pa].
+    /// Volumetric coefficient `λ_Y = λ_e + (2/3)μ_e` (the bulk modulus) \[Pa\].
     pub lambda_y: f64,
 }
 
@@ -84,7 +84,7 @@ pub struct TangentScalars {
 /// form the invariants from their own storage of `C_e` and the tensors from these
 /// scalars.
 pub trait IsotropicSolid {
-    /// `W` [Pa].
+    /// `W` \[Pa\].
     fn energy_density<T: Real>(&self, inv: Invariants<T>) -> T;
     /// `S_e = 2∂W/∂C_e = a I + k C_e⁻¹ + c C_e`, from `I₁` and `I₃` (the law's `∂W/∂I₂`
     /// is constant, so `I₂` does not enter).
@@ -145,7 +145,7 @@ impl IsotropicSolid for Yeoh {
 }
 
 impl Yeoh {
-    /// Coefficients from Young's modulus `e` [Pa], Poisson's ratio `nu`, the stiffening
+    /// Coefficients from Young's modulus `e` \[Pa\], Poisson's ratio `nu`, the stiffening
     /// ratio `gamma` and the Mooney fraction `beta_fraction` (MODEL.md: 0.2):
     ///
     /// `μ_e = E/(2(1+ν))`, `λ_e = Eν/((1+ν)(1−2ν))`, `β = f_β μ_e/2`, `α₁ = μ_e/2 − β`,
@@ -201,9 +201,9 @@ impl Yeoh {
 /// Units: Pa·s = pN·s/µm².
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Viscosity {
-    /// Volumetric viscosity `λ_f` [Pa·s] (MODEL.md: 1000).
+    /// Volumetric viscosity `λ_f` \[Pa·s\] (MODEL.md: 1000).
     pub lambda_f: f64,
-    /// Shear viscosity `μ_f` [Pa·s] (MODEL.md: 2e-3).
+    /// Shear viscosity `μ_f` \[Pa·s\] (MODEL.md: 2e-3).
     pub mu_f: f64,
 }
 
@@ -231,11 +231,11 @@ impl Viscosity {
 /// Flattening: row `D i + J` for `P_iJ`, column `D k + L` for `F_kL` (or `Ḟ_kL`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MaterialPointOf<const D: usize, const DD: usize> {
-    /// Total first Piola–Kirchhoff stress `P` [Pa].
+    /// Total first Piola–Kirchhoff stress `P` \[Pa\].
     pub P: SMatrix<f64, D, D>,
-    /// `∂P_iJ/∂F_kL` [Pa].
+    /// `∂P_iJ/∂F_kL` \[Pa\].
     pub dP_dF: SMatrix<f64, DD, DD>,
-    /// `∂P_iJ/∂Ḟ_kL` [Pa·s] (viscous part only).
+    /// `∂P_iJ/∂Ḟ_kL` \[Pa·s\] (viscous part only).
     pub dP_dFdot: SMatrix<f64, DD, DD>,
 }
 

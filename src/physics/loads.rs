@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 pub struct Contact {
     /// Penalty coefficient `μ_ct` [pN/µm³] (MODEL.md: 2e9 N/m³ = 2e3 pN/µm³).
     pub mu_ct: f64,
-    /// Half-width `ε_ct` of the contact band [µm] (MODEL.md: 0.1).
+    /// Half-width `ε_ct` of the contact band \[µm\] (MODEL.md: 0.1).
     pub eps: f64,
     /// Stiffening `κ` beyond the band: for `d > ε` the force is `J μ_ct (1 + κ ξ³) n`,
     /// `ξ = (d − ε)/ε`, C² at `d = ε` (MODEL.md: 0, the paper's force that stays at
@@ -72,9 +72,9 @@ pub enum AdhesionDirection {
 /// `Cofactor`, `false`, `None`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Adhesion {
-    /// Thickness `e_f` of the fibronectin layer over the substrate [µm] (MODEL.md: 1.5).
+    /// Thickness `e_f` of the fibronectin layer over the substrate \[µm\] (MODEL.md: 1.5).
     pub e_f: f64,
-    /// Half-width of the layer's Heaviside [µm] (MODEL.md does not say; default 0.1,
+    /// Half-width of the layer's Heaviside \[µm\] (MODEL.md does not say; default 0.1,
     /// the contact band's `ε_ct`).
     pub eps: f64,
     /// Maturation rate `μ_as0` [pN/(µm³·s)] (MODEL.md: 1e6 N/(m³·s) = 1 pN/(µm³·s)).
@@ -250,7 +250,7 @@ pub fn self_contact_force<T: Real>(
     Some([zero, f, zero, f * (s - 1.0), -(f * s)])
 }
 
-/// Fibronectin-layer indicator at a current position `x` [µm], from the substrate's
+/// Fibronectin-layer indicator at a current position `x` \[µm\], from the substrate's
 /// penetration depth `d = d(x)`: `H_ε(d + e_f)` ∈ [0, 1], 1 within `e_f − ε` of the
 /// substrate and inside it; or, when the layer excludes the substrate
 /// (`exclude_substrate = Some(ε_s)`), `H_ε(d + e_f) − H_ε_s(d)`, 0 again inside the

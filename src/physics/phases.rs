@@ -12,9 +12,9 @@ use serde::{Deserialize, Serialize};
 /// Smooth reversal of gravity: `s_g(t) = 1 − 2 S(t; start, start + duration)`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Flip {
-    /// Time at which the flip starts [s] (MODEL.md: `T_a0`).
+    /// Time at which the flip starts \[s\] (MODEL.md: `T_a0`).
     pub start: f64,
-    /// Duration of the flip [s] (MODEL.md: 10 000 s).
+    /// Duration of the flip \[s\] (MODEL.md: 10 000 s).
     pub duration: f64,
 }
 
@@ -25,12 +25,12 @@ pub struct Flip {
 /// holds, and then runs from that time over its duration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Phases {
-    /// End of the gravity ramp `T_g0` [s]; gravity ramps over `[0, T_g0]`.
+    /// End of the gravity ramp `T_g0` \[s\]; gravity ramps over `[0, T_g0]`.
     pub t_g0: f64,
-    /// The adhesion ramp `[start, end]` [s] (the paper: `[T_g0, T_as0]`); `None` while its
+    /// The adhesion ramp `[start, end]` \[s\] (the paper: `[T_g0, T_as0]`); `None` while its
     /// start is a condition not yet met.
     pub adhesion: Option<[f64; 2]>,
-    /// The active-strain ramp `[start, end]` [s] (the paper: `[T_as0, T_a0]`); `None`
+    /// The active-strain ramp `[start, end]` \[s\] (the paper: `[T_as0, T_a0]`); `None`
     /// while its start is a condition not yet met.
     pub active: Option<[f64; 2]>,
     /// Optional gravity flip (upside-down scene); `None` also while its start, in the
@@ -42,16 +42,16 @@ pub struct Phases {
 /// zero of a root function of the DAE once the condition is armed.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum Condition {
-    /// The cell has settled: the vertical speed of the centre falls below `speed` [µm/s],
+    /// The cell has settled: the vertical speed of the centre falls below `speed` \[µm/s\],
     /// armed once the contact carries half the weight then acting.
     Settled {
-        /// The speed [µm/s].
+        /// The speed \[µm/s\].
         speed: f64,
     },
-    /// Spreading slows: the adhered reference radius grows slower than `rate` [µm/s],
+    /// Spreading slows: the adhered reference radius grows slower than `rate` \[µm/s\],
     /// armed once it has grown faster (and adhesion has started).
     SpreadingSlows {
-        /// The rate [µm/s].
+        /// The rate \[µm/s\].
         rate: f64,
     },
 }

@@ -17,7 +17,7 @@ use super::{Real, Viscosity, Yeoh};
 use nalgebra::Matrix2;
 
 impl Yeoh {
-    /// Strain energy `W(C_e)` per unit intermediate volume [Pa], from the in-plane block of
+    /// Strain energy `W(C_e)` per unit intermediate volume \[Pa\], from the in-plane block of
     /// the symmetric `C_e` (`C_e,33 = 1`).
     fn strain_energy_sym<T: Real>(&self, Ce: Sym<T>) -> T {
         let tr = Ce.tr();
@@ -30,14 +30,14 @@ impl Yeoh {
     }
 
     /// Energy per unit reference volume `Ψ(F) = J_a W(C_e)`, `C_e = F_a⁻ᵀ C F_a⁻¹`,
-    /// `C = FᵀF` [Pa].
+    /// `C = FᵀF` \[Pa\].
     pub fn energy<T: Real>(&self, F: &Matrix2<T>, Fa: &Matrix2<f64>) -> T {
         let (Ce, _, Ja) = elastic_right_cauchy_green(F, Fa);
         self.strain_energy_sym(Ce) * Ja
     }
 
     /// Second Piola–Kirchhoff stress of the intermediate configuration, in-plane block
-    /// [Pa], from the symmetric `C_e`:
+    /// \[Pa\], from the symmetric `C_e`:
     ///
     /// `S_e = 2∂W/∂C_e = 2(α₁ + 2α₂X + 3α₃X²)(I − I₃^{1/3}C_e⁻¹)
     ///       + 2β(I₁I − C_e − 2I₃^{2/3}C_e⁻¹) + λ_Y ln J_e C_e⁻¹`.
@@ -54,7 +54,7 @@ impl Yeoh {
     }
 
     /// Second Piola–Kirchhoff stress of the solid phase in the reference configuration,
-    /// `S_s = J_a F_a⁻¹ S_e F_a⁻ᵀ` [Pa], symmetric.
+    /// `S_s = J_a F_a⁻¹ S_e F_a⁻ᵀ` \[Pa\], symmetric.
     fn pk2_solid_sym<T: Real>(&self, F: &Matrix2<T>, Fa: &Matrix2<f64>) -> Sym<T> {
         let (Ce, Fa_inv, Ja) = elastic_right_cauchy_green(F, Fa);
         let Se = self.pk2_elastic_sym(Ce);
@@ -64,7 +64,7 @@ impl Yeoh {
         }
     }
 
-    /// First Piola–Kirchhoff stress of the solid phase, `P_s = F J_a F_a⁻¹ S_e F_a⁻ᵀ` [Pa];
+    /// First Piola–Kirchhoff stress of the solid phase, `P_s = F J_a F_a⁻¹ S_e F_a⁻ᵀ` \[Pa\];
     /// it equals `∂Ψ/∂F`.
     pub fn piola_solid<T: Real>(&self, F: &Matrix2<T>, Fa: &Matrix2<f64>) -> Matrix2<T> {
         self.pk2_solid_sym(F, Fa).left_mul(F)
@@ -175,7 +175,7 @@ pub(super) fn elastic_right_cauchy_green<T: Real>(
 }
 
 impl Viscosity {
-    /// Viscous second Piola–Kirchhoff stress `S_f` (in-plane block) [Pa].
+    /// Viscous second Piola–Kirchhoff stress `S_f` (in-plane block) \[Pa\].
     fn pk2_viscous_sym<T: Real>(&self, F: &Matrix2<T>, Fdot: &Matrix2<T>) -> Sym<T> {
         let v = ViscousKinematics::of(F, Fdot);
         let tr = v.Ci.dot(v.Cd);
@@ -183,7 +183,7 @@ impl Viscosity {
             .add(v.K.scale(v.J * self.mu_f))
     }
 
-    /// Viscous first Piola–Kirchhoff stress `P_f = F S_f` [Pa]; linear in `Ḟ`, zero for
+    /// Viscous first Piola–Kirchhoff stress `P_f = F S_f` \[Pa\]; linear in `Ḟ`, zero for
     /// rigid motions `Ḟ = WF`, `W` skew.
     pub fn piola_viscous<T: Real>(&self, F: &Matrix2<T>, Fdot: &Matrix2<T>) -> Matrix2<T> {
         self.pk2_viscous_sym(F, Fdot).left_mul(F)
@@ -233,7 +233,7 @@ impl<T: Real> ViscousKinematics<T> {
     }
 }
 
-/// Total first Piola–Kirchhoff stress `P = F(S_s + S_f)` [Pa] (solid with active strain
+/// Total first Piola–Kirchhoff stress `P = F(S_s + S_f)` \[Pa\] (solid with active strain
 /// `F_a`, plus viscosity). Generic: `f64` for residuals.
 pub fn piola_total<T: Real>(
     yeoh: &Yeoh,

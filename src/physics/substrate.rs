@@ -65,23 +65,23 @@ pub enum PillarFoot {
 /// Micropillar geometry. Lengths in µm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Pillars {
-    /// Pillar width `w` [µm] (MODEL.md: 8).
+    /// Pillar width `w` \[µm\] (MODEL.md: 8).
     pub width: f64,
-    /// Spacing between pillars `s` [µm] (MODEL.md: 8); period `w + s`.
+    /// Spacing between pillars `s` \[µm\] (MODEL.md: 8); period `w + s`.
     pub spacing: f64,
-    /// Pillar height `h` [µm] (MODEL.md: 8); the floor is at `y_top − h`.
+    /// Pillar height `h` \[µm\] (MODEL.md: 8); the floor is at `y_top − h`.
     pub height: f64,
-    /// Abscissa of the axis of pillar `k = 0` [µm] (MODEL.md: 8).
+    /// Abscissa of the axis of pillar `k = 0` \[µm\] (MODEL.md: 8).
     pub first_center: f64,
     /// Superellipse exponent `q ≥ 2` (MODEL.md: 4); integers use exact integer powers.
     pub q: f64,
-    /// Height of the pillar tops `y_top` [µm] (MODEL.md: placed by [`Pillars::y_top_for_gap`],
+    /// Height of the pillar tops `y_top` \[µm\] (MODEL.md: placed by [`Pillars::y_top_for_gap`],
     /// ≈ −0.3 for the default cell).
     pub y_top: f64,
     /// How the pillar meets the floor (default [`PillarFoot::Rounded`], MODEL.md).
     #[serde(default)]
     pub foot: PillarFoot,
-    /// Width `k` [µm] of the fillet where the floor meets a pillar: 0 (default, MODEL.md)
+    /// Width `k` \[µm\] of the fillet where the floor meets a pillar: 0 (default, MODEL.md)
     /// takes the deeper of the two surfaces, a kink in the concave corner; `k > 0` the
     /// smooth maximum of the two depths where they are within `k` of each other
     /// ([`floor_and_pillar`]).
@@ -128,9 +128,9 @@ pub fn floor_and_pillar<T: Real, const D: usize>(
 /// The substrate: a flat half-plane or a periodic row of pillars on a floor.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum Substrate {
-    /// Half-plane `y < y_s` [µm] (MODEL.md: `y_s = −2`).
+    /// Half-plane `y < y_s` \[µm\] (MODEL.md: `y_s = −2`).
     Flat {
-        /// Surface height `y_s` [µm].
+        /// Surface height `y_s` \[µm\].
         y_s: f64,
     },
     /// Micropillars on a floor.
@@ -228,12 +228,12 @@ impl Pillars {
         )
     }
 
-    /// Period `w + s` [µm].
+    /// Period `w + s` \[µm\].
     pub fn period(&self) -> f64 {
         self.width + self.spacing
     }
 
-    /// Axis of the pillar nearest to abscissa `x` [µm].
+    /// Axis of the pillar nearest to abscissa `x` \[µm\].
     pub fn nearest_axis(&self, x: f64) -> f64 {
         let k = ((x - self.first_center) / self.period()).round();
         self.first_center + k * self.period()
@@ -285,7 +285,7 @@ impl Pillars {
         }
     }
 
-    /// Height `y` of the substrate surface (pillar top or floor) at abscissa `x` [µm]:
+    /// Height `y` of the substrate surface (pillar top or floor) at abscissa `x` \[µm\]:
     /// `y_top − h/2 + (h/2)(1 − |x̃/(w/2)|^q)^{1/q}` over a pillar, else `y_top − h`.
     pub fn surface_height(&self, x: f64) -> f64 {
         let a = 0.5 * self.width;
@@ -307,7 +307,7 @@ impl Pillars {
 
     /// `y_top` such that the smallest vertical gap between the reference circle
     /// (centre `cell_center`, radius `r_c`) and the substrate surface below it is `gap`
-    /// [µm] (MODEL.md §5 [choice]). Only the geometry `w, s, h, first_center, q` of `self`
+    /// \[µm\] (MODEL.md §5 \[choice\]). Only the geometry `w, s, h, first_center, q` of `self`
     /// is used.
     ///
     /// The gap at abscissa `x` is `c_y − √(r_c² − (x − c_x)²) − y_surf(x)` and `y_surf`
@@ -406,8 +406,8 @@ impl Substrate {
         }
     }
 
-    /// Signed penetration depth `d(x)` [µm] (> 0 inside the substrate) and outward unit
-    /// normal `n(x)` at the current position `x` [µm]. Generic, for exact tangents.
+    /// Signed penetration depth `d(x)` \[µm\] (> 0 inside the substrate) and outward unit
+    /// normal `n(x)` at the current position `x` \[µm\]. Generic, for exact tangents.
     ///
     /// Flat: `d = y_s − y`, `n = e_y`. Pillars: the deeper of pillar and floor,
     /// `d = max(d_pillar, y_top − h − y)` (see the module notes on where this is not smooth).
@@ -421,7 +421,7 @@ impl Substrate {
         Surface::eval(self, x)
     }
 
-    /// The substrate surface as a polyline for plotting, over `[x_min, x_max]` [µm].
+    /// The substrate surface as a polyline for plotting, over `[x_min, x_max]` \[µm\].
     ///
     /// Flat: the two end points. Pillars: the floor, and at each pillar axis the full
     /// superellipse traced from its bottom point clockwise (left side, top, right side)
@@ -538,7 +538,7 @@ pub enum Lattice {
 }
 
 impl Lattice {
-    /// The z of the axes of the row `k = 0` [µm] for the period `period`: `P/2`
+    /// The z of the axes of the row `k = 0` \[µm\] for the period `period`: `P/2`
     /// ([`Lattice::FourPillars`]) or 0 ([`Lattice::Gap`]).
     #[inline]
     pub fn z_offset(self, period: f64) -> f64 {
@@ -562,7 +562,7 @@ pub struct Substrate3 {
 }
 
 impl Pillars {
-    /// Axis (in z) of the pillar row nearest to `z` [µm] on `lattice`.
+    /// Axis (in z) of the pillar row nearest to `z` \[µm\] on `lattice`.
     #[inline]
     pub fn nearest_axis_z(&self, z: f64, lattice: Lattice) -> f64 {
         let z0 = lattice.z_offset(self.period());
@@ -570,7 +570,7 @@ impl Pillars {
         z0 + k * self.period()
     }
 
-    /// Height `y` of the substrate surface at `(x, z)` [µm] on `lattice`:
+    /// Height `y` of the substrate surface at `(x, z)` \[µm\] on `lattice`:
     /// `y_top − h/2 + (h/2)(1 − |u|^q − |w|^q)^{1/q}` over a pillar
     /// (`|u|^q + |w|^q < 1`), else the floor `y_top − h`.
     #[inline]
@@ -585,7 +585,7 @@ impl Pillars {
 impl Pillars {
     /// `y_top` such that the smallest vertical gap between the reference sphere (centre
     /// `cell_center`, radius `r_c`) and the 3-D substrate surface on `lattice` below it is
-    /// `gap` [µm] (MODEL.md §10, placed "as in §5"); the 3-D twin of
+    /// `gap` \[µm\] (MODEL.md §10, placed "as in §5"); the 3-D twin of
     /// [`Pillars::y_top_for_gap`]. Only `w, s, h, first_center, q` of `self` are used.
     ///
     /// On [`Lattice::Gap`] (pillars at z = 0) the smallest gap lies in the plane z = 0 and
@@ -660,8 +660,8 @@ impl Substrate3 {
         self.plane.validate()
     }
 
-    /// Signed penetration depth `d(x)` [µm] (> 0 inside the substrate) and outward unit
-    /// normal `n(x)` at the current position `x` [µm]. Generic, for exact tangents.
+    /// Signed penetration depth `d(x)` \[µm\] (> 0 inside the substrate) and outward unit
+    /// normal `n(x)` at the current position `x` \[µm\]. Generic, for exact tangents.
     ///
     /// Flat: `d = y_s − y`, `n = e_y`. Pillars: `d = max(d_pillar, y_top − h − y)` with
     /// the normal of the deeper one (module notes). Inlined in `f64`, one function per
@@ -671,7 +671,7 @@ impl Substrate3 {
         Surface::eval(self, x)
     }
 
-    /// Height `y` of the substrate surface at `(x, z)` [µm], for plotting: `y_s` (flat) or
+    /// Height `y` of the substrate surface at `(x, z)` \[µm\], for plotting: `y_s` (flat) or
     /// [`Pillars::surface_height3`].
     #[inline]
     pub fn surface_height(&self, x: f64, z: f64) -> f64 {

@@ -220,7 +220,7 @@ fn elastic_right_cauchy_green3<T: Real>(
 }
 
 impl Yeoh {
-    /// Strain energy `W(C_e)` per unit intermediate volume [Pa] from a symmetric 3 × 3
+    /// Strain energy `W(C_e)` per unit intermediate volume \[Pa\] from a symmetric 3 × 3
     /// `C_e`: `I₁ = tr C_e`, `I₂ = ½(I₁² − tr C_e²)`, `I₃ = det C_e`, `W` as in [`Yeoh`].
     fn strain_energy3_sym<T: Real>(&self, Ce: Sym3<T>) -> T {
         self.energy_density(Invariants {
@@ -231,7 +231,7 @@ impl Yeoh {
     }
 
     /// Energy per unit reference volume `Ψ(F) = J_a W(C_e)`, `C_e = F_a⁻ᵀ FᵀF F_a⁻¹`
-    /// [Pa], with a full 3 × 3 `F` and `F_a`.
+    /// \[Pa\], with a full 3 × 3 `F` and `F_a`.
     pub fn energy3<T: Real>(&self, F: &Matrix3<T>, Fa: &Matrix3<f64>) -> T {
         let (Ce, _, Ja) = elastic_right_cauchy_green3(F, Fa);
         self.strain_energy3_sym(Ce) * Ja
@@ -266,7 +266,7 @@ impl Yeoh {
         }
     }
 
-    /// First Piola–Kirchhoff stress of the solid phase, `P_s = F J_a F_a⁻¹ S_e F_a⁻ᵀ` [Pa],
+    /// First Piola–Kirchhoff stress of the solid phase, `P_s = F J_a F_a⁻¹ S_e F_a⁻ᵀ` \[Pa\],
     /// 3 × 3; it equals `∂Ψ/∂F` ([`Self::energy3`]).
     pub fn piola_solid3<T: Real>(&self, F: &Matrix3<T>, Fa: &Matrix3<f64>) -> Matrix3<T> {
         self.pk2_solid3_sym(F, Fa).left_mul(F)
@@ -274,7 +274,7 @@ impl Yeoh {
 }
 
 impl Viscosity {
-    /// Viscous first Piola–Kirchhoff stress `P_f = F S_f` [Pa] with a full 3 × 3 `F`, `Ḟ`:
+    /// Viscous first Piola–Kirchhoff stress `P_f = F S_f` \[Pa\] with a full 3 × 3 `F`, `Ḟ`:
     /// `S_f = (Jλ_f/2) tr(C⁻¹Ċ) C⁻¹ + Jμ_f C⁻¹ĊC⁻¹`, evaluated as
     /// `P_f = σ cof F`, `σ = λ_f tr(d) I + 2μ_f d`, `d = sym(ḞF⁻¹)` (the same tensor;
     /// module notes). Linear in `Ḟ`, zero for rigid rates `Ḟ = WF`, `W` skew.
@@ -300,7 +300,7 @@ impl Viscosity {
     }
 }
 
-/// Total first Piola–Kirchhoff stress `P = F(S_s + S_f)` [Pa] with a full 3 × 3 `F`, `Ḟ`,
+/// Total first Piola–Kirchhoff stress `P = F(S_s + S_f)` \[Pa\] with a full 3 × 3 `F`, `Ḟ`,
 /// `F_a` (solid with active strain plus viscosity). Generic: `f64` for residuals.
 pub fn piola_total3<T: Real>(
     yeoh: &Yeoh,

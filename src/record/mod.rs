@@ -86,11 +86,11 @@ pub struct Failure {
     pub kind: FailureKind,
     /// What happened.
     pub reason: String,
-    /// Simulated time of the last output written [s].
+    /// Simulated time of the last output written \[s\].
     pub t_last_output: f64,
     /// Steps taken.
     pub step: u64,
-    /// Simulated time the run reached: its last accepted step [s] (absent in summaries of
+    /// Simulated time the run reached: its last accepted step \[s\] (absent in summaries of
     /// an older cellsim).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub t_stop: Option<f64>,
@@ -113,9 +113,9 @@ pub struct StopPlace {
     pub quantity: String,
     /// Its value.
     pub value: f64,
-    /// Time of that evaluation [s] (a trial state of the step that failed).
+    /// Time of that evaluation \[s\] (a trial state of the step that failed).
     pub t: f64,
-    /// Centroid of the element's nodes in that state [µm].
+    /// Centroid of the element's nodes in that state \[µm\].
     pub x: Vec<f64>,
 }
 
@@ -133,7 +133,7 @@ pub enum FailureKind {
     Budget,
     /// More than `solver.max_steps` steps between two output times.
     StepLimit,
-    /// The step size collapsed (the stall rule of [`StepGuard`]).
+    /// The step size collapsed (the stall rule of `StepGuard`).
     Stalled,
     /// The integrator gave up on a state in which an element is inverted or flattened
     /// (det F ≤ 0 at one of its points, [`Failure::place`]): the last state it tried was
@@ -216,7 +216,7 @@ pub struct Summary {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub events: Vec<Event>,
     /// The run's phase lines when the cell started phases itself: the adhesion ramp's
-    /// start, the active ramp's start and end, and the end time [s] (what `mesh.json`'s
+    /// start, the active ramp's start and end, and the end time \[s\] (what `mesh.json`'s
     /// `phase_times`, written before the run, holds for a run on the paper's clock); null
     /// where not reached.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -243,11 +243,11 @@ pub struct Event {
     pub phase: String,
     /// The condition, as in the case (`Settled(1e-5)`, `SpreadingSlows(0.0001)`).
     pub condition: String,
-    /// When it was armed [s], if it was.
+    /// When it was armed \[s\], if it was.
     pub armed_at: Option<f64>,
-    /// When it held and the phase started [s], if it did.
+    /// When it held and the phase started \[s\], if it did.
     pub t: Option<f64>,
-    /// The phase's time in the paper's schedule (T_g0, T_as0) [s].
+    /// The phase's time in the paper's schedule (T_g0, T_as0) \[s\].
     pub paper_t: f64,
 }
 
@@ -271,7 +271,7 @@ impl Summary {
 /// cases agree up to that time ([`crate::run::shared_until`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Parting {
-    /// The time [s].
+    /// The time \[s\].
     pub t: f64,
     /// The cases it had been computed with and parted from there.
     pub from: Vec<String>,
@@ -287,24 +287,24 @@ pub struct Parting {
 /// by [`crate::dae::timing`] (cargo feature `timers`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct TimeBreakdown {
-    /// Integration wall time [s] (= `Summary::wall_seconds`).
+    /// Integration wall time \[s\] (= `Summary::wall_seconds`).
     pub wall: f64,
-    /// Residual evaluations called by IDA [s] and their number.
+    /// Residual evaluations called by IDA \[s\] and their number.
     pub residual: f64,
     pub residual_calls: u64,
-    /// Jacobian assemblies [s] and their number.
+    /// Jacobian assemblies \[s\] and their number.
     pub jacobian: f64,
     pub jacobian_calls: u64,
-    /// Numeric LU factorizations [s] and their number.
+    /// Numeric LU factorizations \[s\] and their number.
     pub factorize: f64,
     pub factorize_calls: u64,
-    /// Triangular solves [s] and their number.
+    /// Triangular solves \[s\] and their number.
     pub solve: f64,
     pub solve_calls: u64,
-    /// IDA's own work: time inside IDASolve/IDACalcIC minus the callbacks above [s].
+    /// IDA's own work: time inside IDASolve/IDACalcIC minus the callbacks above \[s\].
     pub ida_internal: f64,
     /// Outside IDA: outputs, observables, the inertia switch (with its consistent
-    /// initialization) [s].
+    /// initialization) \[s\].
     pub outside: f64,
 }
 
@@ -361,7 +361,7 @@ impl TimeBreakdown {
 /// What the mesh file records: enough to redraw the deformed cell from a state file.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct MeshFile {
-    /// Reference node coordinates [µm].
+    /// Reference node coordinates \[µm\].
     pub nodes: Vec<[f64; 2]>,
     /// Six-node elements.
     pub elements: Vec<[usize; 6]>,
@@ -377,18 +377,18 @@ pub struct MeshFile {
     pub substrate: Substrate,
     /// Active strain regions, if any.
     pub active: Option<ActiveStrain>,
-    /// Contact band half-width ε_ct [µm].
+    /// Contact band half-width ε_ct \[µm\].
     pub contact_eps: f64,
-    /// Fibronectin layer thickness e_f [µm], with adhesion.
+    /// Fibronectin layer thickness e_f \[µm\], with adhesion.
     pub layer_thickness: Option<f64>,
-    /// Cell centre [µm].
+    /// Cell centre \[µm\].
     pub center: [f64; 2],
-    /// Phase end times T_g0, T_as0, T_a0 and the end time [s].
+    /// Phase end times T_g0, T_as0, T_a0 and the end time \[s\].
     pub phase_times: [f64; 4],
 }
 
 impl MeshFile {
-    /// Reference area of the elements of domain `d` [µm²] (half cell): det J of each
+    /// Reference area of the elements of domain `d` \[µm²\] (half cell): det J of each
     /// isoparametric P2 map integrated exactly (it is quadratic; a degree-2 rule is exact),
     /// the areas the run's reference-area means are weighted with.
     pub fn area(&self, d: Domain) -> f64 {
@@ -413,9 +413,9 @@ impl MeshFile {
 pub struct StateFile {
     /// Phase name: "gravity", "spreading", "active" or "end".
     pub phase: String,
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
-    /// Displacement of every node [µm].
+    /// Displacement of every node \[µm\].
     pub u: Vec<[f64; 2]>,
     /// μ_as per node [pN/µm³] (None off the membrane or without adhesion).
     pub mu_as: Vec<Option<f64>>,
@@ -430,11 +430,11 @@ pub struct StateFile {
 /// The state of the cell at one output time.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Snapshot {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
-    /// Displacement of every node [µm].
+    /// Displacement of every node \[µm\].
     pub u: Vec<[f64; 2]>,
-    /// Velocity of every node [µm/s]: the v unknowns with inertia, u̇ without.
+    /// Velocity of every node \[µm/s\]: the v unknowns with inertia, u̇ without.
     pub v: Vec<[f64; 2]>,
     /// μ_as per node [pN/µm³] (`None` off the membrane or without adhesion).
     pub mu_as: Vec<Option<f64>>,
@@ -447,7 +447,7 @@ pub struct Snapshot {
 /// The state of one output time of either model ([`Snapshot`], [`Snapshot3`]), as the
 /// per-output-time writers see it.
 pub trait Timed: Clone {
-    /// Time [s].
+    /// Time \[s\].
     fn time(&self) -> f64;
 }
 
@@ -467,7 +467,7 @@ impl Timed for Snapshot3 {
 /// tetrahedra and its outer surface, with what the figures draw beside it.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Mesh3File {
-    /// Reference node coordinates [µm].
+    /// Reference node coordinates \[µm\].
     pub nodes: Vec<[f64; 3]>,
     /// Ten-node tetrahedra (gmsh's node order, [`crate::fem::tet10`]).
     pub elements: Vec<[usize; 10]>,
@@ -479,13 +479,13 @@ pub struct Mesh3File {
     pub substrate: Substrate3,
     /// Active strain regions, if any.
     pub active: Option<ActiveStrain>,
-    /// Contact band half-width ε_ct [µm].
+    /// Contact band half-width ε_ct \[µm\].
     pub contact_eps: f64,
-    /// Fibronectin layer thickness e_f [µm], with adhesion.
+    /// Fibronectin layer thickness e_f \[µm\], with adhesion.
     pub layer_thickness: Option<f64>,
-    /// Cell centre [µm].
+    /// Cell centre \[µm\].
     pub center: [f64; 3],
-    /// Phase end times T_g0, T_as0, T_a0 and the end time [s].
+    /// Phase end times T_g0, T_as0, T_a0 and the end time \[s\].
     pub phase_times: [f64; 4],
 }
 
@@ -493,11 +493,11 @@ pub struct Mesh3File {
 /// what a VTU frame or a figure is drawn from).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Snapshot3 {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
-    /// Displacement of every node [µm].
+    /// Displacement of every node \[µm\].
     pub u: Vec<[f64; 3]>,
-    /// Velocity of every node [µm/s]: the v unknowns with inertia, u̇ without.
+    /// Velocity of every node \[µm/s\]: the v unknowns with inertia, u̇ without.
     pub v: Vec<[f64; 3]>,
     /// μ_as per node [pN/µm³] (`None` off the membrane or without adhesion).
     pub mu_as: Vec<Option<f64>>,

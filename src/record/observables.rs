@@ -48,15 +48,15 @@ macro_rules! columns {
 }
 
 columns! {
-    /// Time [s].
+    /// Time \[s\].
     t,
-    /// Deformed length of the cell boundary within ε_ct of the substrate [µm] (half cell).
+    /// Deformed length of the cell boundary within ε_ct of the substrate \[µm\] (half cell).
     contact_radius,
-    /// Vertical displacement of the nucleus top p_t [µm] (negative = down).
+    /// Vertical displacement of the nucleus top p_t \[µm\] (negative = down).
     uy_top,
-    /// Vertical displacement of the cell centre c [µm].
+    /// Vertical displacement of the cell centre c \[µm\].
     uy_centre,
-    /// Vertical displacement of the nucleus bottom p_b [µm].
+    /// Vertical displacement of the nucleus bottom p_b \[µm\].
     uy_bottom,
     /// Reference-area mean of ‖E‖_F over the nucleus (fraction).
     strain_nucleus,
@@ -66,12 +66,12 @@ columns! {
     strain_cytoplasm,
     /// Length along the reference contour of the part of the boundary in contact (the
     /// material of [`Self::contact_radius`]: same criterion, measured in the reference
-    /// frame, as the paper's COMSOL does) [µm] (half cell).
+    /// frame, as the paper's COMSOL does) \[µm\] (half cell).
     contact_radius_ref,
     /// Reference-area mean of ‖E‖_F over the membrane alone (fraction).
     strain_membrane,
     /// Largest downward displacement of the nucleus: the smallest u_y over every node
-    /// (vertices and mid-side nodes) of the nucleus elements [µm] (negative = down, as
+    /// (vertices and mid-side nodes) of the nucleus elements \[µm\] (negative = down, as
     /// `uy_top`; never above `uy_top` and `uy_bottom`, which are nucleus nodes).
     uy_nucleus_max,
 }
@@ -175,13 +175,13 @@ pub fn interpolate(rows: &[Observables], t: f64) -> Option<Observables> {
 /// 2-D columns of `timeseries.csv` ([`Observables3::CSV_COLUMNS`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Observables3 {
-    /// Area of the cell surface in contact (depth > −ε_ct), deformed [µm²], whole cell.
+    /// Area of the cell surface in contact (depth > −ε_ct), deformed \[µm²\], whole cell.
     pub contact_area: f64,
-    /// The same material surface measured on the reference sphere [µm²], whole cell.
+    /// The same material surface measured on the reference sphere \[µm²\], whole cell.
     pub contact_area_ref: f64,
-    /// √(A/π) of the deformed contact area [µm].
+    /// √(A/π) of the deformed contact area \[µm\].
     pub contact_radius_equiv: f64,
-    /// How far the nucleus bottom p_b went below the pillar tops [µm] (0 above them and on
+    /// How far the nucleus bottom p_b went below the pillar tops \[µm\] (0 above them and on
     /// a flat substrate): max(0, y_top − (c_y − r_n + u_y(p_b))).
     pub penetration_depth: f64,
 }

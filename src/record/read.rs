@@ -481,12 +481,12 @@ impl RunData {
         self.summary.as_ref().is_some_and(|s| s.finished)
     }
 
-    /// End time the run was meant to reach [s].
+    /// End time the run was meant to reach \[s\].
     pub fn t_end(&self) -> f64 {
         self.mesh.phase_times[3]
     }
 
-    /// Last time written [s] (0 without rows).
+    /// Last time written \[s\] (0 without rows).
     pub fn t_last(&self) -> f64 {
         self.series.last().map(|o| o.t).unwrap_or(0.0)
     }

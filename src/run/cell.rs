@@ -45,7 +45,7 @@ pub(crate) trait RunModel: Dae + Send {
     fn condition_values(&self, at: State<'_>, g: &mut [f64]);
     /// The scene's observables at `t`, and the 3-D ones for the 3-D model.
     fn observe(&self, t: f64, y: &[f64]) -> (Observables, Option<Observables3>);
-    /// The node that moved furthest in `y` and the length of its displacement [µm].
+    /// The node that moved furthest in `y` and the length of its displacement \[µm\].
     fn largest_displacement(&self, y: &[f64]) -> (usize, f64);
     /// Which model this is, for the output writers.
     fn view(&self) -> ModelView<'_>;

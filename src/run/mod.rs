@@ -143,7 +143,7 @@ impl Reporter {
     }
 }
 
-/// Steps in the stall rule's sliding window (see [`StepGuard`]).
+/// Steps in the stall rule's sliding window (see `StepGuard`).
 pub const STALL_STEPS: usize = 1000;
 /// Stall threshold on the mean step over the window, as a fraction of the regular output
 /// interval t_end / n_times.
@@ -163,22 +163,22 @@ pub const STALL_PATH: f64 = STALL_STEPS as f64;
 pub enum StopCause {
     /// A signal asked to stop (SIGINT, SIGTERM, SIGHUP).
     Signal(i32),
-    /// The wall-clock budget was spent [s].
+    /// The wall-clock budget was spent \[s\].
     Budget(f64),
     /// More than `max_steps` steps between two output times.
     StepLimit {
         /// The limit (`solver.max_steps`).
         max_steps: u64,
-        /// The output time being worked towards [s].
+        /// The output time being worked towards \[s\].
         tout: f64,
     },
     /// The mean step over the last [`STALL_STEPS`] steps fell below the stall threshold.
     Stalled {
-        /// The threshold [s].
+        /// The threshold \[s\].
         threshold: f64,
-        /// Simulated time covered by those steps [s].
+        /// Simulated time covered by those steps \[s\].
         advanced: f64,
-        /// Step size [s] and order of the last step.
+        /// Step size \[s\] and order of the last step.
         h: f64,
         /// BDF order of the last step.
         order: u32,
@@ -645,7 +645,7 @@ pub(crate) struct Stop {
     pub kind: FailureKind,
     /// What happened.
     pub reason: String,
-    /// The time of the last accepted step, where the driver knows it [s].
+    /// The time of the last accepted step, where the driver knows it \[s\].
     pub t: Option<f64>,
     /// The element, for [`FailureKind::Inverted`].
     pub place: Option<StopPlace>,
@@ -664,7 +664,7 @@ impl Stop {
 }
 
 /// The integrator on the current system, and what the driver keeps across output times:
-/// its limits ([`StepGuard`]), the progress display and the pending inertia switch.
+/// its limits (`StepGuard`), the progress display and the pending inertia switch.
 struct Driver {
     solver: Solver,
     settings: Settings,
@@ -1025,7 +1025,7 @@ impl From<crate::output::OutputError> for OutputStop {
 /// run).
 pub const SUMMARY_INTERVAL: Duration = Duration::from_millis(500);
 
-/// How far any point of the cell can move in a scene [µm]: the cell's diameter plus the
+/// How far any point of the cell can move in a scene \[µm\]: the cell's diameter plus the
 /// height of its lowest point above the substrate's lowest point (the floor between the
 /// pillars). A state past it has left the scene: a displacement no force of the model
 /// can cause, seen only where the integrator's tolerances let the error test pass
@@ -1444,7 +1444,7 @@ enum Switch {
 }
 
 /// Longest stretch watched with inertia, after the requested switch time, for the moment
-/// the contact carries the cell [s].
+/// the contact carries the cell \[s\].
 const SWITCH_PROBE_LIMIT: f64 = 50.0;
 
 /// Advances towards `tout` one step at a time and, at the first accepted step at or after

@@ -278,7 +278,7 @@ fn order_fit(rows: &[StudyRow]) -> (Option<f64>, OrderFit) {
 }
 
 /// The cheapest finished run of `role` whose error of the final uy_top is within
-/// [`TARGET_ERROR`]: (label, wall [s]).
+/// [`TARGET_ERROR`]: (label, wall \[s\]).
 fn cheapest_meeting_target(rows: &[StudyRow], role: Role) -> Option<(String, f64)> {
     rows.iter()
         .filter(|r| r.role == role && r.finished)

@@ -105,13 +105,13 @@ pub struct StudyRow {
     pub label: String,
     /// Ladder.
     pub role: Role,
-    /// BDF2 step [s] (BDF2 only).
+    /// BDF2 step \[s\] (BDF2 only).
     pub dt: Option<f64>,
-    /// BDF2 step of the fall [s] (BDF2 with a capped fall only).
+    /// BDF2 step of the fall \[s\] (BDF2 with a capped fall only).
     pub dt_inertia: Option<f64>,
     /// rtol (IDA: error test; BDF2: Newton test).
     pub rtol: f64,
-    /// atol [µm].
+    /// atol \[µm\].
     pub atol: f64,
     /// Whether the run reached the end time.
     pub finished: bool,
@@ -233,7 +233,7 @@ pub struct ReferenceInfo {
     pub label: String,
     /// rtol used (the tightest that finished).
     pub rtol: f64,
-    /// atol used [µm].
+    /// atol used \[µm\].
     pub atol: f64,
     /// Tolerances tried that failed, with the reason.
     pub failed_attempts: Vec<(f64, String)>,
@@ -250,7 +250,7 @@ pub struct ReferenceInfo {
 pub struct ReferenceCheck {
     /// The BDF2 run (smallest dt that finished).
     pub bdf2_label: String,
-    /// Its dt [s].
+    /// Its dt \[s\].
     pub dt: f64,
     /// Max-in-time relative difference of the uy_top curves, BDF2 against the reference.
     pub rel_diff_curve: Option<f64>,
@@ -271,7 +271,7 @@ pub struct ReferenceCheck {
 pub struct OrderFit {
     /// The quantity the order is fitted on.
     pub quantity: Quantity,
-    /// dt of the rungs used [s], largest first.
+    /// dt of the rungs used \[s\], largest first.
     pub dt: Vec<f64>,
     /// Their relative errors.
     pub error: Vec<f64>,
@@ -288,22 +288,22 @@ pub struct OrderFit {
 pub struct Speedup {
     /// Relative error of the final uy_top at which walls are compared.
     pub target_error: f64,
-    /// BDF2's wall time there [s].
+    /// BDF2's wall time there \[s\].
     pub bdf2_wall: Option<f64>,
     /// Whether BDF2's ladder had to be extrapolated.
     pub bdf2_extrapolated: bool,
-    /// IDA's wall time there [s].
+    /// IDA's wall time there \[s\].
     pub ida_wall: Option<f64>,
     /// Whether IDA's ladder had to be extrapolated.
     pub ida_extrapolated: bool,
-    /// The cheapest IDA run whose error is at or below the target: (label, wall [s]).
+    /// The cheapest IDA run whose error is at or below the target: (label, wall \[s\]).
     /// A run that meets the target costs at least the interpolated wall, so BDF2's wall
     /// over this one bounds the speed-up from below without extrapolating IDA's ladder.
     pub ida_meeting_target: Option<(String, f64)>,
     /// BDF2's wall at the target over `ida_meeting_target`'s: a lower bound of the
     /// speed-up (only when BDF2's wall there is interpolated, not extrapolated).
     pub ida_speedup_at_least: Option<f64>,
-    /// The cheapest BDF2 run whose error is at or below the target: (label, wall [s]).
+    /// The cheapest BDF2 run whose error is at or below the target: (label, wall \[s\]).
     #[serde(default)]
     pub bdf2_meeting_target: Option<(String, f64)>,
     /// The cheapest meeting BDF2 run's wall over the cheapest meeting IDA run's: what the
@@ -319,11 +319,11 @@ pub struct Speedup {
 /// (extrapolated at most a decade past its ends, see [`super::analysis::wall_at`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SpeedupAt {
-    /// The error [relative].
+    /// The error \[relative\].
     pub error: f64,
-    /// BDF2's wall there [s] and whether it was extrapolated.
+    /// BDF2's wall there \[s\] and whether it was extrapolated.
     pub bdf2_wall: Option<(f64, bool)>,
-    /// IDA's wall there [s] and whether it was extrapolated.
+    /// IDA's wall there \[s\] and whether it was extrapolated.
     pub ida_wall: Option<(f64, bool)>,
     /// BDF2's wall over IDA's.
     pub ratio: Option<f64>,
@@ -343,13 +343,13 @@ pub struct StudyReport {
     /// The reference against BDF2's smallest dt.
     pub reference_check: Option<ReferenceCheck>,
     /// Fitted BDF2 order: slope of log error against log dt of the uy_top curve's
-    /// max-in-time error ([`ORDER_QUANTITY`]) over the rungs that finished.
+    /// max-in-time error ([`super::ORDER_QUANTITY`]) over the rungs that finished.
     pub bdf2_order: Option<f64>,
     /// Details of the fit.
     pub bdf2_order_fit: OrderFit,
     /// IDA's slopes of log error against log rtol, per quantity.
     pub ida_rtol_slopes: Vec<(Quantity, Option<f64>)>,
-    /// Ratio of BDF2's to IDA's wall time at [`TARGET_ERROR`] relative error of the
+    /// Ratio of BDF2's to IDA's wall time at [`super::TARGET_ERROR`] relative error of the
     /// final uy_top.
     pub ida_speedup: Option<f64>,
     /// How it was obtained.
@@ -371,7 +371,7 @@ pub struct StudyReport {
 /// The ladders and tolerances of a study, as recorded in study.json.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct StudySettings {
-    /// Largest BDF2 step tried [s] (default [`default_dt_max`]).
+    /// Largest BDF2 step tried \[s\] (default [`default_dt_max`]).
     pub dt_max: f64,
     /// BDF2 rungs wanted from the largest dt that converges down.
     pub rungs: usize,
@@ -381,10 +381,10 @@ pub struct StudySettings {
     pub ref_rtol: f64,
     /// rtol of BDF2's Newton convergence test (atol scaled alike).
     pub bdf2_rtol: f64,
-    /// BDF2's step during the fall on the largest rung, halved with dt [s] (default
+    /// BDF2's step during the fall on the largest rung, halved with dt \[s\] (default
     /// [`default_dt_inertia`]).
     pub dt_inertia: Option<f64>,
-    /// Wall-clock budget of each run [s].
+    /// Wall-clock budget of each run \[s\].
     pub max_wall: Option<f64>,
     /// Quantities reported in study.csv and the figures.
     pub quantities: Vec<Quantity>,

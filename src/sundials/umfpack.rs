@@ -164,14 +164,14 @@ impl UmfpackLu {
         (!self.numeric.is_null()).then(|| self.info[UMFPACK_FLOPS])
     }
 
-    /// UMFPACK's upper bound on the memory [bytes] of the symbolic and numeric
+    /// UMFPACK's upper bound on the memory \[bytes\] of the symbolic and numeric
     /// factorizations together, from the last analysis (before any factorization).
     pub fn peak_memory_estimate(&self) -> Option<f64> {
         (!self.symbolic.is_null())
             .then(|| self.info[UMFPACK_PEAK_MEMORY_ESTIMATE] * self.info[UMFPACK_SIZE_OF_UNIT])
     }
 
-    /// The memory [bytes] the last numeric factorization used at its peak (with the
+    /// The memory \[bytes\] the last numeric factorization used at its peak (with the
     /// symbolic analysis'), as UMFPACK counts it.
     pub fn peak_memory(&self) -> Option<f64> {
         (!self.numeric.is_null())

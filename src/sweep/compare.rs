@@ -54,7 +54,7 @@ pub enum At {
     SpreadingEnd,
     /// At T_a0, the end of the active-strain ramp.
     ActiveEnd,
-    /// At a time [s].
+    /// At a time \[s\].
     Time(f64),
     /// The largest scaled value over the run (needs a finished run).
     Largest,

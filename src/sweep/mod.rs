@@ -223,7 +223,7 @@ pub struct Settings {
     pub jobs: usize,
     /// Rerun failed points.
     pub retry_failed: bool,
-    /// Wall-clock budget of each run [s].
+    /// Wall-clock budget of each run \[s\].
     pub max_wall: Option<f64>,
     /// Number of shards, when sharded.
     pub shards: Option<usize>,
@@ -810,7 +810,7 @@ pub struct SweepOptions {
     pub retry_failed: bool,
     /// Only the points of shard `i` of `K` (k mod K = i).
     pub shard: Option<(usize, usize)>,
-    /// Wall-clock budget of each run [s].
+    /// Wall-clock budget of each run \[s\].
     pub max_wall: Option<f64>,
     /// Show progress (a bar on a terminal, a line per point otherwise).
     pub progress: bool,
@@ -832,7 +832,7 @@ pub struct SweepReport {
     pub copied: usize,
     /// Files written besides the point directories (sweep.csv, figures).
     pub written: Vec<PathBuf>,
-    /// Wall time of the whole command [s].
+    /// Wall time of the whole command \[s\].
     pub wall_seconds: f64,
 }
 
@@ -1526,7 +1526,7 @@ fn load_table(dir: &Path) -> Result<(Record, Vec<Row>), SweepError> {
 /// The pillar geometry of each point of a sweep, from the overrides `sweep.json` records
 /// for it (the axes', the variants' and the derived ones), the base case's where a field
 /// is not overridden (the base as `sweep.json` names it, relative to the working
-/// directory): (width, spacing, on the `Gap` lattice) [µm]; `None` for a point on a flat
+/// directory): (width, spacing, on the `Gap` lattice) \[µm\]; `None` for a point on a flat
 /// substrate or whose base cannot be read.
 fn pillar_geometry(record: &Record) -> Vec<plots::PillarGeometry> {
     record
@@ -1552,7 +1552,7 @@ fn pillar_geometry(record: &Record) -> Vec<plots::PillarGeometry> {
 /// `quantity` (default: penetration depth) against the spacing, one line per width, plane
 /// strain dashed, 3-D solid, the 3-D cell on the `Gap` lattice dotted with triangles;
 /// written to `out`. Each sweep's points are read from its `sweep.csv`, their width,
-/// spacing and lattice from its `sweep.json` ([`pillar_geometry`]).
+/// spacing and lattice from its `sweep.json` (`pillar_geometry`).
 pub fn plane_and_3d(
     plane: &Path,
     three_d: &Path,

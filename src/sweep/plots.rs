@@ -147,7 +147,7 @@ fn quantity_label(q: &str) -> String {
 }
 
 /// A sweep axis as a reader names it: the quantity and its unit for the case fields the
-/// sweeps vary ("pillar spacing s [µm]"), else the axis's path or variant name itself.
+/// sweeps vary ("pillar spacing s \[µm\]"), else the axis's path or variant name itself.
 pub fn axis_label(path: &str) -> String {
     let label = match path {
         "substrate.width" => "pillar width w [µm]",
@@ -283,7 +283,7 @@ fn heat_map_title(name: &str, rows: &[Row], label: &str) -> String {
     )
 }
 
-/// The size of a heat map [px].
+/// The size of a heat map \[px\].
 struct HeatMapSize {
     /// Width of the figure.
     w: u32,
@@ -443,7 +443,7 @@ fn draw_grid_cell(
     Ok(())
 }
 
-/// Width of a heat map's colour bar with its ticks and label [px].
+/// Width of a heat map's colour bar with its ticks and label \[px\].
 const COLORBAR_W: u32 = 190;
 
 /// The colour bar from `lo` to `hi`, its ticks and its `label` (the quantity and unit).
@@ -628,7 +628,7 @@ pub type GeometrySet = (usize, Vec<Row>, Vec<PillarGeometry>);
 pub struct GeometryCurve {
     /// 2 (plane strain) or 3.
     pub dim: usize,
-    /// Pillar width [µm].
+    /// Pillar width \[µm\].
     pub width: f64,
     /// The 3-D cell above the gap between two pillars (`Gap` lattice).
     pub gap: bool,

@@ -47,9 +47,9 @@ fn quote(s: &str) -> String {
 /// ×[`MEMORY_MARGIN`] plus [`PROCESS_BYTES`] (the process itself, the figures).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TaskEstimate {
-    /// Estimated wall time of the longest task without the margin [s].
+    /// Estimated wall time of the longest task without the margin \[s\].
     pub seconds: f64,
-    /// Estimated peak memory of the largest task without the margin [bytes].
+    /// Estimated peak memory of the largest task without the margin \[bytes\].
     pub bytes: f64,
     /// The `--time` asked for, whole minutes.
     pub minutes: u64,
@@ -63,11 +63,11 @@ pub struct TaskEstimate {
 
 /// Time margin: the asked time is this many times the estimate, plus [`TIME_ALLOWANCE`].
 pub const TIME_MARGIN: f64 = 2.0;
-/// Time allowed on top of the margin [s].
+/// Time allowed on top of the margin \[s\].
 pub const TIME_ALLOWANCE: f64 = 300.0;
 /// Memory margin: the asked memory is this many times the estimate, plus [`PROCESS_BYTES`].
 pub const MEMORY_MARGIN: f64 = 1.5;
-/// The process's own memory (code, plots, buffers) [bytes].
+/// The process's own memory (code, plots, buffers) \[bytes\].
 pub const PROCESS_BYTES: f64 = 200e6;
 
 /// The estimate for `plan` split into `k` shards run `jobs` points at a time each.

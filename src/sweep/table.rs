@@ -65,7 +65,7 @@ pub struct Row {
     pub status: Status,
     /// The last output row written, if any.
     pub last: Option<Observables>,
-    /// How far the nucleus bottom went below the pillar tops at the last output [µm].
+    /// How far the nucleus bottom went below the pillar tops at the last output \[µm\].
     pub penetration: Option<f64>,
     /// Wall seconds of set-up and integration.
     pub wall_seconds: Option<f64>,
@@ -89,7 +89,7 @@ pub struct Row {
 pub const EVENT_COLUMNS: [&str; 2] = ["t_adhesion_start", "t_active_start"];
 
 /// The further final values of [`Row::extras`], after the stop's columns: the deformed and
-/// reference contact areas of a 3-D run (whole cell [µm²]) and the largest ‖E‖_F at a
+/// reference contact areas of a 3-D run (whole cell \[µm²\]) and the largest ‖E‖_F at a
 /// quadrature point of the nucleus.
 pub const EXTRA_COLUMNS: [&str; 3] = ["contact_area", "contact_area_ref", "strain_nucleus_max"];
 
@@ -101,11 +101,11 @@ pub const EXTRA_COLUMNS: [&str; 3] = ["contact_area", "contact_area_ref", "strai
 pub struct Stopped {
     /// The class (`stop_class`).
     pub class: String,
-    /// Simulated time reached [s] (`t_stop`).
+    /// Simulated time reached \[s\] (`t_stop`).
     pub t: Option<f64>,
     /// The element (`stop_element`).
     pub element: Option<usize>,
-    /// Its centroid [µm] (`stop_x`, `stop_y`, `stop_z`).
+    /// Its centroid \[µm\] (`stop_x`, `stop_y`, `stop_z`).
     pub x: [Option<f64>; 3],
 }
 
@@ -187,7 +187,7 @@ pub fn one_line(s: &str) -> String {
         .join("; ")
 }
 
-/// How far the nucleus bottom p_b is below the pillar tops [µm], 0 when above them or on
+/// How far the nucleus bottom p_b is below the pillar tops \[µm\], 0 when above them or on
 /// a flat substrate:
 ///
 /// depth = max(0, y_top − (c_y − r_n + u_y(p_b)))
