@@ -24,3 +24,4 @@ pub mod stop;
 pub mod study;
 pub mod sundials;
 pub mod sweep;
+pub mod tensor;

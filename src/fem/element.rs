@@ -13,7 +13,7 @@ use thiserror::Error;
 
 use super::quadrature::{Rule, Subdivision};
 use super::{Domain, Mesh, Mesh3, MeshError, NamedPoints, P2Tabulation, TetTabulation};
-use crate::physics::cofactor;
+use crate::tensor::cofactor;
 
 /// An isoparametric quadratic (P2) Lagrange element on the reference simplex of dimension
 /// `D` with `N` nodes: the `D + 1` vertices, then one mid-node per edge of

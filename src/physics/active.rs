@@ -45,35 +45,9 @@
 use super::fibres::Fibre;
 use super::smooth::heaviside;
 use super::{PhysicsError, check};
+use crate::fem::Domain;
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
-
-/// Which sub-domain of the cell a material point belongs to (MODEL.md §2; the mesh is
-/// conforming, so each element lies in exactly one).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum Domain {
-    /// `|p − c| < r_n`: no active strain.
-    Nucleus,
-    /// `r_n < |p − c| < r_cp`: PAC and bottom active strains.
-    Cytoplasm,
-    /// `r_cp < |p − c| < r_c`: bottom active strain only; adhesion acts here.
-    Membrane,
-}
-
-impl Domain {
-    /// All domains, inside out.
-    pub const ALL: [Domain; 3] = [Domain::Nucleus, Domain::Cytoplasm, Domain::Membrane];
-}
-
-impl std::fmt::Display for Domain {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Domain::Nucleus => "nucleus",
-            Domain::Cytoplasm => "cytoplasm",
-            Domain::Membrane => "membrane",
-        })
-    }
-}
 
 /// Perinuclear actin cap ("push"): tangential contraction in the cytoplasm between two
 /// ellipses centred at `c`, for `θ ≥ θ_PAC`.

@@ -12,6 +12,7 @@
 use super::smooth::{heaviside, smooth_step};
 use super::substrate::Surface;
 use super::{PhysicsError, Real, check, cst, re, sqrt};
+use crate::tensor::cofactor;
 use nalgebra::{SMatrix, SVector, Vector2};
 use serde::{Deserialize, Serialize};
 
@@ -262,22 +263,6 @@ pub fn layer<T: Real>(ad: &Adhesion, d: T) -> T {
         None => h,
         Some(eps_s) => h - heaviside(d, eps_s),
     }
-}
-
-/// Cofactor `cof(F) = J F⁻ᵀ`, polynomial in `F`: in 2-D `[[F₁₁, −F₁₀], [−F₀₁, F₀₀]]`, in
-/// 3-D `cof_ij = F_{i+1,j+1} F_{i+2,j+2} − F_{i+1,j+2} F_{i+2,j+1}` (indices mod 3).
-#[inline(always)]
-pub fn cofactor<T: Real, const D: usize>(F: &SMatrix<T, D, D>) -> SMatrix<T, D, D> {
-    SMatrix::from_fn(|i, j| {
-        if D == 2 {
-            let f = F[(1 - i, 1 - j)];
-            if i == j { f } else { -f }
-        } else {
-            let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
-            let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
-            F[(i1, j1)] * F[(i2, j2)] - F[(i1, j2)] * F[(i2, j1)]
-        }
-    })
 }
 
 /// Adhesive spreading force per unit reference volume [pN/µm³] (membrane only — the caller

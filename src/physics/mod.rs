@@ -51,7 +51,7 @@ pub mod smooth;
 pub mod substrate;
 pub mod three_d;
 
-pub use active::{ActiveStrain, Bottom, Domain, Pac};
+pub use active::{ActiveStrain, Bottom, Pac};
 pub use fibres::{ActiveFibre, Fibre, Fibres};
 pub use hoop::{
     BlockDiag, MaterialPointHoop, admissible_hoop, material_point_hoop, piola_total_hoop,
@@ -62,7 +62,7 @@ pub use law::{
 };
 pub use loads::{
     ADHESION_TURN, Adhesion, AdhesionDirection, Contact, adhesion_force, adhesion_hoop_factor,
-    adhesion_rate, cofactor, contact_force, layer, self_contact_force,
+    adhesion_rate, contact_force, layer, self_contact_force,
 };
 pub use phases::{Condition, Flip, Phases};
 pub use plane_strain::{MaterialPoint, admissible, material_point, piola_total};
@@ -70,7 +70,6 @@ pub use smooth::{heaviside, smooth_step};
 pub use substrate::{Lattice, PillarFoot, Pillars, Substrate, Substrate3, Surface};
 pub use three_d::{MaterialPoint3, admissible3, material_point3, piola_total3};
 
-use nalgebra::RealField;
 use num_dual::DualNum;
 use serde::{Deserialize, Serialize};
 
@@ -92,15 +91,7 @@ pub enum KinematicModel {
     ThreeD,
 }
 
-/// The scalar type of every function of the unknowns: `f64` for residuals, a forward-mode
-/// dual number such as `num_dual::DualSVec64<N>` for exact tangents.
-///
-/// Implemented automatically for every type meeting the bounds. Both `DualNum` and
-/// `RealField` provide `sqrt`, `powi`, … under the same names; inside this module the
-/// helpers below pick the `DualNum` ones so calls are unambiguous.
-pub trait Real: DualNum<Primitive = f64> + RealField + Copy {}
-
-impl<T: DualNum<Primitive = f64> + RealField + Copy> Real for T {}
+pub use crate::tensor::{Real, cofactor};
 
 /// Invalid physical parameters, caught when a parameter set is built or validated.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -58,10 +58,7 @@ use spade::{
 use super::super::element::{CellMesh, Lagrange, extremes};
 use super::super::quadrature::TriangleRule;
 use super::super::tri6::{self, EDGES, P2Tabulation, REFERENCE_NODES, Tri6};
-use super::{MeshError, NamedPoints};
-
-/// The three material sub-domains of the cell (defined with the physics it selects).
-pub use crate::physics::Domain;
+use super::{Domain, MeshError, NamedPoints};
 
 /// Geometry and mesh-size parameters of the half cell (µm). A case's are built by
 /// [`crate::case::terms::mesh_params`], which holds the defaults (the paper's cell and

@@ -9,8 +9,36 @@ pub mod half_cell;
 pub mod quarter_cell;
 
 pub(crate) use half_cell::MeshParts;
-pub use half_cell::{Domain, MAX_ELEMENTS, MIN_ANGLE_DEG, Mesh, MeshParams, MeshQuality};
+pub use half_cell::{MAX_ELEMENTS, MIN_ANGLE_DEG, Mesh, MeshParams, MeshQuality};
 pub use quarter_cell::{Mesh3, Mesh3Params, Mesh3Quality, Wedge};
+
+/// Which sub-domain of the cell a material point belongs to (MODEL.md §2), as the
+/// meshes label their elements (conforming: each element lies in exactly one) and the
+/// physics selects its terms (the active strain, the adhesion).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Domain {
+    /// `|p − c| < r_n`: no active strain.
+    Nucleus,
+    /// `r_n < |p − c| < r_cp`: PAC and bottom active strains.
+    Cytoplasm,
+    /// `r_cp < |p − c| < r_c`: bottom active strain only; adhesion acts here.
+    Membrane,
+}
+
+impl Domain {
+    /// All domains, inside out.
+    pub const ALL: [Domain; 3] = [Domain::Nucleus, Domain::Cytoplasm, Domain::Membrane];
+}
+
+impl std::fmt::Display for Domain {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Domain::Nucleus => "nucleus",
+            Domain::Cytoplasm => "cytoplasm",
+            Domain::Membrane => "membrane",
+        })
+    }
+}
 
 /// Errors of mesh generation and mesh input.
 #[derive(Debug, Error)]
