@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use cellsim::fem::Domain;
+use cellsim::model::observables::OLD_CSV_HEADER;
 use cellsim::output::RunData;
 use cellsim::output::figures::{
     self, CYTOPLASM, Compared, DisplacementMarks, FOOT, GravityMark, LAYER, LAYER_EDGE, MEMBRANE,
@@ -22,7 +23,6 @@ use cellsim::physics::Substrate;
 use cellsim::record::Observables;
 use cellsim::record::Snapshot;
 use cellsim::record::StateFile;
-use cellsim::record::observables::OLD_CSV_HEADER;
 use cellsim::record::read::{ReadError, parse_timeseries};
 
 fn fixture() -> PathBuf {

@@ -43,6 +43,7 @@ pub mod events;
 pub mod history;
 pub(crate) mod kernels;
 pub mod kinematics;
+pub mod observables;
 pub mod observe;
 pub(crate) mod plan;
 mod quarter;

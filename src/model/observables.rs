@@ -1,13 +1,20 @@
-//! One row of `timeseries.csv`: what a scene reports at an output time (MODEL.md §7).
+//! What the model reports, as the run's files record it: one row of `timeseries.csv`
+//! ([`Observables`], what a scene reports at an output time, MODEL.md §7), the 3-D
+//! columns after it ([`Observables3`]), and the 3-D cell's state and mesh as its state
+//! files and `mesh3.json` hold them ([`Snapshot3`], [`Mesh3File`]; the unfolded quarter).
 //!
-//! The model computes the values ([`crate::model::CellModel::observe`]); this module owns
-//! their file format: the column names and order, a row's text, parsing a row back, and
-//! interpolation between rows. A new column is added here once, to the `columns!` list
+//! The model fills them ([`crate::model::CellModel::observe`], `Cell3::snapshot`);
+//! [`crate::record`] writes them into the run's files and reads them back. This module
+//! owns the time series' format: the column names and order, a row's text, parsing a row
+//! back, and interpolation between rows. A new column is added here once, to the `columns!` list
 //! (which declares the field, [`COLUMNS`], [`Observables::values`] and
 //! [`Observables::from_values`]) and to [`Observables::CSV_HEADER`], and every reader
 //! follows.
 
 use serde::{Deserialize, Serialize};
+
+use crate::fem::Domain;
+use crate::physics::{ActiveStrain, Substrate3};
 
 /// Number of columns of `timeseries.csv`.
 pub const N_COLUMNS: usize = 10;
@@ -205,6 +212,50 @@ impl Observables3 {
     pub fn is_finite(&self) -> bool {
         self.values().iter().all(|v| v.is_finite())
     }
+}
+
+/// What the mesh file of a 3-D run (`mesh3.json`) records: the quarter cell's ten-node
+/// tetrahedra and its outer surface, with what the figures draw beside it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Mesh3File {
+    /// Reference node coordinates \[µm\].
+    pub nodes: Vec<[f64; 3]>,
+    /// Ten-node tetrahedra (gmsh's node order, [`crate::fem::tet10`]).
+    pub elements: Vec<[usize; 10]>,
+    /// Domain of each element.
+    pub domains: Vec<Domain>,
+    /// Six-node triangles of the outer sphere r = r_c (the quarter's cell surface).
+    pub outer_faces: Vec<[usize; 6]>,
+    /// The substrate in 3-D.
+    pub substrate: Substrate3,
+    /// Active strain regions, if any.
+    pub active: Option<ActiveStrain>,
+    /// Contact band half-width ε_ct \[µm\].
+    pub contact_eps: f64,
+    /// Fibronectin layer thickness e_f \[µm\], with adhesion.
+    pub layer_thickness: Option<f64>,
+    /// Cell centre \[µm\].
+    pub center: [f64; 3],
+    /// Phase end times T_g0, T_as0, T_a0 and the end time \[s\].
+    pub phase_times: [f64; 4],
+}
+
+/// The state of the 3-D cell at one output time (`state_<phase>.json` of a 3-D run, and
+/// what a VTU frame or a figure is drawn from).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Snapshot3 {
+    /// Time \[s\].
+    pub t: f64,
+    /// Displacement of every node \[µm\].
+    pub u: Vec<[f64; 3]>,
+    /// Velocity of every node \[µm/s\]: the v unknowns with inertia, u̇ without.
+    pub v: Vec<[f64; 3]>,
+    /// μ_as per node [pN/µm³] (`None` off the membrane or without adhesion).
+    pub mu_as: Vec<Option<f64>>,
+    /// Per element: reference-volume mean of ‖E‖_F.
+    pub element_strain: Vec<f64>,
+    /// Per element: reference-volume mean of det F.
+    pub element_jacobian: Vec<f64>,
 }
 
 #[cfg(test)]

@@ -10,11 +10,11 @@ use nalgebra::{SMatrix, SVector, Vector2};
 use super::dofs::NONE;
 use super::element::ElementOf;
 use super::kinematics::{NodalOf, det};
+use super::observables::Observables;
 use super::{CellOf, Shape, deformation};
 use crate::fem::tri6::edge_shape;
 use crate::fem::{CellMesh, Domain, ElementTabulation};
 use crate::physics::{KinematicModel, Surface, contact_force};
-use crate::record::Observables;
 
 /// Sub-segments per boundary edge when measuring the contact length.
 const EDGE_SAMPLES: usize = 64;

@@ -10,11 +10,11 @@
 use nalgebra::{Vector2, Vector3};
 
 use super::Cell3;
+use super::observables::{Mesh3File, Observables3, Snapshot3};
 use super::observe::add_band_lengths;
 use crate::fem::tet10::{FLIP, face_map};
 use crate::fem::{Mesh3, TriangleRule, Wedge};
 use crate::physics::Substrate;
-use crate::record::{Mesh3File, Observables3, Snapshot3};
 
 /// Sub-triangle levels of the rule sampling each P2 surface face for the contact area.
 const FACE_LEVELS: u32 = 3;

@@ -47,10 +47,8 @@ pub const CONTROL: &str = "push-pull-control";
 /// push-pull's, without a flip). `None` if neither applies.
 pub fn run_phases(run: &RunData) -> Option<Phases> {
     let fits = |case: &crate::case::Case| {
-        let starts = match &run.summary {
-            Some(sm) => sm.phase_starts(case),
-            None => crate::case::terms::phase_starts(case),
-        };
+        let scheduled = crate::case::terms::phase_starts(case);
+        let starts = (run.summary.as_ref()).map_or(scheduled, |sm| sm.phase_starts(scheduled));
         let ph = crate::case::terms::phases_from(case, starts);
         let [tg, tas, ta, _] = run.mesh.phase_times;
         (case.name == run.name && ph.times() == [tg, tas, ta]).then_some(ph)

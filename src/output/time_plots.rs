@@ -1040,7 +1040,7 @@ pub fn upside_down_figure(
         .series
         .iter()
         .filter_map(|o| {
-            crate::record::observables::interpolate(&control.series, o.t)
+            crate::model::observables::interpolate(&control.series, o.t)
                 .map(|c| (o.t, o.uy_top - c.uy_top))
         })
         .collect();

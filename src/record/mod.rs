@@ -8,10 +8,9 @@
 //! paper) write these records and the figures read them back, so neither side imports the
 //! other: this module sits below both. [`read`] loads a run directory back ([`RunData`]).
 
-pub mod observables;
 pub mod read;
 
-pub use observables::{Observables, Observables3};
+pub use crate::model::observables::{Mesh3File, Observables, Observables3, Snapshot3};
 pub use read::{ReadError, RunData};
 
 use std::path::Path;
@@ -20,7 +19,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::dae::Stats;
 use crate::fem::Domain;
-use crate::physics::{ActiveStrain, Substrate, Substrate3};
+use crate::physics::{ActiveStrain, Substrate};
 use crate::solver;
 
 /// summary.json's `settings`: what the run integrated with, in one object: the solver
@@ -252,10 +251,10 @@ pub struct Event {
 }
 
 impl Summary {
-    /// The starts of the adhesion and active phases: those the run's events record, the
-    /// case's times (`At`) for the others.
-    pub fn phase_starts(&self, case: &crate::case::Case) -> [Option<f64>; 2] {
-        let mut starts = crate::case::terms::phase_starts(case);
+    /// The starts of the adhesion and active phases: those the run's events record,
+    /// `scheduled` (the case's times, `At`) for the others.
+    pub fn phase_starts(&self, scheduled: [Option<f64>; 2]) -> [Option<f64>; 2] {
+        let mut starts = scheduled;
         for e in &self.events {
             match e.phase.as_str() {
                 "adhesion" => starts[0] = e.t,
@@ -461,50 +460,6 @@ impl Timed for Snapshot3 {
     fn time(&self) -> f64 {
         self.t
     }
-}
-
-/// What the mesh file of a 3-D run (`mesh3.json`) records: the quarter cell's ten-node
-/// tetrahedra and its outer surface, with what the figures draw beside it.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Mesh3File {
-    /// Reference node coordinates \[µm\].
-    pub nodes: Vec<[f64; 3]>,
-    /// Ten-node tetrahedra (gmsh's node order, [`crate::fem::tet10`]).
-    pub elements: Vec<[usize; 10]>,
-    /// Domain of each element.
-    pub domains: Vec<Domain>,
-    /// Six-node triangles of the outer sphere r = r_c (the quarter's cell surface).
-    pub outer_faces: Vec<[usize; 6]>,
-    /// The substrate in 3-D.
-    pub substrate: Substrate3,
-    /// Active strain regions, if any.
-    pub active: Option<ActiveStrain>,
-    /// Contact band half-width ε_ct \[µm\].
-    pub contact_eps: f64,
-    /// Fibronectin layer thickness e_f \[µm\], with adhesion.
-    pub layer_thickness: Option<f64>,
-    /// Cell centre \[µm\].
-    pub center: [f64; 3],
-    /// Phase end times T_g0, T_as0, T_a0 and the end time \[s\].
-    pub phase_times: [f64; 4],
-}
-
-/// The state of the 3-D cell at one output time (`state_<phase>.json` of a 3-D run, and
-/// what a VTU frame or a figure is drawn from).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Snapshot3 {
-    /// Time \[s\].
-    pub t: f64,
-    /// Displacement of every node \[µm\].
-    pub u: Vec<[f64; 3]>,
-    /// Velocity of every node \[µm/s\]: the v unknowns with inertia, u̇ without.
-    pub v: Vec<[f64; 3]>,
-    /// μ_as per node [pN/µm³] (`None` off the membrane or without adhesion).
-    pub mu_as: Vec<Option<f64>>,
-    /// Per element: reference-volume mean of ‖E‖_F.
-    pub element_strain: Vec<f64>,
-    /// Per element: reference-volume mean of det F.
-    pub element_jacobian: Vec<f64>,
 }
 
 /// A 3-D run's state file: the phase, its snapshot and the observables then.

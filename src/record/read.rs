@@ -13,10 +13,10 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
-use super::observables::{
+use super::{Mesh3File, MeshFile, Observables3, StateFile, StateFile3, Summary};
+use crate::model::observables::{
     COLUMNS, N_COLUMNS, OLD_CSV_HEADER, Observables, RowError, interpolate, parse_fields,
 };
-use super::{Mesh3File, MeshFile, Observables3, StateFile, StateFile3, Summary};
 
 /// Why a run directory's file could not be loaded.
 #[derive(Debug, thiserror::Error)]

@@ -39,8 +39,8 @@ use super::design::{Design, Kind};
 use super::table::{Row, Status};
 use super::{Record, SweepError};
 use crate::case::Case;
+use crate::model::observables::{COLUMNS, interpolate};
 use crate::record::Observables;
-use crate::record::observables::{COLUMNS, interpolate};
 
 /// When a column's value is taken.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
@@ -944,7 +944,7 @@ mod tests {
             series: rows
                 .iter()
                 .map(|&(t, r, u)| {
-                    let mut v = [0.0; crate::record::observables::N_COLUMNS];
+                    let mut v = [0.0; crate::model::observables::N_COLUMNS];
                     v[0] = t;
                     v[1] = r;
                     v[2] = u;

@@ -12,8 +12,8 @@
 //! RFC 4180 says.
 
 use crate::case::{Case, Substrate};
+use crate::model::observables::{COLUMNS, N_COLUMNS};
 use crate::record::Observables;
-use crate::record::observables::{COLUMNS, N_COLUMNS};
 
 /// What became of a point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
