@@ -346,6 +346,21 @@ pub struct RunOptions {
     pub snapshots: SnapshotOptions,
 }
 
+impl RunOptions {
+    /// A run into `out` with `settings` (a case's `solver` section, say), no limits, no
+    /// progress display, no per-output-time files, stopped by nothing but its end.
+    pub fn new(out: impl Into<PathBuf>, settings: Settings) -> Self {
+        Self {
+            out: out.into(),
+            settings,
+            limits: Limits::default(),
+            progress: Progress::Hidden,
+            interrupt: StopFlag::default(),
+            snapshots: SnapshotOptions::default(),
+        }
+    }
+}
+
 /// A run that could not start or could not finish.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
