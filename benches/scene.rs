@@ -14,7 +14,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use cellsim::case::{Case, InertiaMode};
-use cellsim::output::SnapshotOptions;
+use cellsim::render::SnapshotOptions;
 use cellsim::run::{self, Progress, RunOptions};
 use cellsim::solver::LinearSolver;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};

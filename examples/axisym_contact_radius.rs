@@ -15,8 +15,8 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use cellsim::output::figures::{contact_radius_plot, time_figure};
-use cellsim::record::RunData;
+use cellsim::render::figures::{contact_radius_plot, time_figure};
+use cellsim::run_files::RunData;
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -1,4 +1,4 @@
-//! Draws every figure of the 3-D quarter cell ([`cellsim::output::cell_views`]), a VTU file
+//! Draws every figure of the 3-D quarter cell ([`cellsim::render::cell3d_views`]), a VTU file
 //! and a GIF into a directory, from states built here:
 //!
 //! - a synthetic smooth deformation of the default mesh (`cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())`,
@@ -22,15 +22,15 @@ use cellsim::dae::{Atol, Integrator};
 use cellsim::fem::{Domain, Mesh3, Mesh3Params, TetRule, TetTabulation};
 use cellsim::model::Cell3;
 use cellsim::model::ModelParams;
-use cellsim::output::cell_views::{
+use cellsim::physics::{Lattice, Substrate, Substrate3};
+use cellsim::render::cell3d_views::{
     Coloring, FIGURE_SIZE, Section, draw_section, gravity_at, section_figure, surface_figure,
 };
-use cellsim::output::figures::ShapeStyleOptions;
-use cellsim::output::geometry::Bounds;
-use cellsim::output::movie::{Movie3, MovieView};
-use cellsim::output::vtu::write_vtu3;
-use cellsim::physics::{Lattice, Substrate, Substrate3};
-use cellsim::record::{Mesh3File, Snapshot3, write_json};
+use cellsim::render::figures::ShapeStyleOptions;
+use cellsim::render::geometry::Bounds;
+use cellsim::render::movie::{Movie3, MovieView};
+use cellsim::render::vtu::write_vtu3;
+use cellsim::run_files::{Mesh3File, Snapshot3, write_json};
 use cellsim::scene;
 use cellsim::sundials::{Ida, IdaOptions};
 use nalgebra::Matrix3;

@@ -14,11 +14,11 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use cellsim::case::Case;
+use cellsim::commands::step_study::fit_loglog;
+use cellsim::commands::step_study::plots::{LogLogPanel, LogLogSeries, loglog_figure};
 use cellsim::dae::linsolve::FaerLu;
 use cellsim::dae::{Dae, LinearSolver};
 use cellsim::run::{self, Progress, RunOptions};
-use cellsim::study::fit_loglog;
-use cellsim::study::plots::{LogLogPanel, LogLogSeries, loglog_figure};
 
 #[path = "../benches/support/mod.rs"]
 mod support;

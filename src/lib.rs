@@ -10,11 +10,11 @@
 //! Each module uses only the ones below it (tests aside):
 //!
 //! ```text
-//!  commands   paper · study · sweep          the paper's scenes, step studies, maps
+//!  commands   paper · step_study · sweep     the paper's scenes, step studies, maps
 //!                      │
 //!  driver             run                    a case through its phases into its files
 //!              ┌───────┼────────┐
-//!  files    output   record     │            figures, VTU, tables  ·  the files as types
+//!  files    render  run_files    │           figures, VTU, tables  ·  the files as types
 //!              └───────┼────────┘
 //!  setup             scene                   a case in the lower layers' terms
 //!              ┌───────┼────────┐
@@ -37,10 +37,11 @@
 //!   errors; [`scene`]: a validated case as mesh and model parameters;
 //! - [`model`]: the cell, generic over its kinematics (plane strain, axisymmetric, 3-D),
 //!   and what it reports ([`model::observables`]);
-//! - [`record`]: the files a run writes, as types, and reading them back; [`output`]: the
-//!   figures, movies, VTU and tables drawn from them;
+//! - [`run_files`]: the files a run writes, as types, and reading them back; [`render`]:
+//!   the figures, movies, VTU and tables drawn from them;
 //! - [`run`]: one case (or several sharing their start) through its phases;
-//! - [`paper`], [`study`], [`sweep`]: the commands above it.
+//! - [`commands`]: [`commands::paper`], [`commands::step_study`] and
+//!   [`commands::sweep`], above it.
 //!
 //! # Running a case
 //!
@@ -61,18 +62,16 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod case;
+pub mod commands;
 pub mod dae;
 pub mod fem;
 pub mod model;
-pub mod output;
-pub mod paper;
 pub mod physics;
-pub mod record;
+pub mod render;
 pub mod run;
+pub mod run_files;
 pub mod scene;
 pub mod solver;
 pub mod stop;
-pub mod study;
 pub mod sundials;
-pub mod sweep;
 pub mod tensor;

@@ -7,15 +7,15 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use cellsim::case::{Case, Override};
+use cellsim::commands::paper;
+use cellsim::commands::step_study;
+use cellsim::commands::sweep;
 use cellsim::fem::Mesh;
-use cellsim::output::{self, RunData, SnapshotOptions};
-use cellsim::paper;
+use cellsim::render::{self, RunData, SnapshotOptions};
 use cellsim::run::{self, Progress, RunOptions};
 use cellsim::scene;
 use cellsim::solver::{self, Limits};
 use cellsim::stop::{self, StopFlag};
-use cellsim::study;
-use cellsim::sweep;
 
 const LONG_ABOUT: &str = "\
 Finite-element simulation of a living cell that settles under gravity onto a flat or \
@@ -79,14 +79,14 @@ enum QuantityArg {
     UyTopCurve,
 }
 
-impl From<QuantityArg> for study::Quantity {
+impl From<QuantityArg> for step_study::Quantity {
     fn from(a: QuantityArg) -> Self {
         match a {
-            QuantityArg::UyTop => study::Quantity::UyTop,
-            QuantityArg::ContactRadius => study::Quantity::ContactRadius,
-            QuantityArg::StrainNucleus => study::Quantity::StrainNucleus,
-            QuantityArg::StrainCytoplasm => study::Quantity::StrainCytoplasm,
-            QuantityArg::UyTopCurve => study::Quantity::UyTopCurve,
+            QuantityArg::UyTop => step_study::Quantity::UyTop,
+            QuantityArg::ContactRadius => step_study::Quantity::ContactRadius,
+            QuantityArg::StrainNucleus => step_study::Quantity::StrainNucleus,
+            QuantityArg::StrainCytoplasm => step_study::Quantity::StrainCytoplasm,
+            QuantityArg::UyTopCurve => step_study::Quantity::UyTopCurve,
         }
     }
 }
@@ -280,16 +280,16 @@ struct StudyArgs {
     dt_max: Option<f64>,
     /// BDF2 rungs (halvings of dt), at least 2. Six from t_end/100 reach the rungs where
     /// contact onsets are resolved and the order is visible.
-    #[arg(long, default_value_t = study::DEFAULT_RUNGS)]
+    #[arg(long, default_value_t = step_study::DEFAULT_RUNGS)]
     rungs: usize,
     /// IDA's rtol ladder (comma-separated).
-    #[arg(long, allow_hyphen_values = true, value_delimiter = ',', default_values_t = study::DEFAULT_RTOLS)]
+    #[arg(long, allow_hyphen_values = true, value_delimiter = ',', default_values_t = step_study::DEFAULT_RTOLS)]
     rtols: Vec<f64>,
     /// rtol of the reference (IDA); 10x looser if it fails, and said so.
-    #[arg(long, allow_hyphen_values = true, default_value_t = study::DEFAULT_REF_RTOL)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = step_study::DEFAULT_REF_RTOL)]
     ref_rtol: f64,
     /// rtol of BDF2's Newton convergence test.
-    #[arg(long, allow_hyphen_values = true, default_value_t = study::DEFAULT_BDF2_RTOL)]
+    #[arg(long, allow_hyphen_values = true, default_value_t = step_study::DEFAULT_BDF2_RTOL)]
     bdf2_rtol: f64,
     /// BDF2 step during the fall (with inertia) on the largest rung, s, halved with dt
     /// [default: t_s/16 when the case has inertia OffAfter(t_s), else dt throughout].
@@ -671,9 +671,9 @@ fn study_command(a: StudyArgs) -> ExitCode {
     let out = a
         .out
         .unwrap_or_else(|| PathBuf::from("runs/study").join(&case.name));
-    let defaults = study::StudySettings::defaults(&case);
+    let defaults = step_study::StudySettings::defaults(&case);
     let dt_max = a.dt_max.unwrap_or(defaults.dt_max);
-    let settings = study::StudySettings {
+    let settings = step_study::StudySettings {
         dt_max,
         rungs: a.rungs,
         rtols: a.rtols,
@@ -681,7 +681,7 @@ fn study_command(a: StudyArgs) -> ExitCode {
         bdf2_rtol: a.bdf2_rtol,
         dt_inertia: a
             .dt_inertia
-            .or_else(|| study::default_dt_inertia(&case, dt_max)),
+            .or_else(|| step_study::default_dt_inertia(&case, dt_max)),
         max_wall: a.max_wall,
         quantities: if a.quantities.is_empty() {
             defaults.quantities
@@ -690,16 +690,16 @@ fn study_command(a: StudyArgs) -> ExitCode {
         },
     };
     let stop = stop_on_signals();
-    let opts = study::StudyOptions {
+    let opts = step_study::StudyOptions {
         out: out.clone(),
         settings,
         reuse: a.reuse,
         progress: !a.quiet,
         interrupt: stop.clone(),
     };
-    match study::run_study(&case, &a.case.display().to_string(), &opts) {
+    match step_study::run_study(&case, &a.case.display().to_string(), &opts) {
         Ok(report) => {
-            out!("{}", study::summary_text(&report).trim_end());
+            out!("{}", step_study::summary_text(&report).trim_end());
             out!("study written in {}", out.display());
             match stop.exit_status() {
                 Some(s) => ExitCode::from(s),
@@ -952,10 +952,10 @@ fn plot_command(run_dir: &Path, out: Option<PathBuf>, with: &[PathBuf]) -> ExitC
     }
     let run = &runs[0];
     let out = out.unwrap_or_else(|| run_dir.join("plots"));
-    let figures = output::figures::plot_run(run, &out).and_then(|mut files| {
+    let figures = render::figures::plot_run(run, &out).and_then(|mut files| {
         if runs.len() > 1 {
             let all: Vec<&RunData> = runs.iter().collect();
-            files.extend(output::figures::compare_runs(&all, &out)?);
+            files.extend(render::figures::compare_runs(&all, &out)?);
         }
         Ok(files)
     });
@@ -1040,19 +1040,19 @@ fn check_command(path: &Path, set: &[Override]) -> ExitCode {
 
 fn table_command(run_dirs: &[PathBuf], phases: bool) -> ExitCode {
     if phases {
-        out!("{}", output::table::PHASES_HEADER);
+        out!("{}", render::table::PHASES_HEADER);
     } else {
-        out!("{}", output::table::HEADER);
+        out!("{}", render::table::HEADER);
     }
     let mut status = ExitCode::SUCCESS;
     for dir in run_dirs {
         let row = if phases {
-            cellsim::record::read::RunData::load(dir)
-                .map(|run| output::table::phases_row(&run))
+            cellsim::run_files::read::RunData::load(dir)
+                .map(|run| render::table::phases_row(&run))
                 .map_err(|e| e.to_string())
         } else {
-            cellsim::record::read::read_summary(dir)
-                .map(|s| output::table::row(&s))
+            cellsim::run_files::read::read_summary(dir)
+                .map(|s| render::table::row(&s))
                 .map_err(|e| e.to_string())
         };
         match row {

@@ -845,7 +845,7 @@ fn the_linear_solver_flag_takes_kebab_case_names() {
         String::from_utf8_lossy(&res.stderr)
     );
     assert_eq!(summary_of(&out)["settings"]["linear_solver"], "UmfpackNd");
-    let summary = cellsim::record::read::read_summary(std::path::Path::new(&out)).unwrap();
+    let summary = cellsim::run_files::read::read_summary(std::path::Path::new(&out)).unwrap();
     assert!(summary.finished);
     assert_eq!(
         summary.settings.solver.linear_solver,
@@ -864,13 +864,13 @@ fn a_summary_of_the_format_before_reads() {
     );
     let text = std::fs::read_to_string(&fixture).unwrap();
     assert!(text.contains("\"dt\": 1.0") && text.contains("\"faer-condensed\""));
-    let s: cellsim::record::Summary = serde_json::from_str(&text).unwrap();
+    let s: cellsim::run_files::Summary = serde_json::from_str(&text).unwrap();
     assert_eq!(s.settings.solver, cellsim::solver::Settings::default());
     assert_eq!(s.settings.limits, cellsim::solver::Limits::default());
     assert!(s.finished);
     // Its `dt` is BDF2's step.
     let text = text.replace("\"dt\": 1.0", "\"dt\": 2.5");
-    let s: cellsim::record::Summary = serde_json::from_str(&text).unwrap();
+    let s: cellsim::run_files::Summary = serde_json::from_str(&text).unwrap();
     assert_eq!(s.settings.solver.bdf2_dt, 2.5);
     // `cellsim table` on a directory holding it.
     let dir = tmp("old-summary");

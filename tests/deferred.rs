@@ -5,8 +5,8 @@ use cellsim::case::{self, Case};
 use cellsim::dae::Dae;
 use cellsim::dae::State;
 use cellsim::model::CellModel;
-use cellsim::record::RunData;
 use cellsim::run::{self, Progress, RunOptions};
+use cellsim::run_files::RunData;
 use oorandom::Rand64;
 
 use crate::model::{active_pillars_params, coarse_mesh, deformed_state, jacobian_fd_error};
@@ -135,7 +135,7 @@ fn mu_as_beside_the_system_matches_mu_as_in_it() {
     };
     let (r, a, b) = (gravity(&reference), gravity(&deferred), gravity(&in_system));
     let mu_max = Case::reference().adhesion.unwrap().mu_as_max();
-    let err = |s: &cellsim::record::StateFile| {
+    let err = |s: &cellsim::run_files::StateFile| {
         s.mu_as
             .iter()
             .zip(&r.mu_as)

@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use cellsim::case::Case;
-use cellsim::record::{FailureKind, Summary};
 use cellsim::run::{self, Progress, RunError, RunOptions};
+use cellsim::run_files::{FailureKind, Summary};
 
 use crate::scenes::read_csv;
 

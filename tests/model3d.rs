@@ -527,7 +527,7 @@ fn the_cli_meshes_checks_and_runs_a_3d_case() {
     let csv = std::fs::read_to_string(out.join("timeseries.csv")).unwrap();
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     // The 2-D columns first, then the 3-D ones.
-    let two_d: Vec<&str> = cellsim::record::Observables::CSV_HEADER
+    let two_d: Vec<&str> = cellsim::run_files::Observables::CSV_HEADER
         .split(',')
         .collect();
     assert_eq!(&header[..two_d.len()], &two_d[..]);
@@ -563,7 +563,7 @@ fn the_cli_meshes_checks_and_runs_a_3d_case() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["finished"], true, "{s}");
     assert_eq!(s["mesh_elements"], 3320);
-    let state: cellsim::record::StateFile3 =
+    let state: cellsim::run_files::StateFile3 =
         serde_json::from_str(&std::fs::read_to_string(out.join("state_gravity.json")).unwrap())
             .unwrap();
     assert_eq!(state.state.t, 100.0);
@@ -581,7 +581,7 @@ fn the_cli_meshes_checks_and_runs_a_3d_case() {
     assert_eq!(vtus.len(), rows);
     let pvd = std::fs::read_to_string(out.join("flat-3d-coarse.pvd")).unwrap();
     assert_eq!(pvd.matches("<DataSet").count(), rows);
-    let grid = cellsim::output::vtu::read_vtu(
+    let grid = cellsim::render::vtu::read_vtu(
         &out.join("vtu")
             .join(format!("flat-3d-coarse_{:05}.vtu", rows - 1)),
     )

@@ -1,4 +1,4 @@
-//! The 3-D cell's outputs (`output::vtu`, `cell_views`, `movie`) on the default quarter
+//! The 3-D cell's outputs (`output::vtu`, `cell3d_views`, `movie`) on the default quarter
 //! mesh: the ParaView file read back, the sections' areas against the balls', every figure
 //! and the GIF.
 
@@ -10,14 +10,14 @@ use cellsim::case::{self, Case};
 use cellsim::fem::element::Lagrange;
 use cellsim::fem::tet10::Tet10;
 use cellsim::fem::{Domain, Mesh3, TetRule};
-use cellsim::output::cell_views::{
+use cellsim::physics::{Lattice, Substrate, Substrate3};
+use cellsim::render::cell3d_views::{
     self, Coloring, FIGURE_SIZE, Section, SectionShape, section_figure, surface_figure,
 };
-use cellsim::output::figures::ShapeStyleOptions;
-use cellsim::output::movie::{FRAME_SIZE, MAX_FRAMES, Movie3, MovieView};
-use cellsim::output::vtu::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu3};
-use cellsim::physics::{Lattice, Substrate, Substrate3};
-use cellsim::record::{Mesh3File, Snapshot3};
+use cellsim::render::figures::ShapeStyleOptions;
+use cellsim::render::movie::{FRAME_SIZE, MAX_FRAMES, Movie3, MovieView};
+use cellsim::render::vtu::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu3};
+use cellsim::run_files::{Mesh3File, Snapshot3};
 use cellsim::scene;
 use plotters::prelude::*;
 
@@ -369,7 +369,7 @@ fn count(px: &[[u8; 3]], c: RGBColor) -> usize {
 
 #[test]
 fn section_figures_draw_the_cell_and_the_substrate() {
-    use cellsim::output::figures::{CYTOPLASM, MEMBRANE, NUCLEUS, SUBSTRATE};
+    use cellsim::render::figures::{CYTOPLASM, MEMBRANE, NUCLEUS, SUBSTRATE};
     let d = scratch("sections");
     for lattice in [Lattice::FourPillars, Lattice::Gap] {
         let mf = mesh_file(lattice);
@@ -398,7 +398,7 @@ fn section_figures_draw_the_cell_and_the_substrate() {
     let (w, h) = (900u32, 700u32);
     let mut buf = vec![0u8; 3 * (w * h) as usize];
     let area = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-    let view = cell_views::section_view(&mf, &[&s], Section::Diagonal);
+    let view = cell3d_views::section_view(&mf, &[&s], Section::Diagonal);
     let opts = ShapeStyleOptions {
         title: "scale".into(),
         legend: false,
@@ -407,7 +407,7 @@ fn section_figures_draw_the_cell_and_the_substrate() {
         gravity: None,
     };
     let scale =
-        cell_views::draw_section(&area, &mf, &s.u, Section::Diagonal, view, &opts, &mut None)
+        cell3d_views::draw_section(&area, &mf, &s.u, Section::Diagonal, view, &opts, &mut None)
             .expect("draw");
     assert!(
         (scale.px_per_um_x - scale.px_per_um_y).abs() < 0.11,

@@ -10,20 +10,20 @@ use std::process::Command;
 
 use cellsim::fem::Domain;
 use cellsim::model::observables::OLD_CSV_HEADER;
-use cellsim::output::RunData;
-use cellsim::output::figures::{
+use cellsim::physics::Substrate;
+use cellsim::render::RunData;
+use cellsim::render::figures::{
     self, CYTOPLASM, Compared, DisplacementMarks, FOOT, GravityMark, LAYER, LAYER_EDGE, MEMBRANE,
     NUCLEUS, SHAPE_SIZE, SUBSTRATE, StrainBars, TIME_SIZE, UPSIDE_DOWN_SIZE,
 };
-use cellsim::output::geometry::{Backdrop, CellShape};
-use cellsim::output::movie::{FRAME_SIZE, MAX_FRAMES, Movie};
-use cellsim::output::paper::{self, Measure, Quantity, SceneOutcome, When};
-use cellsim::output::vtu::{QUADRATIC_TRIANGLE, VtuSeries, read_vtu, write_vtu};
-use cellsim::physics::Substrate;
-use cellsim::record::Observables;
-use cellsim::record::Snapshot;
-use cellsim::record::StateFile;
-use cellsim::record::read::{ReadError, parse_timeseries};
+use cellsim::render::geometry::{Backdrop, CellShape};
+use cellsim::render::movie::{FRAME_SIZE, MAX_FRAMES, Movie};
+use cellsim::render::paper::{self, Measure, Quantity, SceneOutcome, When};
+use cellsim::render::vtu::{QUADRATIC_TRIANGLE, VtuSeries, read_vtu, write_vtu};
+use cellsim::run_files::Observables;
+use cellsim::run_files::Snapshot;
+use cellsim::run_files::StateFile;
+use cellsim::run_files::read::{ReadError, parse_timeseries};
 
 fn fixture() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/small-push-pull")
@@ -479,7 +479,7 @@ fn malformed_files_are_named() {
             .remove(c);
     }
     std::fs::write(d.join("summary.json"), v.to_string()).expect("write");
-    let e = cellsim::record::read::read_summary(&d).expect_err("older summary");
+    let e = cellsim::run_files::read::read_summary(&d).expect_err("older summary");
     assert!(
         e.to_string().contains("summary.json") && e.to_string().contains("older cellsim"),
         "{e}"
@@ -1009,7 +1009,7 @@ fn paper_figures_from_stored_runs() {
             .all(|r| r.value > 0.0 && !r.source.is_empty())
     );
     // The compiled-in scenes parse, and the control continues push-pull.
-    let cases = cellsim::paper::paper_cases(None).expect("scene files");
+    let cases = cellsim::commands::paper::paper_cases(None).expect("scene files");
     assert_eq!(cases.len(), 6);
     let control = &cases[5].0;
     assert_eq!(control.name, paper::CONTROL);

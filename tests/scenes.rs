@@ -3,8 +3,8 @@
 use std::path::PathBuf;
 
 use cellsim::case::{self, Case};
-use cellsim::record::Summary;
 use cellsim::run::{self, Progress, RunOptions};
+use cellsim::run_files::Summary;
 
 pub fn tmp(name: &str) -> PathBuf {
     let p = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);

@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 
 use cellsim::case::Case;
-use cellsim::record::Summary;
 use cellsim::run::{self, Member, Progress, RunOptions};
+use cellsim::run_files::Summary;
 
 use crate::scenes::{read_csv, tmp};
 

@@ -5,10 +5,10 @@ use std::path::Path;
 use std::process::Command;
 
 use cellsim::case::{Case, InertiaMode};
-use cellsim::record::Observables;
-use cellsim::study::{
+use cellsim::commands::step_study::{
     Quantity, Role, default_dt_inertia, errors_against, fit_loglog, interp_loglog, wall_at,
 };
+use cellsim::run_files::Observables;
 
 #[test]
 fn loglog_fit_recovers_an_exact_power_law() {
@@ -242,10 +242,10 @@ fn study_of_the_fast_scene_writes_its_files_and_finds_order_two() {
     assert!((0.5..2.0).contains(&ratio), "reference check ratio {ratio}");
     // The speed-up along the curve: one entry per error of CURVE_ERRORS, each ratio the
     // two walls' quotient, and none where a ladder would be extrapolated past a decade.
-    let report: cellsim::study::StudyReport =
+    let report: cellsim::commands::step_study::StudyReport =
         serde_json::from_str(&std::fs::read_to_string(out.join("study.json")).unwrap()).unwrap();
     let errors: Vec<f64> = report.speedup_curve.iter().map(|p| p.error).collect();
-    assert_eq!(errors, cellsim::study::CURVE_ERRORS);
+    assert_eq!(errors, cellsim::commands::step_study::CURVE_ERRORS);
     let curve = |role: Role| -> Vec<f64> {
         report
             .runs

@@ -591,7 +591,7 @@ pub fn memory_refusal(case: &Case) -> Result<(), Refusal> {
 }
 
 /// What a run of a case is expected to cost, estimated before it is meshed (for the batch
-/// scripts of a sweep, [`crate::sweep::slurm`]).
+/// scripts of a sweep, [`crate::commands::sweep::slurm`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RunCost {
     /// 2 (plane strain, axisymmetric) or 3 (the 3-D cell).

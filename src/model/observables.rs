@@ -4,7 +4,7 @@
 //! files and `mesh3.json` hold them ([`Snapshot3`], [`Mesh3File`]; the unfolded quarter).
 //!
 //! The model fills them ([`crate::model::CellModel::observe`], `Cell3::snapshot`);
-//! [`crate::record`] writes them into the run's files and reads them back. This module
+//! [`crate::run_files`] writes them into the run's files and reads them back. This module
 //! owns the time series' format: the column names and order, a row's text, parsing a row
 //! back, and interpolation between rows. A new column is added here once, to the `columns!` list
 //! (which declares the field, [`COLUMNS`], [`Observables::values`] and

@@ -6,7 +6,7 @@
 
 use crate::dae::{Dae, Inadmissible};
 use crate::model::{Cell3, CellModel, CellOf, ModelError, ModelParams, Restart, Shape, State};
-use crate::record::{Observables, Observables3, StopPlace};
+use crate::run_files::{Observables, Observables3, StopPlace};
 
 /// Which model a run integrates, for the writers of its mesh and states.
 pub(crate) enum ModelView<'a> {

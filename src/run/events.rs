@@ -15,7 +15,7 @@ use crate::case::terms::{phase_conditions, phase_starts, phases_from, scheduled}
 use crate::dae::Root;
 use crate::model::ModelParams;
 use crate::physics::Condition;
-use crate::record::Event;
+use crate::run_files::Event;
 
 /// The phases that can start on a condition.
 pub(crate) const PHASES: [&str; 2] = ["adhesion", "active"];

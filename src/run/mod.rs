@@ -21,10 +21,10 @@ use crate::fem::{Domain, Mesh, MeshError};
 use crate::model::{
     CellModel, CellOf, HalfPlane, ModelError, ModelParams, Quarter, Restart, Shape, State,
 };
-use crate::output::{SnapshotOptions, SnapshotWriter, SnapshotWriter3};
-use crate::record::Observables;
-use crate::record::read::STOPPED;
-use crate::record::{
+use crate::render::{SnapshotOptions, SnapshotWriter, SnapshotWriter3};
+use crate::run_files::Observables;
+use crate::run_files::read::STOPPED;
+use crate::run_files::{
     self, Failure, FailureKind, MeshFile, SettingsUsed, Snapshot, StateFile, StopPlace, Summary,
     TimeBreakdown, Unknowns,
 };
@@ -393,7 +393,7 @@ pub enum RunError {
     },
     /// A VTU or GIF output could not be written.
     #[error(transparent)]
-    Output(#[from] crate::output::OutputError),
+    Output(#[from] crate::render::OutputError),
     /// The integration stopped; the summary (with the reason) was written.
     #[error("{case}: integration stopped: {reason}")]
     Integration {
@@ -414,7 +414,7 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
 }
 
 fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), RunError> {
-    record::write_json(path, value).map_err(io_err(path))
+    run_files::write_json(path, value).map_err(io_err(path))
 }
 
 /// Output times: `n` equally spaced in (0, t_end], plus the phase ends and the inertia
@@ -1029,8 +1029,8 @@ impl From<RunError> for OutputStop {
     }
 }
 
-impl From<crate::output::OutputError> for OutputStop {
-    fn from(e: crate::output::OutputError) -> Self {
+impl From<crate::render::OutputError> for OutputStop {
+    fn from(e: crate::render::OutputError) -> Self {
         OutputStop::Io(RunError::Output(e))
     }
 }
@@ -1074,7 +1074,7 @@ fn observe_admissible(
     t: f64,
     y: &[f64],
     reach: f64,
-) -> Result<(Observables, Option<crate::record::Observables3>), OutputStop> {
+) -> Result<(Observables, Option<crate::run_files::Observables3>), OutputStop> {
     let (obs, obs3) = model.observe(t, y);
     if !obs.is_finite() || obs3.is_some_and(|o| !o.is_finite()) || y.iter().any(|v| !v.is_finite())
     {
@@ -1145,7 +1145,7 @@ impl RunWriter {
                 let header = format!(
                     "{},{}",
                     Observables::CSV_HEADER,
-                    crate::record::Observables3::CSV_COLUMNS
+                    crate::run_files::Observables3::CSV_COLUMNS
                 );
                 (Frames::Quarter(frames), header)
             }
@@ -1294,7 +1294,7 @@ impl RunWriter {
         y: &[f64],
         yp: &[f64],
         obs: Observables,
-        obs3: Option<crate::record::Observables3>,
+        obs3: Option<crate::run_files::Observables3>,
     ) -> Result<(), OutputStop> {
         let name = format!("state_{phase}.json");
         let path = self.out.join(&name);
@@ -1306,7 +1306,7 @@ impl RunWriter {
                 write_json(&path, &state_file(m, phase, t, y, mu_as, obs))?;
             }
             (ModelView::Quarter(m), Some(observables3)) => {
-                let state = crate::record::StateFile3 {
+                let state = crate::run_files::StateFile3 {
                     phase: phase.to_string(),
                     state: m
                         .snapshot(t, y, yp)

@@ -10,7 +10,7 @@
 //! results agree with their own runs' to the integrator's tolerance (measured in the
 //! tests); a group from which members only end goes on with the same integrator. Every
 //! member's directory is written as by [`super::run`] alone, and its summary records where
-//! it parted from whom ([`crate::record::Parting`]).
+//! it parted from whom ([`crate::run_files::Parting`]).
 //!
 //! The groups and subgroups are tasks run `jobs` at a time.
 
@@ -23,7 +23,7 @@ use super::{Cell, Stop};
 use crate::case::{Case, Output, Phases};
 use crate::dae::Stats;
 use crate::model::State;
-use crate::record::{FailureKind, Parting, Summary};
+use crate::run_files::{FailureKind, Parting, Summary};
 
 /// The time up to which runs of `a` and `b` are the same computation: the earlier end
 /// time when the cases differ only in their names, descriptions, end times and outputs; the

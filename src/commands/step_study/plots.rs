@@ -1,4 +1,4 @@
-//! The figures of `cellsim study` ([`crate::study`]), drawn from its report (the rows of
+//! The figures of `cellsim study` ([`crate::commands::step_study`]), drawn from its report (the rows of
 //! study.csv and the fits of study.json):
 //!
 //! - `work-precision.png`: relative error against wall time, log–log, one panel per
@@ -14,12 +14,12 @@ use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-use crate::output::figures::PALETTE;
-use crate::output::{DrawError, OutputError, draw_png};
-use crate::study::{
+use crate::commands::step_study::{
     LogLogFit, ORDER_QUANTITY, Quantity, Role, StudyReport, StudyRow, TARGET_ERROR, fit_loglog,
     ladder_points, work_points,
 };
+use crate::render::figures::PALETTE;
+use crate::render::{DrawError, OutputError, draw_png};
 
 const FONT: &str = "sans-serif";
 /// Pixel size of one panel.
@@ -32,7 +32,7 @@ const GREY: RGBColor = RGBColor(110, 110, 110);
 
 /// Draws both figures into `out`; returns their paths.
 pub fn plot_study(report: &StudyReport, out: &Path) -> Result<Vec<PathBuf>, OutputError> {
-    crate::output::create_dir(out)?;
+    crate::render::create_dir(out)?;
     let wp = out.join("work-precision.png");
     work_precision_figure(&wp, report)?;
     let dt = out.join("dt-sensitivity.png");

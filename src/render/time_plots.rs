@@ -21,7 +21,7 @@ use super::draw::{
 };
 use super::scenes::run_phases;
 use super::{DrawError, OutputError, draw_png};
-use crate::record::{Observables, RunData};
+use crate::run_files::{Observables, RunData};
 
 /// A note over a time interval, drawn as a bracket under the row of phase names: e.g.
 /// where several runs are the same run.

@@ -8,7 +8,7 @@ use crate::fem::Domain;
 use crate::fem::tri6::{EDGES, edge_shape};
 use crate::fem::{Lagrange, Tri6};
 use crate::physics::{ActiveStrain, Substrate};
-use crate::record::MeshFile;
+use crate::run_files::MeshFile;
 
 /// A point \[µm\].
 pub type Pt = [f64; 2];

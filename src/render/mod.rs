@@ -2,11 +2,11 @@
 //! comparison, ParaView files and animations.
 //!
 //! The rule of this module: **plotting reads only files a run wrote** (`timeseries.csv`,
-//! `mesh.json`, `state_<phase>.json`, `summary.json`, loaded by [`crate::record::read`] as a [`RunData`], tolerant of
+//! `mesh.json`, `state_<phase>.json`, `summary.json`, loaded by [`crate::run_files::read`] as a [`RunData`], tolerant of
 //! partial files), never the
 //! solver's memory, so every figure can be redrawn from a finished or an interrupted run.
 //! The per-output-time writers ([`snapshot`]: VTU and GIF) are handed a
-//! [`crate::record::Snapshot`], the
+//! [`crate::run_files::Snapshot`], the
 //! same kind of plain data a state file holds, by the run loop.
 //!
 //! Module map:
@@ -19,8 +19,8 @@
 //! - [`shapes`]: the 2-D cell's shape figures;
 //! - [`figures`]: `cellsim plot` — which figures a run gets ([`figures::plot_run`]), and
 //!   the curves of several runs compared; it re-exports the figure modules' public items;
-//! - [`cell3d_views`]: the figures of the 3-D quarter cell (a [`crate::record::Mesh3File`]
-//!   and its [`crate::record::Snapshot3`]s): sections through the axis and a shaded view
+//! - [`cell3d_views`]: the figures of the 3-D quarter cell (a [`crate::run_files::Mesh3File`]
+//!   and its [`crate::run_files::Snapshot3`]s): sections through the axis and a shaded view
 //!   of the whole cell;
 //! - [`vtu`]: `.vtu` files (quadratic triangles or tetrahedra) and the `.pvd` collection,
 //!   for either model;
@@ -47,12 +47,8 @@ pub mod table;
 pub mod time_plots;
 pub mod vtu;
 
-pub use crate::record::RunData;
+pub use crate::run_files::RunData;
 pub use snapshot::{FrameSink, SnapshotOptions, SnapshotWriter, SnapshotWriter3, SnapshotWriterOf};
-
-/// The 3-D cell's views under the module's former name, so that `output::cell_views::…`
-/// paths keep working.
-pub use cell3d_views as cell_views;
 
 use std::path::Path;
 
@@ -64,7 +60,7 @@ use plotters::prelude::{BitMapBackend, DrawingArea, IntoDrawingArea, WHITE};
 pub enum OutputError {
     /// A run's file could not be loaded (missing, unreadable or not what a run writes).
     #[error(transparent)]
-    Read(#[from] crate::record::ReadError),
+    Read(#[from] crate::run_files::ReadError),
     /// A file could not be written.
     #[error("cannot write {path}: {source}")]
     Write {

@@ -52,7 +52,7 @@
 //! it shares with the 2-D shapes), [`super::geometry`], [`super::time_plots`] (the time
 //! plots of [`plot_run3`]) and [`super::vtu`] (the snapshot's check), and the error types
 //! and [`super::draw_png`] of [`super`]; [`super::figures`] and [`super::movie`] import it.
-//! Its public items are also reachable at their former paths, `output::cell_views::…`.
+//! Its public items are also reachable at their former paths, `output::cell3d_views::…`.
 
 use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
@@ -74,8 +74,8 @@ use super::vtu::check_snapshot3;
 use super::{DrawError, OutputError, draw_png};
 use crate::fem::{Domain, Lagrange, Tet10, Tri6, tet10 as tet, tri6 as p2};
 use crate::physics::{ActiveStrain, Substrate, Substrate3, smooth_step};
-use crate::record::read::Run3Data;
-use crate::record::{Mesh3File, RunData, Snapshot3};
+use crate::run_files::read::Run3Data;
+use crate::run_files::{Mesh3File, RunData, Snapshot3};
 
 /// Pixel size of the section and surface figures (as the 2-D shape figures).
 pub const FIGURE_SIZE: (u32, u32) = SHAPE_SIZE;
@@ -1714,7 +1714,7 @@ pub fn plot_run3(run: &RunData, r3: &Run3Data, out: &Path) -> Result<Vec<PathBuf
     use super::draw::{Curve, PALETTE, Stroke};
     use super::time_plots::{TimePlot, after_active_name, points, time_figure};
     let mut written = Vec::new();
-    let t3: Vec<(f64, &crate::record::Observables3)> =
+    let t3: Vec<(f64, &crate::run_files::Observables3)> =
         run.series.iter().map(|o| o.t).zip(&r3.series).collect();
     let plot = |title: String, y_desc: &str, curves: Vec<Curve>| TimePlot {
         title,

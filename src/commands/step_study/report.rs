@@ -14,8 +14,8 @@ use super::{
 };
 use crate::case::Case;
 use crate::dae::Stats;
-use crate::record::FailureKind;
-use crate::record::Observables;
+use crate::run_files::FailureKind;
+use crate::run_files::Observables;
 
 /// A quantity of interest.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

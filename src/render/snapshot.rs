@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use super::OutputError;
 use super::movie::{FramePainter, Movie, Movie3, MovieOf};
 use super::vtu::{VtuMesh, VtuSeries, VtuSeries3, VtuSeriesOf};
-use crate::record::{Snapshot, Snapshot3};
+use crate::run_files::{Snapshot, Snapshot3};
 
 /// Which per-output-time files a run writes besides its CSV row.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]

@@ -13,7 +13,7 @@
 
 use crate::case::{Case, Substrate};
 use crate::model::observables::{COLUMNS, N_COLUMNS};
-use crate::record::Observables;
+use crate::run_files::Observables;
 
 /// What became of a point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

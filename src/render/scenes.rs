@@ -5,7 +5,7 @@
 //! [`super`]: the figure modules import it, not the other way round.
 
 use crate::physics::Phases;
-use crate::record::RunData;
+use crate::run_files::RunData;
 
 /// One of the paper's scenes: its name and case file.
 #[derive(Debug, Clone, Copy)]

@@ -4,8 +4,8 @@
 
 use std::fmt::Write as _;
 
-use crate::record::Summary;
-use crate::record::read::RunData;
+use crate::run_files::Summary;
+use crate::run_files::read::RunData;
 
 /// The table's header (markdown).
 pub const HEADER: &str = "| run | outcome | unknowns | wall [s] | steps | Jacobians | t reached [s] | contact radius [µm] | uy_top [µm] | ‖E‖ nucleus | ‖E‖ cytoplasm |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|";

@@ -1,6 +1,6 @@
 //! `cellsim paper`: the five scenes of MODEL.md §7 (and the upside-down control), run in
 //! parallel into `DIR/runs/<scene>/`, then the paper's figures and the comparison with
-//! what the paper reports, drawn from those files ([`crate::output::paper`]).
+//! what the paper reports, drawn from those files ([`crate::render::paper`]).
 //!
 //! The scenes are the case files of `cases/`, compiled into the binary (so the command
 //! works from any directory; `--cases DIR` reads them from a directory instead).
@@ -12,10 +12,10 @@ use std::time::Instant;
 use indicatif::MultiProgress;
 
 use crate::case::Case;
-use crate::output::paper::{CONTROL, PaperReport, SCENES, SceneOutcome, draw_paper};
-use crate::output::{OutputError, RunData, SnapshotOptions};
-use crate::record::Summary;
+use crate::render::paper::{CONTROL, PaperReport, SCENES, SceneOutcome, draw_paper};
+use crate::render::{OutputError, RunData, SnapshotOptions};
 use crate::run::{self, Member, Progress, RunError, RunOptions};
+use crate::run_files::Summary;
 use crate::solver::Limits;
 use crate::stop::StopFlag;
 
@@ -217,9 +217,9 @@ fn shared_note(s: &Summary) -> String {
 /// `cellsim paper`: runs the scenes (unless reused), then writes the figures and
 /// `comparison.md` into `opts.out`.
 pub fn run_paper(opts: &PaperOptions) -> Result<PaperReport, OutputError> {
-    crate::output::create_dir(&opts.out)?;
+    crate::render::create_dir(&opts.out)?;
     let cases =
-        paper_cases(opts.cases.as_deref()).map_err(|m| crate::record::ReadError::Malformed {
+        paper_cases(opts.cases.as_deref()).map_err(|m| crate::run_files::ReadError::Malformed {
             path: opts
                 .cases
                 .as_ref()

@@ -9,7 +9,7 @@ use super::report::{
 };
 use super::{ORDER_QUANTITY, StudyOptions, TARGET_ERROR};
 use crate::case::Case;
-use crate::record::Observables;
+use crate::run_files::Observables;
 
 /// A least-squares line through (ln x, ln y).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -1,6 +1,6 @@
 //! The paper's scenes, what the paper reports about them, and the figures and comparison
 //! table drawn from their runs (`cellsim paper`; the runs themselves are made by
-//! [`crate::paper`]).
+//! [`crate::commands::paper`]).
 //!
 //! The scenes are the case files of `cases/`, compiled into the binary ([`super::scenes`],
 //! re-exported here). Beside them runs a **control**: the push-pull scene continued to the
@@ -14,7 +14,7 @@
 //! are shown beside it.
 //!
 //! The figures and `comparison.md` are drawn from the run directories' files only (see
-//! [`crate::record::read`]), so they can be redrawn from runs that stopped early.
+//! [`crate::run_files::read`]), so they can be redrawn from runs that stopped early.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -30,7 +30,7 @@ use super::time_plots::{
     upside_down_figure,
 };
 use crate::fem::Domain;
-use crate::record::{MeshFile, Observables, RunData, StateFile};
+use crate::run_files::{MeshFile, Observables, RunData, StateFile};
 
 pub use super::scenes::{CONTROL, SCENES, Scene};
 
@@ -563,7 +563,7 @@ impl PaperReport {
 }
 
 /// Draws the paper's figures and `comparison.md` into `out` from the run directories of
-/// `runs` (as written by [`crate::paper::run_cases`]; any of them may be partial or
+/// `runs` (as written by [`crate::commands::paper::run_cases`]; any of them may be partial or
 /// missing).
 pub fn draw_paper(out: &Path, runs: &[SceneOutcome]) -> PaperReport {
     let mut report = PaperReport::default();

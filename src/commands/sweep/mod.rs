@@ -53,9 +53,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::case::overrides::{self, parse_number, value_at};
 use crate::case::{Case, CaseError, Override, Substrate};
-use crate::output::OutputError;
-use crate::record::FailureKind;
+use crate::render::OutputError;
 use crate::run::{self, Progress, RunError, RunOptions};
+use crate::run_files::FailureKind;
 use crate::solver::Limits;
 use crate::stop::StopFlag;
 
@@ -689,7 +689,7 @@ pub fn read_row(id: &str, values: &[String], dir: &Path) -> Row {
     let Some(case_text) = read("case.ron") else {
         return Row::bare(id, values, Status::Missing, "not run");
     };
-    let summary = crate::record::read::read_summary(dir);
+    let summary = crate::run_files::read::read_summary(dir);
     let s = match summary {
         Ok(s) => s,
         // A summary that does not read (e.g. one of an older cellsim): the point is run
@@ -777,7 +777,7 @@ fn is_done(dir: &Path, case: &Case, text: &str, retry_failed: bool) -> bool {
     if !holds("case.ron", text) || !holds(RESOLVED, &resolved(case)) {
         return false;
     }
-    match crate::record::read::read_summary(dir) {
+    match crate::run_files::read::read_summary(dir) {
         Ok(s) if s.finished => true,
         Ok(s) => match s.failure {
             Some(f) if f.kind != FailureKind::Interrupted => !retry_failed,
@@ -1930,7 +1930,7 @@ mod tests {
 
     #[test]
     fn paper_fidelity_references_are_the_papers() {
-        use crate::output::paper::REPORTED;
+        use crate::render::paper::REPORTED;
         let plan = Plan::load(&repo("cases/sweeps/paper-fidelity.ron")).unwrap();
         let table = plan.table.unwrap();
         let scene = |s: &str| match s {
@@ -1952,9 +1952,9 @@ mod tests {
             let pillar_start = r.scene != "pillars-push"
                 && matches!(
                     r.quantity,
-                    crate::output::paper::Quantity::NucleusDisplacement(
-                        crate::output::paper::When::GravityEnd
-                            | crate::output::paper::When::SpreadingEnd
+                    crate::render::paper::Quantity::NucleusDisplacement(
+                        crate::render::paper::When::GravityEnd
+                            | crate::render::paper::When::SpreadingEnd
                     )
                 );
             if pillar_start {

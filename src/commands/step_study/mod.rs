@@ -50,10 +50,10 @@ use std::path::{Path, PathBuf};
 
 use crate::case::{self, Case};
 use crate::dae::Stats;
-use crate::record::Observables;
-use crate::record::read::parse_timeseries;
-use crate::record::{FailureKind, SettingsUsed, Summary};
 use crate::run::{self, Progress, RunError, RunOptions};
+use crate::run_files::Observables;
+use crate::run_files::read::parse_timeseries;
+use crate::run_files::{FailureKind, SettingsUsed, Summary};
 use crate::solver::{Limits, Settings};
 use crate::stop::StopFlag;
 
@@ -141,10 +141,10 @@ pub enum StudyError {
     },
     /// A run's file could not be read back.
     #[error(transparent)]
-    Read(#[from] crate::record::ReadError),
+    Read(#[from] crate::run_files::ReadError),
     /// A figure could not be drawn.
     #[error(transparent)]
-    Output(#[from] crate::output::OutputError),
+    Output(#[from] crate::render::OutputError),
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> StudyError + '_ {

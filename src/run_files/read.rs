@@ -2,7 +2,7 @@
 //!
 //! A run writes `mesh.json` first, then `timeseries.csv` row by row (flushed), a
 //! `state_<phase>.json` at each phase end and `summary.json` after every row (see
-//! [`crate::record`]). An interrupted or failed run therefore leaves a CSV with fewer rows,
+//! [`crate::run_files`]). An interrupted or failed run therefore leaves a CSV with fewer rows,
 //! fewer states, and a summary with `finished = false`; a run killed mid-write may leave
 //! a last CSV line cut short. All of these load: what is missing is recorded in
 //! [`RunData::notes`]. What cannot be loaded is an absent or malformed `mesh.json` or
@@ -522,7 +522,7 @@ mod round_trip {
             let mantissa = rng.rand_float() * 2.0 - 1.0;
             mantissa * 10f64.powi(rng.rand_range(0..40) as i32 - 20)
         }));
-        crate::record::write_json(&path, &values).unwrap();
+        crate::run_files::write_json(&path, &values).unwrap();
         let back: Vec<f64> = read_json(&path).unwrap();
         let _ = std::fs::remove_dir_all(&dir);
         for (a, b) in values.iter().zip(&back) {

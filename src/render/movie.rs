@@ -28,7 +28,7 @@ use super::draw::ShapeStyleOptions;
 use super::geometry::{Backdrop, Bounds, substrate_floor};
 use super::shapes::draw_shape;
 use super::{DrawError, OutputError};
-use crate::record::{Mesh3File, MeshFile, Snapshot, Snapshot3, Timed};
+use crate::run_files::{Mesh3File, MeshFile, Snapshot, Snapshot3, Timed};
 
 /// A movie frame's drawing area.
 type Frame<'b> = DrawingArea<BitMapBackend<'b>, Shift>;

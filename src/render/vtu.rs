@@ -39,7 +39,7 @@ use vtkio::model::{
 
 use super::OutputError;
 use crate::fem::Domain;
-use crate::record::{Mesh3File, MeshFile, Snapshot, Snapshot3, Timed};
+use crate::run_files::{Mesh3File, MeshFile, Snapshot, Snapshot3, Timed};
 
 /// The VTK cell type of a six-node triangle.
 pub const QUADRATIC_TRIANGLE: u8 = 22;

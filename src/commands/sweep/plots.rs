@@ -22,7 +22,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use super::Record;
 use super::design::Kind;
 use super::table::{Row, Status};
-use crate::output::OutputError;
+use crate::render::OutputError;
 
 const FONT: &str = "sans-serif";
 const GREY: RGBColor = RGBColor(190, 190, 190);
@@ -974,7 +974,7 @@ fn tornado(path: &Path, name: &str, axes: &[String], s: &[Sensitivity]) -> Resul
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::record::Observables;
+    use crate::run_files::Observables;
 
     fn row(id: &str, values: &[&str], uy_top: f64) -> Row {
         Row {

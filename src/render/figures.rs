@@ -30,7 +30,7 @@ pub use super::time_plots::{
 
 use super::OutputError;
 use super::time_plots::after_active_name;
-use crate::record::{RunData, StateFile};
+use crate::run_files::{RunData, StateFile};
 
 /// The time curves of several runs on the same axes (a 3-D scene beside its 2-D one,
 /// say), into `out`: `compare-contact-radius.png`, `compare-displacement.png`,

@@ -40,7 +40,7 @@ use super::table::{Row, Status};
 use super::{Record, SweepError};
 use crate::case::Case;
 use crate::model::observables::{COLUMNS, interpolate};
-use crate::record::Observables;
+use crate::run_files::Observables;
 
 /// When a column's value is taken.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
@@ -393,7 +393,7 @@ impl PointData {
         let csv = dir.join("timeseries.csv");
         let series = std::fs::read_to_string(&csv)
             .ok()
-            .and_then(|t| crate::record::read::parse_timeseries(&csv, &t).ok())
+            .and_then(|t| crate::run_files::read::parse_timeseries(&csv, &t).ok())
             .map(|(s, _)| s)
             .unwrap_or_default();
         PointData {
@@ -871,8 +871,8 @@ pub fn write(dir: &Path, record: &Record, rows: &[Row]) -> Result<Vec<PathBuf>, 
 mod tests {
     use super::*;
     use crate::case::Substrate;
-    use crate::sweep::design::DesignSpec;
-    use crate::sweep::{RecordPoint, Settings};
+    use crate::commands::sweep::design::DesignSpec;
+    use crate::commands::sweep::{RecordPoint, Settings};
 
     /// The record of the sweep "t" of `design` with `points` and the table `table`.
     fn record(design: Design, points: Vec<RecordPoint>, table: TableSpec) -> Record {

@@ -17,7 +17,7 @@ use super::draw::{
 use super::geometry::{Backdrop, Bounds, CellShape, substrate_floor};
 use super::{DrawError, OutputError, draw_png};
 use crate::physics::Phases;
-use crate::record::{MeshFile, StateFile};
+use crate::run_files::{MeshFile, StateFile};
 
 /// The region a set of shape drawings shares: the deformed full cells of `states` and
 /// the substrate below them, with a margin of 1.5 µm, symmetric about x = 0.
