@@ -169,6 +169,12 @@ enum Command {
         /// the final values.
         #[arg(long)]
         phases: bool,
+        /// The measures a map reports instead: penetration depth and contact area (3-D),
+        /// u_y of p_t and p_b, contact radius deformed and reference, mean and largest
+        /// nucleus strain; after each run but the first, its relative difference from the
+        /// first.
+        #[arg(long, conflicts_with = "phases")]
+        measures: bool,
     },
 }
 
@@ -522,7 +528,11 @@ fn main() -> ExitCode {
         Command::Plot { run_dir, out, with } => plot_command(&run_dir, out, &with),
         Command::Mesh { case, svg } => mesh_command(&case, svg.as_deref()),
         Command::Check { case, set } => check_command(&case, &set),
-        Command::Table { run_dirs, phases } => table_command(&run_dirs, phases),
+        Command::Table {
+            run_dirs,
+            phases,
+            measures,
+        } => table_command(&run_dirs, phases, measures),
     }
 }
 
@@ -1038,15 +1048,30 @@ fn check_command(path: &Path, set: &[Override]) -> ExitCode {
     }
 }
 
-fn table_command(run_dirs: &[PathBuf], phases: bool) -> ExitCode {
+fn table_command(run_dirs: &[PathBuf], phases: bool, measures: bool) -> ExitCode {
     if phases {
         out!("{}", render::table::PHASES_HEADER);
+    } else if measures {
+        out!("{}", render::table::MEASURES_HEADER);
     } else {
         out!("{}", render::table::HEADER);
     }
     let mut status = ExitCode::SUCCESS;
-    for dir in run_dirs {
-        let row = if phases {
+    let mut first: Option<[Option<f64>; 8]> = None;
+    for (k, dir) in run_dirs.iter().enumerate() {
+        let row = if measures {
+            cellsim::run_files::read::read_summary(dir)
+                .map(|s| {
+                    let against = if k == 0 {
+                        first = render::table::measures(&s);
+                        None
+                    } else {
+                        first.as_ref()
+                    };
+                    render::table::measures_rows(&s, against)
+                })
+                .map_err(|e| e.to_string())
+        } else if phases {
             cellsim::run_files::read::RunData::load(dir)
                 .map(|run| render::table::phases_row(&run))
                 .map_err(|e| e.to_string())

@@ -884,3 +884,52 @@ fn a_summary_of_the_format_before_reads() {
     );
     assert!(String::from_utf8_lossy(&res.stdout).contains("| flat-gravity | finished |"));
 }
+
+#[test]
+fn the_measures_table_gives_each_run_and_its_difference_from_the_first() {
+    // A 2-D summary, and the same with u_y(p_t) 1 % deeper and a 3-D run's measures: the
+    // table prints each run's measures and, after the first, the relative differences.
+    let fixture = format!(
+        "{}/tests/data/summary-583760b.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&fixture).unwrap()).unwrap();
+    let uy = s["final_values"]["uy_top"].as_f64().unwrap();
+    let (a, b) = (tmp("measures-a"), tmp("measures-b"));
+    for d in [&a, &b] {
+        std::fs::create_dir_all(d).unwrap();
+    }
+    std::fs::write(format!("{a}/summary.json"), s.to_string()).unwrap();
+    s["final_values"]["uy_top"] = (1.01 * uy).into();
+    s["final_values_3d"] = serde_json::json!({"contact_area": 100.0, "contact_area_ref": 90.0,
+        "contact_radius_equiv": 5.6, "penetration_depth": 1.5});
+    s["strain_nucleus_max"] = 0.25.into();
+    std::fs::write(format!("{b}/summary.json"), s.to_string()).unwrap();
+    let res = cellsim(&["table", "--measures", &a, &b]);
+    assert!(
+        res.status.success(),
+        "{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    let out = String::from_utf8_lossy(&res.stdout).to_string();
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 5, "{out}");
+    assert!(lines[0].starts_with("| run | outcome | t reached [s] | penetration [µm] |"));
+    // The first run has no 3-D measures and no largest strain: dashes.
+    assert!(lines[2].contains("| – | "), "{}", lines[2]);
+    assert!(lines[3].contains("| 1.500 |") && lines[3].contains("| 25.0 % |"));
+    // u_y(p_t) is negative and 1 % larger in magnitude: −1.00 %; a value the first run
+    // lacks has no difference.
+    let diff: Vec<&str> = lines[4].split('|').map(str::trim).collect();
+    assert_eq!(diff[1], "difference from the first run");
+    assert_eq!(diff[4], "–");
+    assert_eq!(diff[5], format!("{:+.2} %", 100.0 * (0.01 * uy) / uy.abs()));
+    // Both flags at once are refused.
+    assert_eq!(
+        cellsim(&["table", "--measures", "--phases", &a])
+            .status
+            .code(),
+        Some(2)
+    );
+}

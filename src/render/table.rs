@@ -1,6 +1,8 @@
 //! `cellsim table RUN_DIR...`: one markdown row per run directory, from its
 //! `summary.json` alone — outcome, cost and final values, or the reason a run stopped.
 //! Used for the README's hard-case table; works on finished, failed and interrupted runs.
+//! `--phases` gives when the phases started, `--measures` what a map reports of each run
+//! (and how far each is from the first).
 
 use std::fmt::Write as _;
 
@@ -92,6 +94,79 @@ pub fn phases_row(run: &RunData) -> String {
             );
         }
         None => r.push_str(" – | – | – | – | – |"),
+    }
+    r
+}
+
+/// The measures' table's header (markdown): `cellsim table --measures`.
+pub const MEASURES_HEADER: &str = "| run | outcome | t reached [s] | penetration [µm] | u_y(p_t) [µm] | u_y(p_b) [µm] | contact area [µm²] | contact radius, deformed / reference [µm] | mean ‖E‖ nucleus | largest ‖E‖ nucleus |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|";
+
+/// The measures a map reports of a run, in [`MEASURES_HEADER`]'s order: penetration depth
+/// (3-D), u_y of p_t and p_b, contact area (3-D), contact radius deformed and reference,
+/// the mean and the largest nucleus strain. `None` where the run has no such value.
+pub fn measures(s: &Summary) -> Option<[Option<f64>; 8]> {
+    let o = s.final_values?;
+    let f3 = s.final_values_3d;
+    Some([
+        f3.map(|f| f.penetration_depth),
+        Some(o.uy_top),
+        Some(o.uy_bottom),
+        f3.map(|f| f.contact_area),
+        Some(o.contact_radius),
+        Some(o.contact_radius_ref),
+        Some(o.strain_nucleus),
+        s.strain_nucleus_max,
+    ])
+}
+
+/// One markdown row of the measures' table for `s`; with `against` (the first run's
+/// measures) a second row of the relative differences from it, in percent.
+pub fn measures_rows(s: &Summary, against: Option<&[Option<f64>; 8]>) -> String {
+    let outcome = match (&s.failure, s.finished) {
+        (_, true) => "finished".to_string(),
+        (Some(f), false) => format!("stopped: {}", short_reason(&f.reason)).replace('|', "/"),
+        (None, false) => "interrupted or running".to_string(),
+    };
+    let t = s.final_values.map_or("–".into(), |o| format!("{}", o.t));
+    let Some(m) = measures(s) else {
+        return format!(
+            "| {} | {outcome} | {t} | – | – | – | – | – | – | – |",
+            s.case
+        );
+    };
+    let v = |x: Option<f64>, f: &dyn Fn(f64) -> String| x.map_or("–".into(), f);
+    let d3 = |x: f64| format!("{x:.3}");
+    let d1 = |x: f64| format!("{x:.1}");
+    let pc = |x: f64| format!("{:.1} %", 100.0 * x);
+    let mut r = format!(
+        "| {} | {outcome} | {t} | {} | {} | {} | {} | {} / {} | {} | {} |",
+        s.case,
+        v(m[0], &d3),
+        v(m[1], &d3),
+        v(m[2], &d3),
+        v(m[3], &d1),
+        v(m[4], &d3),
+        v(m[5], &d3),
+        v(m[6], &pc),
+        v(m[7], &pc),
+    );
+    if let Some(a) = against {
+        let rel = |k: usize| match (m[k], a[k]) {
+            (Some(x), Some(y)) if y != 0.0 => format!("{:+.2} %", 100.0 * (x - y) / y.abs()),
+            _ => "–".into(),
+        };
+        let _ = write!(
+            r,
+            "\n| difference from the first run | | | {} | {} | {} | {} | {} / {} | {} | {} |",
+            rel(0),
+            rel(1),
+            rel(2),
+            rel(3),
+            rel(4),
+            rel(5),
+            rel(6),
+            rel(7)
+        );
     }
     r
 }
