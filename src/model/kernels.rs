@@ -347,10 +347,9 @@ pub(crate) fn band_force<T: Real, const D: usize>(
         Some(l) => j * l,
         None => j,
     };
-    let d = surf.0;
     let mut b = contact_force(&p.contact, surf, j);
     if let (Some(ad), Some(mu), Some(n)) = (&p.adhesion, mu, radial) {
-        let fa = adhesion_force(ad, d, f, n, mu, t_as);
+        let fa = adhesion_force(ad, surf, f, n, mu, t_as);
         b += match hoop {
             Some(l) => fa * adhesion_hoop_factor(ad, l),
             None => fa,

@@ -93,22 +93,33 @@ pub struct Adhesion {
     /// Eqs. (26) and (28)), with `ε` the half-width of the substrate's own indicator (the
     /// contact band's `ε_ct`). `None` (MODEL.md): `H_ε_f(d + e_f)`, substrate included.
     pub exclude_substrate: Option<f64>,
-    /// Whether the force lets go of membrane turned over onto the cell
-    /// ([`ADHESION_TURN`]): `true` (docs/MODEL.md §5) or the paper's force on all membrane
-    /// in the layer, however far it has turned (`false`).
+    /// Whether the force lets go of membrane turned over onto the cell, facing away from
+    /// the substrate ([`ADHESION_TURN`]): `true` (docs/MODEL.md §5) or the paper's force
+    /// on all membrane in the layer, however far it has turned (`false`).
     pub fold_release: bool,
 }
 
-/// Which membrane the spreading force pulls, by how far it has turned: the force is
-/// multiplied by `S(c; c₀, c₁)` with `c = a·N/|a|` the cosine between the membrane's
-/// current outward normal (`a = cof(F) N`, Nanson) and its reference one `N`: whole up to
-/// a turn of 107° (`c ≥ −0.3`), none beyond 127° (`c ≤ −0.6`). The paper's force pulls
-/// the membrane in the layer outward along its current normal; where the membrane has
-/// turned over — the inner face of a fold beside a pillar wall, late in the active phase —
-/// that normal points into the cell, and the pull drives the fold into the cytoplasm as
-/// deep as the layer reaches, deeper the finer the mesh (docs/MODEL.md §5). Spreading turns
-/// no adhered membrane that far: in the paper's scenes `c ≥ −0.17` wherever the force acts.
+/// Which membrane the spreading force pulls, by how far it has turned and which way it
+/// faces: the force is multiplied by `1 − (1 − S(c; c₀, c₁)) S(s; s₀, s₁)` with
+/// `c = â·N` the cosine between the membrane's current outward normal `â = a/|a|`
+/// (`a = cof(F) N`, Nanson) and its reference one `N`, and `s = â·n_sub` the cosine between
+/// that normal and the substrate's outward normal at the point ([`ADHESION_AWAY`]).
+/// Released: membrane turned by more than 127° (`c ≤ −0.6`) whose normal points away
+/// from the substrate (`s ≥ 0.3`); whole: membrane turned by less than 107° (`c ≥ −0.3`),
+/// or turned over but facing the substrate (`s ≤ 0`). The paper's force pulls the membrane
+/// in the layer outward along its current normal; where the membrane has turned over and
+/// faces away from the wall — the inner face of a fold beside a pillar wall, late in the
+/// active phase — that normal points into the cell, and the pull drives the fold into the
+/// cytoplasm as deep as the layer reaches, deeper the finer the mesh (docs/MODEL.md §5).
+/// Membrane that rolls over a narrow pillar's top and down its far face turns as far, but
+/// faces the pillar, and keeps the pull that holds it there. Spreading turns no adhered
+/// membrane that far: in the paper's scenes `c ≥ −0.17` wherever the force acts.
 pub const ADHESION_TURN: [f64; 2] = [-0.6, -0.3];
+
+/// Which turned-over membrane the spreading force lets go of, by the cosine `s` between its
+/// outward normal and the substrate's ([`ADHESION_TURN`]): none that faces the substrate
+/// (`s ≤ 0`), all that points away from it (`s ≥ 0.3`).
+pub const ADHESION_AWAY: [f64; 2] = [0.0, 0.3];
 
 impl Adhesion {
     /// Checks `e_f ≥ 0`, `ε > 0`, `μ_as0 ≥ 0`, `μ_as,max > 0`, finite; when the layer
@@ -267,16 +278,16 @@ pub fn layer<T: Real>(ad: &Adhesion, d: T) -> T {
 
 /// Adhesive spreading force per unit reference volume [pN/µm³] (membrane only — the caller
 /// applies it there): `b_as = t_as μ_as g_l(x) a(F)`, with `g_l` the [`layer`] indicator
-/// from the substrate's penetration depth `d = d(x)`, `N` the outward radial reference
+/// from the substrate's penetration depth `d = d(x)` (with `n_sub`, [`Surface::eval`]), `N` the outward radial reference
 /// direction `(p − c)/|p − c|`, `μ_as` [pN/µm³] the local adhesion coefficient, `t_as` the
 /// adhesion switch and `a(F)` by the readings of `ad`: `cof(F) N` (MODEL.md) or
 /// `cof(F) N/|cof(F) N|` ([`AdhesionDirection`]), times `J = det F` when `jacobian_factor`,
-/// and with `fold_release` times the switch [`ADHESION_TURN`] on the cosine between
-/// `cof(F) N` and `N`.
+/// and with `fold_release` times the release [`ADHESION_TURN`] of membrane turned over and
+/// facing away from the substrate, whose outward normal at the point is `n_sub`.
 #[inline(always)]
 pub fn adhesion_force<T: Real, const D: usize>(
     ad: &Adhesion,
-    d: T,
+    (d, n_sub): (T, SVector<T, D>),
     F: &SMatrix<T, D, D>,
     N_ref: &SVector<f64, D>,
     mu_as: T,
@@ -299,10 +310,14 @@ pub fn adhesion_force<T: Real, const D: usize>(
     if let (true, Some(len)) = (ad.fold_release, len) {
         let [c0, c1] = ADHESION_TURN;
         let c = a.dot(&N) / len;
-        if re(c) <= c0 {
+        // Turned over and facing away from the substrate: released; turned over and
+        // facing it (membrane wrapped over a pillar's far face): kept.
+        let away = a.dot(&n_sub) / len;
+        let [s0, s1] = ADHESION_AWAY;
+        if re(c) <= c0 && re(away) >= s1 {
             return SVector::zeros();
         }
-        turn = smooth_step(c, c0, c1);
+        turn = T::one() - (T::one() - smooth_step(c, c0, c1)) * smooth_step(away, s0, s1);
     }
     if let (true, Some(len)) = (unit, len) {
         a /= len;
@@ -507,10 +522,13 @@ mod tests {
         // 135° after it, by 115° (c = −0.42, inside the switch's transition)
         let N = Vector2::new(0.6, -0.8);
         let turned = nalgebra::Rotation2::new(135.0_f64.to_radians()).into_inner() * F0;
+        // rotated by 244.5° after it, turned over (c = −0.72) and pointing away from a
+        // floor or a pillar top by s = 0.15 (inside the facing switch's transition)
+        let away = nalgebra::Rotation2::new(244.5_f64.to_radians()).into_inner() * F0;
         for (ad, s, F) in adhesion_readings().into_iter().flat_map(|ad| {
             substrates()
                 .into_iter()
-                .flat_map(move |s| [F0, turned].map(|F| (ad, s, F)))
+                .flat_map(move |s| [F0, turned, away].map(|F| (ad, s, F)))
         }) {
             // in the layer's transition (d + e_f ∈ (−ε, ε)), the cap's transition and
             // the substrate's own transition (d ∈ (−ε, ε), flat and pillar top)
@@ -543,12 +561,12 @@ mod tests {
         let dual = |i: usize| DualSVec64::<M>::from_re(v[i]).derivative(i);
         let xd = SVector::from_fn(|i, _| dual(i));
         let fd = SMatrix::from_fn(|i, j| dual(D + D * i + j));
-        let f = adhesion_force(ad, s.eval(&xd).0, &fd, n, dual(M - 1), 0.7);
+        let f = adhesion_force(ad, s.eval(&xd), &fd, n, dual(M - 1), 0.7);
         let r = adhesion_rate(s, ad, &xd, dual(M - 1));
         let eval = |w: &[f64; M]| {
             let x = SVector::from_fn(|i, _| w[i]);
             let F = SMatrix::from_fn(|i, j| w[D + D * i + j]);
-            let force = adhesion_force(ad, s.eval(&x).0, &F, n, w[M - 1], 0.7);
+            let force = adhesion_force(ad, s.eval(&x), &F, n, w[M - 1], 0.7);
             (force, adhesion_rate(s, ad, &x, w[M - 1]))
         };
         let fscale = v[M - 1].max(1.0) / ad.eps;
@@ -577,13 +595,13 @@ mod tests {
         let N = Vector2::new(0.0, -1.0);
         // inside the layer (d + e_f > ε): full force t_as μ cof(F) N; cof(F) = J F⁻ᵀ
         let X = Vector2::new(0.0, -1.0);
-        let f = adhesion_force(&ad, s.eval(&X).0, &F, &N, 100.0, 0.5);
+        let f = adhesion_force(&ad, s.eval(&X), &F, &N, 100.0, 0.5);
         let cof = F.try_inverse().unwrap().transpose() * F.determinant();
         assert!((f - cof * N * 50.0).norm() < 1e-12);
         // outside the layer: none
         let X = Vector2::new(0.0, -0.3);
         assert_eq!(
-            adhesion_force(&ad, s.eval(&X).0, &F, &N, 100.0, 0.5),
+            adhesion_force(&ad, s.eval(&X), &F, &N, 100.0, 0.5),
             Vector2::zeros()
         );
         assert_eq!(adhesion_rate(&s, &ad, &X, 0.0), 0.0);
@@ -607,14 +625,14 @@ mod tests {
         let N = Vector2::new(0.6, -0.8);
         let X = Vector2::new(0.0_f64, -1.0); // inside the layer, above the substrate's band
         let cof_n = F.try_inverse().unwrap().transpose() * N * J;
-        let f0 = adhesion_force(&d, s.eval(&X).0, &F, &N, 100.0, 0.5);
+        let f0 = adhesion_force(&d, s.eval(&X), &F, &N, 100.0, 0.5);
         assert!((f0 - cof_n * 50.0).norm() < 1e-12);
         // Unit: the same direction, length t_as μ_as.
         let unit = Adhesion {
             direction: AdhesionDirection::Unit,
             ..d
         };
-        let f = adhesion_force(&unit, s.eval(&X).0, &F, &N, 100.0, 0.5);
+        let f = adhesion_force(&unit, s.eval(&X), &F, &N, 100.0, 0.5);
         assert!((f - cof_n / cof_n.norm() * 50.0).norm() < 1e-12);
         assert!((f.norm() - 50.0).abs() < 1e-12);
         // J f_as: J times the default.
@@ -622,7 +640,7 @@ mod tests {
             jacobian_factor: true,
             ..d
         };
-        let f = adhesion_force(&with_j, s.eval(&X).0, &F, &N, 100.0, 0.5);
+        let f = adhesion_force(&with_j, s.eval(&X), &F, &N, 100.0, 0.5);
         assert!((f - f0 * J).norm() < 1e-12);
         // Excluding the substrate: the same above its band, ½ less on its surface, nothing
         // inside it (where the default layer is 1).
@@ -662,7 +680,7 @@ mod tests {
         let force = |ad: &Adhesion, phi: f64, stretch: f64| {
             let r = nalgebra::Rotation2::new(phi.to_radians()).into_inner();
             let F = r * Matrix2::new(1.0, 0.0, 0.0, stretch);
-            adhesion_force(ad, s.eval(&X).0, &F, &N, 100.0, 0.5)
+            adhesion_force(ad, s.eval(&X), &F, &N, 100.0, 0.5)
         };
         // Turned up to 107° (c ≥ −0.3): the paper's force, to the bit.
         for phi in [0.0, 45.0, -90.0, 105.0] {
@@ -683,6 +701,26 @@ mod tests {
         // 29° more than F's rotation, here 129° in all.
         assert_eq!(force(&d, 100.0, 3.0), Vector2::zeros());
         assert!(force(&paper, 100.0, 3.0).norm() > 0.0);
+        // Turned over but facing the substrate (as membrane rolled down a pillar's far
+        // face): the paper's force, to the bit. N points up and out; turned by 180° it
+        // points down onto the floor (s = −0.8), by 150° down and out (s = −0.39).
+        let up = Vector2::new(0.6, 0.8);
+        let facing = |ad: &Adhesion, phi: f64| {
+            let r = nalgebra::Rotation2::new(phi.to_radians()).into_inner();
+            adhesion_force(ad, s.eval(&X), &r, &up, 100.0, 0.5)
+        };
+        for phi in [180.0, 150.0] {
+            assert_eq!(facing(&d, phi), facing(&paper, phi), "φ = {phi}°");
+            assert!(facing(&d, phi).norm() > 0.0);
+        }
+        // Turned over (c = −1) and pointing away from the floor by s = 0.15, in the middle
+        // of S(s; 0, 0.3): N = (0.99, −0.15) turned by 180° points along (−0.99, 0.15),
+        // and keeps half the force.
+        let side = Vector2::new((1.0_f64 - 0.15 * 0.15).sqrt(), -0.15);
+        let r = nalgebra::Rotation2::new(std::f64::consts::PI).into_inner();
+        let half = adhesion_force(&d, s.eval(&X), &r, &side, 100.0, 0.5).norm()
+            / adhesion_force(&paper, s.eval(&X), &r, &side, 100.0, 0.5).norm();
+        assert!((half - 0.5).abs() < 1e-12, "{half}");
     }
 
     #[test]
@@ -716,7 +754,7 @@ mod tests {
                     a *= J3;
                 }
                 let exact = Vector2::new(a.x, a.y) * (100.0 * 0.5);
-                let f = adhesion_force(&ad, s.eval(&X).0, &F, &N, 100.0, 0.5)
+                let f = adhesion_force(&ad, s.eval(&X), &F, &N, 100.0, 0.5)
                     * adhesion_hoop_factor(&ad, lambda);
                 assert!(
                     (f - exact).norm() < 1e-12 * exact.norm(),
@@ -831,8 +869,8 @@ mod tests {
                     let N2 = Vector2::new(phi.cos(), phi.sin());
                     let N3 = Vector3::new(N2.x, N2.y, 0.0);
                     let mu = rng.uniform(0.0, 1400.0);
-                    let a2 = adhesion_force(&ad, s2.eval(&X2).0, &F2, &N2, mu, 0.7);
-                    let a3 = adhesion_force(&ad, s3.eval(&X3).0, &embed(&F2), &N3, mu, 0.7);
+                    let a2 = adhesion_force(&ad, s2.eval(&X2), &F2, &N2, mu, 0.7);
+                    let a3 = adhesion_force(&ad, s3.eval(&X3), &embed(&F2), &N3, mu, 0.7);
                     let scale = mu * (1.0 + F2.norm()).powi(2);
                     assert!(
                         (a3 - Vector3::new(a2.x, a2.y, 0.0)).norm() <= 1e-14 * scale,
