@@ -114,7 +114,7 @@ fn main() {
         h_bottom: args.h_bottom.unwrap_or(case.mesh.h_bottom),
         h_nucleus: args.h_nucleus.unwrap_or(case.mesh.h_nucleus),
         refine: args.refine.unwrap_or(case.mesh.refine),
-        ..cellsim::case::terms::mesh3_params(&case)
+        ..cellsim::scene::terms::mesh3_params(&case)
     };
     let t0 = Instant::now();
     let mesh = Mesh3::generate(&mp).expect("mesh");

@@ -1,7 +1,7 @@
 //! Draws every figure of the 3-D quarter cell ([`cellsim::render::cell3d_views`]), a VTU file
 //! and a GIF into a directory, from states built here:
 //!
-//! - a synthetic smooth deformation of the default mesh (`cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())`,
+//! - a synthetic smooth deformation of the default mesh (`cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference())`,
 //!   meshed by gmsh and cached): the cell fallen 0.5 µm, its bottom sagged into the gap
 //!   under its centre, flattened and bulging sideways, over MODEL.md's pillars on both
 //!   lattices (four pillars around the axis; the gap between two), with both active
@@ -364,7 +364,7 @@ fn main() {
     );
     std::fs::create_dir_all(&out).expect("create the output directory");
     let t0 = Instant::now();
-    let mesh = Mesh3::generate(&cellsim::case::terms::mesh3_params(
+    let mesh = Mesh3::generate(&cellsim::scene::terms::mesh3_params(
         &cellsim::case::Case::reference(),
     ))
     .expect("the default mesh");

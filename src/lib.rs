@@ -33,8 +33,9 @@
 //!   phases, as pure functions of a material point (MODEL.md);
 //! - [`dae`], [`sundials`], [`solver`]: the implicit DAE, its integrators and linear
 //!   solvers (all `unsafe` and FFI in [`sundials`]), the settings a case chooses;
-//! - [`case`]: the case file (RON): its schema, defaults, `--set` overrides and located
-//!   errors; [`scene`]: a validated case as mesh and model parameters;
+//! - [`case`]: the case file (RON): its schema, defaults, rules, `--set` overrides and
+//!   located errors; [`scene`]: a case in the lower layers' terms (mesh and model
+//!   parameters, the checks those layers make, loading a case with them, its cost);
 //! - [`model`]: the cell, generic over its kinematics (plane strain, axisymmetric, 3-D),
 //!   and what it reports ([`model::observables`]);
 //! - [`run_files`]: the files a run writes, as types, and reading them back; [`render`]:

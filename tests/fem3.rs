@@ -9,7 +9,7 @@ use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use cellsim::case::{Case, terms};
+use cellsim::case::Case;
 use cellsim::fem::element::Lagrange;
 use cellsim::fem::mesh::quarter_cell::Generated;
 use cellsim::fem::tet10::{self as tet, TET_FACES};
@@ -18,6 +18,7 @@ use cellsim::fem::{
     CellMesh, Domain, EdgeRule, Mesh, Mesh3, Mesh3Params, MeshError, TetRule, TetTabulation,
     TriangleRule, Wedge,
 };
+use cellsim::scene::terms;
 
 /// The cache root of these tests (under the target directory, kept across runs).
 fn cache() -> PathBuf {
@@ -40,7 +41,7 @@ fn params(refine: f64) -> Mesh3Params {
     Mesh3Params {
         refine,
         wedge: Wedge::Quarter,
-        ..cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())
+        ..cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference())
     }
 }
 
@@ -302,7 +303,7 @@ fn only_geo_and_msh(dir: &Path) -> Vec<String> {
 fn meshing_is_deterministic_and_cached() {
     let p = Mesh3Params {
         refine: 0.8,
-        ..cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())
+        ..cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference())
     };
     let (ra, rb) = (scratch("det-a"), scratch("det-b"));
     let a = Mesh3::generate_with(&p, Path::new("gmsh"), &ra).expect("first");
@@ -368,7 +369,7 @@ fn other_cells_mesh_with_their_planes_points_and_volumes() {
             center: [0.0, 10.0, 0.0],
             h_bottom: 1.0,
             h_nucleus: 0.5,
-            ..cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())
+            ..cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference())
         },
     ];
     for p in cases {
@@ -396,7 +397,7 @@ fn other_cells_mesh_with_their_planes_points_and_volumes() {
 fn gmsh_missing_and_bad_parameters_are_refused() {
     let root = scratch("missing");
     let e = Mesh3::generate_with(
-        &cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference()),
+        &cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference()),
         Path::new("/nonexistent/gmsh"),
         &root,
     )
@@ -410,7 +411,7 @@ fn gmsh_missing_and_bad_parameters_are_refused() {
         Err(MeshError::InvalidParam { field, .. }) => field,
         other => panic!("expected InvalidParam, got {other:?}"),
     };
-    let d = cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference());
+    let d = cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference());
     assert_eq!(
         field_of(Mesh3Params {
             r_cp: 5.0,

@@ -1,12 +1,13 @@
 //! The cell model's derivatives, patch test and closed forms.
 
-use cellsim::case::{self, Case, terms};
+use cellsim::case::{self, Case};
 use cellsim::dae::Dae;
 use cellsim::dae::State;
 use cellsim::fem::{Mesh, MeshParams};
 use cellsim::model::{CellModel, ModelParams};
 use cellsim::physics::Substrate;
 use cellsim::scene;
+use cellsim::scene::terms;
 
 /// The reference case's mesh at refine 0.5.
 pub fn coarse_mesh() -> Mesh {

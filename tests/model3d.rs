@@ -350,7 +350,7 @@ fn flat_gravity_phase_against_the_axisymmetric_model(mesh: Mesh3) {
     let p = quasi_static_flat(t_end);
     let mut pa = p.clone();
     pa.kinematics = cellsim::physics::KinematicModel::Axisymmetric;
-    let mesh2 = Mesh::generate(&case::terms::mesh_params(&Case::reference())).unwrap();
+    let mesh2 = Mesh::generate(&cellsim::scene::terms::mesh_params(&Case::reference())).unwrap();
     let ma = CellModel::new(pa, mesh2).unwrap();
     let atola = ma.atol_vector(1e-7);
     let idaa = ida_to(ma, atola, t_end, LinearSolver::Faer);
@@ -401,7 +401,7 @@ fn a_slab_with_u_z_fixed_reproduces_plane_strain() {
     // against 1.2197 µm (1.7e-3).
     let mesh2 = Mesh::generate(&MeshParams {
         refine: 0.5,
-        ..case::terms::mesh_params(&Case::reference())
+        ..cellsim::scene::terms::mesh_params(&Case::reference())
     })
     .unwrap();
     let t_end = 150.0;

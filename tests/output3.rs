@@ -29,11 +29,11 @@ fn scratch(name: &str) -> PathBuf {
     d
 }
 
-/// The default quarter mesh (`cellsim::case::terms::mesh3_params(&cellsim::case::Case::reference())`), meshed once.
+/// The default quarter mesh (`cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference())`), meshed once.
 fn mesh() -> &'static Mesh3 {
     static MESH: OnceLock<Mesh3> = OnceLock::new();
     MESH.get_or_init(|| {
-        Mesh3::generate(&cellsim::case::terms::mesh3_params(
+        Mesh3::generate(&cellsim::scene::terms::mesh3_params(
             &cellsim::case::Case::reference(),
         ))
         .expect("the default mesh")

@@ -26,13 +26,15 @@
 //! written bare (`adhesion: (e_f: 1.5)`), as `Some(...)`, or `None`.
 //!
 //! [`Case::load`] parses and validates; its errors ([`CaseError`]) name the file, the line
-//! and column, and the field's dotted path.
+//! and column, and the field's dotted path. This module is the schema, its rules and the
+//! locating of errors; the checks of the layers below (mesh generator, material laws,
+//! physics validators) come from one layer up ([`crate::scene::terms::layer_checks`]),
+//! which also defines `Case::load` and its kin over this module's `Case::parse_*`.
 
 mod error;
 mod locate;
 pub mod overrides;
 mod sections;
-pub mod terms;
 mod validate;
 
 #[cfg(test)]
@@ -51,7 +53,7 @@ pub use sections::{
     Materials, Mesh, Output, Pac, Phases, Pillars, Solver, Start, Substrate, Viscosity,
     WedgeChoice, units,
 };
-pub use validate::{Rule, Violation};
+pub use validate::{LayerCheck, LayerChecks, Refusal, Rule, Violation, layer_check};
 pub(crate) use validate::{axes, num};
 
 use locate::FieldMap;
@@ -138,7 +140,8 @@ impl Case {
     /// MODEL.md's scene with every default: the flat substrate, adhesion, no active
     /// region, the paper's phases to T_a0 = 50 000 s. The one source of the model's default
     /// numbers: the layers below the case (physics, mesh, model) hold none, and their
-    /// tests take them from here through [`terms`] (e.g. `terms::contact(&Case::reference())`).
+    /// tests take them from here through [`crate::scene::terms`] (e.g.
+    /// `terms::contact(&Case::reference())`).
     pub fn reference() -> Self {
         let mut c = Case::new("reference", Substrate::flat(), 50_000.0);
         c.adhesion = Some(Adhesion::default());
@@ -153,10 +156,11 @@ impl Case {
         c
     }
 
-    /// Reads, parses and validates the case file at `path`.
-    pub fn load(path: impl AsRef<Path>) -> Result<Case, CaseError> {
+    /// Reads, parses and validates the case file at `path`, with the lower layers' checks
+    /// `layers` ([`Case::load`] gives them).
+    pub fn parse_file(path: impl AsRef<Path>, layers: LayerChecks) -> Result<Case, CaseError> {
         let (label, bytes) = Case::read_file(path.as_ref())?;
-        Case::from_bytes(&bytes, &label)
+        Case::parse_bytes(&bytes, &label, layers)
     }
 
     /// The bytes of the case file at `path`, with the label its messages use.
@@ -171,12 +175,16 @@ impl Case {
 
     /// Parses and validates a case from the bytes of a file, which must be UTF-8 text (a
     /// byte that is not is reported at its line and column); `file_label` names the file in
-    /// error messages.
-    pub fn from_bytes(bytes: &[u8], file_label: &str) -> Result<Case, CaseError> {
+    /// error messages; `layers` are the lower layers' checks ([`Case::from_bytes`]).
+    pub fn parse_bytes(
+        bytes: &[u8],
+        file_label: &str,
+        layers: LayerChecks,
+    ) -> Result<Case, CaseError> {
         // Columns count from after a byte-order mark, as in `from_str`.
         let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
         match std::str::from_utf8(bytes) {
-            Ok(text) => Case::from_str(text, file_label),
+            Ok(text) => Case::parse_str(text, file_label, layers),
             Err(e) => {
                 let valid = bytes.get(..e.valid_up_to()).unwrap_or_default();
                 let position = end_of(&String::from_utf8_lossy(valid));
@@ -195,16 +203,17 @@ impl Case {
         }
     }
 
-    /// Parses and validates a case from `text`; `file_label` names it in error messages.
-    /// A leading byte-order mark is ignored.
-    pub fn from_str(text: &str, file_label: &str) -> Result<Case, CaseError> {
+    /// Parses and validates a case from `text`; `file_label` names it in error messages,
+    /// `layers` are the lower layers' checks ([`Case::from_str`]). A leading byte-order
+    /// mark is ignored.
+    pub fn parse_str(text: &str, file_label: &str, layers: LayerChecks) -> Result<Case, CaseError> {
         let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
         let case: Case = match ron_options().from_str(text) {
             Ok(case) => case,
             Err(e) => return Err(parse_error(e, text, file_label)),
         };
         let fields = FieldMap::scan(text);
-        let violations = case.violations(&|path| fields.contains(path));
+        let violations = case.violations(&|path| fields.contains(path), layers);
         if violations.is_empty() {
             Ok(case)
         } else {
@@ -223,10 +232,11 @@ impl Case {
         }
     }
 
-    /// Checks every range and consistency rule, and what the mesh generator, the material
-    /// law and the physics validators would refuse; returns all violations.
-    pub fn validate(&self) -> Result<(), Vec<Violation>> {
-        let violations = self.violations(&|_| false);
+    /// Checks every range and consistency rule, and what the lower layers' checks `layers`
+    /// refuse ([`Case::validate`] gives the mesh generator's, the material law's and the
+    /// physics validators'); returns all violations.
+    pub fn validate_with(&self, layers: LayerChecks) -> Result<(), Vec<Violation>> {
+        let violations = self.violations(&|_| false, layers);
         if violations.is_empty() {
             Ok(())
         } else {

@@ -700,38 +700,38 @@ pub fn apply(text: &str, overrides: &[Override]) -> Result<Edited, (usize, Optio
 }
 
 impl Case {
-    /// Reads the case file at `path`, applies `overrides` and validates the result. Errors
-    /// in the file's text are located in the file; errors in an override's value name the
-    /// `--set` argument ([`CaseError::Override`], or a [`super::Problem`] whose `set` is
-    /// the argument).
-    pub fn load_with_overrides(
+    /// Reads the case file at `path`, applies `overrides` and validates the result with
+    /// the lower layers' checks `layers` ([`Case::load_with_overrides`] gives them).
+    pub fn parse_file_with_overrides(
         path: impl AsRef<std::path::Path>,
         overrides: &[Override],
+        layers: super::LayerChecks,
     ) -> Result<Case, CaseError> {
         let (label, bytes) = Case::read_file(path.as_ref())?;
         let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
         match std::str::from_utf8(bytes) {
-            Ok(text) => Case::from_str_with_overrides(text, &label, overrides),
-            Err(_) => Case::from_bytes(bytes, &label),
+            Ok(text) => Case::parse_str_with_overrides(text, &label, overrides, layers),
+            Err(_) => Case::parse_bytes(bytes, &label, layers),
         }
     }
 
-    /// As [`Case::from_str`], with `overrides` applied to the text first (see
+    /// As [`Case::parse_str`], with `overrides` applied to the text first (see
     /// [`Case::load_with_overrides`]).
-    pub fn from_str_with_overrides(
+    pub fn parse_str_with_overrides(
         text: &str,
         file_label: &str,
         overrides: &[Override],
+        layers: super::LayerChecks,
     ) -> Result<Case, CaseError> {
         if overrides.is_empty() {
-            return Case::from_str(text, file_label);
+            return Case::parse_str(text, file_label, layers);
         }
         let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
         let edited = match apply(text, overrides) {
             Ok(e) => e,
             Err((k, message)) => {
                 // A file that cannot be walked has a syntax error of its own: report it.
-                Case::from_str(text, file_label)?;
+                Case::parse_str(text, file_label, layers)?;
                 return Err(CaseError::Override {
                     file: file_label.to_string(),
                     arg: overrides[k].label(),
@@ -740,7 +740,8 @@ impl Case {
                 });
             }
         };
-        Case::from_str(&edited.text, file_label).map_err(|e| relocate(e, &edited, overrides))
+        Case::parse_str(&edited.text, file_label, layers)
+            .map_err(|e| relocate(e, &edited, overrides))
     }
 }
 

@@ -435,6 +435,19 @@ impl Substrate {
     pub fn pillars() -> Self {
         Substrate::Pillars(Pillars::default())
     }
+
+    /// Whether the plane x = z through the cell's axis is a mirror of the 3-D substrate:
+    /// flat, or pillars on the four-pillar lattice whose axes lie at the same offsets in x
+    /// as in z (`first_center` an odd multiple of half the period: the centre above a gap).
+    pub fn mirrors_diagonal(&self) -> bool {
+        match self {
+            Substrate::Flat(_) => true,
+            Substrate::Pillars(p) => {
+                p.lattice == crate::physics::Lattice::FourPillars
+                    && p.half_periods().is_some_and(|k| k.rem_euclid(2.0) == 1.0)
+            }
+        }
+    }
 }
 
 /// Flat substrate.

@@ -850,7 +850,7 @@ fn case_wedge_choice_resolves_by_the_substrate_mirror() {
              phases: (t_end: 100.0))"
         );
         let case = Case::from_str(&text, "t.ron").unwrap_or_else(|e| panic!("{e}"));
-        super::terms::mesh3_params(&case).wedge
+        crate::scene::terms::mesh3_params(&case).wedge
     };
     // The default pillars: the cell above the centre of four (first_center = P/2).
     assert_eq!(wedge(""), Wedge::Quarter, "the default");
@@ -862,7 +862,10 @@ fn case_wedge_choice_resolves_by_the_substrate_mirror() {
         "t.ron",
     )
     .unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(super::terms::mesh3_params(&gap).wedge, Wedge::Quarter);
+    assert_eq!(
+        crate::scene::terms::mesh3_params(&gap).wedge,
+        Wedge::Quarter
+    );
 }
 
 /// The run-cost estimate against the measured runs it was fitted to (the README's
@@ -888,7 +891,7 @@ fn run_cost_estimates_the_measured_scenes() {
         (load("cases/pillars-push-pull.ron"), 7.3, 2),
     ];
     for (case, measured, dim) in &cases {
-        let c = terms::run_cost(case).expect("a mesh the generator accepts");
+        let c = crate::scene::terms::run_cost(case).expect("a mesh the generator accepts");
         assert_eq!(c.dimension, *dim);
         let ratio = c.seconds / measured;
         assert!(
@@ -903,9 +906,9 @@ fn run_cost_estimates_the_measured_scenes() {
     // The phases: the whole push-pull is the unit; a run that stops at T_g0 a tenth; a
     // compressed scene (every phase 100 s) the same work.
     let mut p = cases[3].0.phases.clone();
-    assert!((terms::work_fraction(&p) - 1.0).abs() < 1e-12);
+    assert!((crate::scene::terms::work_fraction(&p) - 1.0).abs() < 1e-12);
     p.t_end = p.t_g0;
-    assert!((terms::work_fraction(&p) - 0.1).abs() < 1e-12);
+    assert!((crate::scene::terms::work_fraction(&p) - 0.1).abs() < 1e-12);
     let short = Phases {
         t_g0: 100.0,
         t_as0: 200.0,
@@ -914,5 +917,5 @@ fn run_cost_estimates_the_measured_scenes() {
         adhesion_start: None,
         active_start: None,
     };
-    assert!((terms::work_fraction(&short) - 1.0).abs() < 1e-12);
+    assert!((crate::scene::terms::work_fraction(&short) - 1.0).abs() < 1e-12);
 }

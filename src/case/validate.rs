@@ -200,8 +200,8 @@ impl Checker<'_> {
     /// Runs the checks of the lower layers (mesh generator, material law, physics
     /// validators) that read no field found invalid, and reports what they refuse on the
     /// first of the refusal's fields that the file writes (else its first).
-    fn layers(&mut self, case: &Case) {
-        for check in super::terms::layer_checks(case) {
+    fn layers(&mut self, case: &Case, layers: LayerChecks) {
+        for check in layers(case) {
             let reads: Vec<&str> = check.reads.iter().map(String::as_str).collect();
             if self.any_invalid(&reads) {
                 continue;
@@ -242,7 +242,11 @@ impl Case {
     /// side of two-field rules according to `written`: section by section, then what the
     /// lower layers (mesh generator, material law, physics validators) would refuse when
     /// the run sets up.
-    pub(crate) fn violations(&self, written: &dyn Fn(&str) -> bool) -> Vec<Violation> {
+    pub(crate) fn violations(
+        &self,
+        written: &dyn Fn(&str) -> bool,
+        layers: LayerChecks,
+    ) -> Vec<Violation> {
         let mut c = Checker {
             out: Vec::new(),
             written,
@@ -262,7 +266,7 @@ impl Case {
         c.phases(&self.phases, self.adhesion.is_some());
         c.inertia(&self.inertia);
         c.solver_and_output(&self.solver, &self.output);
-        c.layers(self);
+        c.layers(self, layers);
         c.out
     }
 }
@@ -408,7 +412,7 @@ impl Checker<'_> {
             );
         }
         if g.wedge == super::WedgeChoice::Eighth
-            && (g.model != KinematicModel::ThreeD || !super::terms::diagonal_mirror(substrate))
+            && (g.model != KinematicModel::ThreeD || !substrate.mirrors_diagonal())
         {
             self.report(
                 "geometry.wedge",
@@ -691,4 +695,64 @@ impl Checker<'_> {
 /// Formats a pair of semi-axes for a message.
 pub(crate) fn axes((a, b): (f64, f64)) -> String {
     format!("({}, {})", num(a), num(b))
+}
+
+/// A parameter that a lower layer (the mesh generator, a material law, a physics
+/// validator) refuses, traced back to the case fields it comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refusal {
+    /// The case fields (dotted paths) the refused parameter comes from, with their values
+    /// as the case writes them (case units, formatted), the most likely culprit first. At
+    /// least one.
+    pub fields: Vec<(String, String)>,
+    /// The lower layer's own message: its name for the parameter, the value in its units
+    /// and the rule.
+    pub message: String,
+}
+
+/// One check of a lower layer run on a case: [`crate::scene::model_params`] runs the
+/// physics ones before building, and [`Case::load`] runs them all
+/// ([`crate::scene::terms::layer_checks`]) so that a case it accepts is one the run
+/// accepts.
+pub struct LayerCheck<'c> {
+    /// The layer, as a message names it ("mesh generator", "material law", ...).
+    pub layer: &'static str,
+    /// The case fields the check reads: dotted paths, where a section (`substrate`)
+    /// stands for every field in it.
+    pub reads: Vec<String>,
+    check: Box<dyn Fn() -> Result<(), Refusal> + 'c>,
+}
+
+impl LayerCheck<'_> {
+    /// Runs the check.
+    pub fn run(&self) -> Result<(), Refusal> {
+        (self.check)()
+    }
+}
+
+impl std::fmt::Debug for LayerCheck<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LayerCheck")
+            .field("layer", &self.layer)
+            .field("reads", &self.reads)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The checks of the lower layers that validating a case runs: the mesh generator's, the
+/// material laws', the physics validators' (`crate::scene::terms::layer_checks`, which
+/// translates the case into their terms one layer up).
+pub type LayerChecks = for<'c> fn(&'c Case) -> Vec<LayerCheck<'c>>;
+
+/// A [`LayerCheck`] of `layer` reading the case fields `reads`.
+pub fn layer_check<'c>(
+    layer: &'static str,
+    reads: &[&str],
+    check: impl Fn() -> Result<(), Refusal> + 'c,
+) -> LayerCheck<'c> {
+    LayerCheck {
+        layer,
+        reads: reads.iter().map(|r| r.to_string()).collect(),
+        check: Box::new(check),
+    }
 }

@@ -38,10 +38,10 @@ pub use tri6::{ElementGeometry, P2Error, P2Tabulation, Tri6};
 #[cfg(test)]
 pub(crate) mod reference {
     pub fn mesh_params() -> super::MeshParams {
-        crate::case::terms::mesh_params(&crate::case::Case::reference())
+        crate::scene::terms::mesh_params(&crate::case::Case::reference())
     }
 
     pub fn mesh3_params() -> super::Mesh3Params {
-        crate::case::terms::mesh3_params(&crate::case::Case::reference())
+        crate::scene::terms::mesh3_params(&crate::case::Case::reference())
     }
 }

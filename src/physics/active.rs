@@ -376,7 +376,7 @@ mod tests {
 
     /// Both regions at the case's defaults (the one source of MODEL.md's numbers).
     fn both() -> ActiveStrain {
-        crate::case::terms::active(&crate::case::Case::reference_active())
+        crate::scene::terms::active(&crate::case::Case::reference_active())
             .expect("the reference case has both regions")
     }
 

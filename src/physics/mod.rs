@@ -179,7 +179,8 @@ pub(crate) fn abs<T: Real>(x: T) -> T {
 /// place the defaults live; this layer holds no default numbers of its own).
 #[cfg(test)]
 pub(crate) mod reference {
-    use crate::case::{Case, terms};
+    use crate::case::Case;
+    use crate::scene::terms;
 
     pub fn contact() -> super::Contact {
         terms::contact(&Case::reference())

@@ -47,9 +47,9 @@ pub const CONTROL: &str = "push-pull-control";
 /// push-pull's, without a flip). `None` if neither applies.
 pub fn run_phases(run: &RunData) -> Option<Phases> {
     let fits = |case: &crate::case::Case| {
-        let scheduled = crate::case::terms::phase_starts(case);
+        let scheduled = crate::scene::terms::phase_starts(case);
         let starts = (run.summary.as_ref()).map_or(scheduled, |sm| sm.phase_starts(scheduled));
-        let ph = crate::case::terms::phases_from(case, starts);
+        let ph = crate::scene::terms::phases_from(case, starts);
         let [tg, tas, ta, _] = run.mesh.phase_times;
         (case.name == run.name && ph.times() == [tg, tas, ta]).then_some(ph)
     };

@@ -8,14 +8,14 @@
 //! schedule what it means (an arming, a start, or nothing) and, at a start, restarts the
 //! integrator there with the phase's ramp from that time. The case's later times — the
 //! end time, the output times, the gravity flip — are read as times after the phase they
-//! fall in ([`crate::case::terms::scheduled`]) and become known when it starts.
+//! fall in ([`crate::scene::terms::scheduled`]) and become known when it starts.
 
 use crate::case::Case;
-use crate::case::terms::{phase_conditions, phase_starts, phases_from, scheduled};
 use crate::dae::Root;
 use crate::model::ModelParams;
 use crate::physics::Condition;
 use crate::run_files::Event;
+use crate::scene::terms::{phase_conditions, phase_starts, phases_from, scheduled};
 
 /// The phases that can start on a condition.
 pub(crate) const PHASES: [&str; 2] = ["adhesion", "active"];

@@ -10,12 +10,12 @@
 //!
 //! Unless a `--slurm-opt` sets them, the script asks for the time and memory its largest
 //! task is estimated to need ([`TaskEstimate`]): each point's cost from its case before
-//! meshing ([`crate::case::terms::run_cost`]), a task running its points `jobs` at a time.
+//! meshing ([`crate::scene::terms::run_cost`]), a task running its points `jobs` at a time.
 
 use std::path::{Path, PathBuf};
 
 use super::{Plan, SweepError};
-use crate::case::terms::{RunCost, run_cost};
+use crate::scene::terms::{RunCost, run_cost};
 
 /// Options of the batch script.
 #[derive(Debug, Clone, Default)]

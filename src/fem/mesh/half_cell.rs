@@ -61,7 +61,7 @@ use super::super::tri6::{self, EDGES, P2Tabulation, REFERENCE_NODES, Tri6};
 use super::{Domain, MeshError, NamedPoints};
 
 /// Geometry and mesh-size parameters of the half cell (µm). A case's are built by
-/// [`crate::case::terms::mesh_params`], which holds the defaults (the paper's cell and
+/// [`crate::scene::terms::mesh_params`], which holds the defaults (the paper's cell and
 /// mesh, MODEL.md §2, §9).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MeshParams {

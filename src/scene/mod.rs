@@ -1,15 +1,21 @@
-//! From a validated [`Case`] to what the solver needs: the mesh parameters and the
-//! physical parameters in solver units. Only what the scene needs is switched on (μ_as
+//! A case in the lower layers' terms, one layer above [`crate::case`] (the schema),
+//! [`crate::fem`], [`crate::physics`] and [`crate::model`]: the mesh parameters and the
+//! physical parameters in solver units ([`terms`], and here the model's), the checks those
+//! layers make of a case, which loading a case runs ([`Case::load`] and its kin, in
+//! `load.rs`), and the run's cost estimate. Only what the scene needs is switched on (μ_as
 //! unknowns with adhesion, active terms with active fibres, inertia per the case).
 
-use crate::case::terms::{
-    MEMORY_ESTIMATE, MESH_GENERATOR, active, adhesion, contact, fibres, phase_conditions,
-    phase_starts, phases, scheduled, viscosity,
-};
-pub use crate::case::terms::{layer_checks, mesh_params, mesh3_params, substrate};
+mod load;
+pub mod terms;
+
 use crate::case::{self, Case, InertiaMode};
 use crate::model::ModelParams;
 use crate::physics::{KinematicModel, Lattice, Yeoh};
+use terms::{
+    MEMORY_ESTIMATE, MESH_GENERATOR, active, adhesion, contact, fibres, phase_conditions,
+    phase_starts, phases, scheduled, viscosity,
+};
+pub use terms::{layer_checks, mesh_params, mesh3_params, substrate};
 
 /// A problem with a case that validation could not see (a material law rejecting its
 /// parameters, say).

@@ -4,7 +4,7 @@
 //! generator and the physics apply, and reports a refusal at the case field it comes from.
 //! (The model's full parameters are built one layer up, by [`crate::scene`].)
 
-use super::{self as case, Case};
+use crate::case::{self, Case, LayerCheck, Refusal, layer_check};
 use crate::fem::{Mesh3Params, MeshError, MeshParams, Wedge};
 use crate::physics::{self, ActiveStrain, Condition, Flip, Phases, Substrate, Viscosity, Yeoh};
 
@@ -31,25 +31,12 @@ pub fn mesh3_params(case: &Case) -> Mesh3Params {
     let wedge = match case.geometry.wedge {
         case::WedgeChoice::Quarter => Wedge::Quarter,
         case::WedgeChoice::Eighth => Wedge::Eighth,
-        case::WedgeChoice::Auto if diagonal_mirror(&case.substrate) => Wedge::Eighth,
+        case::WedgeChoice::Auto if case.substrate.mirrors_diagonal() => Wedge::Eighth,
         case::WedgeChoice::Auto => Wedge::Quarter,
     };
     Mesh3Params {
         wedge,
         ..Mesh3Params::from_section(&mesh_params(case), 0.0)
-    }
-}
-
-/// Whether the plane x = z through the cell's axis is a mirror of the 3-D substrate: flat,
-/// or pillars on the four-pillar lattice whose axes lie at the same offsets in x as in z
-/// (`first_center` an odd multiple of half the period: the centre above a gap).
-pub fn diagonal_mirror(substrate: &case::Substrate) -> bool {
-    match substrate {
-        case::Substrate::Flat(_) => true,
-        case::Substrate::Pillars(p) => {
-            p.lattice == physics::Lattice::FourPillars
-                && p.half_periods().is_some_and(|k| k.rem_euclid(2.0) == 1.0)
-        }
     }
 }
 
@@ -255,63 +242,10 @@ pub fn adhesion(case: &Case) -> Option<physics::Adhesion> {
     })
 }
 
-/// A parameter that a lower layer (the mesh generator, a material law, a physics
-/// validator) refuses, traced back to the case fields it comes from.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Refusal {
-    /// The case fields (dotted paths) the refused parameter comes from, with their values
-    /// as the case writes them (case units, formatted), the most likely culprit first. At
-    /// least one.
-    pub fields: Vec<(String, String)>,
-    /// The lower layer's own message: its name for the parameter, the value in its units
-    /// and the rule.
-    pub message: String,
-}
-
-/// One check of a lower layer run on a case: [`crate::scene::model_params`] runs the physics ones
-/// before building, and [`Case::load`] runs them all so that a case it accepts is one
-/// the run accepts.
-pub struct LayerCheck<'c> {
-    /// The layer, as a message names it ("mesh generator", "material law", ...).
-    pub layer: &'static str,
-    /// The case fields the check reads: dotted paths, where a section (`substrate`)
-    /// stands for every field in it.
-    pub reads: Vec<String>,
-    check: Box<dyn Fn() -> Result<(), Refusal> + 'c>,
-}
-
-impl LayerCheck<'_> {
-    /// Runs the check.
-    pub fn run(&self) -> Result<(), Refusal> {
-        (self.check)()
-    }
-}
-
-impl std::fmt::Debug for LayerCheck<'_> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("LayerCheck")
-            .field("layer", &self.layer)
-            .field("reads", &self.reads)
-            .finish_non_exhaustive()
-    }
-}
-
 /// The name of the mesh generator's layer in [`LayerCheck::layer`].
 pub const MESH_GENERATOR: &str = "mesh generator";
 /// The name of the memory estimate's layer in [`LayerCheck::layer`].
 pub const MEMORY_ESTIMATE: &str = "memory estimate";
-
-fn layer_check<'c>(
-    layer: &'static str,
-    reads: &[&str],
-    check: impl Fn() -> Result<(), Refusal> + 'c,
-) -> LayerCheck<'c> {
-    LayerCheck {
-        layer,
-        reads: reads.iter().map(|r| r.to_string()).collect(),
-        check: Box::new(check),
-    }
-}
 
 /// A case field and its value, formatted as in case messages.
 fn field(path: impl Into<String>, value: f64) -> Option<(String, String)> {
