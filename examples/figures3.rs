@@ -29,7 +29,7 @@ use cellsim::render::cell3d_views::{
 use cellsim::render::figures::ShapeStyleOptions;
 use cellsim::render::geometry::Bounds;
 use cellsim::render::movie::{Movie3, MovieView};
-use cellsim::render::vtu::write_vtu3;
+use cellsim::render::vtu::write_vtu;
 use cellsim::run_files::{Mesh3File, Snapshot3, write_json};
 use cellsim::scene;
 use cellsim::sundials::{Ida, IdaOptions};
@@ -282,7 +282,7 @@ fn real_state(out: &Path) -> Vec<PathBuf> {
         }
     };
     let vtu = out.join("flat-gravity.vtu");
-    write_vtu3(&vtu, &mf, &s).expect("vtu");
+    write_vtu(&vtu, &mf, &s).expect("vtu");
     let mut files = draw_all(
         out,
         "flat-gravity",
@@ -392,7 +392,7 @@ fn main() {
             &format!("{what} (reference)"),
         ));
         let vtu = out.join(format!("synthetic-{tag}.vtu"));
-        write_vtu3(&vtu, &mf, &s).expect("vtu");
+        write_vtu(&vtu, &mf, &s).expect("vtu");
         files.push(vtu);
         // The deformation ramped in over 12 frames, as a section and as a surface.
         for (view, name) in [

@@ -16,7 +16,7 @@ use cellsim::render::cell3d_views::{
 };
 use cellsim::render::figures::ShapeStyleOptions;
 use cellsim::render::movie::{FRAME_SIZE, MAX_FRAMES, Movie3, MovieView};
-use cellsim::render::vtu::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu3};
+use cellsim::render::vtu::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu};
 use cellsim::run_files::{Mesh3File, Snapshot3};
 use cellsim::scene;
 use plotters::prelude::*;
@@ -145,7 +145,7 @@ fn vtu3_reads_back_with_quadratic_tetrahedra_in_vtk_order() {
     let s = snapshot(&mf, 1.0, 5_000.0);
     let d = scratch("vtu");
     let p = d.join("cell.vtu");
-    write_vtu3(&p, &mf, &s).expect("write vtu");
+    write_vtu(&p, &mf, &s).expect("write vtu");
     let g = read_vtu_grid(&p).expect("read vtu");
     let v = &g.summary;
     assert_eq!(v.points, mf.nodes.len());
@@ -205,7 +205,7 @@ fn vtu3_reads_back_with_quadratic_tetrahedra_in_vtk_order() {
     // A snapshot that does not fit the mesh is refused, naming the file.
     let mut bad = s.clone();
     bad.element_strain.pop();
-    let e = write_vtu3(&d.join("bad.vtu"), &mf, &bad).expect_err("short snapshot");
+    let e = write_vtu(&d.join("bad.vtu"), &mf, &bad).expect_err("short snapshot");
     assert!(e.to_string().contains("bad.vtu"), "{e}");
 }
 

@@ -70,7 +70,7 @@ use super::geometry::{
     ACTIVE_LEVEL, ActiveRegion, Backdrop, Bounds, CellShape, Pt, contour, element_polygon,
     intervals,
 };
-use super::vtu::check_snapshot3;
+use super::vtu::VtuMesh;
 use super::{DrawError, OutputError, draw_png};
 use crate::fem::{Domain, Lagrange, Tet10, Tri6, tet10 as tet, tri6 as p2};
 use crate::physics::{ActiveStrain, Substrate, Substrate3, smooth_step};
@@ -863,7 +863,7 @@ pub fn section_figure(
     plane: Section,
     title: &str,
 ) -> Result<(), OutputError> {
-    check_snapshot3(mesh, s).map_err(|m| OutputError::draw(path, m))?;
+    mesh.check(s).map_err(|m| OutputError::draw(path, m))?;
     let view = section_view(mesh, &[s], plane);
     let opts = ShapeStyleOptions {
         title: title.to_string(),
@@ -1461,7 +1461,7 @@ pub fn draw_surface<DB: DrawingBackend>(
     frame: &SurfaceFrame,
     opts: &SurfaceStyleOptions,
 ) -> Result<(), DrawError> {
-    check_snapshot3(mesh, s)?;
+    mesh.check(s)?;
     let fs = opts.font as f64;
     let areas = SurfaceAreas::new(area, opts, fs)?;
     let strain_max = outer_strain_max(mesh, s);
@@ -1691,7 +1691,7 @@ pub fn surface_figure(
     coloring: Coloring,
     title: &str,
 ) -> Result<(), OutputError> {
-    check_snapshot3(mesh, s).map_err(|m| OutputError::draw(path, m))?;
+    mesh.check(s).map_err(|m| OutputError::draw(path, m))?;
     let frame = SurfaceFrame::new(mesh, &[s], Camera::DEFAULT);
     let opts = SurfaceStyleOptions {
         title: title.to_string(),

@@ -260,26 +260,10 @@ pub fn vtk_model<M: VtuMesh>(mesh: &M, s: &M::Snapshot) -> Result<Vtk, SnapshotM
     Ok(mesh.grid(s))
 }
 
-/// The VTK model of one output time of the 3-D cell ([`vtk_model`] on a [`Mesh3File`]).
-pub fn vtk_model3(mesh: &Mesh3File, s: &Snapshot3) -> Result<Vtk, SnapshotMismatch> {
-    vtk_model(mesh, s)
-}
-
-/// Checks that the 3-D snapshot's arrays fit the mesh.
-pub fn check_snapshot3(mesh: &Mesh3File, s: &Snapshot3) -> Result<(), SnapshotMismatch> {
-    mesh.check(s)
-}
-
 /// Writes the `.vtu` of one output time at `path` (of either model: [`VtuMesh`]).
 pub fn write_vtu<M: VtuMesh>(path: &Path, mesh: &M, s: &M::Snapshot) -> Result<(), OutputError> {
     let vtk = vtk_model(mesh, s).map_err(|m| vtk_err(path, m))?;
     vtk.export(path).map_err(|e| vtk_err(path, e))
-}
-
-/// Writes the `.vtu` of one output time of the 3-D cell at `path` ([`write_vtu`] on a
-/// [`Mesh3File`]).
-pub fn write_vtu3(path: &Path, mesh: &Mesh3File, s: &Snapshot3) -> Result<(), OutputError> {
-    write_vtu(path, mesh, s)
 }
 
 /// What a `.vtu` read back holds, for checks.
