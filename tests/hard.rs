@@ -317,10 +317,12 @@ fn the_fold_holds_on_a_mesh_refined_twice_and_gives_the_default_mesh_answer() {
 
 #[test]
 fn without_self_contact_the_fold_passes_through_itself_and_an_element_inverts() {
-    // The model as MODEL.md states it: the same scene stops where the fold's faces have
-    // passed through each other, with an inverted element as its classified reason.
+    // The paper's model (no self-contact, the spreading force without the fold release):
+    // the same scene stops where the fold's faces have passed through each other, with an
+    // inverted element as its classified reason.
     let s = run_hard_with("wide-gap-fold", "-without", |c| {
-        c.contact.self_contact = false
+        c.contact.self_contact = false;
+        c.adhesion.as_mut().expect("adhesion").fold_release = false;
     });
     let f = s.failure.as_ref().expect("stops without self-contact");
     assert_eq!(f.kind, FailureKind::Inverted, "{}", f.reason);
