@@ -14,8 +14,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use cellsim::case::{Case, InertiaMode};
-use cellsim::render::SnapshotOptions;
-use cellsim::run::{self, Progress, RunOptions};
+use cellsim::run::{self, RunOptions};
 use cellsim::solver::LinearSolver;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 
@@ -41,14 +40,7 @@ fn unknowns(case: &Case, file: &str) -> usize {
 fn run_once(case: &Case, file: &str, kind: LinearSolver, out: &Path) -> u64 {
     let mut settings = case.solver.clone();
     settings.linear_solver = kind;
-    let opts = RunOptions {
-        out: out.to_path_buf(),
-        settings,
-        limits: Default::default(),
-        progress: Progress::Hidden,
-        interrupt: cellsim::stop::StopFlag::new(),
-        snapshots: SnapshotOptions::default(),
-    };
+    let opts = RunOptions::new(out.to_path_buf(), settings);
     let s = run::run(case, file, &opts).unwrap();
     assert!(s.finished);
     s.stats.steps

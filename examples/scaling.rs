@@ -18,7 +18,7 @@ use cellsim::commands::step_study::fit_loglog;
 use cellsim::commands::step_study::plots::{LogLogPanel, LogLogSeries, loglog_figure};
 use cellsim::dae::linsolve::FaerLu;
 use cellsim::dae::{Dae, LinearSolver};
-use cellsim::run::{self, Progress, RunOptions};
+use cellsim::run::{self, RunOptions};
 
 #[path = "../benches/support/mod.rs"]
 mod support;
@@ -54,14 +54,10 @@ fn main() {
         case.name = format!("flat-gravity-refine{refine}");
         case.phases.t_end = case.phases.t_g0;
         case.mesh.refine = refine;
-        let opts = RunOptions {
-            out: root.join("target/scaling").join(&case.name),
-            settings: case.solver.clone(),
-            limits: Default::default(),
-            progress: Progress::Hidden,
-            interrupt: cellsim::stop::StopFlag::new(),
-            snapshots: Default::default(),
-        };
+        let opts = RunOptions::new(
+            root.join("target/scaling").join(&case.name),
+            case.solver.clone(),
+        );
         let s =
             run::run(&case, &file.display().to_string(), &opts).unwrap_or_else(|e| panic!("{e}"));
         // The fill of the system after the fall, on the same mesh.

@@ -5,7 +5,7 @@ use cellsim::case::{self, Case};
 use cellsim::dae::Dae;
 use cellsim::dae::State;
 use cellsim::model::CellModel;
-use cellsim::run::{self, Progress, RunOptions};
+use cellsim::run::{self, RunOptions};
 use cellsim::run_files::RunData;
 use oorandom::Rand64;
 
@@ -102,14 +102,7 @@ fn run_short_flat(out: &str, defer: bool, rtol: f64) -> RunData {
     settings.atol = rtol * 1e-2;
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(out);
     let _ = std::fs::remove_dir_all(&dir);
-    let opts = RunOptions {
-        out: dir.clone(),
-        settings,
-        limits: Default::default(),
-        progress: Progress::Hidden,
-        interrupt: cellsim::stop::StopFlag::new(),
-        snapshots: Default::default(),
-    };
+    let opts = RunOptions::new(dir.clone(), settings);
     let s = run::run(&case, &file, &opts).unwrap();
     assert!(s.finished, "{out}: {:?}", s.failure);
     if defer {

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use cellsim::case::Case;
-use cellsim::run::{self, Progress, RunError, RunOptions};
+use cellsim::run::{self, RunError, RunOptions};
 use cellsim::run_files::{FailureKind, Summary};
 
 use crate::scenes::read_csv;
@@ -29,14 +29,7 @@ fn run_hard_with(name: &str, tag: &str, change: impl Fn(&mut Case)) -> Summary {
     case.validate().unwrap_or_else(|e| panic!("{name}: {e:?}"));
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("hard-{name}{tag}"));
     let _ = std::fs::remove_dir_all(&out);
-    let opts = RunOptions {
-        out: out.clone(),
-        settings: case.solver.clone(),
-        limits: Default::default(),
-        progress: Progress::Hidden,
-        interrupt: cellsim::stop::StopFlag::new(),
-        snapshots: Default::default(),
-    };
+    let opts = RunOptions::new(out.clone(), case.solver.clone());
     let result = run::run(&case, &file, &opts);
 
     // Whatever happened, the summary on disk says it, and the time series is intact.

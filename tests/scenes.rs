@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use cellsim::case::{self, Case};
-use cellsim::run::{self, Progress, RunOptions};
+use cellsim::run::{self, RunOptions};
 use cellsim::run_files::Summary;
 
 pub fn tmp(name: &str) -> PathBuf {
@@ -34,14 +34,7 @@ pub fn run_changed_case(
     let mut settings = case.solver.clone();
     tweak(&mut settings);
     let dir = tmp(out);
-    let opts = RunOptions {
-        out: dir.clone(),
-        settings,
-        limits: Default::default(),
-        progress: Progress::Hidden,
-        interrupt: cellsim::stop::StopFlag::new(),
-        snapshots: Default::default(),
-    };
+    let opts = RunOptions::new(dir.clone(), settings);
     let summary = run::run(&case, &file, &opts).unwrap_or_else(|e| panic!("{path}: {e}"));
     (summary, read_csv(&dir.join("timeseries.csv")), dir)
 }

@@ -37,14 +37,7 @@ fn family() -> Vec<Case> {
 }
 
 fn options(case: &Case, dir: PathBuf) -> RunOptions {
-    RunOptions {
-        out: dir,
-        settings: case.solver.clone(),
-        limits: Default::default(),
-        progress: Progress::Hidden,
-        interrupt: cellsim::stop::StopFlag::new(),
-        snapshots: Default::default(),
-    }
+    RunOptions::new(dir, case.solver.clone())
 }
 
 #[test]
