@@ -310,14 +310,17 @@ pub fn adhesion_force<T: Real, const D: usize>(
     if let (true, Some(len)) = (ad.fold_release, len) {
         let [c0, c1] = ADHESION_TURN;
         let c = a.dot(&N) / len;
-        // Turned over and facing away from the substrate: released; turned over and
-        // facing it (membrane wrapped over a pillar's far face): kept.
-        let away = a.dot(&n_sub) / len;
-        let [s0, s1] = ADHESION_AWAY;
-        if re(c) <= c0 && re(away) >= s1 {
-            return SVector::zeros();
+        // Turned less than 107° (nearly all membrane): the whole force, nothing more to
+        // evaluate. Turned over and facing away from the substrate: released; turned over
+        // and facing it (membrane wrapped over a pillar's far face): kept.
+        if re(c) < c1 {
+            let away = a.dot(&n_sub) / len;
+            let [s0, s1] = ADHESION_AWAY;
+            if re(c) <= c0 && re(away) >= s1 {
+                return SVector::zeros();
+            }
+            turn = T::one() - (T::one() - smooth_step(c, c0, c1)) * smooth_step(away, s0, s1);
         }
-        turn = T::one() - (T::one() - smooth_step(c, c0, c1)) * smooth_step(away, s0, s1);
     }
     if let (true, Some(len)) = (unit, len) {
         a /= len;
