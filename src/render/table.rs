@@ -15,15 +15,10 @@ pub const HEADER: &str = "| run | outcome | unknowns | wall [s] | steps | Jacobi
 /// One markdown row for a run: "finished", or "stopped: \<reason\>" (shortened to its
 /// first sentence and the callback's report, if any).
 pub fn row(s: &Summary) -> String {
-    let outcome = match (&s.failure, s.finished) {
-        (_, true) => "finished".to_string(),
-        (Some(f), false) => format!("stopped: {}", short_reason(&f.reason)),
-        (None, false) => "interrupted or running".to_string(),
-    };
     let mut r = format!(
         "| {} | {} | {} | {:.1} | {} | {} |",
         s.case,
-        outcome.replace('|', "/"),
+        outcome(s),
         s.unknowns.total,
         s.wall_seconds,
         s.stats.steps,
@@ -54,14 +49,7 @@ pub const PHASES_HEADER: &str = "| run | outcome | adhesion starts [s] | active 
 /// run's phase lines) — the end time, the cost and the final values.
 pub fn phases_row(run: &RunData) -> String {
     let s = run.summary.as_ref();
-    let outcome = match s {
-        Some(s) if s.finished => "finished".to_string(),
-        Some(s) => match &s.failure {
-            Some(f) => format!("stopped: {}", short_reason(&f.reason)).replace('|', "/"),
-            None => "interrupted or running".into(),
-        },
-        None => "no summary".into(),
-    };
+    let outcome = s.map_or("no summary".into(), outcome);
     let [ta, tb, _, t_end] = run.mesh.phase_times;
     let start = |phase: &str, t: f64| {
         let event = s.and_then(|s| s.events.iter().find(|e| e.phase == phase));
@@ -122,11 +110,7 @@ pub fn measures(s: &Summary) -> Option<[Option<f64>; 8]> {
 /// One markdown row of the measures' table for `s`; with `against` (the first run's
 /// measures) a second row of the relative differences from it, in percent.
 pub fn measures_rows(s: &Summary, against: Option<&[Option<f64>; 8]>) -> String {
-    let outcome = match (&s.failure, s.finished) {
-        (_, true) => "finished".to_string(),
-        (Some(f), false) => format!("stopped: {}", short_reason(&f.reason)).replace('|', "/"),
-        (None, false) => "interrupted or running".to_string(),
-    };
+    let outcome = outcome(s);
     let t = s.final_values.map_or("–".into(), |o| format!("{}", o.t));
     let Some(m) = measures(s) else {
         return format!(
@@ -169,6 +153,16 @@ pub fn measures_rows(s: &Summary, against: Option<&[Option<f64>; 8]>) -> String 
         );
     }
     r
+}
+
+/// A run's outcome in a table cell: "finished", "stopped: \<reason\>" (shortened to its
+/// first sentence and the callback's report, if any) or "interrupted or running".
+fn outcome(s: &Summary) -> String {
+    match (&s.failure, s.finished) {
+        (_, true) => "finished".to_string(),
+        (Some(f), false) => format!("stopped: {}", short_reason(&f.reason)).replace('|', "/"),
+        (None, false) => "interrupted or running".to_string(),
+    }
 }
 
 /// IDA's messages repeat the flag name and the time; keep the readable part.

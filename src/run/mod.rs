@@ -514,7 +514,7 @@ fn ida_options(s: &Settings, atol: Atol, linear_solver: solver::LinearSolver) ->
 
 /// BDF2's options for a run: its step `bdf2_dt` (capped by `limits.dt_inertia` while the
 /// system has inertia), the tolerances and the LU from the settings `s`; the method's own
-/// constants, which no setting changes, written out.
+/// constants, which no setting changes, BDF2's defaults.
 fn bdf2_options(
     s: &Settings,
     limits: &Limits,
@@ -531,12 +531,7 @@ fn bdf2_options(
         rtol: s.rtol,
         atol,
         linear_solver: linear_solver.into(),
-        newton_tol: 0.33,
-        max_newton_iters: 4,
-        max_cuts: 10,
-        start_fraction: 0.25,
-        max_growth: 1.5,
-        cj_reuse_tol: 1e-9,
+        ..Bdf2Options::default()
     }
 }
 
