@@ -20,7 +20,7 @@ use std::time::Instant;
 use cellsim::case::Case;
 use cellsim::dae::linsolve::{ColumnOrdering, FaerLu, LinearSolver, LinearSolverError};
 use cellsim::dae::{Atol, Dae, Integrator, LinearSolverFactory, SharedFactory};
-use cellsim::fem::{Mesh3, Mesh3Params};
+use cellsim::fem::{TetMesh, TetMeshParams};
 use cellsim::model::{Cell3, ModelParams};
 use cellsim::physics::Lattice;
 use cellsim::scene;
@@ -110,14 +110,14 @@ fn main() {
         case.inertia.mode = cellsim::case::InertiaMode::Off;
         case.inertia.drag = d;
     }
-    let mp = Mesh3Params {
+    let mp = TetMeshParams {
         h_bottom: args.h_bottom.unwrap_or(case.mesh.h_bottom),
         h_nucleus: args.h_nucleus.unwrap_or(case.mesh.h_nucleus),
         refine: args.refine.unwrap_or(case.mesh.refine),
-        ..cellsim::scene::terms::mesh3_params(&case)
+        ..cellsim::scene::terms::tet_mesh_params(&case)
     };
     let t0 = Instant::now();
-    let mesh = Mesh3::generate(&mp).expect("mesh");
+    let mesh = TetMesh::generate(&mp).expect("mesh");
     println!(
         "mesh: {:.2} s\n{}",
         t0.elapsed().as_secs_f64(),

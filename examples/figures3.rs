@@ -1,7 +1,7 @@
 //! Draws every figure of the 3-D quarter cell ([`cellsim::render::cell3d_views`]), a VTU file
 //! and a GIF into a directory, from states built here:
 //!
-//! - a synthetic smooth deformation of the default mesh (`cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference())`,
+//! - a synthetic smooth deformation of the default mesh (`cellsim::scene::terms::tet_mesh_params(&cellsim::case::Case::reference())`,
 //!   meshed by gmsh and cached): the cell fallen 0.5 µm, its bottom sagged into the gap
 //!   under its centre, flattened and bulging sideways, over MODEL.md's pillars on both
 //!   lattices (four pillars around the axis; the gap between two), with both active
@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use cellsim::case::{self, Case};
 use cellsim::dae::{Atol, Integrator};
-use cellsim::fem::{Domain, Mesh3, Mesh3Params, TetRule, TetTabulation};
+use cellsim::fem::{Domain, TetMesh, TetMeshParams, TetRule, TetTabulation};
 use cellsim::model::Cell3;
 use cellsim::model::ModelParams;
 use cellsim::physics::{Lattice, Substrate, Substrate3};
@@ -37,7 +37,7 @@ use nalgebra::Matrix3;
 use plotters::prelude::*;
 
 /// The mesh file of `mesh` with the model parameters `p` on `lattice`.
-fn mesh_file(mesh: &Mesh3, p: &ModelParams, lattice: Lattice) -> Mesh3File {
+fn mesh_file(mesh: &TetMesh, p: &ModelParams, lattice: Lattice) -> Mesh3File {
     let ph = &p.phases;
     Mesh3File {
         nodes: mesh.nodes.clone(),
@@ -308,7 +308,7 @@ fn integrate_flat_gravity() -> (Mesh3File, Snapshot3) {
     let p = scene::model_params(&c, "quasi-static", false).expect("a valid case");
     let g = Case::reference().geometry;
     let centre = g.centre();
-    let mesh = Mesh3::generate(&Mesh3Params {
+    let mesh = TetMesh::generate(&TetMeshParams {
         center: [centre[0], centre[1], 0.0],
         wedge: cellsim::fem::Wedge::Quarter,
         r_n: g.r_n,
@@ -364,7 +364,7 @@ fn main() {
     );
     std::fs::create_dir_all(&out).expect("create the output directory");
     let t0 = Instant::now();
-    let mesh = Mesh3::generate(&cellsim::scene::terms::mesh3_params(
+    let mesh = TetMesh::generate(&cellsim::scene::terms::tet_mesh_params(
         &cellsim::case::Case::reference(),
     ))
     .expect("the default mesh");

@@ -9,7 +9,7 @@
 
 use cellsim::case::Case;
 use cellsim::dae::{Atol, Dae, Integrator};
-use cellsim::fem::Mesh3;
+use cellsim::fem::TetMesh;
 use cellsim::model::{Cell3, ModelParams};
 use cellsim::physics::Lattice;
 use cellsim::scene;
@@ -40,7 +40,7 @@ fn main() {
     let args = <Args as clap::Parser>::parse();
     let file = args.case;
     let case = Case::load(&file).expect("case");
-    let mesh = Mesh3::generate(&scene::mesh3_params(&case)).expect("mesh");
+    let mesh = TetMesh::generate(&scene::tet_mesh_params(&case)).expect("mesh");
     let plane = scene::model_params(&case, &file, false).expect("params");
     let bottom = case.geometry.centre()[1] - case.geometry.r_c;
     let m = Cell3::new(

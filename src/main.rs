@@ -991,8 +991,8 @@ fn mesh_command(path: &Path, svg: Option<&Path>) -> ExitCode {
             return ExitCode::from(2);
         }
         let cache = cellsim::fem::mesh::quarter_cell::cache_root();
-        let made = cellsim::fem::Mesh3::generate_with(
-            &scene::mesh3_params(&case),
+        let made = cellsim::fem::TetMesh::generate_with(
+            &scene::tet_mesh_params(&case),
             Path::new("gmsh"),
             &cache,
         );

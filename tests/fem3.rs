@@ -15,7 +15,7 @@ use cellsim::fem::mesh::quarter_cell::Generated;
 use cellsim::fem::tet10::{self as tet, TET_FACES};
 use cellsim::fem::tri6::{self as p2, Tri6};
 use cellsim::fem::{
-    CellMesh, Domain, EdgeRule, Mesh, Mesh3, Mesh3Params, MeshError, TetRule, TetTabulation,
+    CellMesh, Domain, EdgeRule, Mesh, MeshError, TetMesh, TetMeshParams, TetRule, TetTabulation,
     TriangleRule, Wedge,
 };
 use cellsim::scene::terms;
@@ -33,15 +33,15 @@ fn scratch(name: &str) -> PathBuf {
     d
 }
 
-fn generate(p: &Mesh3Params) -> Generated {
-    Mesh3::generate_with(p, Path::new("gmsh"), &cache()).unwrap_or_else(|e| panic!("{p:?}: {e}"))
+fn generate(p: &TetMeshParams) -> Generated {
+    TetMesh::generate_with(p, Path::new("gmsh"), &cache()).unwrap_or_else(|e| panic!("{p:?}: {e}"))
 }
 
-fn params(refine: f64) -> Mesh3Params {
-    Mesh3Params {
+fn params(refine: f64) -> TetMeshParams {
+    TetMeshParams {
         refine,
         wedge: Wedge::Quarter,
-        ..cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference())
+        ..cellsim::scene::terms::tet_mesh_params(&cellsim::case::Case::reference())
     }
 }
 
@@ -55,7 +55,7 @@ fn norm(a: [f64; 3]) -> f64 {
 
 /// Volumes of the balls r_n, r_cp, r_c (of the wedge) from a mesh: nucleus, nucleus +
 /// cytoplasm, everything. Each has one curved boundary.
-fn ball_volumes(m: &Mesh3) -> [f64; 3] {
+fn ball_volumes(m: &TetMesh) -> [f64; 3] {
     let n = m.volume(Some(Domain::Nucleus));
     let c = m.volume(Some(Domain::Cytoplasm));
     [n, n + c, m.volume(None)]
@@ -301,13 +301,13 @@ fn only_geo_and_msh(dir: &Path) -> Vec<String> {
 /// a second call on the same cache does not run gmsh and gives the same mesh.
 #[test]
 fn meshing_is_deterministic_and_cached() {
-    let p = Mesh3Params {
+    let p = TetMeshParams {
         refine: 0.8,
-        ..cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference())
+        ..cellsim::scene::terms::tet_mesh_params(&cellsim::case::Case::reference())
     };
     let (ra, rb) = (scratch("det-a"), scratch("det-b"));
-    let a = Mesh3::generate_with(&p, Path::new("gmsh"), &ra).expect("first");
-    let b = Mesh3::generate_with(&p, Path::new("gmsh"), &rb).expect("second");
+    let a = TetMesh::generate_with(&p, Path::new("gmsh"), &ra).expect("first");
+    let b = TetMesh::generate_with(&p, Path::new("gmsh"), &rb).expect("second");
     assert!(!a.from_cache && !b.from_cache);
     assert_ne!(a.file, b.file);
     assert_eq!(a.file.file_name(), b.file.file_name());
@@ -327,7 +327,7 @@ fn meshing_is_deterministic_and_cached() {
     only_geo_and_msh(&ra.join("mesh3d"));
     // From the cache.
     let t = Instant::now();
-    let c = Mesh3::generate_with(&p, Path::new("gmsh"), &ra).expect("cached");
+    let c = TetMesh::generate_with(&p, Path::new("gmsh"), &ra).expect("cached");
     let dt = t.elapsed().as_secs_f64();
     println!(
         "gmsh {:.2} s; from the cache {dt:.2} s ({} tetrahedra)",
@@ -339,7 +339,7 @@ fn meshing_is_deterministic_and_cached() {
     assert_eq!(c.mesh.nodes, a.mesh.nodes);
     assert_eq!(c.mesh.elements, a.mesh.elements);
     // Another size is another key.
-    let q = Mesh3Params {
+    let q = TetMeshParams {
         h_bottom: 0.31,
         ..p.clone()
     };
@@ -354,7 +354,7 @@ fn meshing_is_deterministic_and_cached() {
 #[test]
 fn other_cells_mesh_with_their_planes_points_and_volumes() {
     let cases = [
-        Mesh3Params {
+        TetMeshParams {
             center: [1.5, -2.0, 0.7],
             wedge: Wedge::Eighth,
             r_n: 3.0,
@@ -365,11 +365,11 @@ fn other_cells_mesh_with_their_planes_points_and_volumes() {
             refine: 1.0,
             h_surface: None,
         },
-        Mesh3Params {
+        TetMeshParams {
             center: [0.0, 10.0, 0.0],
             h_bottom: 1.0,
             h_nucleus: 0.5,
-            ..cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference())
+            ..cellsim::scene::terms::tet_mesh_params(&cellsim::case::Case::reference())
         },
     ];
     for p in cases {
@@ -396,8 +396,8 @@ fn other_cells_mesh_with_their_planes_points_and_volumes() {
 #[test]
 fn gmsh_missing_and_bad_parameters_are_refused() {
     let root = scratch("missing");
-    let e = Mesh3::generate_with(
-        &cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference()),
+    let e = TetMesh::generate_with(
+        &cellsim::scene::terms::tet_mesh_params(&cellsim::case::Case::reference()),
         Path::new("/nonexistent/gmsh"),
         &root,
     )
@@ -407,77 +407,77 @@ fn gmsh_missing_and_bad_parameters_are_refused() {
             .contains("gmsh not found on PATH: install the Debian package `gmsh` (make deps does)"),
         "{e}"
     );
-    let field_of = |p: Mesh3Params| match Mesh3::generate_with(&p, Path::new("gmsh"), &root) {
+    let field_of = |p: TetMeshParams| match TetMesh::generate_with(&p, Path::new("gmsh"), &root) {
         Err(MeshError::InvalidParam { field, .. }) => field,
         other => panic!("expected InvalidParam, got {other:?}"),
     };
-    let d = cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference());
+    let d = cellsim::scene::terms::tet_mesh_params(&cellsim::case::Case::reference());
     assert_eq!(
-        field_of(Mesh3Params {
+        field_of(TetMeshParams {
             r_cp: 5.0,
             ..d.clone()
         }),
         "r_cp"
     );
     assert_eq!(
-        field_of(Mesh3Params {
+        field_of(TetMeshParams {
             r_c: 9.0,
             ..d.clone()
         }),
         "r_c"
     );
     assert_eq!(
-        field_of(Mesh3Params {
+        field_of(TetMeshParams {
             r_c: 9.7505,
             ..d.clone()
         }),
         "r_c"
     );
     assert_eq!(
-        field_of(Mesh3Params {
+        field_of(TetMeshParams {
             r_n: -1.0,
             ..d.clone()
         }),
         "r_n"
     );
     assert_eq!(
-        field_of(Mesh3Params {
+        field_of(TetMeshParams {
             h_bottom: 0.0,
             ..d.clone()
         }),
         "h_bottom"
     );
     assert_eq!(
-        field_of(Mesh3Params {
+        field_of(TetMeshParams {
             h_nucleus: f64::NAN,
             ..d.clone()
         }),
         "h_nucleus"
     );
     assert_eq!(
-        field_of(Mesh3Params {
+        field_of(TetMeshParams {
             refine: f64::INFINITY,
             ..d.clone()
         }),
         "refine"
     );
     assert_eq!(
-        field_of(Mesh3Params {
+        field_of(TetMeshParams {
             center: [0.0, 0.0, f64::NAN],
             ..d.clone()
         }),
         "center[2]"
     );
     assert_eq!(
-        field_of(Mesh3Params {
+        field_of(TetMeshParams {
             center: [0.0, 1e12, 0.0],
             ..d.clone()
         }),
         "center"
     );
     assert!(matches!(
-        Mesh3::generate_with(
-            &Mesh3Params {
+        TetMesh::generate_with(
+            &TetMeshParams {
                 refine: 20.0,
                 ..d.clone()
             },
@@ -486,7 +486,7 @@ fn gmsh_missing_and_bad_parameters_are_refused() {
         ),
         Err(MeshError::TooFine { .. })
     ));
-    let msg = Mesh3::generate(&Mesh3Params { r_cp: 4.0, ..d })
+    let msg = TetMesh::generate(&TetMeshParams { r_cp: 4.0, ..d })
         .expect_err("invalid")
         .to_string();
     assert!(msg.contains("r_cp") && msg.contains("r_n"), "{msg}");
@@ -502,27 +502,27 @@ fn reading_checks_the_file_and_the_cell() {
     let p = g.mesh.params.clone();
     let good = std::fs::read_to_string(&g.file).expect("mesh file");
     let path = "cell.msh";
-    let m = Mesh3::parse_gmsh(&good, path, &p).expect("reads");
+    let m = TetMesh::parse_gmsh(&good, path, &p).expect("reads");
     assert_eq!(m.nodes, g.mesh.nodes);
     // Wrong version.
     let bad = good.replacen("4.1 0 8", "2.2 0 8", 1);
     assert!(matches!(
-        Mesh3::parse_gmsh(&bad, path, &p),
+        TetMesh::parse_gmsh(&bad, path, &p),
         Err(MeshError::Format { line: 2, .. })
     ));
     // A missing group.
     let bad = good.replacen("\"membrane\"", "\"skin\"", 1);
-    let e = Mesh3::parse_gmsh(&bad, path, &p).expect_err("no membrane");
+    let e = TetMesh::parse_gmsh(&bad, path, &p).expect_err("no membrane");
     assert!(e.to_string().contains("membrane"), "{e}");
     let bad = good.replacen("\"outer\"", "\"surface\"", 1);
-    let e = Mesh3::parse_gmsh(&bad, path, &p).expect_err("no outer");
+    let e = TetMesh::parse_gmsh(&bad, path, &p).expect_err("no outer");
     assert!(e.to_string().contains("outer"), "{e}");
     // A corrupt node coordinate: the message names its line.
     let lines: Vec<&str> = good.lines().collect();
     let end_nodes = lines.iter().position(|l| *l == "$EndNodes").expect("nodes");
     let mut broken = lines.clone();
     broken[end_nodes - 1] = "0.5 oops 0";
-    match Mesh3::parse_gmsh(&broken.join("\n"), path, &p) {
+    match TetMesh::parse_gmsh(&broken.join("\n"), path, &p) {
         Err(MeshError::Format { line, message, .. }) => {
             assert_eq!(line, end_nodes, "{message}");
             assert!(message.contains("oops"));
@@ -546,7 +546,7 @@ fn reading_checks_the_file_and_the_cell() {
     let f: Vec<&str> = lines[block].split_whitespace().collect();
     let relabelled = format!("{} {} 4 {}", f[0], f[1], f[3]);
     linear[block] = &relabelled;
-    let e = Mesh3::parse_gmsh(&linear.join("\n"), path, &p).expect_err("linear");
+    let e = TetMesh::parse_gmsh(&linear.join("\n"), path, &p).expect_err("linear");
     assert!(e.to_string().contains("10-node"), "{e}");
     // An element given with the opposite orientation is reoriented.
     let el: Vec<&str> = lines[block + 1].split_whitespace().collect();
@@ -557,7 +557,7 @@ fn reading_checks_the_file_and_the_cell() {
         .join(" ");
     let mut flipped = lines.clone();
     flipped[block + 1] = &flipped_line;
-    let r = Mesh3::parse_gmsh(&flipped.join("\n"), path, &p).expect("reoriented");
+    let r = TetMesh::parse_gmsh(&flipped.join("\n"), path, &p).expect("reoriented");
     assert!(r.check_jacobians().is_ok());
     assert!((r.volume(None) - m.volume(None)).abs() < 1e-12 * m.volume(None));
     // A mid-node moved across its element: the element is named.
@@ -575,20 +575,20 @@ fn reading_checks_the_file_and_the_cell() {
         other => panic!("expected a Jacobian error, got {other:?}"),
     }
     // The file of another cell.
-    let other = Mesh3Params {
+    let other = TetMeshParams {
         r_c: 10.5,
         ..p.clone()
     };
-    let e = Mesh3::parse_gmsh(&good, path, &other).expect_err("another cell");
+    let e = TetMesh::parse_gmsh(&good, path, &other).expect_err("another cell");
     println!("another cell: {e}");
-    let other = Mesh3Params {
+    let other = TetMeshParams {
         r_n: 4.0,
         ..p.clone()
     };
-    assert!(Mesh3::parse_gmsh(&good, path, &other).is_err());
+    assert!(TetMesh::parse_gmsh(&good, path, &other).is_err());
     // A missing file.
     assert!(matches!(
-        Mesh3::read_gmsh(Path::new("/nonexistent/cell.msh"), &p),
+        TetMesh::read_gmsh(Path::new("/nonexistent/cell.msh"), &p),
         Err(MeshError::Io { .. })
     ));
 }
@@ -605,7 +605,7 @@ fn mesh2(refine: f64) -> Mesh {
 fn extruded_slab_is_conforming_with_exact_volumes() {
     let m2 = mesh2(1.0);
     let t = 0.7;
-    let m = Mesh3::extruded(&m2, t);
+    let m = TetMesh::extruded(&m2, t);
     assert_eq!(m.n_elements(), 3 * m2.n_elements());
     assert_eq!(m.n_nodes(), 3 * m2.n_nodes());
     for d in Domain::ALL {
@@ -704,7 +704,7 @@ fn extruded_slab_is_conforming_with_exact_volumes() {
 fn extruded_slab_contains_the_2d_space() {
     let m2 = mesh2(0.5);
     let t = 0.4;
-    let m = Mesh3::extruded(&m2, t);
+    let m = TetMesh::extruded(&m2, t);
     let n2 = m2.n_nodes();
     // Arbitrary nodal values on the 2-D mesh.
     let f2: Vec<f64> = (0..n2)
@@ -764,7 +764,7 @@ fn print_quality() {
         let p = params(refine);
         let root = scratch(&format!("print-{refine}"));
         let t = Instant::now();
-        let g = Mesh3::generate_with(&p, Path::new("gmsh"), &root).expect("mesh");
+        let g = TetMesh::generate_with(&p, Path::new("gmsh"), &root).expect("mesh");
         let total = t.elapsed().as_secs_f64();
         let q = g.mesh.quality();
         println!(
@@ -782,7 +782,7 @@ fn print_quality() {
 #[test]
 fn the_eighth_mesh_is_half_the_quarter() {
     let quarter = generate(&params(1.0)).mesh;
-    let m = generate(&Mesh3Params {
+    let m = generate(&TetMeshParams {
         wedge: Wedge::Eighth,
         ..params(1.0)
     })
@@ -845,7 +845,7 @@ fn the_eighth_mesh_is_half_the_quarter() {
 }
 
 /// All boundary faces of `m` (used by one tetrahedron), outward, in element order.
-fn boundary_faces(m: &Mesh3) -> Vec<[usize; 6]> {
+fn boundary_faces(m: &TetMesh) -> Vec<[usize; 6]> {
     let key = |f: &[usize; 6]| {
         let mut k = [f[0], f[1], f[2]];
         k.sort_unstable();
@@ -979,13 +979,13 @@ fn several_processes_on_one_cold_cache_share_one_whole_mesh() {
 /// option the geometry file (and so every cached mesh's key) is what it was.
 #[test]
 fn a_surface_cap_refines_the_lower_surface_only() {
-    let base = Mesh3Params {
+    let base = TetMeshParams {
         wedge: Wedge::Eighth,
         ..params(1.0)
     };
     let geo = base.geo();
     assert!(geo.contains("Background Field = 1;") && !geo.contains("Field[2]"));
-    let capped_params = Mesh3Params {
+    let capped_params = TetMeshParams {
         h_surface: Some(0.6),
         ..base.clone()
     };
@@ -996,7 +996,7 @@ fn a_surface_cap_refines_the_lower_surface_only() {
     let c = base.center;
     // The longest vertex-to-vertex edge of the outer faces whose midpoint lies in the
     // height band `ys` and whose ends are both on the surface.
-    let longest = |m: &Mesh3, ys: std::ops::Range<f64>| -> f64 {
+    let longest = |m: &TetMesh, ys: std::ops::Range<f64>| -> f64 {
         let mut l: f64 = 0.0;
         for f in &m.outer_faces {
             for (a, b) in [(0, 1), (1, 2), (2, 0)] {

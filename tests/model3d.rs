@@ -6,7 +6,9 @@ use cellsim::case::{self, Case};
 use cellsim::dae::State;
 use cellsim::dae::{Atol, Dae, Integrator};
 use cellsim::fem::tet10::{TET_FACES, face_map};
-use cellsim::fem::{Domain, Lagrange, Mesh, Mesh3, Mesh3Params, MeshParams, TriangleRule, Wedge};
+use cellsim::fem::{
+    Domain, Lagrange, Mesh, MeshParams, TetMesh, TetMeshParams, TriangleRule, Wedge,
+};
 use cellsim::model::{Cell3, Constraints};
 use cellsim::model::{CellModel, ModelParams};
 use cellsim::physics::{KinematicModel, Lattice, Substrate, Viscosity, Yeoh, piola_total3};
@@ -16,15 +18,15 @@ use cellsim::sundials::{Ida, IdaOptions};
 use nalgebra::{Matrix3, Vector3};
 
 /// The quarter cell's mesh at the given sizes (µm) for the reference cell.
-pub fn mesh3(h_bottom: f64, h_nucleus: f64) -> Mesh3 {
+pub fn mesh3(h_bottom: f64, h_nucleus: f64) -> TetMesh {
     wedge_mesh(h_bottom, h_nucleus, Wedge::Quarter)
 }
 
 /// The mesh of `wedge` at the given sizes (µm) for the reference cell.
-pub fn wedge_mesh(h_bottom: f64, h_nucleus: f64, wedge: Wedge) -> Mesh3 {
+pub fn wedge_mesh(h_bottom: f64, h_nucleus: f64, wedge: Wedge) -> TetMesh {
     let g = Case::reference().geometry;
     let c = g.centre();
-    Mesh3::generate(&Mesh3Params {
+    TetMesh::generate(&TetMeshParams {
         center: [c[0], c[1], 0.0],
         wedge,
         r_n: g.r_n,
@@ -39,12 +41,12 @@ pub fn wedge_mesh(h_bottom: f64, h_nucleus: f64, wedge: Wedge) -> Mesh3 {
 }
 
 /// A coarse quarter cell (fast tests).
-pub fn coarse3() -> Mesh3 {
+pub fn coarse3() -> TetMesh {
     mesh3(0.6, 1.5)
 }
 
 /// A coarse eighth cell (fast tests).
-pub fn coarse8() -> Mesh3 {
+pub fn coarse8() -> TetMesh {
     wedge_mesh(0.6, 1.5, Wedge::Eighth)
 }
 
@@ -92,12 +94,12 @@ fn jacobian_of_the_eighth_cell_matches_finite_differences() {
 /// (medium drag): every block of J. t in the active phase, the cell sunk 0.5 µm into the
 /// bands. On the eighth cell, whose nodes on the diagonal plane carry one unknown for
 /// u_x = u_z, the u and v unknowns of every such node in the lower half are columns.
-fn check_jacobian3(inertia: bool, lattice: Lattice, mesh: &Mesh3) {
+fn check_jacobian3(inertia: bool, lattice: Lattice, mesh: &TetMesh) {
     check_jacobian3_of(inertia, lattice, mesh, 0.0)
 }
 
 /// [`check_jacobian3`] with the cytoplasm's fibres at `k1_pa` (none at 0).
-fn check_jacobian3_of(inertia: bool, lattice: Lattice, mesh: &Mesh3, k1_pa: f64) {
+fn check_jacobian3_of(inertia: bool, lattice: Lattice, mesh: &TetMesh, k1_pa: f64) {
     let wedge = mesh.params.wedge;
     let eighth = wedge == Wedge::Eighth;
     let mut c = Case::reference_active();
@@ -269,7 +271,7 @@ fn weight_and_volumes_of_the_quarter_and_the_eighth_cell() {
     }
 }
 
-fn weight_and_volumes(mesh: Mesh3, share: f64) {
+fn weight_and_volumes(mesh: TetMesh, share: f64) {
     let m = Cell3::new(params3(scene::reference_params()), mesh).unwrap();
     let g = Case::reference().geometry;
     let ball = |r: f64| share * 4.0 * std::f64::consts::PI * r.powi(3) / 3.0;
@@ -337,7 +339,7 @@ fn flat_gravity_phase_of_the_eighth_cell_agrees_with_the_axisymmetric_model() {
     flat_gravity_phase_against_the_axisymmetric_model(coarse8());
 }
 
-fn flat_gravity_phase_against_the_axisymmetric_model(mesh: Mesh3) {
+fn flat_gravity_phase_against_the_axisymmetric_model(mesh: TetMesh) {
     // MODEL.md §10 check (2): the ball settled under its weight on the flat substrate, in
     // the 3-D quarter cell and in the axisymmetric model, quasi-statically (gravity ramped
     // over 100 s, medium drag, no inertia). At rest the integrated contact force balances
@@ -410,7 +412,7 @@ fn a_slab_with_u_z_fixed_reproduces_plane_strain() {
     let atol2 = m2.atol_vector(1e-7);
     let ida2 = ida_to(m2, atol2, t_end, LinearSolver::Faer);
     let o2 = ida2.dae().observe(t_end, ida2.y());
-    let slab = Mesh3::extruded(&mesh2, 1.0);
+    let slab = TetMesh::extruded(&mesh2, 1.0);
     let m3 = Cell3::with_constraints(params3(p), slab, Constraints::Slab).unwrap();
     let atol3 = m3.atol_vector(1e-7);
     let ida3 = ida_to(m3, atol3, t_end, LinearSolver::UmfpackNd);

@@ -9,7 +9,7 @@ use std::sync::OnceLock;
 use cellsim::case::{self, Case};
 use cellsim::fem::element::Lagrange;
 use cellsim::fem::tet10::Tet10;
-use cellsim::fem::{Domain, Mesh3, TetRule};
+use cellsim::fem::{Domain, TetMesh, TetRule};
 use cellsim::physics::{Lattice, Substrate, Substrate3};
 use cellsim::render::cell3d_views::{
     self, Coloring, FIGURE_SIZE, Section, SectionShape, section_figure, surface_figure,
@@ -29,11 +29,11 @@ fn scratch(name: &str) -> PathBuf {
     d
 }
 
-/// The default quarter mesh (`cellsim::scene::terms::mesh3_params(&cellsim::case::Case::reference())`), meshed once.
-fn mesh() -> &'static Mesh3 {
-    static MESH: OnceLock<Mesh3> = OnceLock::new();
+/// The default quarter mesh (`cellsim::scene::terms::tet_mesh_params(&cellsim::case::Case::reference())`), meshed once.
+fn mesh() -> &'static TetMesh {
+    static MESH: OnceLock<TetMesh> = OnceLock::new();
     MESH.get_or_init(|| {
-        Mesh3::generate(&cellsim::scene::terms::mesh3_params(
+        TetMesh::generate(&cellsim::scene::terms::tet_mesh_params(
             &cellsim::case::Case::reference(),
         ))
         .expect("the default mesh")

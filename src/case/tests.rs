@@ -850,7 +850,7 @@ fn case_wedge_choice_resolves_by_the_substrate_mirror() {
              phases: (t_end: 100.0))"
         );
         let case = Case::from_str(&text, "t.ron").unwrap_or_else(|e| panic!("{e}"));
-        crate::scene::terms::mesh3_params(&case).wedge
+        crate::scene::terms::tet_mesh_params(&case).wedge
     };
     // The default pillars: the cell above the centre of four (first_center = P/2).
     assert_eq!(wedge(""), Wedge::Quarter, "the default");
@@ -863,7 +863,7 @@ fn case_wedge_choice_resolves_by_the_substrate_mirror() {
     )
     .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
-        crate::scene::terms::mesh3_params(&gap).wedge,
+        crate::scene::terms::tet_mesh_params(&gap).wedge,
         Wedge::Quarter
     );
 }

@@ -1,6 +1,6 @@
 //! What a finite-element model needs of its mesh and of its element's shape functions,
 //! written once for the six-node triangles of the half cell ([`super::Mesh`],
-//! [`super::tri6`]) and the ten-node tetrahedra of the quarter cell ([`super::Mesh3`],
+//! [`super::tri6`]) and the ten-node tetrahedra of the quarter cell ([`super::TetMesh`],
 //! [`super::tet10`]): `D` the spatial dimension, `N` the nodes per element. An element is a
 //! [`Lagrange`] type (its edges and quadrature rules; the quadratic shape functions are
 //! written once); the tabulation at quadrature points, the isoparametric Jacobian and the
@@ -12,7 +12,7 @@ use nalgebra::{Const, DimMin, SMatrix};
 use thiserror::Error;
 
 use super::quadrature::{Rule, Subdivision};
-use super::{Domain, Mesh, Mesh3, MeshError, NamedPoints, P2Tabulation, TetTabulation};
+use super::{Domain, Mesh, MeshError, NamedPoints, P2Tabulation, TetMesh, TetTabulation};
 use crate::tensor::cofactor;
 
 /// An isoparametric quadratic (P2) Lagrange element on the reference simplex of dimension
@@ -367,7 +367,7 @@ macro_rules! cell_mesh {
 }
 
 cell_mesh!(Mesh, 2, 6, P2Tabulation, "triangles");
-cell_mesh!(Mesh3, 3, 10, TetTabulation, "tetrahedra");
+cell_mesh!(TetMesh, 3, 10, TetTabulation, "tetrahedra");
 
 /// An element whose reference geometry is not valid: inverted or degenerate.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

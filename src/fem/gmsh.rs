@@ -5,7 +5,7 @@
 //! `cytoplasm` and `membrane` (case-insensitive). Points, lines and other element types
 //! are ignored; linear triangles are refused.
 //!
-//! In 3-D ([`Mesh3::read_gmsh`]): 10-node tetrahedra (type 11, the local order of
+//! In 3-D ([`TetMesh::read_gmsh`]): 10-node tetrahedra (type 11, the local order of
 //! [`super::tet10`]) in volumes of the physical groups `nucleus`, `cytoplasm`, `membrane`,
 //! and 6-node triangles in surfaces of the physical group `outer`; other elements of the
 //! usual types are skipped, linear tetrahedra in a cell volume are refused. The nodes the
@@ -16,7 +16,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::element::CellMesh;
-use super::mesh::{Domain, Mesh, Mesh3, Mesh3Params, MeshError, MeshParams, MeshParts};
+use super::mesh::{Domain, Mesh, MeshError, MeshParams, MeshParts, TetMesh, TetMeshParams};
 use super::tri6::EDGES;
 
 /// gmsh element type of the 6-node triangle.
@@ -323,7 +323,7 @@ type TaggedFace = ([usize; 6], usize);
 impl<'a> MshFile<'a> {
     /// `$PhysicalNames` of a 3-D cell mesh: the 3-D physical tags of the three domains, and
     /// the 2-D physical tags named `outer`.
-    fn physical_groups3(&self) -> Result<(HashMap<i64, Domain>, HashSet<i64>), MeshError> {
+    fn tet_physical_groups(&self) -> Result<(HashMap<i64, Domain>, HashSet<i64>), MeshError> {
         let mut domains: HashMap<i64, Domain> = HashMap::new();
         let mut outer: HashSet<i64> = HashSet::new();
         for (dim, tag, name, d) in self.physical_names()? {
@@ -418,7 +418,7 @@ impl<'a> MshFile<'a> {
     }
 
     /// `$Nodes` with three coordinates: (tag, x) in file order.
-    fn nodes3(&self) -> Result<Vec<(usize, [f64; 3])>, MeshError> {
+    fn node_coordinates(&self) -> Result<Vec<(usize, [f64; 3])>, MeshError> {
         let sec = self
             .find("Nodes")
             .ok_or_else(|| self.err(0, "no $Nodes".into()))?;
@@ -565,21 +565,25 @@ fn read_file<M>(
     }
 }
 
-impl Mesh3 {
+impl TetMesh {
     /// Reads a gmsh 4.1 ASCII mesh of 10-node tetrahedra with physical volume groups named
     /// `nucleus`, `cytoplasm`, `membrane` and the 6-node triangles of the physical surface
     /// `outer`, and completes it for the cell `params` (see [`super::mesh::quarter_cell`]: the checks
     /// against the cell, the symmetry planes, the named points, the Jacobians).
-    pub fn read_gmsh(path: &Path, params: &Mesh3Params) -> Result<Mesh3, MeshError> {
+    pub fn read_gmsh(path: &Path, params: &TetMeshParams) -> Result<TetMesh, MeshError> {
         read_file(path, params.validate(), |text, name| {
             Self::parse_gmsh(text, name, params)
         })
     }
 
-    /// As [`Mesh3::read_gmsh`], from the file's text (`path` is only used in messages).
-    pub fn parse_gmsh(text: &str, path: &str, params: &Mesh3Params) -> Result<Mesh3, MeshError> {
+    /// As [`TetMesh::read_gmsh`], from the file's text (`path` is only used in messages).
+    pub fn parse_gmsh(
+        text: &str,
+        path: &str,
+        params: &TetMeshParams,
+    ) -> Result<TetMesh, MeshError> {
         let file = MshFile::open(text, path)?;
-        let (phys_domain, phys_outer) = file.physical_groups3()?;
+        let (phys_domain, phys_outer) = file.tet_physical_groups()?;
         let entities = file.entity_physicals()?;
         let volume_domain = file.entity_domains(&entities[3], &phys_domain, "volume")?;
         let outer_surfaces: HashSet<i64> = entities[2]
@@ -587,7 +591,7 @@ impl Mesh3 {
             .filter(|(_, phys, _)| phys.iter().any(|p| phys_outer.contains(p)))
             .map(|(tag, _, _)| *tag)
             .collect();
-        let coords = file.nodes3()?;
+        let coords = file.node_coordinates()?;
         let (tets, faces) = file.cell_tets(&volume_domain, &outer_surfaces)?;
         // Compact numbering of the nodes the tetrahedra use, in file order.
         let used: HashSet<usize> = tets.iter().flat_map(|t| t.0).collect();
@@ -634,7 +638,7 @@ impl Mesh3 {
             }
             outer.push((f, *line));
         }
-        Mesh3::from_parts(params, nodes, elements, domains, &outer, path)
+        TetMesh::from_parts(params, nodes, elements, domains, &outer, path)
     }
 }
 
@@ -661,7 +665,7 @@ impl Mesh {
         let surface_domain =
             file.entity_domains(&entities[2], &file.physical_domains()?, "surface")?;
         let coord: HashMap<usize, [f64; 2]> = file
-            .nodes3()?
+            .node_coordinates()?
             .into_iter()
             .map(|(tag, p)| (tag, [p[0], p[1]]))
             .collect();

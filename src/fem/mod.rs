@@ -27,7 +27,9 @@ pub mod tet10;
 pub mod tri6;
 
 pub use element::{CellMesh, ElementGeometryError, ElementTabulation, GeometryOf, Lagrange};
-pub use mesh::{Domain, Mesh, Mesh3, Mesh3Params, Mesh3Quality, MeshError, MeshParams, Wedge};
+pub use mesh::{
+    Domain, Mesh, MeshError, MeshParams, TetMesh, TetMeshParams, TetMeshQuality, Wedge,
+};
 pub use mesh::{MeshQuality, NamedPoints};
 pub use quadrature::{EdgeRule, TetRule, TriangleRule, gauss_legendre};
 pub use tet10::{Tet10, TetError, TetGeometry, TetTabulation};
@@ -41,7 +43,7 @@ pub(crate) mod reference {
         crate::scene::terms::mesh_params(&crate::case::Case::reference())
     }
 
-    pub fn mesh3_params() -> super::Mesh3Params {
-        crate::scene::terms::mesh3_params(&crate::case::Case::reference())
+    pub fn tet_mesh_params() -> super::TetMeshParams {
+        crate::scene::terms::tet_mesh_params(&crate::case::Case::reference())
     }
 }

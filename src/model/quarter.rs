@@ -13,7 +13,7 @@ use super::Cell3;
 use super::observables::{Mesh3File, Observables3, Snapshot3};
 use super::observe::add_band_lengths;
 use crate::fem::tet10::{FLIP, face_map};
-use crate::fem::{Mesh3, TriangleRule, Wedge};
+use crate::fem::{TetMesh, TriangleRule, Wedge};
 use crate::physics::Substrate;
 
 /// Sub-triangle levels of the rule sampling each P2 surface face for the contact area.
@@ -163,7 +163,7 @@ struct Unfold {
 }
 
 impl Unfold {
-    fn new(mesh: &Mesh3) -> Self {
+    fn new(mesh: &TetMesh) -> Self {
         if mesh.params.wedge != Wedge::Eighth {
             return Self {
                 mirror: Vec::new(),

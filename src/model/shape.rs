@@ -4,7 +4,7 @@
 //! - [`HalfPlane`]: six-node triangles on the half cell's [`Mesh`], the substrate's
 //!   section [`Substrate`]; the plane-strain and the axisymmetric models
 //!   ([`crate::physics::KinematicModel`], chosen once per element loop).
-//! - [`Quarter`]: ten-node tetrahedra on the quarter cell's [`Mesh3`], the substrate on its
+//! - [`Quarter`]: ten-node tetrahedra on the quarter cell's [`TetMesh`], the substrate on its
 //!   pillar lattice [`Substrate3`]; the symmetry planes x = c_x and z = c_z.
 //!
 //! A shape names its mesh (which names its element's tabulation), its substrate and the
@@ -19,7 +19,7 @@ use num_dual::DualSVec64;
 use super::history::LayerField;
 use super::{CellOf, ModelParams};
 use crate::dae::DaeError;
-use crate::fem::{CellMesh, Domain, Mesh, Mesh3};
+use crate::fem::{CellMesh, Domain, Mesh, TetMesh};
 use crate::physics::{ActiveStrain, Fibre, KinematicModel, Real, Substrate, Substrate3};
 
 /// Largest number of dual directions a tangent uses (3-D band forces: 3 + 9 + 1).
@@ -152,7 +152,7 @@ pub struct Quarter;
 
 /// What a half-plane model says when asked to be the 3-D one.
 pub(crate) const THREE_D: &str =
-    "the half-plane mesh cannot carry the 3-D model (a Cell3 on a Mesh3 does)";
+    "the half-plane mesh cannot carry the 3-D model (a Cell3 on a TetMesh does)";
 
 /// `nodes` marked in `out`: their component `c` is eliminated.
 fn mark<const D: usize>(mut out: Vec<[bool; D]>, nodes: &[usize], c: usize) -> Vec<[bool; D]> {
@@ -226,7 +226,7 @@ impl Shape<2, 6, 12> for HalfPlane {
 }
 
 impl Shape<3, 10, 30> for Quarter {
-    type Mesh = Mesh3;
+    type Mesh = TetMesh;
     type Substrate = Substrate3;
     type BandDual = DualSVec64<13>;
     type RateDual = DualSVec64<4>;
@@ -258,7 +258,7 @@ impl Shape<3, 10, 30> for Quarter {
     }
 
     /// u_x = 0 on the plane x = c_x; u_z = 0 on z = c_z, or everywhere for the slab.
-    fn eliminated(mesh: &Mesh3, constraints: Constraints) -> Vec<[bool; 3]> {
+    fn eliminated(mesh: &TetMesh, constraints: Constraints) -> Vec<[bool; 3]> {
         let slab = constraints == Constraints::Slab;
         let out = mark(
             vec![[false, false, slab]; mesh.nodes.len()],
@@ -268,7 +268,7 @@ impl Shape<3, 10, 30> for Quarter {
         mark(out, &mesh.symmetry_z, 2)
     }
 
-    fn tied(mesh: &Mesh3) -> &[usize] {
+    fn tied(mesh: &TetMesh) -> &[usize] {
         &mesh.symmetry_diagonal
     }
 

@@ -604,7 +604,8 @@ fn build_model(case: &Case, file: &str, settings: &Settings) -> Result<Cell, Run
     };
     let params = scene::model_params(case, file, scene::starts_with_inertia(case))?;
     let built: Result<Cell, _> = if scene::is_3d(case) {
-        let mesh = crate::fem::Mesh3::generate(&scene::mesh3_params(case)).map_err(mesh_err)?;
+        let mesh =
+            crate::fem::TetMesh::generate(&scene::tet_mesh_params(case)).map_err(mesh_err)?;
         new_model::<Quarter, 3, 10, 30>(params, mesh, defer_adhesion, parallel)
     } else {
         let mesh = Mesh::generate(&scene::mesh_params(case)).map_err(mesh_err)?;

@@ -15,7 +15,7 @@ use terms::{
     MEMORY_ESTIMATE, MESH_GENERATOR, active, adhesion, contact, fibres, phase_conditions,
     phase_starts, phases, scheduled, viscosity,
 };
-pub use terms::{layer_checks, mesh_params, mesh3_params, substrate};
+pub use terms::{layer_checks, mesh_params, substrate, tet_mesh_params};
 
 /// A problem with a case that validation could not see (a material law rejecting its
 /// parameters, say).

@@ -5,7 +5,7 @@
 //! (The model's full parameters are built one layer up, by [`crate::scene`].)
 
 use crate::case::{self, Case, LayerCheck, Refusal, layer_check};
-use crate::fem::{Mesh3Params, MeshError, MeshParams, Wedge};
+use crate::fem::{MeshError, MeshParams, TetMeshParams, Wedge};
 use crate::physics::{self, ActiveStrain, Condition, Flip, Phases, Substrate, Viscosity, Yeoh};
 
 /// Mesh parameters of a case.
@@ -27,16 +27,16 @@ pub fn mesh_params(case: &Case) -> MeshParams {
 /// centre (0, c_y, 0), so that the section z = 0 follows the 2-D grading law. For
 /// [`Case::reference`]: c = (0, 8.5, 0), r_n 5, r_cp 9.75, r_c 10 µm, h_bottom 0.3 µm,
 /// h_nucleus 1 µm, ≈ 10 000 tetrahedra and ≈ 44 000 displacement unknowns.
-pub fn mesh3_params(case: &Case) -> Mesh3Params {
+pub fn tet_mesh_params(case: &Case) -> TetMeshParams {
     let wedge = match case.geometry.wedge {
         case::WedgeChoice::Quarter => Wedge::Quarter,
         case::WedgeChoice::Eighth => Wedge::Eighth,
         case::WedgeChoice::Auto if case.substrate.mirrors_diagonal() => Wedge::Eighth,
         case::WedgeChoice::Auto => Wedge::Quarter,
     };
-    Mesh3Params {
+    TetMeshParams {
         wedge,
-        ..Mesh3Params::from_section(&mesh_params(case), 0.0)
+        ..TetMeshParams::from_section(&mesh_params(case), 0.0)
     }
 }
 
@@ -48,14 +48,14 @@ pub enum MeshSpec {
     /// The half-plane models' mesh.
     Plane(MeshParams),
     /// The 3-D quarter cell's mesh.
-    Quarter(Mesh3Params),
+    Quarter(TetMeshParams),
 }
 
 impl MeshSpec {
     /// The mesh of `case`'s model.
     pub fn of(case: &Case) -> Self {
         match case.geometry.model {
-            crate::physics::KinematicModel::ThreeD => MeshSpec::Quarter(mesh3_params(case)),
+            crate::physics::KinematicModel::ThreeD => MeshSpec::Quarter(tet_mesh_params(case)),
             _ => MeshSpec::Plane(mesh_params(case)),
         }
     }

@@ -10,7 +10,7 @@ pub mod quarter_cell;
 
 pub(crate) use half_cell::MeshParts;
 pub use half_cell::{MAX_ELEMENTS, MIN_ANGLE_DEG, Mesh, MeshParams, MeshQuality};
-pub use quarter_cell::{Mesh3, Mesh3Params, Mesh3Quality, Wedge};
+pub use quarter_cell::{TetMesh, TetMeshParams, TetMeshQuality, Wedge};
 
 /// Which sub-domain of the cell a material point belongs to (MODEL.md §2), as the
 /// meshes label their elements (conforming: each element lies in exactly one) and the

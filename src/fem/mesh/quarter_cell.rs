@@ -9,7 +9,7 @@
 //! the cell surface (contact, adhesion).
 //!
 //! **The mesher is gmsh** (Debian package `gmsh`, 4.8 and later), run headless on a
-//! geometry written here ([`Mesh3Params::geo`]):
+//! geometry written here ([`TetMeshParams::geo`]):
 //!
 //! 1. OpenCASCADE balls r_n, r_cp, r_c about c, each intersected with the box x ≥ c_x,
 //!    z ≥ c_z; the two shells as differences; `BooleanFragments` of the three volumes and
@@ -55,7 +55,7 @@
 //! bytes, replace one another whole, so a reader finds no file or a whole one (tested with
 //! several processes on one cold cache).
 //!
-//! **Reading** ([`Mesh3::read_gmsh`], in [`crate::fem::gmsh`]): 10-node tetrahedra (gmsh type 11)
+//! **Reading** ([`TetMesh::read_gmsh`], in [`crate::fem::gmsh`]): 10-node tetrahedra (gmsh type 11)
 //! in the three physical volumes and 6-node triangles (type 9) in `outer`; the nodes the
 //! tetrahedra use are renumbered compactly in file order. The completion checks what the
 //! model relies on: every vertex inside the ball r_c and on the side of the interfaces its
@@ -67,7 +67,7 @@
 //!
 //! # The slab
 //!
-//! [`Mesh3::extruded`] turns the 2-D half-cell mesh into one layer of thickness t in z:
+//! [`TetMesh::extruded`] turns the 2-D half-cell mesh into one layer of thickness t in z:
 //! each P2 triangle × [0, t] is a prism split into three P2 tetrahedra. The quadrilateral
 //! faces are split by the diagonal from the smallest global vertex number (Dompierre et al.'s
 //! rule), so neighbouring prisms agree and no prism gets the one impossible choice of
@@ -96,8 +96,8 @@ use super::super::tet10::{self, FLIP, REFERENCE_NODES, TET_EDGES, TET_FACES, Tet
 use super::super::tri6::EDGES;
 use super::{Domain, MIN_ANGLE_DEG, Mesh, MeshError, MeshParams, NamedPoints};
 
-/// Largest number of tetrahedra [`Mesh3::generate`] accepts to build (estimated from the
-/// sizes before meshing, [`Mesh3Params::estimated_tets`]), so that a typo in a case file
+/// Largest number of tetrahedra [`TetMesh::generate`] accepts to build (estimated from the
+/// sizes before meshing, [`TetMeshParams::estimated_tets`]), so that a typo in a case file
 /// fails fast instead of running gmsh for hours.
 pub const MAX_TETS: f64 = 2.0e6;
 
@@ -149,7 +149,7 @@ impl Wedge {
 
 /// Geometry and mesh-size parameters of the 3-D cell's wedge (µm).
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Mesh3Params {
+pub struct TetMeshParams {
     /// Cell centre c; the symmetry planes pass through it (see [`Wedge`]), y is vertical.
     pub center: [f64; 3],
     /// The part of the cell that is meshed.
@@ -172,7 +172,7 @@ pub struct Mesh3Params {
     pub h_surface: Option<f64>,
 }
 
-impl Mesh3Params {
+impl TetMeshParams {
     /// The quarter cell whose section z = `c_z` has the 2-D parameters `p` (centre
     /// (p.center, c_z), same radii and sizes; the 2-D angle limit is not used).
     pub fn from_section(p: &MeshParams, c_z: f64) -> Self {
@@ -234,7 +234,7 @@ impl Mesh3Params {
     /// ball r_cp plus 7.4 · ∫ dV / (h² min(h, t)) over the membrane shell
     /// of thickness t = r_c − r_cp (a shell thinner than h still needs one layer of
     /// elements), by the midpoint rule in y on the wedge's circular-sector cross-sections.
-    /// [`Mesh3Params::validate`] refuses more than [`MAX_TETS`]. Meaningful for parameters
+    /// [`TetMeshParams::validate`] refuses more than [`MAX_TETS`]. Meaningful for parameters
     /// that pass the other checks of `validate`.
     pub fn estimated_tets(&self) -> f64 {
         const N: usize = 2000;
@@ -452,14 +452,14 @@ fn signed(v: f64) -> String {
 }
 
 /// A P2 tetrahedral mesh of the quarter cell (or of the extruded slab,
-/// [`Mesh3::extruded`]).
+/// [`TetMesh::extruded`]).
 ///
 /// Element node order is that of [`crate::fem::tet10`] (gmsh's type 11); every element is
 /// positively oriented.
 #[derive(Debug, Clone, Serialize)]
-pub struct Mesh3 {
+pub struct TetMesh {
     /// The parameters the mesh was built from.
-    pub params: Mesh3Params,
+    pub params: TetMeshParams,
     /// Node coordinates (reference configuration, µm).
     pub nodes: Vec<[f64; 3]>,
     /// Element connectivity, ten nodes each.
@@ -483,11 +483,11 @@ pub struct Mesh3 {
     pub points: NamedPoints,
 }
 
-/// A mesh made by [`Mesh3::generate_with`], with where it came from.
+/// A mesh made by [`TetMesh::generate_with`], with where it came from.
 #[derive(Debug, Clone)]
 pub struct Generated {
     /// The mesh.
-    pub mesh: Mesh3,
+    pub mesh: TetMesh,
     /// The cached gmsh file it was read from.
     pub file: PathBuf,
     /// True if the file was in the cache (gmsh was not run).
@@ -498,7 +498,7 @@ pub struct Generated {
 
 /// Size and shape statistics of a 3-D mesh.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Mesh3Quality {
+pub struct TetMeshQuality {
     /// Number of tetrahedra.
     pub tets: usize,
     /// Number of nodes (vertices and mid-nodes).
@@ -537,7 +537,7 @@ pub struct Mesh3Quality {
     pub exact_outer_area: f64,
 }
 
-impl fmt::Display for Mesh3Quality {
+impl fmt::Display for TetMeshQuality {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
@@ -885,14 +885,14 @@ fn face_key(f: &[usize; 6]) -> [usize; 3] {
 
 /// How far a node read from a mesh file (its coordinates rounded there) may lie from a
 /// circle or a named height and still count as on it: 10⁻⁶ r_c.
-fn fit_tolerance(params: &Mesh3Params) -> f64 {
+fn fit_tolerance(params: &TetMeshParams) -> f64 {
     1e-6 * params.r_c
 }
 
 /// Snaps the nodes within 10⁻⁹ r_c of a symmetry plane onto it (the symmetry sets are
 /// those exactly on it): x = c_x and z = c_z for the quarter; z = c_z and the diagonal
 /// x − c_x = z − c_z for the eighth (both: onto the axis). Refuses a node outside the wedge.
-fn snap_to_symmetry_planes(params: &Mesh3Params, nodes: &mut [[f64; 3]]) -> Result<(), String> {
+fn snap_to_symmetry_planes(params: &TetMeshParams, nodes: &mut [[f64; 3]]) -> Result<(), String> {
     let c = params.center;
     let snap = 1e-9 * params.r_c;
     for (i, p) in nodes.iter_mut().enumerate() {
@@ -934,7 +934,7 @@ fn snap_to_symmetry_planes(params: &Mesh3Params, nodes: &mut [[f64; 3]]) -> Resu
 /// Checks that every tetrahedron's vertices lie inside r_c and on its domain's side of
 /// the interfaces r_n and r_cp (within the fit tolerance): the mesh fits the cell.
 fn check_vertex_radii(
-    params: &Mesh3Params,
+    params: &TetMeshParams,
     nodes: &[[f64; 3]],
     elements: &[[usize; 10]],
     domains: &[Domain],
@@ -1009,18 +1009,18 @@ fn tet_shape(p: [[f64; 3]; 4]) -> (f64, [f64; 6]) {
     (3.0 * r_in / r_circ, dihedral)
 }
 
-impl Mesh3 {
+impl TetMesh {
     /// Generates the quarter-cell mesh with the gmsh on the PATH and the cache of
     /// [`cache_root`] (see the module documentation).
-    pub fn generate(params: &Mesh3Params) -> Result<Mesh3, MeshError> {
+    pub fn generate(params: &TetMeshParams) -> Result<TetMesh, MeshError> {
         Self::generate_with(params, Path::new("gmsh"), &cache_root()).map(|g| g.mesh)
     }
 
-    /// As [`Mesh3::generate`] with the gmsh executable `program` and the cache root
+    /// As [`TetMesh::generate`] with the gmsh executable `program` and the cache root
     /// `cache_root` (meshes go to its `mesh3d` subdirectory); also says whether the mesh
     /// came from the cache.
     pub fn generate_with(
-        params: &Mesh3Params,
+        params: &TetMeshParams,
         program: &Path,
         cache_root: &Path,
     ) -> Result<Generated, MeshError> {
@@ -1046,13 +1046,13 @@ impl Mesh3 {
     /// `params`, snapping onto the symmetry planes, orientation, conformity, outer faces,
     /// named points, Jacobians. `faces` are the outer triangles with their file lines.
     pub(crate) fn from_parts(
-        params: &Mesh3Params,
+        params: &TetMeshParams,
         mut nodes: Vec<[f64; 3]>,
         mut elements: Vec<[usize; 10]>,
         domains: Vec<Domain>,
         faces: &[([usize; 6], usize)],
         path: &str,
-    ) -> Result<Mesh3, MeshError> {
+    ) -> Result<TetMesh, MeshError> {
         let ferr = |line: usize, message: String| MeshError::Format {
             path: path.to_string(),
             line,
@@ -1061,7 +1061,7 @@ impl Mesh3 {
         snap_to_symmetry_planes(params, &mut nodes).map_err(|m| ferr(0, m))?;
         check_vertex_radii(params, &nodes, &elements, &domains).map_err(|m| ferr(0, m))?;
         orient_positively(&nodes, &mut elements);
-        let mut mesh = Mesh3 {
+        let mut mesh = TetMesh {
             params: params.clone(),
             nodes,
             elements,
@@ -1296,7 +1296,7 @@ impl Mesh3 {
     }
 
     /// Size and shape statistics.
-    pub fn quality(&self) -> Mesh3Quality {
+    pub fn quality(&self) -> TetMeshQuality {
         let mut min_edge = f64::INFINITY;
         let mut max_edge: f64 = 0.0;
         let mut min_dih = f64::INFINITY;
@@ -1328,7 +1328,7 @@ impl Mesh3 {
         // The wedge's share of a ball and of a sphere.
         let share = 1.0 / prm.wedge.copies();
         let ball = |r: f64| share * 4.0 * PI * r * r * r / 3.0;
-        Mesh3Quality {
+        TetMeshQuality {
             tets: self.elements.len(),
             nodes: self.nodes.len(),
             vertices: is_vertex.iter().filter(|&&v| v).count(),
@@ -1412,7 +1412,7 @@ impl Mesh3 {
     ///
     /// # Panics
     /// If `thickness` is not finite and positive.
-    pub fn extruded(mesh: &Mesh, thickness: f64) -> Mesh3 {
+    pub fn extruded(mesh: &Mesh, thickness: f64) -> TetMesh {
         assert!(
             thickness.is_finite() && thickness > 0.0,
             "slab thickness must be finite and > 0, got {thickness}"
@@ -1489,8 +1489,8 @@ impl Mesh3 {
                 outer_faces.push(f);
             }
         }
-        let mut out = Mesh3 {
-            params: Mesh3Params::from_section(&mesh.params, 0.0),
+        let mut out = TetMesh {
+            params: TetMeshParams::from_section(&mesh.params, 0.0),
             nodes,
             elements,
             domains,
@@ -1549,8 +1549,8 @@ mod tests {
     #[test]
     fn missing_gmsh_is_reported_with_the_package_name() {
         let root = scratch("missing");
-        let e = Mesh3::generate_with(
-            &crate::fem::reference::mesh3_params(),
+        let e = TetMesh::generate_with(
+            &crate::fem::reference::tet_mesh_params(),
             Path::new("/nonexistent/bin/gmsh"),
             &root,
         )
