@@ -2,9 +2,9 @@
 //! `substrate.rs`, `loads.rs`) beside their 2-D counterparts, on fixed pseudo-random inputs
 //! (F within ±0.4 of I, half of them with an active strain, Ḟ within ±1):
 //!
-//! - `piola_total` (2-D) and `piola_total3` in `f64`, the residual's stress;
-//! - `material_point` (2-D, one `DualSVec64<4>` pass), `material_point3` (closed form) and
-//!   `dual_material_point` over `piola_total3` (one `DualSVec64<9>` pass, instantiated
+//! - `piola_total` (2-D) and `piola_total_full` in `f64`, the residual's stress;
+//! - `material_point` (2-D, one `DualSVec64<4>` pass), `material_point_full` (closed form) and
+//!   `dual_material_point` over `piola_total_full` (one `DualSVec64<9>` pass, instantiated
 //!   here), the tangent's;
 //! - `contact_force` in 2-D and in 3-D with `DualSVec64<3>` (x and J), on the
 //!   default pillars, points in the contact band.
@@ -18,8 +18,9 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use cellsim::physics::{
-    Contact, Lattice, MaterialPoint3, Pillars, Substrate, Substrate3, Viscosity, Yeoh,
-    contact_force, dual_material_point, material_point, material_point3, piola_total, piola_total3,
+    Contact, Lattice, MaterialPointFull, Pillars, Substrate, Substrate3, Viscosity, Yeoh,
+    contact_force, dual_material_point, material_point, material_point_full, piola_total,
+    piola_total_full,
 };
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
@@ -112,11 +113,11 @@ fn laws(c: &mut Criterion) {
             acc
         })
     });
-    g.bench_function("piola_total3-f64", |b| {
+    g.bench_function("piola_total_full-f64", |b| {
         b.iter(|| {
             let mut acc = 0.0;
             for (F, G, Fa) in &three {
-                acc += piola_total3(&mat, &visc, black_box(F), black_box(G), Fa)[(0, 0)];
+                acc += piola_total_full(&mat, &visc, black_box(F), black_box(G), Fa)[(0, 0)];
             }
             acc
         })
@@ -131,24 +132,24 @@ fn laws(c: &mut Criterion) {
             acc
         })
     });
-    g.bench_function("material_point3-closed-form", |b| {
+    g.bench_function("material_point_full-closed-form", |b| {
         b.iter(|| {
             let mut acc = 0.0;
             for (F, G, Fa) in &three {
-                let m = material_point3(&mat, &visc, black_box(F), black_box(G), Fa);
+                let m = material_point_full(&mat, &visc, black_box(F), black_box(G), Fa);
                 acc += m.dP_dF[(0, 0)] + m.dP_dFdot[(8, 8)];
             }
             acc
         })
     });
-    g.bench_function("material_point3-dual9", |b| {
+    g.bench_function("material_point_full-dual9", |b| {
         b.iter(|| {
             let mut acc = 0.0;
             for (F, G, Fa) in &three {
                 let (F, G) = (black_box(F), black_box(G));
-                let piola = |Fd: &_, Gd: &_| piola_total3(&mat, &visc, Fd, Gd, Fa);
-                let m: MaterialPoint3 =
-                    dual_material_point(F, G, piola, |E| visc.piola_viscous3(F, E));
+                let piola = |Fd: &_, Gd: &_| piola_total_full(&mat, &visc, Fd, Gd, Fa);
+                let m: MaterialPointFull =
+                    dual_material_point(F, G, piola, |E| visc.piola_viscous_full(F, E));
                 acc += m.dP_dF[(0, 0)] + m.dP_dFdot[(8, 8)];
             }
             acc

@@ -11,7 +11,7 @@ use cellsim::fem::{
 };
 use cellsim::model::{Cell3, Constraints};
 use cellsim::model::{CellModel, ModelParams};
-use cellsim::physics::{KinematicModel, Lattice, Substrate, Viscosity, Yeoh, piola_total3};
+use cellsim::physics::{KinematicModel, Lattice, Substrate, Viscosity, Yeoh, piola_total_full};
 use cellsim::scene;
 use cellsim::solver::LinearSolver;
 use cellsim::sundials::{Ida, IdaOptions};
@@ -211,7 +211,7 @@ fn patch_test_homogeneous_deformation_gives_exact_internal_forces() {
             Domain::Cytoplasm => 1,
             Domain::Membrane => 2,
         };
-        piola_total3(&solids[k], &visc, &f0, &zero, &Matrix3::identity())
+        piola_total_full(&solids[k], &visc, &f0, &zero, &Matrix3::identity())
     };
     let rule = TriangleRule::degree(8);
     let mesh = &m.mesh;

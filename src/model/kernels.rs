@@ -46,7 +46,8 @@ use crate::dae::{DaeError, ElementPoint, Inadmissible};
 use crate::fem::ElementTabulation;
 use crate::physics::{
     Fibres, MaterialPointOf, Real, Surface, Viscosity, Yeoh, adhesion_force, adhesion_hoop_factor,
-    adhesion_rate, contact_force, material_point, material_point3, piola_total, piola_total3,
+    adhesion_rate, contact_force, material_point, material_point_full, piola_total,
+    piola_total_full,
 };
 
 /// The time-dependent switches of MODEL.md §5 at one time.
@@ -160,7 +161,7 @@ macro_rules! solid_formulation {
 }
 
 solid_formulation!(PlaneStrain, 2, 6, 12, piola_total, material_point);
-solid_formulation!(ThreeD, 3, 10, 30, piola_total3, material_point3);
+solid_formulation!(ThreeD, 3, 10, 30, piola_total_full, material_point_full);
 
 /// The error of a quantity `quantity` = `value` out of its admissible range at `point`
 /// of element `e`.

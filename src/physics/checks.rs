@@ -19,7 +19,7 @@ use nalgebra::{Matrix2, Matrix3};
 use super::hoop::{BlockDiag, HOOP, material_point_hoop, piola_total_hoop};
 use super::plane_strain::tests::{Rng, cytoplasm};
 use super::three_d::tests::cases as cases3;
-use super::{Viscosity, Yeoh, material_point, material_point3, piola_total, piola_total3};
+use super::{Viscosity, Yeoh, material_point, material_point_full, piola_total, piola_total_full};
 
 /// A kinematics under test: its `F`, `F_a`, and the laws evaluated on them.
 trait Kinematics {
@@ -188,10 +188,10 @@ impl Kinematics for ThreeD {
         Matrix3::from_row_slice(e)
     }
     fn energy(law: &Yeoh, f: &Matrix3<f64>, fa: &Matrix3<f64>) -> f64 {
-        law.energy3(f, fa)
+        law.energy_full(f, fa)
     }
     fn piola_solid(law: &Yeoh, f: &Matrix3<f64>, fa: &Matrix3<f64>) -> Vec<f64> {
-        Self::entries(&law.piola_solid3(f, fa))
+        Self::entries(&law.piola_solid_full(f, fa))
     }
     fn piola(
         law: &Yeoh,
@@ -200,7 +200,7 @@ impl Kinematics for ThreeD {
         fdot: &Matrix3<f64>,
         fa: &Matrix3<f64>,
     ) -> Vec<f64> {
-        Self::entries(&piola_total3(law, visc, f, fdot, fa))
+        Self::entries(&piola_total_full(law, visc, f, fdot, fa))
     }
     fn point(
         law: &Yeoh,
@@ -209,7 +209,7 @@ impl Kinematics for ThreeD {
         fdot: &Matrix3<f64>,
         fa: &Matrix3<f64>,
     ) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
-        let mp = material_point3(law, visc, f, fdot, fa);
+        let mp = material_point_full(law, visc, f, fdot, fa);
         let rows = |m: &nalgebra::SMatrix<f64, 9, 9>| m.transpose().iter().copied().collect();
         (Self::entries(&mp.P), rows(&mp.dP_dF), rows(&mp.dP_dFdot))
     }

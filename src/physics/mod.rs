@@ -27,7 +27,7 @@
 //! - [`loads`]: contact, adhesion, adhesion-rate and gravity body forces (§5), and their
 //!   3-D twins (§10).
 //!
-//! **The 3-D functions that are not generic carry `#[inline]`** (`material_point3`,
+//! **The 3-D functions that are not generic carry `#[inline]`** (`material_point_full`,
 //! `fa3`, `surface_height3`, …). The 2-D code paths keep their own functions, but adding
 //! compiled code to the crate changes how rustc splits it into codegen units, and with that
 //! what LLVM inlines in the 2-D element loops: with these functions compiled eagerly,
@@ -68,7 +68,7 @@ pub use phases::{Condition, Flip, Phases};
 pub use plane_strain::{MaterialPoint, admissible, material_point, piola_total};
 pub use smooth::{heaviside, smooth_step};
 pub use substrate::{Lattice, PillarFoot, Pillars, Substrate, Substrate3, Surface};
-pub use three_d::{MaterialPoint3, admissible3, material_point3, piola_total3};
+pub use three_d::{MaterialPointFull, admissible_full, material_point_full, piola_total_full};
 
 use num_dual::DualNum;
 use serde::{Deserialize, Serialize};

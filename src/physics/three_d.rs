@@ -27,7 +27,7 @@
 //! (`adj F`, `ḞF⁻¹`, one product with `cof F`; no `C`, `C⁻¹` or `C⁻¹ĊC⁻¹`), which counts
 //! twice for dual numbers. A test checks it against MODEL.md's `S_f` literally.
 //!
-//! **Tangent.** [`material_point3`] returns `∂P/∂F` in closed form, not by dual numbers.
+//! **Tangent.** [`material_point_full`] returns `∂P/∂F` in closed form, not by dual numbers.
 //! With `M = F_a⁻¹F_a⁻ᵀ` (`I` without active strain) the push-forward through `F_a⁻¹` maps
 //! `I ↦ M`, `C_e⁻¹ ↦ C⁻¹`, `C_e ↦ MCM`, so `S_s = J_a(a M + k C⁻¹ + c MCM)` and
 //!
@@ -53,7 +53,7 @@
 //! over `F` ([`super::dual_material_point`], kept as the independent reference in the tests).
 //!
 //! Admissibility: every function assumes `det F > 0` and `det F_a > 0` (check with
-//! [`admissible3`]); it does not check, for speed.
+//! [`admissible_full`]); it does not check, for speed.
 
 #![allow(non_snake_case)]
 
@@ -63,7 +63,7 @@ use super::law::{Invariants, IsotropicSolid, StressScalars, TangentScalars};
 use super::{Real, Viscosity, Yeoh};
 
 /// Number of entries of a 3 × 3 tensor, the size of the flattened tangents.
-pub const ENTRIES3: usize = 9;
+pub const FULL_ENTRIES: usize = 9;
 
 /// A symmetric 3 × 3 tensor by its six entries; the stress computations use it to skip
 /// the redundant half of every product (this matters for dual numbers).
@@ -208,7 +208,7 @@ fn active_inverse(Fa: &Matrix3<f64>) -> Option<(Matrix3<f64>, f64)> {
 
 /// `(C_e, F_a⁻¹, J_a)` with `C_e = F_a⁻ᵀ FᵀF F_a⁻¹`; `F_a⁻¹` is `None` when `F_a = I`.
 #[inline(always)]
-fn elastic_right_cauchy_green3<T: Real>(
+fn elastic_right_cauchy_green_full<T: Real>(
     F: &Matrix3<T>,
     Fa: &Matrix3<f64>,
 ) -> (Sym3<T>, Option<Matrix3<f64>>, f64) {
@@ -222,7 +222,7 @@ fn elastic_right_cauchy_green3<T: Real>(
 impl Yeoh {
     /// Strain energy `W(C_e)` per unit intermediate volume \[Pa\] from a symmetric 3 × 3
     /// `C_e`: `I₁ = tr C_e`, `I₂ = ½(I₁² − tr C_e²)`, `I₃ = det C_e`, `W` as in [`Yeoh`].
-    fn strain_energy3_sym<T: Real>(&self, Ce: Sym3<T>) -> T {
+    fn strain_energy_full_sym<T: Real>(&self, Ce: Sym3<T>) -> T {
         self.energy_density(Invariants {
             i1: Ce.tr(),
             i2: Ce.minors(),
@@ -232,14 +232,14 @@ impl Yeoh {
 
     /// Energy per unit reference volume `Ψ(F) = J_a W(C_e)`, `C_e = F_a⁻ᵀ FᵀF F_a⁻¹`
     /// \[Pa\], with a full 3 × 3 `F` and `F_a`.
-    pub fn energy3<T: Real>(&self, F: &Matrix3<T>, Fa: &Matrix3<f64>) -> T {
-        let (Ce, _, Ja) = elastic_right_cauchy_green3(F, Fa);
-        self.strain_energy3_sym(Ce) * Ja
+    pub fn energy_full<T: Real>(&self, F: &Matrix3<T>, Fa: &Matrix3<f64>) -> T {
+        let (Ce, _, Ja) = elastic_right_cauchy_green_full(F, Fa);
+        self.strain_energy_full_sym(Ce) * Ja
     }
 
     /// `S_e = 2∂W/∂C_e = a I + (k/I₃) adj(C_e) + c C_e` (module notes).
     #[inline(always)]
-    fn pk2_elastic3_sym<T: Real>(&self, Ce: Sym3<T>) -> Sym3<T> {
+    fn pk2_elastic_full_sym<T: Real>(&self, Ce: Sym3<T>) -> Sym3<T> {
         let adj = Ce.adj();
         let I3 = Ce.det_with(adj);
         let StressScalars { a, k, c } = self.stress_scalars(Ce.tr(), I3);
@@ -256,9 +256,9 @@ impl Yeoh {
 
     /// Solid second Piola–Kirchhoff stress `S_s = J_a F_a⁻¹ S_e F_a⁻ᵀ`, symmetric.
     #[inline(always)]
-    fn pk2_solid3_sym<T: Real>(&self, F: &Matrix3<T>, Fa: &Matrix3<f64>) -> Sym3<T> {
-        let (Ce, Fa_inv, Ja) = elastic_right_cauchy_green3(F, Fa);
-        let Se = self.pk2_elastic3_sym(Ce);
+    fn pk2_solid_full_sym<T: Real>(&self, F: &Matrix3<T>, Fa: &Matrix3<f64>) -> Sym3<T> {
+        let (Ce, Fa_inv, Ja) = elastic_right_cauchy_green_full(F, Fa);
+        let Se = self.pk2_elastic_full_sym(Ce);
         match Fa_inv {
             None => Se,
             // G S Gᵀ = (Gᵀ)ᵀ S Gᵀ, with √J_a on each side.
@@ -267,9 +267,9 @@ impl Yeoh {
     }
 
     /// First Piola–Kirchhoff stress of the solid phase, `P_s = F J_a F_a⁻¹ S_e F_a⁻ᵀ` \[Pa\],
-    /// 3 × 3; it equals `∂Ψ/∂F` ([`Self::energy3`]).
-    pub fn piola_solid3<T: Real>(&self, F: &Matrix3<T>, Fa: &Matrix3<f64>) -> Matrix3<T> {
-        self.pk2_solid3_sym(F, Fa).left_mul(F)
+    /// 3 × 3; it equals `∂Ψ/∂F` ([`Self::energy_full`]).
+    pub fn piola_solid_full<T: Real>(&self, F: &Matrix3<T>, Fa: &Matrix3<f64>) -> Matrix3<T> {
+        self.pk2_solid_full_sym(F, Fa).left_mul(F)
     }
 }
 
@@ -278,7 +278,7 @@ impl Viscosity {
     /// `S_f = (Jλ_f/2) tr(C⁻¹Ċ) C⁻¹ + Jμ_f C⁻¹ĊC⁻¹`, evaluated as
     /// `P_f = σ cof F`, `σ = λ_f tr(d) I + 2μ_f d`, `d = sym(ḞF⁻¹)` (the same tensor;
     /// module notes). Linear in `Ḟ`, zero for rigid rates `Ḟ = WF`, `W` skew.
-    pub fn piola_viscous3<T: Real>(&self, F: &Matrix3<T>, Fdot: &Matrix3<T>) -> Matrix3<T> {
+    pub fn piola_viscous_full<T: Real>(&self, F: &Matrix3<T>, Fdot: &Matrix3<T>) -> Matrix3<T> {
         let adj = adjugate(F);
         let J = det_with(F, &adj);
         // Lh = Ḟ adj(F) = J L, L = ḞF⁻¹.
@@ -302,25 +302,25 @@ impl Viscosity {
 
 /// Total first Piola–Kirchhoff stress `P = F(S_s + S_f)` \[Pa\] with a full 3 × 3 `F`, `Ḟ`,
 /// `F_a` (solid with active strain plus viscosity). Generic: `f64` for residuals.
-pub fn piola_total3<T: Real>(
+pub fn piola_total_full<T: Real>(
     yeoh: &Yeoh,
     visc: &Viscosity,
     F: &Matrix3<T>,
     Fdot: &Matrix3<T>,
     Fa: &Matrix3<f64>,
 ) -> Matrix3<T> {
-    yeoh.piola_solid3(F, Fa) + visc.piola_viscous3(F, Fdot)
+    yeoh.piola_solid_full(F, Fa) + visc.piola_viscous_full(F, Fdot)
 }
 
 /// `true` when `F` is finite with `det F > 0` (then `det F_e = det F / det F_a > 0` for
 /// any admissible active strain, `det F_a > 0`). The stress functions assume it.
 #[inline]
-pub fn admissible3(F: &Matrix3<f64>) -> bool {
+pub fn admissible_full(F: &Matrix3<f64>) -> bool {
     F.iter().all(|v| v.is_finite()) && F.determinant() > 0.0
 }
 
 /// The material point of the 3-D model (the flattening `3i + J`, `3k + L`).
-pub type MaterialPoint3 = super::law::MaterialPointOf<3, ENTRIES3>;
+pub type MaterialPointFull = super::law::MaterialPointOf<3, FULL_ENTRIES>;
 
 /// `P` and its exact tangents `∂P/∂F`, `∂P/∂Ḟ` at one material point of the 3-D model, in
 /// closed form (module notes): the solid's through `∂S_s/∂C` written with `M = F_a⁻¹F_a⁻ᵀ`
@@ -329,21 +329,21 @@ pub type MaterialPoint3 = super::law::MaterialPointOf<3, ENTRIES3>;
 ///
 /// Measured with `benches/kernels3.rs` (criterion, release, 256 inputs, half with active
 /// strain; a shared 2-core machine, so ratios, over three runs): 0.24–0.26 µs per call,
-/// 3.3–3.5 × the residual-only [`piola_total3`] in `f64` and 1.6–1.9 × plane strain's
+/// 3.3–3.5 × the residual-only [`piola_total_full`] in `f64` and 1.6–1.9 × plane strain's
 /// [`super::material_point`]; one `DualSVec64<9>` pass ([`super::dual_material_point`]) costs
 /// 7–10 × as much (1.9–2.4 µs) instantiated in the calling crate as here, and 3.5–4.8 ×
-/// (1.2–1.3 µs) when it was compiled in this crate. `P` agrees with [`piola_total3`] to
+/// (1.2–1.3 µs) when it was compiled in this crate. `P` agrees with [`piola_total_full`] to
 /// round-off (the same stress summed in another order).
 ///
-/// Assumes [`admissible3`]`(F)` and `det F_a > 0`.
+/// Assumes [`admissible_full`]`(F)` and `det F_a > 0`.
 #[inline]
-pub fn material_point3(
+pub fn material_point_full(
     yeoh: &Yeoh,
     visc: &Viscosity,
     F: &Matrix3<f64>,
     Fdot: &Matrix3<f64>,
     Fa: &Matrix3<f64>,
-) -> MaterialPoint3 {
+) -> MaterialPointFull {
     let adj = adjugate(F);
     let J = det_with(F, &adj);
     let H = adj / J; // F⁻¹
@@ -405,8 +405,8 @@ pub fn material_point3(
     let (u, v, pf, m, ci) = (rows(&U), rows(&V), rows(&Pf), rows(&M), rows(&Ci));
     let (vl, vm) = (rows(&(V * jl)), rows(&(V * jm)));
 
-    let mut dP_dF = SMatrix::<f64, ENTRIES3, ENTRIES3>::zeros();
-    let mut dP_dFdot = SMatrix::<f64, ENTRIES3, ENTRIES3>::zeros();
+    let mut dP_dF = SMatrix::<f64, FULL_ENTRIES, FULL_ENTRIES>::zeros();
+    let mut dP_dFdot = SMatrix::<f64, FULL_ENTRIES, FULL_ENTRIES>::zeros();
     for kk in 0..3 {
         for l in 0..3 {
             let col = 3 * kk + l;
@@ -432,7 +432,7 @@ pub fn material_point3(
             }
         }
     }
-    MaterialPoint3 {
+    MaterialPointFull {
         P: Ps + Pf,
         dP_dF,
         dP_dFdot,
@@ -444,24 +444,24 @@ pub(super) mod tests {
     use super::*;
     use crate::physics::dual_material_point;
 
-    /// [`material_point3`] by forward-mode dual numbers ([`dual_material_point`]: one
-    /// `DualSVec64<9>` pass of [`piola_total3`] over `F`, `∂P/∂Ḟ` from the linearity of `P_f`
+    /// [`material_point_full`] by forward-mode dual numbers ([`dual_material_point`]: one
+    /// `DualSVec64<9>` pass of [`piola_total_full`] over `F`, `∂P/∂Ḟ` from the linearity of `P_f`
     /// in `Ḟ`), as [`super::super::material_point`] does in plane strain: the independent
     /// reference for the closed form.
-    fn by_duals(m: (&Yeoh, &Viscosity), [F, Fdot, Fa]: [&Matrix3<f64>; 3]) -> MaterialPoint3 {
-        let piola = |Fd: &_, Gd: &_| piola_total3(m.0, m.1, Fd, Gd, Fa);
-        dual_material_point(F, Fdot, piola, |E| m.1.piola_viscous3(F, E))
+    fn by_duals(m: (&Yeoh, &Viscosity), [F, Fdot, Fa]: [&Matrix3<f64>; 3]) -> MaterialPointFull {
+        let piola = |Fd: &_, Gd: &_| piola_total_full(m.0, m.1, Fd, Gd, Fa);
+        dual_material_point(F, Fdot, piola, |E| m.1.piola_viscous_full(F, E))
     }
     use crate::physics::hoop::{BlockDiag, HOOP, material_point_hoop, piola_total_hoop};
     use crate::physics::plane_strain::tests::{Rng, active, cytoplasm};
     use crate::physics::{material_point, piola_total, reference};
     use nalgebra::{Matrix2, Rotation3, SVector, Vector3};
 
-    type V9 = SVector<f64, ENTRIES3>;
+    type V9 = SVector<f64, FULL_ENTRIES>;
 
     /// The entries of a 3 × 3 tensor, row-major (index 3k + l), the layout of the tangents.
     pub(in crate::physics) fn flat9(m: &Matrix3<f64>) -> V9 {
-        V9::from_iterator((0..ENTRIES3).map(|c| m[(c / 3, c % 3)]))
+        V9::from_iterator((0..FULL_ENTRIES).map(|c| m[(c / 3, c % 3)]))
     }
 
     /// `A₂ ⊕ a₃₃`.
@@ -482,7 +482,7 @@ pub(super) mod tests {
     /// The 3-D tangent `big` (on the flattened 3 × 3 entries) restricted to the rows and
     /// columns `idx` equals the lower-dimensional tangent `small`, to 1e-12 of its norm.
     fn assert_sub_tangent<const M: usize>(
-        big: &SMatrix<f64, ENTRIES3, ENTRIES3>,
+        big: &SMatrix<f64, FULL_ENTRIES, FULL_ENTRIES>,
         small: &SMatrix<f64, M, M>,
         idx: &[usize; M],
         what: &str,
@@ -509,7 +509,7 @@ pub(super) mod tests {
     }
 
     /// A random F with entries I + U(−s, s), det F ≥ 0.3.
-    fn deformation3(rng: &mut Rng, s: f64) -> Matrix3<f64> {
+    fn deformation(rng: &mut Rng, s: f64) -> Matrix3<f64> {
         loop {
             let F = Matrix3::identity() + Matrix3::from_fn(|_, _| rng.uniform(-s, s));
             if F.determinant() >= 0.3 {
@@ -530,7 +530,7 @@ pub(super) mod tests {
 
     /// A symmetric active strain `I − a T⊗T − b N⊗N` like the model's, with orthonormal
     /// `N`, `T` in a random orientation; I when not `on`.
-    fn active3(rng: &mut Rng, on: bool) -> Matrix3<f64> {
+    fn active_strain(rng: &mut Rng, on: bool) -> Matrix3<f64> {
         if !on {
             return Matrix3::identity();
         }
@@ -546,11 +546,11 @@ pub(super) mod tests {
         (0..n)
             .map(|case| {
                 let F = match case % 3 {
-                    0 => deformation3(rng, 0.05),
-                    1 => deformation3(rng, 0.5),
+                    0 => deformation(rng, 0.05),
+                    1 => deformation(rng, 0.5),
                     _ => large_strain(rng),
                 };
-                (F, active3(rng, (case / 3) % 2 == 1))
+                (F, active_strain(rng, (case / 3) % 2 == 1))
             })
             .collect()
     }
@@ -569,11 +569,11 @@ pub(super) mod tests {
     #[test]
     fn energy_uses_the_invariants_of_model_md() {
         // W from I₂ = ½(I₁² − tr C²) and I₃ = det C computed by nalgebra, against
-        // strain_energy3_sym (principal minors and the adjugate).
+        // strain_energy_full_sym (principal minors and the adjugate).
         let mut rng = Rng::new(41);
         let m = Yeoh::from_engineering(500.0, 0.3, 1.5, 0.2).unwrap();
         for _ in 0..10 {
-            let F = deformation3(&mut rng, 0.5);
+            let F = deformation(&mut rng, 0.5);
             let C = F.transpose() * F;
             let I1 = C.trace();
             let I2 = 0.5 * (I1 * I1 - (C * C).trace());
@@ -584,9 +584,9 @@ pub(super) mod tests {
                 + m.alpha3 * X * X * X
                 + m.beta * (I2 - 3.0 * I3.powf(2.0 / 3.0))
                 + 0.5 * m.lambda_y * (0.5 * I3.ln()).powi(2);
-            let w = m.strain_energy3_sym(Sym3::from_upper(&C));
+            let w = m.strain_energy_full_sym(Sym3::from_upper(&C));
             assert!((w - W).abs() < 1e-12 * W.abs().max(1.0), "{w} vs {W}");
-            assert_eq!(m.energy3(&F, &Matrix3::identity()), w);
+            assert_eq!(m.energy_full(&F, &Matrix3::identity()), w);
         }
     }
 
@@ -600,10 +600,10 @@ pub(super) mod tests {
             ] {
                 for (case, (F, Fa)) in cases(&mut rng, 12).into_iter().enumerate() {
                     let Fdot = Matrix3::from_fn(|_, _| rng.uniform(-1.0, 1.0));
-                    let a = material_point3(&mat, &visc, &F, &Fdot, &Fa);
+                    let a = material_point_full(&mat, &visc, &F, &Fdot, &Fa);
                     let d = by_duals((&mat, &visc), [&F, &Fdot, &Fa]);
                     // dual arithmetic rounds differently from f64 in the last bits
-                    let P = piola_total3(&mat, &visc, &F, &Fdot, &Fa);
+                    let P = piola_total_full(&mat, &visc, &F, &Fdot, &Fa);
                     assert!(rel(&d.P, &P) < 1e-14, "case {case}");
                     let eF = (a.dP_dF - d.dP_dF).norm() / d.dP_dF.norm();
                     let eV = (a.dP_dFdot - d.dP_dFdot).norm() / d.dP_dFdot.norm();
@@ -623,49 +623,53 @@ pub(super) mod tests {
         let mut rng = Rng::new(59);
         for (case, (F, Fa)) in cases(&mut rng, 12).into_iter().enumerate() {
             let Q = rotation(&mut rng);
-            let P = mat.piola_solid3(&F, &Fa);
+            let P = mat.piola_solid_full(&F, &Fa);
             assert!(
-                rel(&mat.piola_solid3(&(Q * F), &Fa), &(Q * P)) < 1e-12,
+                rel(&mat.piola_solid_full(&(Q * F), &Fa), &(Q * P)) < 1e-12,
                 "case {case}"
             );
             let G = Matrix3::from_fn(|_, _| rng.uniform(-1.0, 1.0));
-            let Pf = visc.piola_viscous3(&F, &G);
-            assert!(rel(&visc.piola_viscous3(&(Q * F), &(Q * G)), &(Q * Pf)) < 1e-12);
+            let Pf = visc.piola_viscous_full(&F, &G);
+            assert!(rel(&visc.piola_viscous_full(&(Q * F), &(Q * G)), &(Q * Pf)) < 1e-12);
         }
     }
 
     #[test]
-    fn reference_and_pure_active_states_are_stress_free3() {
+    fn reference_and_pure_active_states_are_stress_free() {
         let mat = cytoplasm();
         let visc = reference::viscosity();
         let I = Matrix3::identity();
-        let P = piola_total3(&mat, &visc, &I, &Matrix3::zeros(), &I);
+        let P = piola_total_full(&mat, &visc, &I, &Matrix3::zeros(), &I);
         assert!(P.norm() < 1e-13, "P(I) = {P}");
         assert!(
-            material_point3(&mat, &visc, &I, &Matrix3::zeros(), &I)
+            material_point_full(&mat, &visc, &I, &Matrix3::zeros(), &I)
                 .P
                 .norm()
                 < 1e-13
         );
-        assert!(mat.energy3(&I, &I).abs() < 1e-13);
+        assert!(mat.energy_full(&I, &I).abs() < 1e-13);
         // F = F_a and F = R F_a: F_e is a rotation, no elastic stress (to the round-off of
         // the terms of size λ_Y that cancel: measured ≈ 1e-15 λ_Y).
         let tol = 1e-14 * mat.lambda_y;
         let mut rng = Rng::new(61);
         for _ in 0..5 {
-            let Fa = active3(&mut rng, true);
-            assert!(mat.piola_solid3(&Fa, &Fa).norm() < tol);
+            let Fa = active_strain(&mut rng, true);
+            assert!(mat.piola_solid_full(&Fa, &Fa).norm() < tol);
             let R = rotation(&mut rng);
-            assert!(mat.piola_solid3(&(R * Fa), &Fa).norm() < tol);
-            let mp = material_point3(&mat, &visc, &(R * Fa), &Matrix3::zeros(), &Fa);
+            assert!(mat.piola_solid_full(&(R * Fa), &Fa).norm() < tol);
+            let mp = material_point_full(&mat, &visc, &(R * Fa), &Matrix3::zeros(), &Fa);
             assert!(mp.P.norm() < tol);
         }
         // F = I with a non-trivial F_a is stressed.
-        assert!(mat.piola_solid3(&I, &active3(&mut rng, true)).norm() > 1.0);
+        assert!(
+            mat.piola_solid_full(&I, &active_strain(&mut rng, true))
+                .norm()
+                > 1.0
+        );
     }
 
     #[test]
-    fn small_strain_limit_is_linear_elasticity3() {
+    fn small_strain_limit_is_linear_elasticity() {
         // P(I + εH)/ε → λ tr(H) I + μ(H + Hᵀ), error O(ε).
         let (e, nu) = (100.0, 0.485);
         let mat = Yeoh::from_engineering(e, nu, 0.1, 0.2).unwrap();
@@ -676,14 +680,14 @@ pub(super) mod tests {
         for _ in 0..5 {
             let H = Matrix3::from_fn(|_, _| rng.uniform(-1.0, 1.0));
             let lin = I * (lam * H.trace()) + (H + H.transpose()) * mu;
-            let err = |eps: f64| rel(&(mat.piola_solid3(&(I + H * eps), &I) / eps), &lin);
+            let err = |eps: f64| rel(&(mat.piola_solid_full(&(I + H * eps), &I) / eps), &lin);
             let (e5, e6) = (err(1e-5), err(1e-6));
             assert!(e6 < 1e-5, "error at ε = 1e-6: {e6:e}");
             let ratio = e5 / e6;
             assert!((5.0..20.0).contains(&ratio), "ratio {ratio}");
         }
         // and the tangent at I is the isotropic elasticity tensor
-        let mp = material_point3(
+        let mp = material_point_full(
             &mat,
             &Viscosity {
                 lambda_f: 0.0,
@@ -693,7 +697,7 @@ pub(super) mod tests {
             &I,
             &I,
         );
-        for c in 0..ENTRIES3 {
+        for c in 0..FULL_ENTRIES {
             let mut E = Matrix3::zeros();
             E[(c / 3, c % 3)] = 1.0;
             let col = I * (lam * E.trace()) + (E + E.transpose()) * mu;
@@ -706,7 +710,7 @@ pub(super) mod tests {
         let mut rng = Rng::new(71);
         for visc in [reference::viscosity(), shear_viscosity()] {
             for _ in 0..10 {
-                let F = deformation3(&mut rng, 0.5);
+                let F = deformation(&mut rng, 0.5);
                 let G = Matrix3::from_fn(|_, _| rng.uniform(-1.0, 1.0));
                 // MODEL.md §3 literally: S_f = (Jλ_f/2) tr(C⁻¹Ċ) C⁻¹ + Jμ_f C⁻¹ĊC⁻¹.
                 let J = F.determinant();
@@ -715,16 +719,16 @@ pub(super) mod tests {
                 let Cd = G.transpose() * F + F.transpose() * G;
                 let Sf = Ci * (0.5 * J * visc.lambda_f * (Ci * Cd).trace())
                     + Ci * Cd * Ci * (J * visc.mu_f);
-                let P = visc.piola_viscous3(&F, &G);
+                let P = visc.piola_viscous_full(&F, &G);
                 let scale = (visc.lambda_f + visc.mu_f) * G.norm();
                 assert!((P - F * Sf).norm() < 1e-13 * scale);
                 // a rigid rate Ḟ = WF is not resisted, a stretching rate of that size is
                 let w = Vector3::new(rng.uniform(-2.0, 2.0), rng.uniform(-2.0, 2.0), 0.3);
                 let W = w.cross_matrix();
                 let scale = (visc.lambda_f + visc.mu_f) * (W * F).norm();
-                assert!(visc.piola_viscous3(&F, &(W * F)).norm() < 1e-13 * scale);
+                assert!(visc.piola_viscous_full(&F, &(W * F)).norm() < 1e-13 * scale);
                 let D = Matrix3::from_diagonal(&w) * F;
-                assert!(visc.piola_viscous3(&F, &D).norm() > 1e-3 * visc.mu_f * D.norm());
+                assert!(visc.piola_viscous_full(&F, &D).norm() > 1e-3 * visc.mu_f * D.norm());
             }
         }
         // at F = I: P = σ = λ_f tr(d) I + 2μ_f d
@@ -732,7 +736,7 @@ pub(super) mod tests {
         let G = Matrix3::new(0.3, -0.7, 0.2, -0.1, 0.5, 0.4, 0.9, -0.2, 0.1);
         let d = (G + G.transpose()) * 0.5;
         let sigma = Matrix3::identity() * (3.0 * d.trace()) + d * 4.0;
-        assert!(rel(&visc.piola_viscous3(&Matrix3::identity(), &G), &sigma) < 1e-15);
+        assert!(rel(&visc.piola_viscous_full(&Matrix3::identity(), &G), &sigma) < 1e-15);
     }
 
     #[test]
@@ -752,10 +756,10 @@ pub(super) mod tests {
                 let scale = P2.norm() + mat.lambda_y;
                 let mp2 = material_point(&mat, &visc, &F2, &G2, &Fa2);
                 for (name, mp) in [
-                    ("closed form", material_point3(&mat, &visc, &F, &G, &Fa)),
+                    ("closed form", material_point_full(&mat, &visc, &F, &G, &Fa)),
                     ("dual", by_duals((&mat, &visc), [&F, &G, &Fa])),
                 ] {
-                    let P3 = piola_total3(&mat, &visc, &F, &G, &Fa);
+                    let P3 = piola_total_full(&mat, &visc, &F, &G, &Fa);
                     for P in [P3, mp.P] {
                         let block = P.fixed_view::<2, 2>(0, 0);
                         assert!((block - P2).norm() < 1e-13 * scale, "{name} case {case}");
@@ -795,8 +799,8 @@ pub(super) mod tests {
                 let mph = material_point_hoop(&mat, &visc, &Fh, &Gh, &Fa2);
                 let (F, G, Fa) = (embed(&F2, l), embed(&G2, ld), embed(&Fa2, 1.0));
                 let scale = Ph.plane.norm() + Ph.hoop.abs() + mat.lambda_y;
-                let mp = material_point3(&mat, &visc, &F, &G, &Fa);
-                for P in [piola_total3(&mat, &visc, &F, &G, &Fa), mp.P] {
+                let mp = material_point_full(&mat, &visc, &F, &G, &Fa);
+                for P in [piola_total_full(&mat, &visc, &F, &G, &Fa), mp.P] {
                     assert!((P.fixed_view::<2, 2>(0, 0) - Ph.plane).norm() < 1e-13 * scale);
                     assert!((P[(2, 2)] - Ph.hoop).abs() < 1e-13 * scale, "case {case}");
                 }
@@ -808,16 +812,16 @@ pub(super) mod tests {
     }
 
     #[test]
-    fn admissibility3() {
-        assert!(admissible3(&Matrix3::identity()));
-        assert!(!admissible3(&Matrix3::from_diagonal(&Vector3::new(
+    fn admissibility() {
+        assert!(admissible_full(&Matrix3::identity()));
+        assert!(!admissible_full(&Matrix3::from_diagonal(&Vector3::new(
             1.0, 1.0, -0.1
         ))));
-        assert!(!admissible3(&Matrix3::from_diagonal(&Vector3::new(
+        assert!(!admissible_full(&Matrix3::from_diagonal(&Vector3::new(
             1.0, 1.0, 0.0
         ))));
         let mut F = Matrix3::identity();
         F[(0, 2)] = f64::NAN;
-        assert!(!admissible3(&F));
+        assert!(!admissible_full(&F));
     }
 }
