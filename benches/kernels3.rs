@@ -3,9 +3,9 @@
 //! (F within ±0.4 of I, half of them with an active strain, Ḟ within ±1):
 //!
 //! - `piola_total` (2-D) and `piola_total_full` in `f64`, the residual's stress;
-//! - `material_point` (2-D, one `DualSVec64<4>` pass), `material_point_full` (closed form) and
-//!   `dual_material_point` over `piola_total_full` (one `DualSVec64<9>` pass, instantiated
-//!   here), the tangent's;
+//! - `material_point` (2-D, one `DualSVec64<4>` pass), `material_point_full` (closed form)
+//!   and `dual_material_point` over `piola_total_full` (one `DualSVec64<9>` pass,
+//!   instantiated here), the tangent's;
 //! - `contact_force` in 2-D and in 3-D with `DualSVec64<3>` (x and J), on the
 //!   default pillars, points in the contact band.
 //!
@@ -18,7 +18,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use cellsim::physics::{
-    Contact, Lattice, MaterialPointFull, Pillars, Substrate, Substrate3, Viscosity, Yeoh,
+    Contact, Lattice, LatticeSubstrate, MaterialPointFull, Pillars, Substrate, Viscosity, Yeoh,
     contact_force, dual_material_point, material_point, material_point_full, piola_total,
     piola_total_full,
 };
@@ -182,7 +182,7 @@ fn contact(c: &mut Criterion) {
     };
     let p = pillars();
     let s2 = Substrate::Pillars(p);
-    let s3 = Substrate3 {
+    let s3 = LatticeSubstrate {
         plane: s2,
         lattice: Lattice::FourPillars,
     };

@@ -1,11 +1,12 @@
 //! Draws every figure of the 3-D quarter cell ([`cellsim::render::cell3d_views`]), a VTU file
 //! and a GIF into a directory, from states built here:
 //!
-//! - a synthetic smooth deformation of the default mesh (`cellsim::scene::terms::tet_mesh_params(&cellsim::case::Case::reference())`,
-//!   meshed by gmsh and cached): the cell fallen 0.5 µm, its bottom sagged into the gap
-//!   under its centre, flattened and bulging sideways, over MODEL.md's pillars on both
-//!   lattices (four pillars around the axis; the gap between two), with both active
-//!   regions and the fibronectin layer;
+//! - a synthetic smooth deformation of the default mesh
+//!   (`cellsim::scene::terms::tet_mesh_params(&cellsim::case::Case::reference())`, meshed
+//!   by gmsh and cached): the cell fallen 0.5 µm, its bottom sagged into the gap under its
+//!   centre, flattened and bulging sideways, over MODEL.md's pillars on both lattices (four
+//!   pillars around the axis; the gap between two), with both active regions and the
+//!   fibronectin layer;
 //! - with `--real`, a computed state: the quasi-static flat gravity phase of the quarter
 //!   cell integrated by IDA (as `tests/model3d.rs`'s check against the axisymmetric model,
 //!   on its coarse mesh: about a minute).
@@ -22,7 +23,7 @@ use cellsim::dae::{Atol, Integrator};
 use cellsim::fem::{Domain, TetMesh, TetMeshParams, TetRule, TetTabulation};
 use cellsim::model::Cell3;
 use cellsim::model::ModelParams;
-use cellsim::physics::{Lattice, Substrate, Substrate3};
+use cellsim::physics::{Lattice, LatticeSubstrate, Substrate};
 use cellsim::render::cell3d_views::{
     Coloring, FIGURE_SIZE, Section, draw_section, gravity_at, section_figure, surface_figure,
 };
@@ -44,7 +45,7 @@ fn mesh_file(mesh: &TetMesh, p: &ModelParams, lattice: Lattice) -> Mesh3File {
         elements: mesh.elements.clone(),
         domains: mesh.domains.clone(),
         outer_faces: mesh.outer_faces.clone(),
-        substrate: Substrate3 {
+        substrate: LatticeSubstrate {
             plane: p.substrate,
             lattice,
         },
@@ -252,7 +253,7 @@ fn pillar_params(lattice: Lattice) -> ModelParams {
     if let Substrate::Pillars(pl) = &mut p.substrate {
         let c3 = [p.center[0], p.center[1], 0.0];
         pl.y_top = pl
-            .y_top_for_gap3(0.5, lattice, c3, c.geometry.r_c)
+            .y_top_for_gap_on_lattice(0.5, lattice, c3, c.geometry.r_c)
             .expect("placed");
     }
     p

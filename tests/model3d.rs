@@ -112,7 +112,9 @@ fn check_jacobian3_of(inertia: bool, lattice: Lattice, mesh: &TetMesh, k1_pa: f6
     // The pillar tops 0.5 µm below the cell's lowest point over them, in 3-D.
     if let Substrate::Pillars(pl) = &mut p.substrate {
         let c3 = [p.center[0], p.center[1], 0.0];
-        pl.y_top = pl.y_top_for_gap3(0.5, lattice, c3, 10.0).expect("placed");
+        pl.y_top = pl
+            .y_top_for_gap_on_lattice(0.5, lattice, c3, 10.0)
+            .expect("placed");
     }
     let mut m = Cell3::new(
         ModelParams {
@@ -657,7 +659,7 @@ fn deferred_exposures_leave_the_same_cell_and_join_consistently() {
     p.drag = 1e-3;
     if let Substrate::Pillars(pl) = &mut p.substrate {
         pl.y_top = pl
-            .y_top_for_gap3(0.5, Lattice::Gap, [p.center[0], p.center[1], 0.0], 10.0)
+            .y_top_for_gap_on_lattice(0.5, Lattice::Gap, [p.center[0], p.center[1], 0.0], 10.0)
             .expect("placed");
     }
     let params = ModelParams {

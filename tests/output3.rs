@@ -10,7 +10,7 @@ use cellsim::case::{self, Case};
 use cellsim::fem::element::Lagrange;
 use cellsim::fem::tet10::Tet10;
 use cellsim::fem::{Domain, TetMesh, TetRule};
-use cellsim::physics::{Lattice, Substrate, Substrate3};
+use cellsim::physics::{Lattice, LatticeSubstrate, Substrate};
 use cellsim::render::cell3d_views::{
     self, Coloring, FIGURE_SIZE, Section, SectionShape, section_figure, surface_figure,
 };
@@ -29,7 +29,9 @@ fn scratch(name: &str) -> PathBuf {
     d
 }
 
-/// The default quarter mesh (`cellsim::scene::terms::tet_mesh_params(&cellsim::case::Case::reference())`), meshed once.
+/// The default quarter mesh
+/// (`cellsim::scene::terms::tet_mesh_params(&cellsim::case::Case::reference())`), meshed
+/// once.
 fn mesh() -> &'static TetMesh {
     static MESH: OnceLock<TetMesh> = OnceLock::new();
     MESH.get_or_init(|| {
@@ -49,14 +51,16 @@ fn mesh_file(lattice: Lattice) -> Mesh3File {
     let mut p = scene::model_params(&c, "pillars-3d", false).expect("a valid case");
     if let Substrate::Pillars(pl) = &mut p.substrate {
         let c3 = [p.center[0], p.center[1], 0.0];
-        pl.y_top = pl.y_top_for_gap3(0.5, lattice, c3, 10.0).expect("placed");
+        pl.y_top = pl
+            .y_top_for_gap_on_lattice(0.5, lattice, c3, 10.0)
+            .expect("placed");
     }
     Mesh3File {
         nodes: m.nodes.clone(),
         elements: m.elements.clone(),
         domains: m.domains.clone(),
         outer_faces: m.outer_faces.clone(),
-        substrate: Substrate3 {
+        substrate: LatticeSubstrate {
             plane: p.substrate,
             lattice,
         },

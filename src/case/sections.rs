@@ -568,7 +568,7 @@ impl Pillars {
         let clearance = if geometry.model == KinematicModel::ThreeD {
             let [cx, cy] = geometry.centre();
             pillars
-                .lowest_clearance3(self.lattice, [cx, cy, 0.0], geometry.r_c)
+                .lowest_clearance_on_lattice(self.lattice, [cx, cy, 0.0], geometry.r_c)
                 .1
         } else {
             pillars.lowest_clearance(geometry.centre(), geometry.r_c).1

@@ -14,7 +14,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::fem::Domain;
-use crate::physics::{ActiveStrain, Substrate3};
+use crate::physics::{ActiveStrain, LatticeSubstrate};
 
 /// Number of columns of `timeseries.csv`.
 pub const N_COLUMNS: usize = 10;
@@ -227,7 +227,7 @@ pub struct Mesh3File {
     /// Six-node triangles of the outer sphere r = r_c (the quarter's cell surface).
     pub outer_faces: Vec<[usize; 6]>,
     /// The substrate in 3-D.
-    pub substrate: Substrate3,
+    pub substrate: LatticeSubstrate,
     /// Active strain regions, if any.
     pub active: Option<ActiveStrain>,
     /// Contact band half-width ε_ct \[µm\].

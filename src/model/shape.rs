@@ -4,8 +4,8 @@
 //! - [`HalfPlane`]: six-node triangles on the half cell's [`Mesh`], the substrate's
 //!   section [`Substrate`]; the plane-strain and the axisymmetric models
 //!   ([`crate::physics::KinematicModel`], chosen once per element loop).
-//! - [`Quarter`]: ten-node tetrahedra on the quarter cell's [`TetMesh`], the substrate on its
-//!   pillar lattice [`Substrate3`]; the symmetry planes x = c_x and z = c_z.
+//! - [`Quarter`]: ten-node tetrahedra on the quarter cell's [`TetMesh`], the substrate on
+//!   its pillar lattice [`LatticeSubstrate`]; the symmetry planes x = c_x and z = c_z.
 //!
 //! A shape names its mesh (which names its element's tabulation), its substrate and the
 //! dual numbers of its tangents (`D + D² + 1` directions for the band forces, `D + 1` for
@@ -20,7 +20,7 @@ use super::history::LayerField;
 use super::{CellOf, ModelParams};
 use crate::dae::DaeError;
 use crate::fem::{CellMesh, Domain, Mesh, TetMesh};
-use crate::physics::{ActiveStrain, Fibre, KinematicModel, Real, Substrate, Substrate3};
+use crate::physics::{ActiveStrain, Fibre, KinematicModel, LatticeSubstrate, Real, Substrate};
 
 /// Largest number of dual directions a tangent uses (3-D band forces: 3 + 9 + 1).
 pub const MAX_DIRECTIONS: usize = 13;
@@ -227,13 +227,13 @@ impl Shape<2, 6, 12> for HalfPlane {
 
 impl Shape<3, 10, 30> for Quarter {
     type Mesh = TetMesh;
-    type Substrate = Substrate3;
+    type Substrate = LatticeSubstrate;
     type BandDual = DualSVec64<13>;
     type RateDual = DualSVec64<4>;
     const CHECK_EVERY_BAND_POINT: bool = false;
 
-    fn substrate(p: &ModelParams) -> Substrate3 {
-        Substrate3 {
+    fn substrate(p: &ModelParams) -> LatticeSubstrate {
+        LatticeSubstrate {
             plane: p.substrate,
             lattice: p.lattice,
         }
@@ -250,11 +250,11 @@ impl Shape<3, 10, 30> for Quarter {
         c: &Vector3<f64>,
         domain: Domain,
     ) -> SMatrix<f64, 3, 3> {
-        act.fa3(&Vector3::new(x[0], x[1], x[2]), c.z, domain, 1.0)
+        act.fa_revolved(&Vector3::new(x[0], x[1], x[2]), c.z, domain, 1.0)
     }
 
     fn fibres(act: &ActiveStrain, x: &[f64; 3], c: &Vector3<f64>) -> [Fibre<3>; 2] {
-        act.fibres3(&Vector3::new(x[0], x[1], x[2]), c.z)
+        act.fibres_revolved(&Vector3::new(x[0], x[1], x[2]), c.z)
     }
 
     /// u_x = 0 on the plane x = c_x; u_z = 0 on z = c_z, or everywhere for the slab.

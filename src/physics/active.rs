@@ -14,17 +14,19 @@
 //! acts in the cytoplasm only ([`ActiveStrain::fa`]'s domain restriction); the switch only
 //! relaxes the case validation. The same holds in 3-D.
 //!
-//! **3-D** (MODEL.md §10; [`ActiveStrain::fa3`], [`ActiveStrain::chi_pac3`],
-//! [`ActiveStrain::chi_bottom3`]). With `c = (c_x, c_y, c_z)` and `p = X − c`, the point's
-//! meridian coordinates are `ρ = √(p_x² + p_z²)` (the horizontal distance from the vertical
-//! axis through `c`) and `p_y`; the elevation is `θ = atan(p_y/ρ)`. The indicators are the
-//! 2-D ones evaluated at `(ρ, p_y)`: the ellipses become ellipsoids of revolution about the
-//! axis (horizontal semi-axis `a`, vertical `b`; the first-order distance of
-//! `l = 1 − (ρ/a)² − (p_y/b)²` in 3-D is the 2-D one in `(ρ, p_y)`), the bounding rays
-//! become cones about the axis. `N = p/|p|`, and `T = −N_y e_ρ + (ρ/|p|) e_y` is the unit
-//! tangent of the meridian through `X` (`e_ρ = (p_x, 0, p_z)/ρ`): in the plane `z = c_z`,
-//! `x > c_x` it is the 2-D `T`, so there `fa3 = fa ⊕ 1` bit for bit, and elsewhere
-//! `fa3(c + R p) = R fa3(c + p) Rᵀ` for every rotation `R` about the vertical axis.
+//! **3-D** (MODEL.md §10; [`ActiveStrain::fa_revolved`],
+//! [`ActiveStrain::chi_pac_revolved`], [`ActiveStrain::chi_bottom_revolved`]). With
+//! `c = (c_x, c_y, c_z)` and `p = X − c`, the point's meridian coordinates are
+//! `ρ = √(p_x² + p_z²)` (the horizontal distance from the vertical axis through `c`) and
+//! `p_y`; the elevation is `θ = atan(p_y/ρ)`. The indicators are the 2-D ones evaluated at
+//! `(ρ, p_y)`: the ellipses become ellipsoids of revolution about the axis (horizontal
+//! semi-axis `a`, vertical `b`; the first-order distance of `l = 1 − (ρ/a)² − (p_y/b)²` in
+//! 3-D is the 2-D one in `(ρ, p_y)`), the bounding rays become cones about the axis.
+//! `N = p/|p|`, and `T = −N_y e_ρ + (ρ/|p|) e_y` is the unit tangent of the meridian
+//! through `X` (`e_ρ = (p_x, 0, p_z)/ρ`): in the plane `z = c_z`, `x > c_x` it is the 2-D
+//! `T`, so there `fa_revolved = fa ⊕ 1` bit for bit, and elsewhere
+//! `fa_revolved(c + R p) = R fa_revolved(c + p) Rᵀ` for every rotation `R` about the
+//! vertical axis.
 //!
 //! *On the axis* (`ρ = 0`) the meridian, hence `T`, is undefined: the meridian fibres of
 //! the PAC converge there and `T⊗T → e_ρ⊗e_ρ` depends on the direction of approach. We take
@@ -34,10 +36,10 @@
 //! is far away and `χ_PAC = 1`, so the cap's fibres meet at its apex. Only the axis itself
 //! (a line, on which no quadrature point of the quarter cell lies: it is an edge of the
 //! domain) sees this choice; the 2-D half cell instead takes `T = (−1, 0)` on its symmetry
-//! line, so `fa3 ≠ fa ⊕ 1` on the axis only. The bottom fibres (`N`) are defined on the
-//! axis; `F_a = I` at `X = c`. The indicators are smooth across the axis wherever the PAC or
-//! bottom region can act: `ρ` enters the ellipsoid distances through `ρ²`, and the cone
-//! distances `cos θ₀ p_y − sin θ₀ ρ` (not smooth at the axis) are beyond `±ε_a` there
+//! line, so `fa_revolved ≠ fa ⊕ 1` on the axis only. The bottom fibres (`N`) are defined on
+//! the axis; `F_a = I` at `X = c`. The indicators are smooth across the axis wherever the
+//! PAC or bottom region can act: `ρ` enters the ellipsoid distances through `ρ²`, and the
+//! cone distances `cos θ₀ p_y − sin θ₀ ρ` (not smooth at the axis) are beyond `±ε_a` there
 //! except within `ε_a/cos θ₀` of the centre, inside the nucleus.
 
 #![allow(non_snake_case)]
@@ -277,9 +279,9 @@ impl ActiveStrain {
     /// PAC indicator in 3-D, `χ_PAC` ∈ [0, 1] (0 if no PAC): [`Self::chi_pac`] at the
     /// meridian coordinates `(ρ, X_y − c_y)` of `X` about the vertical axis through
     /// `c = (center[0], center[1], c_z)` — between two ellipsoids of revolution, above the
-    /// cone `θ = θ_PAC`. Without the domain restriction (see [`Self::fa3`]).
+    /// cone `θ = θ_PAC`. Without the domain restriction (see [`Self::fa_revolved`]).
     #[inline]
-    pub fn chi_pac3(&self, X: &Vector3<f64>, c_z: f64) -> f64 {
+    pub fn chi_pac_revolved(&self, X: &Vector3<f64>, c_z: f64) -> f64 {
         let Some(pac) = self.pac else { return 0.0 };
         let (_, q) = self.meridian(X, c_z);
         self.chi_pac_offset(&pac, &q)
@@ -289,7 +291,7 @@ impl ActiveStrain {
     /// [`Self::chi_bottom`] at the meridian coordinates of `X`, the region below the cone
     /// `θ = θ_bot` about the vertical axis through `c = (center[0], center[1], c_z)`.
     #[inline]
-    pub fn chi_bottom3(&self, X: &Vector3<f64>, c_z: f64) -> f64 {
+    pub fn chi_bottom_revolved(&self, X: &Vector3<f64>, c_z: f64) -> f64 {
         let Some(bot) = self.bottom else { return 0.0 };
         let (_, q) = self.meridian(X, c_z);
         self.chi_bottom_offset(&bot, &q)
@@ -306,7 +308,13 @@ impl ActiveStrain {
     /// In the plane `z = c_z`, `x > c_x`, it is [`Self::fa`] `⊕ 1` exactly. Affine in `t_a`
     /// like [`Self::fa`]: `F_a(t_a) = I − t_a (I − F_a(1))`, axis included.
     #[inline]
-    pub fn fa3(&self, X: &Vector3<f64>, c_z: f64, domain: Domain, t_a: f64) -> Matrix3<f64> {
+    pub fn fa_revolved(
+        &self,
+        X: &Vector3<f64>,
+        c_z: f64,
+        domain: Domain,
+        t_a: f64,
+    ) -> Matrix3<f64> {
         let I = Matrix3::identity();
         if domain == Domain::Nucleus || t_a == 0.0 {
             return I;
@@ -347,7 +355,7 @@ impl ActiveStrain {
     /// the radial direction. On the axis, where `T` is undefined, the PAC family has `χ = 0`
     /// (no quadrature point lies there: it is an edge of the quarter cell).
     #[inline]
-    pub fn fibres3(&self, X: &Vector3<f64>, c_z: f64) -> [Fibre<3>; 2] {
+    pub fn fibres_revolved(&self, X: &Vector3<f64>, c_z: f64) -> [Fibre<3>; 2] {
         let (p, q) = self.meridian(X, c_z);
         let r = p.norm();
         if r == 0.0 {
@@ -408,7 +416,7 @@ mod tests {
             assert_eq!(fib[0].chi, act.chi_pac(&X));
             assert_eq!(fib[1].chi, act.chi_bottom(&X));
             let X3 = Vector3::new(X.x, X.y, 0.0);
-            let fib3 = act.fibres3(&X3, 0.0);
+            let fib3 = act.fibres_revolved(&X3, 0.0);
             for (f2, f3) in fib.iter().zip(&fib3) {
                 assert!((f3.a - Vector3::new(f2.a.x, f2.a.y, 0.0)).norm() < 1e-14);
                 assert!((f3.chi - f2.chi).abs() < 1e-14);
@@ -418,10 +426,10 @@ mod tests {
             let R = Matrix3::new(c, 0.0, -s, 0.0, 1.0, 0.0, s, 0.0, c);
             let Xr = Vector3::new(act.center[0], act.center[1], 0.0)
                 + R * (X3 - Vector3::new(act.center[0], act.center[1], 0.0));
-            let fa3 = act.fa3(&Xr, 0.0, Domain::Cytoplasm, 1.0);
-            for (k, (f3, fr)) in fib3.iter().zip(&act.fibres3(&Xr, 0.0)).enumerate() {
+            let fa_revolved = act.fa_revolved(&Xr, 0.0, Domain::Cytoplasm, 1.0);
+            for (k, (f3, fr)) in fib3.iter().zip(&act.fibres_revolved(&Xr, 0.0)).enumerate() {
                 assert!((fr.a - R * f3.a).norm() < 1e-12);
-                assert!((fa3 * fr.a - fr.a * (1.0 - e[k] * fr.chi)).norm() < 1e-12);
+                assert!((fa_revolved * fr.a - fr.a * (1.0 - e[k] * fr.chi)).norm() < 1e-12);
             }
         }
     }
@@ -590,7 +598,7 @@ mod tests {
     }
 
     #[test]
-    fn in_the_plane_through_the_centre_fa3_is_fa_plus_one_exactly() {
+    fn in_the_plane_through_the_centre_fa_revolved_is_fa_plus_one_exactly() {
         // z = c_z, x > c_x: the meridian is the 2-D half plane.
         let mut rng = crate::physics::plane_strain::tests::Rng::new(103);
         for (a, c_z) in variants() {
@@ -598,23 +606,26 @@ mod tests {
             for _ in 0..2000 {
                 let X2 = Vector2::new(cx + rng.uniform(1e-6, 10.0), cy + rng.uniform(-10.0, 10.0));
                 let X3 = Vector3::new(X2.x, X2.y, c_z);
-                assert_eq!(a.chi_pac3(&X3, c_z), a.chi_pac(&X2));
-                assert_eq!(a.chi_bottom3(&X3, c_z), a.chi_bottom(&X2));
+                assert_eq!(a.chi_pac_revolved(&X3, c_z), a.chi_pac(&X2));
+                assert_eq!(a.chi_bottom_revolved(&X3, c_z), a.chi_bottom(&X2));
                 for dom in DOMAINS {
                     for t_a in [0.0, 0.4, 1.0] {
-                        let (f2, f3) = (a.fa(&X2, dom, t_a), a.fa3(&X3, c_z, dom, t_a));
+                        let (f2, f3) = (a.fa(&X2, dom, t_a), a.fa_revolved(&X3, c_z, dom, t_a));
                         assert_eq!(f3, embed(&f2), "{X3:?} {dom} t_a {t_a}");
                     }
                 }
             }
             // at the centre: I
             let c3 = Vector3::new(cx, cy, c_z);
-            assert_eq!(a.fa3(&c3, c_z, Domain::Cytoplasm, 1.0), Matrix3::identity());
+            assert_eq!(
+                a.fa_revolved(&c3, c_z, Domain::Cytoplasm, 1.0),
+                Matrix3::identity()
+            );
         }
     }
 
     #[test]
-    fn fa3_is_axisymmetric() {
+    fn fa_revolved_is_axisymmetric() {
         // X' = c + R(X − c) for R a rotation about the vertical axis: F_a(X') = R F_a(X) Rᵀ,
         // on and off the axis.
         let mut rng = crate::physics::plane_strain::tests::Rng::new(107);
@@ -628,10 +639,16 @@ mod tests {
                 )
                 .into_inner();
                 let (X, Xr) = (c + p, c + R * p);
-                assert!((a.chi_pac3(&Xr, c_z) - a.chi_pac3(&X, c_z)).abs() < 1e-13);
-                assert!((a.chi_bottom3(&Xr, c_z) - a.chi_bottom3(&X, c_z)).abs() < 1e-13);
+                assert!((a.chi_pac_revolved(&Xr, c_z) - a.chi_pac_revolved(&X, c_z)).abs() < 1e-13);
+                assert!(
+                    (a.chi_bottom_revolved(&Xr, c_z) - a.chi_bottom_revolved(&X, c_z)).abs()
+                        < 1e-13
+                );
                 for dom in DOMAINS {
-                    let (F, Fr) = (a.fa3(&X, c_z, dom, 0.8), a.fa3(&Xr, c_z, dom, 0.8));
+                    let (F, Fr) = (
+                        a.fa_revolved(&X, c_z, dom, 0.8),
+                        a.fa_revolved(&Xr, c_z, dom, 0.8),
+                    );
                     assert!((Fr - R * F * R.transpose()).norm() < 1e-12, "{p:?} {dom}");
                 }
             }
@@ -639,7 +656,7 @@ mod tests {
     }
 
     #[test]
-    fn fa3_bounds_and_indicators() {
+    fn fa_revolved_bounds_and_indicators() {
         // det F_a ∈ [(1 − e_PAC)(1 − e_bot), 1], F_a symmetric with eigenvalues in
         // [1 − e, 1], indicators in [0, 1]; the fibre directions contract as stated.
         let mut rng = crate::physics::plane_strain::tests::Rng::new(109);
@@ -649,10 +666,10 @@ mod tests {
             for i in 0..3000 {
                 let p = offset(&mut rng, i % 10 == 0);
                 let X = c + p;
-                let (cp, cb) = (a.chi_pac3(&X, c_z), a.chi_bottom3(&X, c_z));
+                let (cp, cb) = (a.chi_pac_revolved(&X, c_z), a.chi_bottom_revolved(&X, c_z));
                 assert!((0.0..=1.0).contains(&cp) && (0.0..=1.0).contains(&cb));
                 for dom in DOMAINS {
-                    let Fa = a.fa3(&X, c_z, dom, 1.0);
+                    let Fa = a.fa_revolved(&X, c_z, dom, 1.0);
                     let det = Fa.determinant();
                     assert!(det >= (1.0 - ep) * (1.0 - eb) - 1e-12 && det <= 1.0 + 1e-12);
                     assert_eq!(Fa, Fa.transpose());
@@ -671,12 +688,12 @@ mod tests {
         let T = Vector3::new(-t.sin() * f.cos(), t.cos(), -t.sin() * f.sin());
         let Phi = Vector3::new(-f.sin(), 0.0, f.cos()); // the azimuthal direction
         let X = Vector3::new(0.0, 8.5, 0.0) + N * 6.2;
-        let Fa = a.fa3(&X, 0.0, Domain::Cytoplasm, 0.6);
+        let Fa = a.fa_revolved(&X, 0.0, Domain::Cytoplasm, 0.6);
         assert!((Fa * T - T * (1.0 - 0.7 * 0.6)).norm() < 1e-15);
         assert!((Fa * N - N).norm() < 1e-15 && (Fa * Phi - Phi).norm() < 1e-15);
         let (t, f) = ((-70f64).to_radians(), -2.0f64);
         let N = Vector3::new(t.cos() * f.cos(), t.sin(), t.cos() * f.sin());
-        let Fa = a.fa3(
+        let Fa = a.fa_revolved(
             &(Vector3::new(0.0, 8.5, 0.0) + N * 9.9),
             0.0,
             Domain::Membrane,
@@ -692,12 +709,18 @@ mod tests {
         // default θ_PAC: the PAC covers the axis above the centre between the ellipsoids
         // (vertical semi-axes 4.5 and 7), not below it; the bottom covers it below
         let top = Vector3::new(0.0, 8.5 + 5.75, 0.0);
-        assert_eq!(a.chi_pac3(&top, 0.0), 1.0);
-        assert_eq!(a.chi_pac3(&Vector3::new(0.0, 8.5 - 5.75, 0.0), 0.0), 0.0);
-        assert_eq!(a.chi_bottom3(&Vector3::new(0.0, 8.5 - 8.0, 0.0), 0.0), 1.0);
-        assert_eq!(a.chi_bottom3(&top, 0.0), 0.0);
+        assert_eq!(a.chi_pac_revolved(&top, 0.0), 1.0);
+        assert_eq!(
+            a.chi_pac_revolved(&Vector3::new(0.0, 8.5 - 5.75, 0.0), 0.0),
+            0.0
+        );
+        assert_eq!(
+            a.chi_bottom_revolved(&Vector3::new(0.0, 8.5 - 8.0, 0.0), 0.0),
+            1.0
+        );
+        assert_eq!(a.chi_bottom_revolved(&top, 0.0), 0.0);
         // F_a there: the mean of T⊗T over the azimuth, ½(e_x⊗e_x + e_z⊗e_z)
-        let Fa = a.fa3(&top, 0.0, Domain::Cytoplasm, t_a);
+        let Fa = a.fa_revolved(&top, 0.0, Domain::Cytoplasm, t_a);
         let mean =
             Matrix3::from_diagonal(&Vector3::new(1.0 - 0.5 * e * t_a, 1.0, 1.0 - 0.5 * e * t_a));
         assert_eq!(Fa, mean);
@@ -706,7 +729,7 @@ mod tests {
         let avg = (0..n)
             .map(|k| {
                 let f = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
-                a.fa3(
+                a.fa_revolved(
                     &(top + Vector3::new(f.cos(), 0.0, f.sin()) * 1e-9),
                     0.0,
                     Domain::Cytoplasm,

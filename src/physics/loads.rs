@@ -3,9 +3,9 @@
 //!
 //! Functions of the unknowns (`x`, `F`, `J`, `μ_as`) are generic over [`Real`] for exact
 //! tangents, and over the dimension `D` and its substrate ([`Surface`]: the 2-D section
-//! [`super::Substrate`], the 3-D [`super::Substrate3`]); the dimension enters only the
-//! cofactor and the determinant. Gravity depends on time only and is `f64`: `−ρ₀ g s_g t_g
-//! e_y` in every dimension.
+//! [`super::Substrate`], the 3-D [`super::LatticeSubstrate`]); the dimension enters only
+//! the cofactor and the determinant. Gravity depends on time only and is `f64`:
+//! `−ρ₀ g s_g t_g e_y` in every dimension.
 
 #![allow(non_snake_case)]
 
@@ -370,7 +370,7 @@ pub fn adhesion_rate<T: Real, S: Surface<D>, const D: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::{Substrate, Substrate3, reference};
+    use crate::physics::{LatticeSubstrate, Substrate, reference};
     use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
     use num_dual::DualSVec64;
 
@@ -806,14 +806,14 @@ mod tests {
     /// The 3-D substrates paired with the 2-D one they reduce to on the plane `z = z₀`:
     /// flat; the pillars on the gap lattice at z₀ = 0 and on the four-pillar one at
     /// z₀ = P/2 (planes through a row of pillar axes).
-    fn substrates3() -> Vec<(Substrate3, Substrate, f64)> {
+    fn lattice_substrates() -> Vec<(LatticeSubstrate, Substrate, f64)> {
         use crate::physics::Lattice;
         let p = crate::physics::reference::pillars();
         let flat = Substrate::Flat { y_s: -2.0 };
         let pil = Substrate::Pillars(p);
         vec![
             (
-                Substrate3 {
+                LatticeSubstrate {
                     plane: flat,
                     lattice: Lattice::FourPillars,
                 },
@@ -821,7 +821,7 @@ mod tests {
                 0.0,
             ),
             (
-                Substrate3 {
+                LatticeSubstrate {
                     plane: pil,
                     lattice: Lattice::Gap,
                 },
@@ -829,7 +829,7 @@ mod tests {
                 0.0,
             ),
             (
-                Substrate3 {
+                LatticeSubstrate {
                     plane: pil,
                     lattice: Lattice::FourPillars,
                 },
@@ -850,7 +850,7 @@ mod tests {
         let c = crate::physics::reference::contact();
         let mut rng = crate::physics::plane_strain::tests::Rng::new(97);
         let y_top = crate::physics::reference::pillars().y_top;
-        for (s3, s2, z0) in substrates3() {
+        for (s3, s2, z0) in lattice_substrates() {
             for ad in adhesion_readings() {
                 for _ in 0..100 {
                     // points across the contact and layer bands of the flat surface and
@@ -912,7 +912,7 @@ mod tests {
         use crate::physics::Lattice;
         let c = crate::physics::reference::contact();
         let p = crate::physics::reference::pillars();
-        let s = Substrate3 {
+        let s = LatticeSubstrate {
             plane: Substrate::Pillars(p),
             lattice: Lattice::FourPillars,
         };
@@ -940,15 +940,15 @@ mod tests {
         let F0 = Matrix3::new(1.1, 0.2, -0.1, -0.3, 0.9, 0.15, 0.05, -0.2, 1.05);
         let N = Vector3::new(0.6, -0.64, 0.48);
         let subs = [
-            Substrate3 {
+            LatticeSubstrate {
                 plane: Substrate::Flat { y_s: -2.0 },
                 lattice: Lattice::FourPillars,
             },
-            Substrate3 {
+            LatticeSubstrate {
                 plane: Substrate::Pillars(p),
                 lattice: Lattice::FourPillars,
             },
-            Substrate3 {
+            LatticeSubstrate {
                 plane: Substrate::Pillars(p),
                 lattice: Lattice::Gap,
             },

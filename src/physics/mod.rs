@@ -28,15 +28,15 @@
 //!   3-D twins (§10).
 //!
 //! **The 3-D functions that are not generic carry `#[inline]`** (`material_point_full`,
-//! `fa3`, `surface_height3`, …). The 2-D code paths keep their own functions, but adding
-//! compiled code to the crate changes how rustc splits it into codegen units, and with that
-//! what LLVM inlines in the 2-D element loops: with these functions compiled eagerly,
-//! callgrind on `cases/fast/push-pull-short.ron` counted plane strain's `material_point`
-//! 3.3 % more instructions and `piola_total` 3.0 % fewer, and the assembly's
-//! `BlockPositions::scatter` was no longer inlined, for the same results. `#[inline]`
-//! functions are compiled only where they are called, so until the 3-D model calls them the
-//! 2-D binary is the one it was (the same symbols of the same sizes, the same instruction
-//! counts per function).
+//! `fa_revolved`, `surface_height_on_lattice`, …). The 2-D code paths keep their own
+//! functions, but adding compiled code to the crate changes how rustc splits it into
+//! codegen units, and with that what LLVM inlines in the 2-D element loops: with these
+//! functions compiled eagerly, callgrind on `cases/fast/push-pull-short.ron` counted plane
+//! strain's `material_point` 3.3 % more instructions and `piola_total` 3.0 % fewer, and the
+//! assembly's `BlockPositions::scatter` was no longer inlined, for the same results.
+//! `#[inline]` functions are compiled only where they are called, so until the 3-D model
+//! calls them the 2-D binary is the one it was (the same symbols of the same sizes, the
+//! same instruction counts per function).
 
 pub mod active;
 #[cfg(test)]
@@ -67,7 +67,7 @@ pub use loads::{
 pub use phases::{Condition, Flip, Phases};
 pub use plane_strain::{MaterialPoint, admissible, material_point, piola_total};
 pub use smooth::{heaviside, smooth_step};
-pub use substrate::{Lattice, PillarFoot, Pillars, Substrate, Substrate3, Surface};
+pub use substrate::{Lattice, LatticeSubstrate, PillarFoot, Pillars, Substrate, Surface};
 pub use three_d::{MaterialPointFull, admissible_full, material_point_full, piola_total_full};
 
 use num_dual::DualNum;

@@ -27,8 +27,8 @@
 //! changes: `d` is continuous there by symmetry but `n` flips); there `d_pillar ≈ −s/2`
 //! (−4 µm by default), far outside every band unless `s/2 < e_f + ε`.
 //!
-//! **3-D** ([`Substrate3`], MODEL.md §10). The pillars stand on a square lattice of period
-//! `P = w + s` in x and in z ([`Lattice`]); each is the superellipsoid
+//! **3-D** ([`LatticeSubstrate`], MODEL.md §10). The pillars stand on a square lattice of
+//! period `P = w + s` in x and in z ([`Lattice`]); each is the superellipsoid
 //! `|x̃/(w/2)|^q + |ỹ/(h/2)|^q + |z̃/(w/2)|^q ≤ 1`, `x̃`, `z̃` the offsets to the nearest
 //! pillar axis in x and in z, with the same homogeneous level set
 //! `l = (|u|^q + |v|^q + |w|^q)^{1/q} − 1` (`w = z̃/(w/2)`), the same first-order distance
@@ -464,7 +464,7 @@ impl Substrate {
 
 /// A substrate in `D` dimensions: its signed penetration depth `d(x)` (> 0 inside) and
 /// outward unit normal `n(x)` at a current position, generic over [`Real`] for exact
-/// tangents. The 2-D section ([`Substrate`]) and the 3-D substrate ([`Substrate3`]).
+/// tangents. The 2-D section ([`Substrate`]) and the 3-D substrate ([`LatticeSubstrate`]).
 pub trait Surface<const D: usize> {
     /// `(d(x), n(x))`: inlined in `f64`, one function per dual type otherwise (see
     /// [`Substrate::eval`]).
@@ -514,7 +514,7 @@ impl Surface<2> for Substrate {
     }
 }
 
-impl Surface<3> for Substrate3 {
+impl Surface<3> for LatticeSubstrate {
     #[inline(always)]
     fn eval_inline<T: Real>(&self, x: &Vector3<T>) -> (T, Vector3<T>) {
         plane_eval(&self.plane, x, |p| p.eval_pillar(x, self.lattice))
@@ -553,7 +553,7 @@ impl Lattice {
 /// along z; the pillars become superellipsoids on the square lattice `lattice` (ignored
 /// for a flat substrate).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Substrate3 {
+pub struct LatticeSubstrate {
     /// The section: a flat surface `y_s`, or the pillars' `w, s, h, first_center, q,
     /// y_top` (the same fields mean the same in 3-D).
     pub plane: Substrate,
@@ -574,7 +574,7 @@ impl Pillars {
     /// `y_top − h/2 + (h/2)(1 − |u|^q − |w|^q)^{1/q}` over a pillar
     /// (`|u|^q + |w|^q < 1`), else the floor `y_top − h`.
     #[inline]
-    pub fn surface_height3(&self, x: f64, z: f64, lattice: Lattice) -> f64 {
+    pub fn surface_height_on_lattice(&self, x: f64, z: f64, lattice: Lattice) -> f64 {
         let a = 0.5 * self.width;
         let u = ((x - self.nearest_axis(x)) / a).abs();
         let w = ((z - self.nearest_axis_z(z, lattice)) / a).abs();
@@ -592,7 +592,7 @@ impl Pillars {
     /// this is the 2-D placement; on [`Lattice::FourPillars`] it lies over the pillars'
     /// rounded corners nearest the axis.
     #[inline]
-    pub fn y_top_for_gap3(
+    pub fn y_top_for_gap_on_lattice(
         &self,
         gap: f64,
         lattice: Lattice,
@@ -600,7 +600,7 @@ impl Pillars {
         r_c: f64,
     ) -> Result<f64, PhysicsError> {
         self.check_gap_inputs(gap, &cell_center, cell_center.iter().sum(), r_c)?;
-        let (_, clearance) = self.lowest_clearance3(lattice, cell_center, r_c);
+        let (_, clearance) = self.lowest_clearance_on_lattice(lattice, cell_center, r_c);
         Ok(clearance - gap)
     }
 
@@ -610,7 +610,7 @@ impl Pillars {
     /// the disk the sphere's "bottom" is its equator height, never the minimum), then
     /// zooming 11 × 11 grids, each 2.5 × finer, down to 1e-10 µm.
     #[inline]
-    pub fn lowest_clearance3(
+    pub fn lowest_clearance_on_lattice(
         &self,
         lattice: Lattice,
         cell_center: [f64; 3],
@@ -620,7 +620,7 @@ impl Pillars {
         let g = |x: f64, z: f64| {
             let (dx, dz) = (x - cx, z - cz);
             cy - (r_c * r_c - dx * dx - dz * dz).max(0.0).sqrt()
-                - (self.surface_height3(x, z, lattice) - self.y_top)
+                - (self.surface_height_on_lattice(x, z, lattice) - self.y_top)
         };
         let n = 200;
         let mut h = 2.0 * r_c / n as f64;
@@ -653,7 +653,7 @@ impl Pillars {
     }
 }
 
-impl Substrate3 {
+impl LatticeSubstrate {
     /// Checks the parameters (those of [`Substrate::validate`]; a lattice has none).
     #[inline]
     pub fn validate(&self) -> Result<(), PhysicsError> {
@@ -672,12 +672,12 @@ impl Substrate3 {
     }
 
     /// Height `y` of the substrate surface at `(x, z)` \[µm\], for plotting: `y_s` (flat) or
-    /// [`Pillars::surface_height3`].
+    /// [`Pillars::surface_height_on_lattice`].
     #[inline]
     pub fn surface_height(&self, x: f64, z: f64) -> f64 {
         match &self.plane {
             Substrate::Flat { y_s } => *y_s,
-            Substrate::Pillars(p) => p.surface_height3(x, z, self.lattice),
+            Substrate::Pillars(p) => p.surface_height_on_lattice(x, z, self.lattice),
         }
     }
 }
@@ -951,7 +951,7 @@ mod tests {
 }
 
 #[cfg(test)]
-mod tests3 {
+mod lattice_tests {
     use super::*;
     use num_dual::DualSVec64;
 
@@ -961,8 +961,8 @@ mod tests3 {
         crate::physics::reference::pillars()
     }
 
-    fn both(p: Pillars) -> [Substrate3; 2] {
-        [Lattice::FourPillars, Lattice::Gap].map(|lattice| Substrate3 {
+    fn both(p: Pillars) -> [LatticeSubstrate; 2] {
+        [Lattice::FourPillars, Lattice::Gap].map(|lattice| LatticeSubstrate {
             plane: Substrate::Pillars(p),
             lattice,
         })
@@ -970,8 +970,8 @@ mod tests3 {
 
     /// All the 3-D substrates of the tests: flat, and the default pillars on both
     /// lattices with q = 4 and with non-integer q.
-    fn substrates() -> Vec<Substrate3> {
-        let mut v = vec![Substrate3 {
+    fn substrates() -> Vec<LatticeSubstrate> {
+        let mut v = vec![LatticeSubstrate {
             plane: Substrate::Flat { y_s: -2.0 },
             lattice: Lattice::FourPillars,
         }];
@@ -1006,7 +1006,7 @@ mod tests3 {
         for lattice in [Lattice::FourPillars, Lattice::Gap] {
             let az = p.nearest_axis_z(0.0, lattice);
             let largest_turn = |fillet: f64| {
-                let s = Substrate3 {
+                let s = LatticeSubstrate {
                     plane: Substrate::Pillars(Pillars { fillet, ..p }),
                     lattice,
                 };
@@ -1031,7 +1031,7 @@ mod tests3 {
             assert!(filleted < 0.02, "{filleted}");
             // The fillet lies within k/4 of the sharp corner: on the bisector, the surface
             // (d = 0) moves out by (k − 0)²/(4k) = k/4 in depth.
-            let s = Substrate3 {
+            let s = LatticeSubstrate {
                 plane: Substrate::Pillars(Pillars { fillet: 0.5, ..p }),
                 lattice,
             };
@@ -1053,7 +1053,7 @@ mod tests3 {
         };
         let floor = rounded.y_top - rounded.height;
         for lattice in [Lattice::FourPillars, Lattice::Gap] {
-            let [r, st] = [rounded, straight].map(|p| Substrate3 {
+            let [r, st] = [rounded, straight].map(|p| LatticeSubstrate {
                 plane: Substrate::Pillars(p),
                 lattice,
             });
@@ -1109,7 +1109,7 @@ mod tests3 {
     }
 
     /// Central differences of the depth: the gradient ∇d at `x`.
-    fn grad_fd(s: &Substrate3, x: &Vector3<f64>, h: f64) -> Vector3<f64> {
+    fn grad_fd(s: &LatticeSubstrate, x: &Vector3<f64>, h: f64) -> Vector3<f64> {
         Vector3::from_fn(|k, _| {
             let mut e = Vector3::zeros();
             e[k] = h;
@@ -1119,7 +1119,7 @@ mod tests3 {
 
     #[test]
     fn flat_is_exact_in_3d() {
-        let s = Substrate3 {
+        let s = LatticeSubstrate {
             plane: Substrate::Flat { y_s: -2.0 },
             lattice: Lattice::Gap,
         };
@@ -1241,7 +1241,7 @@ mod tests3 {
                 (Lattice::FourPillars, 8.0),
                 (Lattice::FourPillars, -8.0),
             ] {
-                let s3 = Substrate3 { plane: s2, lattice };
+                let s3 = LatticeSubstrate { plane: s2, lattice };
                 for _ in 0..200 {
                     let (x, y) = (rng.uniform(-20.0, 20.0), rng.uniform(-10.0, 1.0));
                     let (d2, n2) = s2.eval(&Vector2::new(x, y));
@@ -1254,7 +1254,7 @@ mod tests3 {
         }
         // and a flat substrate anywhere
         let f = Substrate::Flat { y_s: -2.0 };
-        let f3 = Substrate3 {
+        let f3 = LatticeSubstrate {
             plane: f,
             lattice: Lattice::FourPillars,
         };
@@ -1350,7 +1350,8 @@ mod tests3 {
     fn the_lattices_place_the_pillars_as_documented() {
         let p = pillars();
         let [four, gap] = both(p);
-        let above = |s: &Substrate3, x: f64, z: f64| s.eval(&Vector3::new(x, p.y_top + 0.1, z)).0;
+        let above =
+            |s: &LatticeSubstrate, x: f64, z: f64| s.eval(&Vector3::new(x, p.y_top + 0.1, z)).0;
         // 0.1 µm above a top, or at least s/2 − 0.5 µm from every pillar (a side face
         // s/2 = 4 µm away, the first-order distance past a rounded edge a bit less)
         let far = -0.5 * p.spacing + 0.5;
@@ -1379,7 +1380,7 @@ mod tests3 {
         assert_eq!(p.nearest_axis_z(-9.0, Lattice::Gap), -16.0);
         assert_eq!(Lattice::default(), Lattice::FourPillars);
         // a bad parameter is refused through the section
-        let bad = Substrate3 {
+        let bad = LatticeSubstrate {
             plane: Substrate::Pillars(Pillars { q: 1.5, ..p }),
             lattice: Lattice::Gap,
         };
@@ -1387,18 +1388,22 @@ mod tests3 {
     }
 
     #[test]
-    fn y_top_for_gap3_gives_the_requested_gap() {
+    fn y_top_for_gap_on_lattice_gives_the_requested_gap() {
         let p = pillars();
         let (c, r_c) = ([0.0, 8.5, 0.0], 10.0);
         // Gap lattice: the smallest gap lies in the plane z = 0, the 2-D placement
         let y2 = p.y_top_for_gap(0.5, [0.0, 8.5], r_c).unwrap();
-        let yg = p.y_top_for_gap3(0.5, Lattice::Gap, c, r_c).unwrap();
+        let yg = p
+            .y_top_for_gap_on_lattice(0.5, Lattice::Gap, c, r_c)
+            .unwrap();
         assert!((yg - y2).abs() < 1e-9, "{yg} vs {y2}");
         // Four pillars: brute force over a fine grid of the disk, and the minimiser on the
         // rounded corner of a pillar, near the diagonal x = ±z (quarter symmetry)
-        let y4 = p.y_top_for_gap3(0.5, Lattice::FourPillars, c, r_c).unwrap();
+        let y4 = p
+            .y_top_for_gap_on_lattice(0.5, Lattice::FourPillars, c, r_c)
+            .unwrap();
         let placed = Pillars { y_top: y4, ..p };
-        let ([xs, zs], _) = placed.lowest_clearance3(Lattice::FourPillars, c, r_c);
+        let ([xs, zs], _) = placed.lowest_clearance_on_lattice(Lattice::FourPillars, c, r_c);
         assert!((xs.abs() - zs.abs()).abs() < 1e-4, "minimiser ({xs}, {zs})");
         assert!(xs.abs() > 4.0 && xs.abs() < 8.0);
         let n = 1000;
@@ -1413,7 +1418,8 @@ mod tests3 {
                 if rr < 0.0 {
                     continue;
                 }
-                let gap = 8.5 - rr.sqrt() - placed.surface_height3(x, z, Lattice::FourPillars);
+                let gap =
+                    8.5 - rr.sqrt() - placed.surface_height_on_lattice(x, z, Lattice::FourPillars);
                 min_gap = min_gap.min(gap);
             }
         }
@@ -1429,9 +1435,17 @@ mod tests3 {
         // gap at (±5.08, ±5.08))
         assert!(y4 > yg + 0.1, "{y4} vs {yg}");
         // other gaps shift y_top rigidly; bad inputs are refused
-        let y41 = p.y_top_for_gap3(1.0, Lattice::FourPillars, c, r_c).unwrap();
+        let y41 = p
+            .y_top_for_gap_on_lattice(1.0, Lattice::FourPillars, c, r_c)
+            .unwrap();
         assert!((y4 - y41 - 0.5).abs() < 1e-9);
-        assert!(p.y_top_for_gap3(0.5, Lattice::Gap, c, 0.0).is_err());
-        assert!(p.y_top_for_gap3(f64::NAN, Lattice::Gap, c, r_c).is_err());
+        assert!(
+            p.y_top_for_gap_on_lattice(0.5, Lattice::Gap, c, 0.0)
+                .is_err()
+        );
+        assert!(
+            p.y_top_for_gap_on_lattice(f64::NAN, Lattice::Gap, c, r_c)
+                .is_err()
+        );
     }
 }

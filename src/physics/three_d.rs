@@ -27,9 +27,10 @@
 //! (`adj F`, `ḞF⁻¹`, one product with `cof F`; no `C`, `C⁻¹` or `C⁻¹ĊC⁻¹`), which counts
 //! twice for dual numbers. A test checks it against MODEL.md's `S_f` literally.
 //!
-//! **Tangent.** [`material_point_full`] returns `∂P/∂F` in closed form, not by dual numbers.
-//! With `M = F_a⁻¹F_a⁻ᵀ` (`I` without active strain) the push-forward through `F_a⁻¹` maps
-//! `I ↦ M`, `C_e⁻¹ ↦ C⁻¹`, `C_e ↦ MCM`, so `S_s = J_a(a M + k C⁻¹ + c MCM)` and
+//! **Tangent.** [`material_point_full`] returns `∂P/∂F` in closed form, not by dual
+//! numbers. With `M = F_a⁻¹F_a⁻ᵀ` (`I` without active strain) the push-forward through
+//! `F_a⁻¹` maps `I ↦ M`, `C_e⁻¹ ↦ C⁻¹`, `C_e ↦ MCM`, so `S_s = J_a(a M + k C⁻¹ + c MCM)`
+//! and
 //!
 //! `∂S_s/∂C = J_a[(2A′ + 2β) M⊗M − 2A′s (M⊗C⁻¹ + C⁻¹⊗M) + κ C⁻¹⊗C⁻¹ − k C⁻¹⊙C⁻¹ + c M⊙M]`,
 //!
@@ -445,9 +446,9 @@ pub(super) mod tests {
     use crate::physics::dual_material_point;
 
     /// [`material_point_full`] by forward-mode dual numbers ([`dual_material_point`]: one
-    /// `DualSVec64<9>` pass of [`piola_total_full`] over `F`, `∂P/∂Ḟ` from the linearity of `P_f`
-    /// in `Ḟ`), as [`super::super::material_point`] does in plane strain: the independent
-    /// reference for the closed form.
+    /// `DualSVec64<9>` pass of [`piola_total_full`] over `F`, `∂P/∂Ḟ` from the linearity of
+    /// `P_f` in `Ḟ`), as [`super::super::material_point`] does in plane strain: the
+    /// independent reference for the closed form.
     fn by_duals(m: (&Yeoh, &Viscosity), [F, Fdot, Fa]: [&Matrix3<f64>; 3]) -> MaterialPointFull {
         let piola = |Fd: &_, Gd: &_| piola_total_full(m.0, m.1, Fd, Gd, Fa);
         dual_material_point(F, Fdot, piola, |E| m.1.piola_viscous_full(F, E))

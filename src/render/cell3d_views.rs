@@ -24,9 +24,9 @@
 //!
 //! Horizontal coordinates are measured from the cell's vertical axis (x = c_x, z = c_z;
 //! c_x = c_z = 0 in every case cellsim builds), and the substrate's section is the surface
-//! height ([`Substrate3::surface_height`]) along the section line: pillars stand on their
-//! floor with their full width (the undercut below a superellipsoid's rounded foot, which
-//! the model leaves open, is drawn filled).
+//! height ([`LatticeSubstrate::surface_height`]) along the section line: pillars stand on
+//! their floor with their full width (the undercut below a superellipsoid's rounded foot,
+//! which the model leaves open, is drawn filled).
 //!
 //! **Surface view** ([`surface_figure`]): the whole deformed cell (the quarter's outer faces
 //! mirrored about x = 0 and z = 0) standing on the substrate — the floor and the pillars of
@@ -73,7 +73,7 @@ use super::geometry::{
 use super::vtu::VtuMesh;
 use super::{DrawError, OutputError, draw_png};
 use crate::fem::{Domain, Lagrange, Tet10, Tri6, tet10 as tet, tri6 as p2};
-use crate::physics::{ActiveStrain, Substrate, Substrate3, smooth_step};
+use crate::physics::{ActiveStrain, LatticeSubstrate, Substrate, smooth_step};
 use crate::run_files::read::Run3Data;
 use crate::run_files::{Mesh3File, RunData, Snapshot3};
 
@@ -205,8 +205,8 @@ impl Interface {
 fn chi3(region: ActiveRegion, a: &ActiveStrain, x: [f64; 3], c_z: f64) -> f64 {
     let v = Vector3::from(x);
     match region {
-        ActiveRegion::Pac => a.chi_pac3(&v, c_z),
-        ActiveRegion::Bottom => a.chi_bottom3(&v, c_z),
+        ActiveRegion::Pac => a.chi_pac_revolved(&v, c_z),
+        ActiveRegion::Bottom => a.chi_bottom_revolved(&v, c_z),
     }
 }
 
@@ -722,7 +722,7 @@ impl SectionBackdrop {
     /// The section of `sub` by `plane` through the axis of centre `c`, with the layer of
     /// thickness `e_f`, over the view `[h0, h1, y0, y1]` in `columns` strips.
     pub fn new(
-        sub: &Substrate3,
+        sub: &LatticeSubstrate,
         e_f: Option<f64>,
         plane: Section,
         c: [f64; 3],

@@ -55,15 +55,16 @@
 //! bytes, replace one another whole, so a reader finds no file or a whole one (tested with
 //! several processes on one cold cache).
 //!
-//! **Reading** ([`TetMesh::read_gmsh`], in [`crate::fem::gmsh`]): 10-node tetrahedra (gmsh type 11)
-//! in the three physical volumes and 6-node triangles (type 9) in `outer`; the nodes the
-//! tetrahedra use are renumbered compactly in file order. The completion checks what the
-//! model relies on: every vertex inside the ball r_c and on the side of the interfaces its
-//! domain says (so a mesh of another cell is refused), edges with one mid-node each, faces
-//! shared by at most two tetrahedra, outer faces on r = r_c that are faces of the mesh
-//! (oriented outward), the named points, and det J > 0 at the nodes and at the points of
-//! every [`TetRule::degree`] with d ≤ 6 (the rules an assembly uses), naming the element
-//! otherwise. Nodes within 1e-9 · r_c of a symmetry plane are moved onto it exactly.
+//! **Reading** ([`TetMesh::read_gmsh`], in [`crate::fem::gmsh`]): 10-node tetrahedra (gmsh
+//! type 11) in the three physical volumes and 6-node triangles (type 9) in `outer`; the
+//! nodes the tetrahedra use are renumbered compactly in file order. The completion checks
+//! what the model relies on: every vertex inside the ball r_c and on the side of the
+//! interfaces its domain says (so a mesh of another cell is refused), edges with one
+//! mid-node each, faces shared by at most two tetrahedra, outer faces on r = r_c that are
+//! faces of the mesh (oriented outward), the named points, and det J > 0 at the nodes and
+//! at the points of every [`TetRule::degree`] with d ≤ 6 (the rules an assembly uses),
+//! naming the element otherwise. Nodes within 1e-9 · r_c of a symmetry plane are moved onto
+//! it exactly.
 //!
 //! # The slab
 //!
@@ -234,8 +235,8 @@ impl TetMeshParams {
     /// ball r_cp plus 7.4 · ∫ dV / (h² min(h, t)) over the membrane shell
     /// of thickness t = r_c − r_cp (a shell thinner than h still needs one layer of
     /// elements), by the midpoint rule in y on the wedge's circular-sector cross-sections.
-    /// [`TetMeshParams::validate`] refuses more than [`MAX_TETS`]. Meaningful for parameters
-    /// that pass the other checks of `validate`.
+    /// [`TetMeshParams::validate`] refuses more than [`MAX_TETS`]. Meaningful for
+    /// parameters that pass the other checks of `validate`.
     pub fn estimated_tets(&self) -> f64 {
         const N: usize = 2000;
         // Radial points of the midpoint rule inside r_cp where the surface cap may act.
