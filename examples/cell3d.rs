@@ -21,7 +21,7 @@ use cellsim::case::Case;
 use cellsim::dae::linsolve::{ColumnOrdering, FaerLu, LinearSolver, LinearSolverError};
 use cellsim::dae::{Atol, Dae, Integrator, LinearSolverFactory, SharedFactory};
 use cellsim::fem::{TetMesh, TetMeshParams};
-use cellsim::model::{Cell3, ModelParams};
+use cellsim::model::{ModelParams, QuarterCell};
 use cellsim::physics::Lattice;
 use cellsim::scene;
 use cellsim::solver;
@@ -138,7 +138,7 @@ fn main() {
         lattice,
         ..plane
     };
-    let mut m = Cell3::new(params, mesh).expect("model");
+    let mut m = QuarterCell::new(params, mesh).expect("model");
     m.set_parallel(args.threads);
     println!(
         "model: {} unknowns ({} u, {} μ_as), {} elements, set-up {:.2} s",
@@ -193,7 +193,7 @@ fn main() {
         }
         let (m, y) = (ida.dae(), ida.y());
         let o = m.observe(t, y);
-        let o3 = m.observe3(y);
+        let o3 = m.observe_quarter(y);
         let s = ida.stats();
         println!(
             "{t}\t{}\t{}\t{:.2}\t{:.5}\t{:.4}\t{:.4}\t{:.4}\t{:.4}",
@@ -212,7 +212,7 @@ fn main() {
 /// The 3-D runs' LU (UMFPACK, nested dissection, symmetric strategy) on the model's
 /// iteration matrix at rest: UMFPACK's memory estimate after the analysis, then one
 /// factorization's fill, time and peak memory, and the process's peak resident set.
-fn lu_memory(m: &mut Cell3) {
+fn lu_memory(m: &mut QuarterCell) {
     let n = m.size();
     let (y, yp) = (vec![0.0; n], vec![0.0; n]);
     let pattern = m.pattern().clone();
@@ -262,7 +262,7 @@ fn peak_rss_gb() -> f64 {
 /// Times each LU on the model's iteration matrix at the rest state (cj = 0.1): analysis,
 /// numeric factorization (median of 3) and solve; for UMFPACK also its strategy, fill and
 /// flop count.
-fn bench_lu(m: &mut Cell3, only: Option<&str>) {
+fn bench_lu(m: &mut QuarterCell, only: Option<&str>) {
     let n = m.size();
     let (y, yp) = (vec![0.0; n], vec![0.0; n]);
     let pattern = m.pattern().clone();

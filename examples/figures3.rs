@@ -21,8 +21,8 @@ use std::time::Instant;
 use cellsim::case::{self, Case};
 use cellsim::dae::{Atol, Integrator};
 use cellsim::fem::{Domain, TetMesh, TetMeshParams, TetRule, TetTabulation};
-use cellsim::model::Cell3;
 use cellsim::model::ModelParams;
+use cellsim::model::QuarterCell;
 use cellsim::physics::{Lattice, LatticeSubstrate, Substrate};
 use cellsim::render::cell3d_views::{
     Coloring, FIGURE_SIZE, Section, draw_section, gravity_at, section_figure, surface_figure,
@@ -31,16 +31,16 @@ use cellsim::render::figures::ShapeStyleOptions;
 use cellsim::render::geometry::Bounds;
 use cellsim::render::movie::{Movie3, MovieView};
 use cellsim::render::vtu::write_vtu;
-use cellsim::run_files::{Mesh3File, Snapshot3, write_json};
+use cellsim::run_files::{QuarterMeshFile, QuarterSnapshot, write_json};
 use cellsim::scene;
 use cellsim::sundials::{Ida, IdaOptions};
 use nalgebra::Matrix3;
 use plotters::prelude::*;
 
 /// The mesh file of `mesh` with the model parameters `p` on `lattice`.
-fn mesh_file(mesh: &TetMesh, p: &ModelParams, lattice: Lattice) -> Mesh3File {
+fn mesh_file(mesh: &TetMesh, p: &ModelParams, lattice: Lattice) -> QuarterMeshFile {
     let ph = &p.phases;
-    Mesh3File {
+    QuarterMeshFile {
         nodes: mesh.nodes.clone(),
         elements: mesh.elements.clone(),
         domains: mesh.domains.clone(),
@@ -67,7 +67,7 @@ fn mesh_file(mesh: &TetMesh, p: &ModelParams, lattice: Lattice) -> Mesh3File {
 
 /// Per element: the reference-volume means of ‖E‖_F and of det F under the displacement
 /// `u` (a degree-4 rule: the means of the run's snapshots).
-fn element_means(mesh: &Mesh3File, u: &[[f64; 3]]) -> (Vec<f64>, Vec<f64>) {
+fn element_means(mesh: &QuarterMeshFile, u: &[[f64; 3]]) -> (Vec<f64>, Vec<f64>) {
     let tab = TetTabulation::new(&TetRule::degree(4));
     let (mut strain, mut jac) = (Vec::new(), Vec::new());
     for el in &mesh.elements {
@@ -95,7 +95,7 @@ fn element_means(mesh: &Mesh3File, u: &[[f64; 3]]) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// A snapshot at `t` of the displacement `u`, velocity `v`, with the element means.
-fn snapshot(mesh: &Mesh3File, t: f64, u: Vec<[f64; 3]>, v: Vec<[f64; 3]>) -> Snapshot3 {
+fn snapshot(mesh: &QuarterMeshFile, t: f64, u: Vec<[f64; 3]>, v: Vec<[f64; 3]>) -> QuarterSnapshot {
     let (element_strain, element_jacobian) = element_means(mesh, &u);
     let membrane: Vec<bool> = {
         let mut m = vec![false; mesh.nodes.len()];
@@ -113,7 +113,7 @@ fn snapshot(mesh: &Mesh3File, t: f64, u: Vec<[f64; 3]>, v: Vec<[f64; 3]>) -> Sna
         .zip(&u)
         .map(|(&m, d)| (m && mesh.layer_thickness.is_some()).then_some(-2e8 * d[1].min(0.0)))
         .collect();
-    Snapshot3 {
+    QuarterSnapshot {
         t,
         u,
         v,
@@ -149,7 +149,7 @@ fn synthetic_u(x: [f64; 3], c: [f64; 3], r_c: f64, w: f64) -> [f64; 3] {
     [bulge * p[0], y2 - x[1], bulge * p[2]]
 }
 
-fn synthetic(mesh: &Mesh3File, w: f64, t: f64) -> Snapshot3 {
+fn synthetic(mesh: &QuarterMeshFile, w: f64, t: f64) -> QuarterSnapshot {
     let c = mesh.center;
     let u: Vec<[f64; 3]> = mesh
         .nodes
@@ -160,7 +160,13 @@ fn synthetic(mesh: &Mesh3File, w: f64, t: f64) -> Snapshot3 {
     snapshot(mesh, t, u, v)
 }
 
-fn draw_all(out: &Path, tag: &str, mesh: &Mesh3File, s: &Snapshot3, what: &str) -> Vec<PathBuf> {
+fn draw_all(
+    out: &Path,
+    tag: &str,
+    mesh: &QuarterMeshFile,
+    s: &QuarterSnapshot,
+    what: &str,
+) -> Vec<PathBuf> {
     let mut written = Vec::new();
     for plane in Section::ALL {
         let p = out.join(format!("{tag}-section-{}.png", plane.tag()));
@@ -295,7 +301,7 @@ fn real_state(out: &Path) -> Vec<PathBuf> {
     files
 }
 
-fn integrate_flat_gravity() -> (Mesh3File, Snapshot3) {
+fn integrate_flat_gravity() -> (QuarterMeshFile, QuarterSnapshot) {
     let t_end = 150.0;
     let mut c = Case::reference();
     c.phases.t_g0 = 100.0;
@@ -328,7 +334,7 @@ fn integrate_flat_gravity() -> (Mesh3File, Snapshot3) {
         lattice,
         ..p
     };
-    let m = Cell3::new(params, mesh).expect("the model builds");
+    let m = QuarterCell::new(params, mesh).expect("the model builds");
     let atol = m.atol_vector(1e-7);
     let t0 = Instant::now();
     let mut ida = Ida::new(

@@ -10,7 +10,7 @@
 use cellsim::case::Case;
 use cellsim::dae::{Atol, Dae, Integrator};
 use cellsim::fem::TetMesh;
-use cellsim::model::{Cell3, ModelParams};
+use cellsim::model::{ModelParams, QuarterCell};
 use cellsim::physics::Lattice;
 use cellsim::scene;
 use cellsim::solver::LinearSolver;
@@ -43,7 +43,7 @@ fn main() {
     let mesh = TetMesh::generate(&scene::tet_mesh_params(&case)).expect("mesh");
     let plane = scene::model_params(&case, &file, false).expect("params");
     let bottom = case.geometry.centre()[1] - case.geometry.r_c;
-    let m = Cell3::new(
+    let m = QuarterCell::new(
         ModelParams {
             kinematics: cellsim::physics::KinematicModel::ThreeD,
             lattice: Lattice::FourPillars,

@@ -3,7 +3,7 @@
 
 use cellsim::case::{Case, Start};
 use cellsim::dae::State;
-use cellsim::model::{Cell3, CellModel, ModelParams};
+use cellsim::model::{CellModel, ModelParams, QuarterCell};
 use cellsim::physics::{Condition, KinematicModel, Lattice};
 use cellsim::scene;
 
@@ -56,7 +56,7 @@ fn the_adhered_radius_rate_is_its_derivative_along_the_motion() {
         let err = rate_error(|y, yp| m.adhered_radius(y, yp), &y, &yp);
         assert!(err < 1e-6, "{model:?}: relative error {err:.2e}");
     }
-    let m = Cell3::new(spreading_params(KinematicModel::ThreeD), coarse3()).unwrap();
+    let m = QuarterCell::new(spreading_params(KinematicModel::ThreeD), coarse3()).unwrap();
     let (y, yp) = deformed_state(&m, 0.5, 3);
     let err = rate_error(|y, yp| m.adhered_radius(y, yp), &y, &yp);
     assert!(err < 1e-6, "3-D: relative error {err:.2e}");

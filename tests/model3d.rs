@@ -9,8 +9,8 @@ use cellsim::fem::tet10::{TET_FACES, face_map};
 use cellsim::fem::{
     Domain, Lagrange, Mesh, MeshParams, TetMesh, TetMeshParams, TriangleRule, Wedge,
 };
-use cellsim::model::{Cell3, Constraints};
 use cellsim::model::{CellModel, ModelParams};
+use cellsim::model::{Constraints, QuarterCell};
 use cellsim::physics::{KinematicModel, Lattice, Substrate, Viscosity, Yeoh, piola_total_full};
 use cellsim::scene;
 use cellsim::solver::LinearSolver;
@@ -116,7 +116,7 @@ fn check_jacobian3_of(inertia: bool, lattice: Lattice, mesh: &TetMesh, k1_pa: f6
             .y_top_for_gap_on_lattice(0.5, lattice, c3, 10.0)
             .expect("placed");
     }
-    let mut m = Cell3::new(
+    let mut m = QuarterCell::new(
         ModelParams {
             lattice,
             ..params3(p)
@@ -191,7 +191,7 @@ fn patch_test_homogeneous_deformation_gives_exact_internal_forces() {
     ];
     let params = unloaded(solids);
     let visc = params.viscosity;
-    let mut m = Cell3::new(params3(params), coarse3()).unwrap();
+    let mut m = QuarterCell::new(params3(params), coarse3()).unwrap();
     let f0 = Matrix3::new(1.08, 0.0, 0.0, -0.06, 0.93, 0.04, 0.0, 0.0, 1.05);
     let c = Vector3::new(m.params.center[0], m.params.center[1], 0.0);
     let mut y = vec![0.0; m.size()];
@@ -274,7 +274,7 @@ fn weight_and_volumes_of_the_quarter_and_the_eighth_cell() {
 }
 
 fn weight_and_volumes(mesh: TetMesh, share: f64) {
-    let m = Cell3::new(params3(scene::reference_params()), mesh).unwrap();
+    let m = QuarterCell::new(params3(scene::reference_params()), mesh).unwrap();
     let g = Case::reference().geometry;
     let ball = |r: f64| share * 4.0 * std::f64::consts::PI * r.powi(3) / 3.0;
     let v = m.volume(None);
@@ -360,7 +360,7 @@ fn flat_gravity_phase_against_the_axisymmetric_model(mesh: TetMesh) {
     let idaa = ida_to(ma, atola, t_end, LinearSolver::Faer);
     let oa = idaa.dae().observe(t_end, idaa.y());
     let wedge = mesh.params.wedge;
-    let m3 = Cell3::new(params3(p.clone()), mesh).unwrap();
+    let m3 = QuarterCell::new(params3(p.clone()), mesh).unwrap();
     let atol3 = m3.atol_vector(1e-7);
     let ida3 = ida_to(m3, atol3, t_end, LinearSolver::UmfpackNd);
     let (m3, y3) = (ida3.dae(), ida3.y());
@@ -415,7 +415,7 @@ fn a_slab_with_u_z_fixed_reproduces_plane_strain() {
     let ida2 = ida_to(m2, atol2, t_end, LinearSolver::Faer);
     let o2 = ida2.dae().observe(t_end, ida2.y());
     let slab = TetMesh::extruded(&mesh2, 1.0);
-    let m3 = Cell3::with_constraints(params3(p), slab, Constraints::Slab).unwrap();
+    let m3 = QuarterCell::with_constraints(params3(p), slab, Constraints::Slab).unwrap();
     let atol3 = m3.atol_vector(1e-7);
     let ida3 = ida_to(m3, atol3, t_end, LinearSolver::UmfpackNd);
     let o3 = ida3.dae().observe(t_end, ida3.y());
@@ -567,7 +567,7 @@ fn the_cli_meshes_checks_and_runs_a_3d_case() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["finished"], true, "{s}");
     assert_eq!(s["mesh_elements"], 3320);
-    let state: cellsim::run_files::StateFile3 =
+    let state: cellsim::run_files::QuarterStateFile =
         serde_json::from_str(&std::fs::read_to_string(out.join("state_gravity.json")).unwrap())
             .unwrap();
     assert_eq!(state.state.t, 100.0);
@@ -667,8 +667,8 @@ fn deferred_exposures_leave_the_same_cell_and_join_consistently() {
         ..params3(p)
     };
     let mesh = coarse3();
-    let mut full = Cell3::new(params.clone(), mesh.clone()).unwrap();
-    let mut small = Cell3::deferring_adhesion(params, mesh).unwrap();
+    let mut full = QuarterCell::new(params.clone(), mesh.clone()).unwrap();
+    let mut small = QuarterCell::deferring_adhesion(params, mesh).unwrap();
     assert!(small.adhesion_deferred() && !full.adhesion_deferred());
     let n_mu = full.dofs.n_mu();
     assert!(n_mu > 0 && small.size() + n_mu == full.size());
@@ -724,7 +724,7 @@ fn hertz3(e: f64, h_bottom: f64, eps_ct: f64, mu_ct: f64, degree: u32, sub: u32)
     );
     let case = Case::from_str(&text, "hertz-3d.ron").unwrap();
     let p = scene::model_params(&case, "hertz-3d.ron", false).unwrap();
-    let m = Cell3::new(params3(p), mesh3(h_bottom, 1.5)).unwrap();
+    let m = QuarterCell::new(params3(p), mesh3(h_bottom, 1.5)).unwrap();
     let atol = m.atol_vector(1e-6);
     let ida = ida_to(m, atol, 150.0, LinearSolver::Faer);
     let (m, y) = (ida.dae(), ida.y());
@@ -735,7 +735,7 @@ fn hertz3(e: f64, h_bottom: f64, eps_ct: f64, mu_ct: f64, degree: u32, sub: u32)
     let a_hertz = (3.0 * weight * r / (4.0 * e / (1.0 - 0.485f64.powi(2)))).cbrt();
     [
         m.observe(150.0, y).contact_radius,
-        m.observe3(y).contact_radius_equiv,
+        m.observe_quarter(y).contact_radius_equiv,
         a_hertz,
         force / weight,
     ]

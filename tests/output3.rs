@@ -17,7 +17,7 @@ use cellsim::render::cell3d_views::{
 use cellsim::render::figures::ShapeStyleOptions;
 use cellsim::render::movie::{FRAME_SIZE, MAX_FRAMES, Movie3, MovieView};
 use cellsim::render::vtu::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu};
-use cellsim::run_files::{Mesh3File, Snapshot3};
+use cellsim::run_files::{QuarterMeshFile, QuarterSnapshot};
 use cellsim::scene;
 use plotters::prelude::*;
 
@@ -44,7 +44,7 @@ fn mesh() -> &'static TetMesh {
 
 /// The mesh file of the default mesh over MODEL.md's pillars on `lattice` (tops placed
 /// for the 0.5 µm gap in 3-D), with both active regions and the fibronectin layer.
-fn mesh_file(lattice: Lattice) -> Mesh3File {
+fn mesh_file(lattice: Lattice) -> QuarterMeshFile {
     let m = mesh();
     let mut c = Case::reference_active();
     c.substrate = case::Substrate::pillars();
@@ -55,7 +55,7 @@ fn mesh_file(lattice: Lattice) -> Mesh3File {
             .y_top_for_gap_on_lattice(0.5, lattice, c3, 10.0)
             .expect("placed");
     }
-    Mesh3File {
+    QuarterMeshFile {
         nodes: m.nodes.clone(),
         elements: m.elements.clone(),
         domains: m.domains.clone(),
@@ -74,7 +74,7 @@ fn mesh_file(lattice: Lattice) -> Mesh3File {
 
 /// A smooth deformation keeping the symmetry planes (u_x = 0 on x = 0, u_z = 0 on z = 0),
 /// scaled by `w`: the cell sinks and its bottom spreads; made-up element values.
-fn snapshot(mesh: &Mesh3File, w: f64, t: f64) -> Snapshot3 {
+fn snapshot(mesh: &QuarterMeshFile, w: f64, t: f64) -> QuarterSnapshot {
     let c = mesh.center;
     let u: Vec<[f64; 3]> = mesh
         .nodes
@@ -90,7 +90,7 @@ fn snapshot(mesh: &Mesh3File, w: f64, t: f64) -> Snapshot3 {
         .collect();
     let n = u.len();
     let ne = mesh.elements.len();
-    Snapshot3 {
+    QuarterSnapshot {
         t,
         v: u.iter().map(|d| d.map(|v| 1e-3 * v)).collect(),
         mu_as: (0..n).map(|i| (i % 3 == 0).then_some(i as f64)).collect(),

@@ -136,7 +136,7 @@ fn area_radius(a: f64, adot: f64) -> (f64, f64) {
     (l, adot / (2.0 * std::f64::consts::PI * l))
 }
 
-impl super::Cell3 {
+impl super::QuarterCell {
     /// The adhered reference radius √(A/π) of the whole cell's adhered reference area A
     /// and its rate [µm, µm/s] (module documentation): each surface face sampled by a
     /// degree-2 rule on 4^`FACE_LEVELS` sub-triangles. (0, 0) without adhesion.

@@ -2,8 +2,8 @@
 //! compressible Yeoh solid, active strain and Kelvin–Voigt viscosity, gravity, penalty
 //! contact, the adhesive spreading force and the μ_as field — one model for the half cell
 //! (six-node triangles, plane strain or axisymmetric: [`CellModel`]) and the 3-D quarter
-//! cell (ten-node tetrahedra: [`Cell3`]), generic over the [`Shape`] (dimension, element,
-//! mesh, substrate) and, inside the element loops, the kinematic model's
+//! cell (ten-node tetrahedra: [`QuarterCell`]), generic over the [`Shape`] (dimension,
+//! element, mesh, substrate) and, inside the element loops, the kinematic model's
 //! `kernels::Formulation`.
 //!
 //! Unknowns y = (u, v, μ_as) with inertia, (u, μ_as) without ([`dofs::DofMapOf`]).
@@ -76,7 +76,7 @@ pub use switch::Restart;
 pub struct ModelParams {
     /// Plane strain (the paper's 2-D half cell, per unit thickness), axisymmetric (the
     /// (x, y) half-plane is the meridian (r, y) of a 3-D cell, every integral per radian)
-    /// or 3-D (the quarter cell, [`Cell3`]).
+    /// or 3-D (the quarter cell, [`QuarterCell`]).
     pub kinematics: KinematicModel,
     /// Cell centre c \[µm\] in the plane z = 0 (the 3-D cell's is (c_x, c_y, 0)).
     pub center: [f64; 2],
@@ -196,7 +196,7 @@ pub struct CellOf<S: Shape<D, N, E>, const D: usize, const N: usize, const E: us
 pub type CellModel = CellOf<HalfPlane, 2, 6, 12>;
 
 /// The 3-D quarter cell on ten-node tetrahedra.
-pub type Cell3 = CellOf<Quarter, 3, 10, 30>;
+pub type QuarterCell = CellOf<Quarter, 3, 10, 30>;
 
 /// Elements per block of the element loops: each block's element vectors or tangents
 /// are computed (in parallel, or not) into a buffer, then scattered in element order.

@@ -1,9 +1,10 @@
 //! What the model reports, as the run's files record it: one row of `timeseries.csv`
 //! ([`Observables`], what a scene reports at an output time, MODEL.md §7), the 3-D
-//! columns after it ([`Observables3`]), and the 3-D cell's state and mesh as its state
-//! files and `mesh3.json` hold them ([`Snapshot3`], [`Mesh3File`]; the unfolded quarter).
+//! columns after it ([`QuarterObservables`]), and the 3-D cell's state and mesh as its
+//! state files and `mesh3.json` hold them ([`QuarterSnapshot`], [`QuarterMeshFile`]; the
+//! unfolded quarter).
 //!
-//! The model fills them ([`crate::model::CellModel::observe`], `Cell3::snapshot`);
+//! The model fills them ([`crate::model::CellModel::observe`], `QuarterCell::snapshot`);
 //! [`crate::run_files`] writes them into the run's files and reads them back. This module
 //! owns the time series' format: the column names and order, a row's text, parsing a row
 //! back, and interpolation between rows. A new column is added here once, to the `columns!` list
@@ -179,9 +180,9 @@ pub fn interpolate(rows: &[Observables], t: f64) -> Option<Observables> {
 }
 
 /// The 3-D quantities of one output row of a 3-D run (MODEL.md §10), written after the
-/// 2-D columns of `timeseries.csv` ([`Observables3::CSV_COLUMNS`]).
+/// 2-D columns of `timeseries.csv` ([`QuarterObservables::CSV_COLUMNS`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-pub struct Observables3 {
+pub struct QuarterObservables {
     /// Area of the cell surface in contact (depth > −ε_ct), deformed \[µm²\], whole cell.
     pub contact_area: f64,
     /// The same material surface measured on the reference sphere \[µm²\], whole cell.
@@ -193,7 +194,7 @@ pub struct Observables3 {
     pub penetration_depth: f64,
 }
 
-impl Observables3 {
+impl QuarterObservables {
     /// The 3-D columns, after [`Observables::CSV_HEADER`]'s.
     pub const CSV_COLUMNS: &'static str =
         "contact_area,contact_area_ref,contact_radius_equiv,penetration_depth";
@@ -217,7 +218,7 @@ impl Observables3 {
 /// What the mesh file of a 3-D run (`mesh3.json`) records: the quarter cell's ten-node
 /// tetrahedra and its outer surface, with what the figures draw beside it.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct Mesh3File {
+pub struct QuarterMeshFile {
     /// Reference node coordinates \[µm\].
     pub nodes: Vec<[f64; 3]>,
     /// Ten-node tetrahedra (gmsh's node order, [`crate::fem::tet10`]).
@@ -240,23 +241,34 @@ pub struct Mesh3File {
     pub phase_times: [f64; 4],
 }
 
-/// The state of the 3-D cell at one output time (`state_<phase>.json` of a 3-D run, and
-/// what a VTU frame or a figure is drawn from).
+/// The state of the cell at one output time, `D` components per node: the half cell's
+/// ([`Snapshot`], `D = 2`) or the 3-D cell's ([`QuarterSnapshot`], `D = 3`: the
+/// `state_<phase>.json` of a 3-D run, and what a VTU frame or a figure is drawn from).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Snapshot3 {
+#[serde(bound(
+    serialize = "[f64; D]: Serialize",
+    deserialize = "[f64; D]: Deserialize<'de>"
+))]
+pub struct SnapshotOf<const D: usize> {
     /// Time \[s\].
     pub t: f64,
     /// Displacement of every node \[µm\].
-    pub u: Vec<[f64; 3]>,
+    pub u: Vec<[f64; D]>,
     /// Velocity of every node \[µm/s\]: the v unknowns with inertia, u̇ without.
-    pub v: Vec<[f64; 3]>,
+    pub v: Vec<[f64; D]>,
     /// μ_as per node [pN/µm³] (`None` off the membrane or without adhesion).
     pub mu_as: Vec<Option<f64>>,
-    /// Per element: reference-volume mean of ‖E‖_F.
+    /// Per element: reference-area (2-D) or reference-volume (3-D) mean of ‖E‖_F.
     pub element_strain: Vec<f64>,
-    /// Per element: reference-volume mean of det F.
+    /// Per element: reference-area (2-D) or reference-volume (3-D) mean of det F.
     pub element_jacobian: Vec<f64>,
 }
+
+/// The state of the half cell at one output time.
+pub type Snapshot = SnapshotOf<2>;
+
+/// The state of the 3-D cell at one output time.
+pub type QuarterSnapshot = SnapshotOf<3>;
 
 #[cfg(test)]
 mod tests {

@@ -9,8 +9,8 @@
 
 use nalgebra::{Vector2, Vector3};
 
-use super::Cell3;
-use super::observables::{Mesh3File, Observables3, Snapshot3};
+use super::QuarterCell;
+use super::observables::{QuarterMeshFile, QuarterObservables, QuarterSnapshot};
 use super::observe::add_band_lengths;
 use crate::fem::tet10::{FLIP, face_map};
 use crate::fem::{TetMesh, TriangleRule, Wedge};
@@ -19,9 +19,9 @@ use crate::physics::Substrate;
 /// Sub-triangle levels of the rule sampling each P2 surface face for the contact area.
 const FACE_LEVELS: u32 = 3;
 
-impl Cell3 {
+impl QuarterCell {
     /// The 3-D quantities in state `y`.
-    pub fn observe3(&self, y: &[f64]) -> Observables3 {
+    pub fn observe_quarter(&self, y: &[f64]) -> QuarterObservables {
         let (a, a_ref) = self.contact_areas(y);
         let penetration_depth = match self.params.substrate {
             Substrate::Pillars(p) => {
@@ -31,7 +31,7 @@ impl Cell3 {
             }
             Substrate::Flat { .. } => 0.0,
         };
-        Observables3 {
+        QuarterObservables {
             contact_area: a,
             contact_area_ref: a_ref,
             contact_radius_equiv: (a / std::f64::consts::PI).sqrt(),
@@ -113,10 +113,10 @@ impl Cell3 {
         t: f64,
         y: &[f64],
         yp: &[f64],
-    ) -> Result<Snapshot3, super::history::OutsideHistory> {
+    ) -> Result<QuarterSnapshot, super::history::OutsideHistory> {
         let per_el = self.element_strain_and_jacobian(y);
         let unfold = Unfold::new(&self.mesh);
-        Ok(Snapshot3 {
+        Ok(QuarterSnapshot {
             t,
             u: unfold.vectors(
                 (0..self.mesh.nodes.len()).map(|i| self.dofs.node_u(y, i)),
@@ -133,10 +133,10 @@ impl Cell3 {
     }
 
     /// What `mesh3.json` records of this model, with the scene's phase end times.
-    pub fn mesh_file(&self, phase_times: [f64; 4]) -> Mesh3File {
+    pub fn mesh_file(&self, phase_times: [f64; 4]) -> QuarterMeshFile {
         let p = &self.params;
         let unfold = Unfold::new(&self.mesh);
-        Mesh3File {
+        QuarterMeshFile {
             nodes: unfold.vectors(self.mesh.nodes.iter().copied(), self.mesh.params.center),
             elements: unfold.elements(&self.mesh.elements),
             domains: unfold.elemental(self.mesh.domains.clone()),

@@ -152,7 +152,7 @@ pub struct Quarter;
 
 /// What a half-plane model says when asked to be the 3-D one.
 pub(crate) const THREE_D: &str =
-    "the half-plane mesh cannot carry the 3-D model (a Cell3 on a TetMesh does)";
+    "the half-plane mesh cannot carry the 3-D model (a QuarterCell on a TetMesh does)";
 
 /// `nodes` marked in `out`: their component `c` is eliminated.
 fn mark<const D: usize>(mut out: Vec<[bool; D]>, nodes: &[usize], c: usize) -> Vec<[bool; D]> {

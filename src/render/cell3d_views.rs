@@ -1,6 +1,6 @@
 //! The figures of the 3-D quarter cell (MODEL.md §10) — sections through its axis and the
-//! shaded surface view — drawn from a [`Mesh3File`] and a [`Snapshot3`] only, in the
-//! colours and styles of the 2-D figures ([`super::draw`]).
+//! shaded surface view — drawn from a [`QuarterMeshFile`] and a [`QuarterSnapshot`] only,
+//! in the colours and styles of the 2-D figures ([`super::draw`]).
 //!
 //! **Sections** ([`section_figure`]): the deformed cell cut by a vertical plane through its
 //! axis, mirrored to both sides as the 2-D shape figures are — nucleus red, cytoplasm
@@ -74,8 +74,8 @@ use super::vtu::VtuMesh;
 use super::{DrawError, OutputError, draw_png};
 use crate::fem::{Domain, Lagrange, Tet10, Tri6, tet10 as tet, tri6 as p2};
 use crate::physics::{ActiveStrain, LatticeSubstrate, Substrate, smooth_step};
-use crate::run_files::read::Run3Data;
-use crate::run_files::{Mesh3File, RunData, Snapshot3};
+use crate::run_files::read::QuarterRunData;
+use crate::run_files::{QuarterMeshFile, QuarterSnapshot, RunData};
 
 /// Pixel size of the section and surface figures (as the 2-D shape figures).
 pub const FIGURE_SIZE: (u32, u32) = SHAPE_SIZE;
@@ -233,7 +233,7 @@ fn sorted3(mut v: [usize; 3]) -> [usize; 3] {
     v
 }
 
-fn face_map(mesh: &Mesh3File) -> FaceMap {
+fn face_map(mesh: &QuarterMeshFile) -> FaceMap {
     let mut map: FaceMap = HashMap::with_capacity(2 * mesh.elements.len());
     for (e, el) in mesh.elements.iter().enumerate() {
         for (k, f) in tet::TET_FACES.iter().enumerate() {
@@ -245,7 +245,7 @@ fn face_map(mesh: &Mesh3File) -> FaceMap {
     map
 }
 
-fn outer_set(mesh: &Mesh3File) -> HashSet<[usize; 3]> {
+fn outer_set(mesh: &QuarterMeshFile) -> HashSet<[usize; 3]> {
     mesh.outer_faces
         .iter()
         .map(|f| sorted3([f[0], f[1], f[2]]))
@@ -295,7 +295,7 @@ struct Collected {
 }
 
 /// The section z = 0: the boundary faces of the mesh in the plane z = c_z.
-fn collect_z0(mesh: &Mesh3File, pos: &[Pt]) -> Collected {
+fn collect_z0(mesh: &QuarterMeshFile, pos: &[Pt]) -> Collected {
     let c = mesh.center;
     let r = cell_radius(mesh);
     let tol = 1e-9 * r.max(1.0);
@@ -441,7 +441,7 @@ fn subdivision(n: usize) -> (Vec<[usize; 3]>, Vec<[usize; 4]>) {
 }
 
 /// The section x = z: every tetrahedron cut by the reference plane X − c_x = Z − c_z.
-fn collect_diagonal(mesh: &Mesh3File, pos: &[Pt]) -> Collected {
+fn collect_diagonal(mesh: &QuarterMeshFile, pos: &[Pt]) -> Collected {
     let c = mesh.center;
     let n = CUT_DIVISIONS;
     let (lattice, subs) = subdivision(n);
@@ -539,7 +539,7 @@ fn collect_diagonal(mesh: &Mesh3File, pos: &[Pt]) -> Collected {
 }
 
 /// The largest distance of a node from the centre: the cell radius r_c.
-fn cell_radius(mesh: &Mesh3File) -> f64 {
+fn cell_radius(mesh: &QuarterMeshFile) -> f64 {
     let c = mesh.center;
     mesh.nodes
         .iter()
@@ -552,7 +552,7 @@ fn dist3(p: [f64; 3], q: [f64; 3]) -> f64 {
 }
 
 /// Deformed node positions x = X + u.
-fn deformed3(mesh: &Mesh3File, u: &[[f64; 3]]) -> Vec<[f64; 3]> {
+fn deformed3(mesh: &QuarterMeshFile, u: &[[f64; 3]]) -> Vec<[f64; 3]> {
     mesh.nodes
         .iter()
         .zip(u)
@@ -620,7 +620,7 @@ fn active_outline(
 impl SectionShape {
     /// The quarter cell of `mesh` displaced by `u` (one entry per node), cut by `plane`:
     /// the half section (horizontal coordinate ≥ 0); [`Self::mirrored`] gives the whole.
-    pub fn new(mesh: &Mesh3File, u: &[[f64; 3]], plane: Section) -> Self {
+    pub fn new(mesh: &QuarterMeshFile, u: &[[f64; 3]], plane: Section) -> Self {
         let c = mesh.center;
         let x = deformed3(mesh, u);
         let pos: Vec<Pt> = x.iter().map(|p| plane.to_plane(*p, c)).collect();
@@ -686,7 +686,7 @@ impl SectionShape {
 
 /// p_t, c, p_b: the nodes nearest to c ± (0, r_n, 0) and c, r_n the largest distance of a
 /// nucleus node from c; their deformed positions in the plane.
-fn markers(mesh: &Mesh3File, x: &[[f64; 3]], plane: Section) -> Vec<Pt> {
+fn markers(mesh: &QuarterMeshFile, x: &[[f64; 3]], plane: Section) -> Vec<Pt> {
     let c = mesh.center;
     let r_n = mesh
         .elements
@@ -785,7 +785,7 @@ impl AsRef<Backdrop> for SectionBackdrop {
 /// The region a set of section drawings shares: the reference cell and the deformed
 /// sections of `states` and the substrate below them, with a margin of 1.5 µm, symmetric
 /// about the axis.
-pub fn section_view(mesh: &Mesh3File, states: &[&Snapshot3], plane: Section) -> Bounds {
+pub fn section_view(mesh: &QuarterMeshFile, states: &[&QuarterSnapshot], plane: Section) -> Bounds {
     let c = mesh.center;
     let r = cell_radius(mesh);
     let mut b = Bounds {
@@ -804,7 +804,7 @@ pub fn section_view(mesh: &Mesh3File, states: &[&Snapshot3], plane: Section) -> 
 
 /// Gravity at time `t` with the phase times of `mesh`: down, ramped in over [0, T_g0]. (The
 /// mesh file does not record a gravity flip.)
-pub fn gravity_at(mesh: &Mesh3File, t: f64) -> GravityMark {
+pub fn gravity_at(mesh: &QuarterMeshFile, t: f64) -> GravityMark {
     GravityMark {
         factor: smooth_step(t, 0.0, mesh.phase_times[0]),
         note: "gravity".to_string(),
@@ -817,7 +817,7 @@ pub fn gravity_at(mesh: &Mesh3File, t: f64) -> GravityMark {
 /// (pass `&mut None` for a single drawing).
 pub fn draw_section<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
-    mesh: &Mesh3File,
+    mesh: &QuarterMeshFile,
     u: &[[f64; 3]],
     plane: Section,
     view: Bounds,
@@ -858,8 +858,8 @@ pub fn draw_section<DB: DrawingBackend>(
 /// gravity arrow, over [`section_view`] of this state.
 pub fn section_figure(
     path: &Path,
-    mesh: &Mesh3File,
-    s: &Snapshot3,
+    mesh: &QuarterMeshFile,
+    s: &QuarterSnapshot,
     plane: Section,
     title: &str,
 ) -> Result<(), OutputError> {
@@ -1007,7 +1007,7 @@ fn floor_half_width(p: Option<(f64, f64)>, c: f64, r: f64) -> f64 {
 impl SurfaceFrame {
     /// The frame showing the substrate around the cell of `mesh` and the cell of every state
     /// in `states` (the reference cell at least), seen by `camera`.
-    pub fn new(mesh: &Mesh3File, states: &[&Snapshot3], camera: Camera) -> Self {
+    pub fn new(mesh: &QuarterMeshFile, states: &[&QuarterSnapshot], camera: Camera) -> Self {
         let c = mesh.center;
         let r = cell_radius(mesh);
         let floor = match &mesh.substrate.plane {
@@ -1075,7 +1075,7 @@ fn mirrors(c: [f64; 3]) -> [impl Fn([f64; 3]) -> [f64; 3]; 4] {
 }
 
 /// The floor and the pillars within the frame's floor, as shaded-surface triangles.
-fn substrate_triangles(mesh: &Mesh3File, frame: &SurfaceFrame) -> Vec<Triangle> {
+fn substrate_triangles(mesh: &QuarterMeshFile, frame: &SurfaceFrame) -> Vec<Triangle> {
     let c = mesh.center;
     let [lx, lz] = frame.floor;
     let mut out = Vec::new();
@@ -1165,8 +1165,8 @@ fn strain_color(value: f64, max: f64) -> [f64; 3] {
 /// The whole deformed cell's outer surface: the quarter's outer faces subdivided and
 /// mirrored four times, coloured by `coloring` (strain on [0, `strain_max`]).
 fn cell_triangles(
-    mesh: &Mesh3File,
-    s: &Snapshot3,
+    mesh: &QuarterMeshFile,
+    s: &QuarterSnapshot,
     coloring: Coloring,
     strain_max: f64,
 ) -> Vec<Triangle> {
@@ -1322,7 +1322,7 @@ impl Raster {
 
 /// The largest element mean ‖E‖ under the outer faces (at least 1e-3): the top of the
 /// colour bar.
-fn outer_strain_max(mesh: &Mesh3File, s: &Snapshot3) -> f64 {
+fn outer_strain_max(mesh: &QuarterMeshFile, s: &QuarterSnapshot) -> f64 {
     let outer = outer_set(mesh);
     mesh.elements
         .iter()
@@ -1456,8 +1456,8 @@ fn draw_panel<DB: DrawingBackend>(
 /// cell from below ([`Camera::below`], the substrate not drawn), where the contact is.
 pub fn draw_surface<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
-    mesh: &Mesh3File,
-    s: &Snapshot3,
+    mesh: &QuarterMeshFile,
+    s: &QuarterSnapshot,
     frame: &SurfaceFrame,
     opts: &SurfaceStyleOptions,
 ) -> Result<(), DrawError> {
@@ -1686,8 +1686,8 @@ fn draw_strain_bar<DB: DrawingBackend>(
 /// `coloring`, as a PNG of [`FIGURE_SIZE`] at `path` (see the module notes).
 pub fn surface_figure(
     path: &Path,
-    mesh: &Mesh3File,
-    s: &Snapshot3,
+    mesh: &QuarterMeshFile,
+    s: &QuarterSnapshot,
     coloring: Coloring,
     title: &str,
 ) -> Result<(), OutputError> {
@@ -1710,11 +1710,15 @@ pub fn surface_figure(
 /// the pillars break it); `penetration.png` on pillars; for each state file
 /// `shape-<phase>-z0.png` and `shape-<phase>-diagonal.png` ([`section_figure`]),
 /// `surface-<phase>.png` and `surface-<phase>-strain.png` ([`surface_figure`]).
-pub fn plot_run3(run: &RunData, r3: &Run3Data, out: &Path) -> Result<Vec<PathBuf>, OutputError> {
+pub fn plot_run3(
+    run: &RunData,
+    r3: &QuarterRunData,
+    out: &Path,
+) -> Result<Vec<PathBuf>, OutputError> {
     use super::draw::{Curve, PALETTE, Stroke};
     use super::time_plots::{TimePlot, after_active_name, points, time_figure};
     let mut written = Vec::new();
-    let t3: Vec<(f64, &crate::run_files::Observables3)> =
+    let t3: Vec<(f64, &crate::run_files::QuarterObservables)> =
         run.series.iter().map(|o| o.t).zip(&r3.series).collect();
     let plot = |title: String, y_desc: &str, curves: Vec<Curve>| TimePlot {
         title,

@@ -19,9 +19,9 @@
 //! - [`shapes`]: the 2-D cell's shape figures;
 //! - [`figures`]: `cellsim plot` — which figures a run gets ([`figures::plot_run`]), and
 //!   the curves of several runs compared; it re-exports the figure modules' public items;
-//! - [`cell3d_views`]: the figures of the 3-D quarter cell (a [`crate::run_files::Mesh3File`]
-//!   and its [`crate::run_files::Snapshot3`]s): sections through the axis and a shaded view
-//!   of the whole cell;
+//! - [`cell3d_views`]: the figures of the 3-D quarter cell (a
+//!   [`crate::run_files::QuarterMeshFile`] and its [`crate::run_files::QuarterSnapshot`]s):
+//!   sections through the axis and a shaded view of the whole cell;
 //! - [`vtu`]: `.vtu` files (quadratic triangles or tetrahedra) and the `.pvd` collection,
 //!   for either model;
 //! - [`movie`]: the deformation as an animated GIF, for either model;

@@ -28,7 +28,7 @@ use super::draw::ShapeStyleOptions;
 use super::geometry::{Backdrop, Bounds, substrate_floor};
 use super::shapes::draw_shape;
 use super::{DrawError, OutputError};
-use crate::run_files::{Mesh3File, MeshFile, Snapshot, Snapshot3, Timed};
+use crate::run_files::{MeshFile, QuarterMeshFile, QuarterSnapshot, Snapshot, Timed};
 
 /// A movie frame's drawing area.
 type Frame<'b> = DrawingArea<BitMapBackend<'b>, Shift>;
@@ -279,7 +279,7 @@ pub type Movie3 = MovieOf<View3Painter>;
 /// Draws the frames of a 3-D movie: a section or the surface view ([`MovieView`]), over a
 /// fixed frame.
 pub struct View3Painter {
-    mesh: Mesh3File,
+    mesh: QuarterMeshFile,
     framing: Framing,
     backdrop: Option<SectionBackdrop>,
 }
@@ -287,7 +287,7 @@ pub struct View3Painter {
 impl View3Painter {
     /// The painter of `view` of the cell on `mesh`. A surface view is framed on the
     /// substrate around the cell and the reference cell ([`SurfaceFrame::new`]).
-    fn with_view(mesh: &Mesh3File, view: MovieView) -> Self {
+    fn with_view(mesh: &QuarterMeshFile, view: MovieView) -> Self {
         let framing = match view {
             MovieView::Section(plane) => Framing::Section(plane, movie_view3(mesh)),
             MovieView::Surface(coloring) => Framing::Surface(
@@ -304,10 +304,10 @@ impl View3Painter {
 }
 
 impl FramePainter for View3Painter {
-    type State = Snapshot3;
-    type Mesh = Mesh3File;
+    type State = QuarterSnapshot;
+    type Mesh = QuarterMeshFile;
 
-    fn for_run(mesh: &Mesh3File) -> (Self, [f64; 4]) {
+    fn for_run(mesh: &QuarterMeshFile) -> (Self, [f64; 4]) {
         let painter = View3Painter::with_view(mesh, MovieView::Section(Section::Z0));
         (painter, mesh.phase_times)
     }
@@ -319,7 +319,7 @@ impl FramePainter for View3Painter {
         }
     }
 
-    fn paint(&mut self, area: &Frame, s: &Snapshot3, title: String) -> Result<(), DrawError> {
+    fn paint(&mut self, area: &Frame, s: &QuarterSnapshot, title: String) -> Result<(), DrawError> {
         match &self.framing {
             Framing::Section(plane, view) => {
                 let opts = ShapeStyleOptions {
@@ -356,7 +356,7 @@ impl FramePainter for View3Painter {
 /// The frame of a section movie: the reference cell widened to 2.1 cell radii on each side
 /// of the axis (room for spreading) and down to the substrate's floor (as the 2-D
 /// [`movie_view`]).
-pub fn movie_view3(mesh: &Mesh3File) -> Bounds {
+pub fn movie_view3(mesh: &QuarterMeshFile) -> Bounds {
     let c = mesh.center;
     let r = mesh
         .nodes
@@ -372,7 +372,7 @@ impl Movie3 {
     pub fn with_view(
         path: &Path,
         name: &str,
-        mesh: &Mesh3File,
+        mesh: &QuarterMeshFile,
         outputs: usize,
         view: MovieView,
     ) -> Result<Self, OutputError> {

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use super::OutputError;
 use super::movie::{FramePainter, Movie, Movie3, MovieOf};
 use super::vtu::{VtuMesh, VtuSeries, VtuSeries3, VtuSeriesOf};
-use crate::run_files::{Snapshot, Snapshot3};
+use crate::run_files::{QuarterSnapshot, Snapshot};
 
 /// Which per-output-time files a run writes besides its CSV row.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -80,7 +80,7 @@ pub struct SnapshotWriterOf<S, V, M> {
 pub type SnapshotWriter = SnapshotWriterOf<Snapshot, VtuSeries, Movie>;
 /// The writer of the 3-D model: quadratic tetrahedra and the section z = 0
 /// ([`super::vtu`], [`super::movie`]).
-pub type SnapshotWriter3 = SnapshotWriterOf<Snapshot3, VtuSeries3, Movie3>;
+pub type SnapshotWriter3 = SnapshotWriterOf<QuarterSnapshot, VtuSeries3, Movie3>;
 
 /// The GIF of the run `name` in `out`.
 fn gif_path(out: &Path, name: &str) -> PathBuf {

@@ -39,7 +39,7 @@ use vtkio::model::{
 
 use super::OutputError;
 use crate::fem::Domain;
-use crate::run_files::{Mesh3File, MeshFile, Snapshot, Snapshot3, Timed};
+use crate::run_files::{MeshFile, QuarterMeshFile, QuarterSnapshot, Snapshot, Timed};
 
 /// The VTK cell type of a six-node triangle.
 pub const QUADRATIC_TRIANGLE: u8 = 22;
@@ -179,7 +179,7 @@ impl<const D: usize, const N: usize> GridData<'_, D, N> {
 }
 
 /// A mesh whose output times are written as `.vtu` files: the 2-D [`MeshFile`] with its
-/// [`Snapshot`]s, the 3-D [`Mesh3File`] with its [`Snapshot3`]s.
+/// [`Snapshot`]s, the 3-D [`QuarterMeshFile`] with its [`QuarterSnapshot`]s.
 pub trait VtuMesh: Clone {
     /// The state of one output time on this mesh.
     type Snapshot: Timed;
@@ -245,8 +245,8 @@ vtu_mesh!(
     false
 );
 vtu_mesh!(
-    Mesh3File,
-    Snapshot3,
+    QuarterMeshFile,
+    QuarterSnapshot,
     GMSH_OF_VTK,
     CellType::QuadraticTetra,
     "cellsim 3-D t = {} s",
@@ -378,7 +378,7 @@ pub struct VtuSeriesOf<M> {
 pub type VtuSeries = VtuSeriesOf<MeshFile>;
 
 /// The `.vtu` files of one 3-D run and their `.pvd` collection.
-pub type VtuSeries3 = VtuSeriesOf<Mesh3File>;
+pub type VtuSeries3 = VtuSeriesOf<QuarterMeshFile>;
 
 impl<M: VtuMesh> VtuSeriesOf<M> {
     /// A series written into `out/vtu/<name>_NNNNN.vtu`, collected in `out/<name>.pvd`.

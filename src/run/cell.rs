@@ -1,19 +1,21 @@
 //! The model a run integrates, whatever its shape: the half cell ([`CellModel`]: plane
-//! strain or axisymmetric) or the 3-D quarter cell ([`Cell3`]), both the one generic
+//! strain or axisymmetric) or the 3-D quarter cell ([`QuarterCell`]), both the one generic
 //! [`CellOf`]. The driver, its changes of system and its outputs see it through
 //! [`RunModel`]; only the output writers, which record each shape's mesh in its own files,
 //! look at which it is ([`RunModel::view`]).
 
 use crate::dae::{Dae, Inadmissible};
-use crate::model::{Cell3, CellModel, CellOf, ModelError, ModelParams, Restart, Shape, State};
-use crate::run_files::{Observables, Observables3, StopPlace};
+use crate::model::{
+    CellModel, CellOf, ModelError, ModelParams, QuarterCell, Restart, Shape, State,
+};
+use crate::run_files::{Observables, QuarterObservables, StopPlace};
 
 /// Which model a run integrates, for the writers of its mesh and states.
 pub(crate) enum ModelView<'a> {
     /// The half-plane models.
     Plane(&'a CellModel),
     /// The 3-D quarter cell.
-    Quarter(&'a Cell3),
+    Quarter(&'a QuarterCell),
 }
 
 /// What the driver asks of the model it integrates, besides the DAE itself.
@@ -44,7 +46,7 @@ pub(crate) trait RunModel: Dae + Send {
     /// The watched conditions' root functions at `at` ([`crate::model::events`]).
     fn condition_values(&self, at: State<'_>, g: &mut [f64]);
     /// The scene's observables at `t`, and the 3-D ones for the 3-D model.
-    fn observe(&self, t: f64, y: &[f64]) -> (Observables, Option<Observables3>);
+    fn observe(&self, t: f64, y: &[f64]) -> (Observables, Option<QuarterObservables>);
     /// The node that moved furthest in `y` and the length of its displacement \[µm\].
     fn largest_displacement(&self, y: &[f64]) -> (usize, f64);
     /// Which model this is, for the output writers.
@@ -68,7 +70,7 @@ impl Viewed for CellModel {
     }
 }
 
-impl Viewed for Cell3 {
+impl Viewed for QuarterCell {
     fn view_of(&self) -> ModelView<'_> {
         ModelView::Quarter(self)
     }
@@ -134,9 +136,9 @@ where
         CellOf::condition_values(self, at, g)
     }
 
-    fn observe(&self, t: f64, y: &[f64]) -> (Observables, Option<Observables3>) {
+    fn observe(&self, t: f64, y: &[f64]) -> (Observables, Option<QuarterObservables>) {
         let obs3 = match self.view_of() {
-            ModelView::Quarter(m) => Some(m.observe3(y)),
+            ModelView::Quarter(m) => Some(m.observe_quarter(y)),
             ModelView::Plane(_) => None,
         };
         (CellOf::observe(self, t, y), obs3)

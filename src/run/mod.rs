@@ -1070,7 +1070,7 @@ fn observe_admissible(
     t: f64,
     y: &[f64],
     reach: f64,
-) -> Result<(Observables, Option<crate::run_files::Observables3>), OutputStop> {
+) -> Result<(Observables, Option<crate::run_files::QuarterObservables>), OutputStop> {
     let (obs, obs3) = model.observe(t, y);
     if !obs.is_finite() || obs3.is_some_and(|o| !o.is_finite()) || y.iter().any(|v| !v.is_finite())
     {
@@ -1141,7 +1141,7 @@ impl RunWriter {
                 let header = format!(
                     "{},{}",
                     Observables::CSV_HEADER,
-                    crate::run_files::Observables3::CSV_COLUMNS
+                    crate::run_files::QuarterObservables::CSV_COLUMNS
                 );
                 (Frames::Quarter(frames), header)
             }
@@ -1290,7 +1290,7 @@ impl RunWriter {
         y: &[f64],
         yp: &[f64],
         obs: Observables,
-        obs3: Option<crate::run_files::Observables3>,
+        obs3: Option<crate::run_files::QuarterObservables>,
     ) -> Result<(), OutputStop> {
         let name = format!("state_{phase}.json");
         let path = self.out.join(&name);
@@ -1302,7 +1302,7 @@ impl RunWriter {
                 write_json(&path, &state_file(m, phase, t, y, mu_as, obs))?;
             }
             (ModelView::Quarter(m), Some(observables3)) => {
-                let state = crate::run_files::StateFile3 {
+                let state = crate::run_files::QuarterStateFile {
                     phase: phase.to_string(),
                     state: m
                         .snapshot(t, y, yp)

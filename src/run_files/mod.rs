@@ -10,7 +10,9 @@
 
 pub mod read;
 
-pub use crate::model::observables::{Mesh3File, Observables, Observables3, Snapshot3};
+pub use crate::model::observables::{
+    Observables, QuarterMeshFile, QuarterObservables, QuarterSnapshot, Snapshot, SnapshotOf,
+};
 pub use read::{ReadError, RunData};
 
 use std::path::Path;
@@ -197,7 +199,7 @@ pub struct Summary {
     pub final_values: Option<Observables>,
     /// The 3-D columns of the last output row (3-D runs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub final_values_3d: Option<Observables3>,
+    pub final_values_3d: Option<QuarterObservables>,
     /// The largest ‖E‖_F at a quadrature point of the nucleus at the last output (the
     /// largest nucleus strain; `final_values` holds its mean).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -426,37 +428,14 @@ pub struct StateFile {
     pub observables: Observables,
 }
 
-/// The state of the cell at one output time.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Snapshot {
-    /// Time \[s\].
-    pub t: f64,
-    /// Displacement of every node \[µm\].
-    pub u: Vec<[f64; 2]>,
-    /// Velocity of every node \[µm/s\]: the v unknowns with inertia, u̇ without.
-    pub v: Vec<[f64; 2]>,
-    /// μ_as per node [pN/µm³] (`None` off the membrane or without adhesion).
-    pub mu_as: Vec<Option<f64>>,
-    /// Per element: reference-area mean of ‖E‖_F.
-    pub element_strain: Vec<f64>,
-    /// Per element: reference-area mean of det F.
-    pub element_jacobian: Vec<f64>,
-}
-
-/// The state of one output time of either model ([`Snapshot`], [`Snapshot3`]), as the
+/// The state of one output time of either model ([`Snapshot`], [`QuarterSnapshot`]), as the
 /// per-output-time writers see it.
 pub trait Timed: Clone {
     /// Time \[s\].
     fn time(&self) -> f64;
 }
 
-impl Timed for Snapshot {
-    fn time(&self) -> f64 {
-        self.t
-    }
-}
-
-impl Timed for Snapshot3 {
+impl<const D: usize> Timed for SnapshotOf<D> {
     fn time(&self) -> f64 {
         self.t
     }
@@ -464,15 +443,15 @@ impl Timed for Snapshot3 {
 
 /// A 3-D run's state file: the phase, its snapshot and the observables then.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct StateFile3 {
+pub struct QuarterStateFile {
     /// Phase name: "gravity", "spreading", "active" or "end".
     pub phase: String,
     /// The state.
-    pub state: Snapshot3,
+    pub state: QuarterSnapshot,
     /// The 2-D scene's observables (section z = 0).
     pub observables: Observables,
     /// The 3-D ones.
-    pub observables3: Observables3,
+    pub observables3: QuarterObservables,
 }
 
 /// Writes `value` as pretty JSON to `path` through a temporary file and a rename, so that

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
-use super::{Mesh3File, MeshFile, Observables3, StateFile, StateFile3, Summary};
+use super::{MeshFile, QuarterMeshFile, QuarterObservables, QuarterStateFile, StateFile, Summary};
 use crate::model::observables::{
     COLUMNS, N_COLUMNS, OLD_CSV_HEADER, Observables, RowError, interpolate, parse_fields,
 };
@@ -76,22 +76,22 @@ pub struct RunData {
     /// A 3-D run's own files (`mesh3.json` instead of `mesh.json`). Its [`Self::mesh`]
     /// then holds only what the time plots use (substrate section, active regions, phase
     /// times), no elements, and [`Self::states`] is empty.
-    pub three_d: Option<Run3Data>,
+    pub three_d: Option<QuarterRunData>,
 }
 
 /// What a 3-D run writes besides the 2-D columns.
 #[derive(Debug, Clone)]
-pub struct Run3Data {
+pub struct QuarterRunData {
     /// `mesh3.json`.
-    pub mesh: Mesh3File,
+    pub mesh: QuarterMeshFile,
     /// The 3-D columns of `timeseries.csv`, one per row of [`RunData::series`].
-    pub series: Vec<Observables3>,
+    pub series: Vec<QuarterObservables>,
     /// The state files present, in phase order (a stopped run's last state last).
-    pub states: Vec<StateFile3>,
+    pub states: Vec<QuarterStateFile>,
 }
 
 /// The time plots' view of a 3-D mesh file: no elements, the section's substrate.
-fn section_of(m: &Mesh3File) -> MeshFile {
+fn section_of(m: &QuarterMeshFile) -> MeshFile {
     MeshFile {
         nodes: Vec::new(),
         elements: Vec::new(),
@@ -109,8 +109,8 @@ fn section_of(m: &Mesh3File) -> MeshFile {
 }
 
 /// Reads `mesh3.json` and checks its indices.
-pub fn read_mesh3(path: &Path) -> Result<Mesh3File, ReadError> {
-    let mesh: Mesh3File = read_json(path)?;
+pub fn read_quarter_mesh(path: &Path) -> Result<QuarterMeshFile, ReadError> {
+    let mesh: QuarterMeshFile = read_json(path)?;
     let n = mesh.nodes.len();
     let bad = |what: String| ReadError::malformed(path, what);
     if mesh.elements.is_empty() {
@@ -134,9 +134,12 @@ pub fn read_mesh3(path: &Path) -> Result<Mesh3File, ReadError> {
 }
 
 /// Reads a 3-D state file and checks its sizes against the mesh.
-pub fn read_state3(path: &Path, mesh: &Mesh3File) -> Result<StateFile3, ReadError> {
+pub fn read_quarter_state(
+    path: &Path,
+    mesh: &QuarterMeshFile,
+) -> Result<QuarterStateFile, ReadError> {
     let sizes = [mesh.nodes.len(), mesh.elements.len()];
-    read_checked(path, sizes, |s: &StateFile3| {
+    read_checked(path, sizes, |s: &QuarterStateFile| {
         let st = &s.state;
         (&st.u, [st.element_strain.len(), st.element_jacobian.len()])
     })
@@ -251,24 +254,25 @@ fn new_columns() -> String {
 }
 
 /// Parses `timeseries.csv`. The header must be exactly
-/// [`Observables::CSV_HEADER`], or it followed by [`Observables3::CSV_COLUMNS`] (a 3-D
-/// run: those columns are read by [`parse_timeseries3`]); a file with the header of an
-/// older cellsim ([`OLD_CSV_HEADER`]) is refused with a message saying so. A last line
-/// without its newline that does not parse is taken as cut short by an interruption and
-/// dropped (reported in the second value); any other bad line is an error naming the line.
+/// [`Observables::CSV_HEADER`], or it followed by [`QuarterObservables::CSV_COLUMNS`] (a
+/// 3-D run: those columns are read by [`parse_quarter_timeseries`]); a file with the header
+/// of an older cellsim ([`OLD_CSV_HEADER`]) is refused with a message saying so. A last
+/// line without its newline that does not parse is taken as cut short by an interruption
+/// and dropped (reported in the second value); any other bad line is an error naming the
+/// line.
 pub fn parse_timeseries(
     path: &Path,
     text: &str,
 ) -> Result<(Vec<Observables>, Option<String>), ReadError> {
-    parse_timeseries3(path, text).map(|(rows, _, cut)| (rows, cut))
+    parse_quarter_timeseries(path, text).map(|(rows, _, cut)| (rows, cut))
 }
 
 /// The rows of a time series, the 3-D columns of each row (empty for a 2-D run), and a
 /// note if the last line was cut short.
-pub type Rows3 = (Vec<Observables>, Vec<Observables3>, Option<String>);
+pub type QuarterRows = (Vec<Observables>, Vec<QuarterObservables>, Option<String>);
 
 /// [`parse_timeseries`] with the 3-D columns of each row.
-pub fn parse_timeseries3(path: &Path, text: &str) -> Result<Rows3, ReadError> {
+pub fn parse_quarter_timeseries(path: &Path, text: &str) -> Result<QuarterRows, ReadError> {
     let mut lines = text.split_inclusive('\n').enumerate();
     let header = match lines.next() {
         Some((_, h)) => h.trim_end(),
@@ -285,7 +289,11 @@ pub fn parse_timeseries3(path: &Path, text: &str) -> Result<Rows3, ReadError> {
             ),
         ));
     }
-    let three_d = format!("{},{}", Observables::CSV_HEADER, Observables3::CSV_COLUMNS);
+    let three_d = format!(
+        "{},{}",
+        Observables::CSV_HEADER,
+        QuarterObservables::CSV_COLUMNS
+    );
     let extra = if header == three_d { 4 } else { 0 };
     if header != Observables::CSV_HEADER && extra == 0 {
         return Err(ReadError::malformed(
@@ -348,7 +356,7 @@ fn split_3d_row(line: &str) -> Result<(&str, &str), RowError> {
     Ok((&line[..at], &line[at + 1..]))
 }
 
-fn parse_3d_columns(text: &str) -> Result<Observables3, RowError> {
+fn parse_3d_columns(text: &str) -> Result<QuarterObservables, RowError> {
     let v = parse_fields(text)?;
     match v[..] {
         [
@@ -356,7 +364,7 @@ fn parse_3d_columns(text: &str) -> Result<Observables3, RowError> {
             contact_area_ref,
             contact_radius_equiv,
             penetration_depth,
-        ] => Ok(Observables3 {
+        ] => Ok(QuarterObservables {
             contact_area,
             contact_area_ref,
             contact_radius_equiv,
@@ -392,7 +400,7 @@ impl RunData {
         }
         let mesh3_path = dir.join("mesh3.json");
         let mesh3 = if !dir.join("mesh.json").exists() && mesh3_path.exists() {
-            Some(read_mesh3(&mesh3_path)?)
+            Some(read_quarter_mesh(&mesh3_path)?)
         } else {
             None
         };
@@ -401,7 +409,7 @@ impl RunData {
             None => read_mesh(&dir.join("mesh.json"))?,
         };
         let csv_path = dir.join("timeseries.csv");
-        let (series, series3, cut) = parse_timeseries3(&csv_path, &read_text(&csv_path)?)?;
+        let (series, series3, cut) = parse_quarter_timeseries(&csv_path, &read_text(&csv_path)?)?;
         if mesh3.is_some() && series3.len() != series.len() {
             return Err(ReadError::malformed(
                 &csv_path,
@@ -425,12 +433,12 @@ impl RunData {
             let p = dir.join(format!("state_{phase}.json"));
             if p.exists() {
                 match &mesh3 {
-                    Some(m) => states3.push(read_state3(&p, m)?),
+                    Some(m) => states3.push(read_quarter_state(&p, m)?),
                     None => states.push(read_state(&p, &mesh)?),
                 }
             }
         }
-        let mut three_d = mesh3.map(|mesh| Run3Data {
+        let mut three_d = mesh3.map(|mesh| QuarterRunData {
             mesh,
             series: series3,
             states: states3,
