@@ -29,7 +29,7 @@ use cellsim::render::cell3d_views::{
 };
 use cellsim::render::figures::ShapeStyleOptions;
 use cellsim::render::geometry::Bounds;
-use cellsim::render::movie::{Movie3, MovieView};
+use cellsim::render::movie::{MovieView, QuarterMovie};
 use cellsim::render::vtu::write_vtu;
 use cellsim::run_files::{QuarterMeshFile, QuarterSnapshot, write_json};
 use cellsim::scene;
@@ -409,7 +409,7 @@ fn main() {
             let p = out.join(format!("synthetic-{tag}-{name}.gif"));
             let t1 = Instant::now();
             let n = 12;
-            let mut movie = Movie3::with_view(&p, what, &mf, n, view).expect("movie");
+            let mut movie = QuarterMovie::with_view(&p, what, &mf, n, view).expect("movie");
             for k in 0..n {
                 let w = k as f64 / (n - 1) as f64;
                 movie

@@ -15,8 +15,10 @@ use cellsim::render::cell3d_views::{
     self, Coloring, FIGURE_SIZE, Section, SectionShape, section_figure, surface_figure,
 };
 use cellsim::render::figures::ShapeStyleOptions;
-use cellsim::render::movie::{FRAME_SIZE, MAX_FRAMES, Movie3, MovieView};
-use cellsim::render::vtu::{GMSH_OF_VTK, QUADRATIC_TETRA, VtuSeries3, read_vtu_grid, write_vtu};
+use cellsim::render::movie::{FRAME_SIZE, MAX_FRAMES, MovieView, QuarterMovie};
+use cellsim::render::vtu::{
+    GMSH_OF_VTK, QUADRATIC_TETRA, QuarterVtuSeries, read_vtu_grid, write_vtu,
+};
 use cellsim::run_files::{QuarterMeshFile, QuarterSnapshot};
 use cellsim::scene;
 use plotters::prelude::*;
@@ -217,7 +219,7 @@ fn vtu3_reads_back_with_quadratic_tetrahedra_in_vtk_order() {
 fn vtu3_series_writes_a_collection() {
     let mf = mesh_file(Lattice::Gap);
     let d = scratch("pvd");
-    let mut series = VtuSeries3::new(&d, "cell3", &mf).expect("series");
+    let mut series = QuarterVtuSeries::new(&d, "cell3", &mf).expect("series");
     for k in 0..3 {
         series
             .write(&snapshot(&mf, k as f64 / 2.0, 1000.0 * k as f64))
@@ -469,7 +471,7 @@ fn movie3_has_one_frame_per_offered_state() {
     ] {
         let p = d.join(format!("{name}.gif"));
         let n = 4;
-        let mut m = Movie3::with_view(&p, "cell", &mf, n, view).expect("movie");
+        let mut m = QuarterMovie::with_view(&p, "cell", &mf, n, view).expect("movie");
         for k in 0..n {
             let w = k as f64 / (n - 1) as f64;
             m.frame(&snapshot(&mf, w, 10_000.0 * w)).expect("frame");
@@ -488,7 +490,7 @@ fn movie3_has_one_frame_per_offered_state() {
     // The default movie (the section z = 0) with more outputs announced than MAX_FRAMES:
     // every third state, and the last one offered although skipped.
     let p = d.join("default.gif");
-    let mut m = Movie3::new(&p, "cell", &mf, 3 * MAX_FRAMES).expect("movie");
+    let mut m = QuarterMovie::new(&p, "cell", &mf, 3 * MAX_FRAMES).expect("movie");
     for k in 0..5 {
         m.frame(&snapshot(&mf, k as f64 / 4.0, 1000.0 * k as f64))
             .expect("frame");

@@ -50,9 +50,10 @@
 //!
 //! What it may import of [`super`]: [`super::draw`] (the primitives and the plane drawing
 //! it shares with the 2-D shapes), [`super::geometry`], [`super::time_plots`] (the time
-//! plots of [`plot_run3`]) and [`super::vtu`] (the snapshot's check), and the error types
-//! and [`super::draw_png`] of [`super`]; [`super::figures`] and [`super::movie`] import it.
-//! Its public items are also reachable at their former paths, `output::cell3d_views::…`.
+//! plots of [`plot_quarter_run`]) and [`super::vtu`] (the snapshot's check), and the error
+//! types and [`super::draw_png`] of [`super`]; [`super::figures`] and [`super::movie`]
+//! import it. Its public items are also reachable at their former paths,
+//! `output::cell3d_views::…`.
 
 use std::collections::{HashMap, HashSet};
 use std::f64::consts::{FRAC_1_SQRT_2, PI};
@@ -202,7 +203,7 @@ impl Interface {
 /// The indicator χ of `region` at reference point `x` of a cell centred at height `c_z`,
 /// without the domain restriction (the 3-D counterpart of the 2-D one in
 /// [`super::geometry`]).
-fn chi3(region: ActiveRegion, a: &ActiveStrain, x: [f64; 3], c_z: f64) -> f64 {
+fn chi_revolved(region: ActiveRegion, a: &ActiveStrain, x: [f64; 3], c_z: f64) -> f64 {
     let v = Vector3::from(x);
     match region {
         ActiveRegion::Pac => a.chi_pac_revolved(&v, c_z),
@@ -228,7 +229,8 @@ pub struct SectionShape {
 /// The four faces of every tetrahedron by their sorted vertex triples: (element, local face).
 type FaceMap = HashMap<[usize; 3], Vec<(usize, usize)>>;
 
-fn sorted3(mut v: [usize; 3]) -> [usize; 3] {
+/// The key of a face in a [`FaceMap`]: its vertices sorted.
+fn face_key(mut v: [usize; 3]) -> [usize; 3] {
     v.sort_unstable();
     v
 }
@@ -237,7 +239,7 @@ fn face_map(mesh: &QuarterMeshFile) -> FaceMap {
     let mut map: FaceMap = HashMap::with_capacity(2 * mesh.elements.len());
     for (e, el) in mesh.elements.iter().enumerate() {
         for (k, f) in tet::TET_FACES.iter().enumerate() {
-            map.entry(sorted3([el[f[0]], el[f[1]], el[f[2]]]))
+            map.entry(face_key([el[f[0]], el[f[1]], el[f[2]]]))
                 .or_default()
                 .push((e, k));
         }
@@ -248,7 +250,7 @@ fn face_map(mesh: &QuarterMeshFile) -> FaceMap {
 fn outer_set(mesh: &QuarterMeshFile) -> HashSet<[usize; 3]> {
     mesh.outer_faces
         .iter()
-        .map(|f| sorted3([f[0], f[1], f[2]]))
+        .map(|f| face_key([f[0], f[1], f[2]]))
         .collect()
 }
 
@@ -485,7 +487,7 @@ fn collect_diagonal(mesh: &QuarterMeshFile, pos: &[Pt]) -> Collected {
         // What the tetrahedron's face opposite vertex m is: outer, interface, inner.
         let classify = |m: usize| -> Option<(usize, Domain)> {
             let tf = tet::TET_FACES[m];
-            let key = sorted3([el[tf[0]], el[tf[1]], el[tf[2]]]);
+            let key = face_key([el[tf[0]], el[tf[1]], el[tf[2]]]);
             faces
                 .get(&key)
                 .and_then(|v| v.iter().find(|(e2, _)| *e2 != e))
@@ -543,16 +545,16 @@ fn cell_radius(mesh: &QuarterMeshFile) -> f64 {
     let c = mesh.center;
     mesh.nodes
         .iter()
-        .map(|p| dist3(*p, c))
+        .map(|p| distance(*p, c))
         .fold(0.0f64, f64::max)
 }
 
-fn dist3(p: [f64; 3], q: [f64; 3]) -> f64 {
+fn distance(p: [f64; 3], q: [f64; 3]) -> f64 {
     ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
 }
 
 /// Deformed node positions x = X + u.
-fn deformed3(mesh: &QuarterMeshFile, u: &[[f64; 3]]) -> Vec<[f64; 3]> {
+fn deformed_positions(mesh: &QuarterMeshFile, u: &[[f64; 3]]) -> Vec<[f64; 3]> {
     mesh.nodes
         .iter()
         .zip(u)
@@ -575,7 +577,7 @@ fn active_outline(
         }
         let v: Vec<f64> = piece
             .iter()
-            .map(|s| chi3(region, a, s.x, c_z) - ACTIVE_LEVEL)
+            .map(|s| chi_revolved(region, a, s.x, c_z) - ACTIVE_LEVEL)
             .collect();
         let mut cuts = Vec::with_capacity(4);
         for k in 0..piece.len() {
@@ -602,8 +604,8 @@ fn active_outline(
     for line in bounding {
         for w in line.windows(2) {
             let (v0, v1) = (
-                chi3(region, a, w[0].x, c_z) - ACTIVE_LEVEL,
-                chi3(region, a, w[1].x, c_z) - ACTIVE_LEVEL,
+                chi_revolved(region, a, w[0].x, c_z) - ACTIVE_LEVEL,
+                chi_revolved(region, a, w[1].x, c_z) - ACTIVE_LEVEL,
             );
             let at = |s: f64| lerp(&w[0], &w[1], s).p;
             match (v0 >= 0.0, v1 >= 0.0) {
@@ -622,7 +624,7 @@ impl SectionShape {
     /// the half section (horizontal coordinate ≥ 0); [`Self::mirrored`] gives the whole.
     pub fn new(mesh: &QuarterMeshFile, u: &[[f64; 3]], plane: Section) -> Self {
         let c = mesh.center;
-        let x = deformed3(mesh, u);
+        let x = deformed_positions(mesh, u);
         let pos: Vec<Pt> = x.iter().map(|p| plane.to_plane(*p, c)).collect();
         let col = match plane {
             Section::Z0 => collect_z0(mesh, &pos),
@@ -693,11 +695,13 @@ fn markers(mesh: &QuarterMeshFile, x: &[[f64; 3]], plane: Section) -> Vec<Pt> {
         .iter()
         .zip(&mesh.domains)
         .filter(|(_, d)| **d == Domain::Nucleus)
-        .flat_map(|(el, _)| el.iter().map(|&i| dist3(mesh.nodes[i], c)))
+        .flat_map(|(el, _)| el.iter().map(|&i| distance(mesh.nodes[i], c)))
         .fold(0.0f64, f64::max);
     let nearest = |target: [f64; 3]| -> Option<Pt> {
         (0..mesh.nodes.len())
-            .min_by(|&i, &j| dist3(mesh.nodes[i], target).total_cmp(&dist3(mesh.nodes[j], target)))
+            .min_by(|&i, &j| {
+                distance(mesh.nodes[i], target).total_cmp(&distance(mesh.nodes[j], target))
+            })
             .map(|i| plane.to_plane(x[i], c))
     };
     [[c[0], c[1] + r_n, c[2]], c, [c[0], c[1] - r_n, c[2]]]
@@ -1029,7 +1033,7 @@ impl SurfaceFrame {
         let deformed: Vec<Vec<[f64; 3]>> = states
             .iter()
             .filter(|s| s.u.len() == mesh.nodes.len())
-            .map(|s| deformed3(mesh, &s.u))
+            .map(|s| deformed_positions(mesh, &s.u))
             .collect();
         // The reference cell's silhouette and the deformed cells, seen by `cam`.
         let cell_box = |cam: Camera| {
@@ -1171,13 +1175,13 @@ fn cell_triangles(
     strain_max: f64,
 ) -> Vec<Triangle> {
     let c = mesh.center;
-    let x = deformed3(mesh, &s.u);
+    let x = deformed_positions(mesh, &s.u);
     let element_of: HashMap<[usize; 3], usize> = {
         let outer = outer_set(mesh);
         let mut m = HashMap::new();
         for (e, el) in mesh.elements.iter().enumerate() {
             for f in tet::TET_FACES {
-                let key = sorted3([el[f[0]], el[f[1]], el[f[2]]]);
+                let key = face_key([el[f[0]], el[f[1]], el[f[2]]]);
                 if outer.contains(&key) {
                     m.insert(key, e);
                 }
@@ -1191,7 +1195,7 @@ fn cell_triangles(
         let color = match coloring {
             Coloring::Domain => rgb(MEMBRANE),
             Coloring::Strain => {
-                let e = element_of.get(&sorted3([f[0], f[1], f[2]]));
+                let e = element_of.get(&face_key([f[0], f[1], f[2]]));
                 let v = e.map_or(0.0, |&e| s.element_strain[e]);
                 strain_color(v, strain_max)
             }
@@ -1330,7 +1334,7 @@ fn outer_strain_max(mesh: &QuarterMeshFile, s: &QuarterSnapshot) -> f64 {
         .filter(|(_, el)| {
             tet::TET_FACES
                 .iter()
-                .any(|f| outer.contains(&sorted3([el[f[0]], el[f[1]], el[f[2]]])))
+                .any(|f| outer.contains(&face_key([el[f[0]], el[f[1]], el[f[2]]])))
         })
         .map(|(e, _)| s.element_strain[e])
         .filter(|v| v.is_finite())
@@ -1710,7 +1714,7 @@ pub fn surface_figure(
 /// the pillars break it); `penetration.png` on pillars; for each state file
 /// `shape-<phase>-z0.png` and `shape-<phase>-diagonal.png` ([`section_figure`]),
 /// `surface-<phase>.png` and `surface-<phase>-strain.png` ([`surface_figure`]).
-pub fn plot_run3(
+pub fn plot_quarter_run(
     run: &RunData,
     r3: &QuarterRunData,
     out: &Path,

@@ -66,8 +66,9 @@ pub fn compare_runs(runs: &[&RunData], out: &Path) -> Result<Vec<PathBuf>, Outpu
 
 /// All of one run's figures into `out`: `contact-radius.png` (both frames), `displacement.png`
 /// (p_t, c, p_b and the nucleus's lowest point), `strain.png` (mean ‖E‖ over time) and `shape-<phase>.png` for each
-/// state file written; for a 3-D run, [`super::cell3d_views::plot_run3`]'s instead of the shapes. Works on partial runs (fewer rows, missing states). Returns the
-/// files written.
+/// state file written; for a 3-D run, [`super::cell3d_views::plot_quarter_run`]'s instead
+/// of the shapes. Works on partial runs (fewer rows, missing states). Returns the files
+/// written.
 pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> {
     super::create_dir(out)?;
     let mut written = Vec::new();
@@ -135,7 +136,7 @@ pub fn plot_run(run: &RunData, out: &Path) -> Result<Vec<PathBuf>, OutputError> 
         written.push(p);
     }
     if let Some(r3) = &run.three_d {
-        written.extend(super::cell3d_views::plot_run3(run, r3, out)?);
+        written.extend(super::cell3d_views::plot_quarter_run(run, r3, out)?);
     }
     Ok(written)
 }

@@ -48,7 +48,9 @@ pub mod time_plots;
 pub mod vtu;
 
 pub use crate::run_files::RunData;
-pub use snapshot::{FrameSink, SnapshotOptions, SnapshotWriter, SnapshotWriter3, SnapshotWriterOf};
+pub use snapshot::{
+    FrameSink, QuarterSnapshotWriter, SnapshotOptions, SnapshotWriter, SnapshotWriterOf,
+};
 
 use std::path::Path;
 

@@ -5,7 +5,7 @@
 //!
 //! [`MovieOf`] is the GIF of either model: the encoder, the choice of frames and their
 //! titles; a [`FramePainter`] draws each frame — [`ShapePainter`] the 2-D cell,
-//! [`View3Painter`] a view of the 3-D cell ([`Movie3`], `--gif` on a 3-D run).
+//! [`QuarterPainter`] a view of the 3-D cell ([`QuarterMovie`], `--gif` on a 3-D run).
 //!
 //! A 3-D frame is either the section z = 0 drawn as
 //! [`super::cell3d_views::section_figure`] draws it (the default: cheap, and the 2-D
@@ -47,7 +47,7 @@ const QUANT_SPEED: i32 = 30;
 const QUANT_SPEED_SURFACE: i32 = 10;
 
 /// What draws the frames of a [`MovieOf`]: the 2-D cell ([`ShapePainter`]) or a view of
-/// the 3-D cell ([`View3Painter`]).
+/// the 3-D cell ([`QuarterPainter`]).
 pub trait FramePainter: Sized {
     /// The state of one output time.
     type State: Timed;
@@ -131,7 +131,7 @@ pub fn movie_view(mesh: &MeshFile) -> Bounds {
 /// The frame of a movie of a cell of radius `r` whose centre is at height `c_y` and at
 /// `axis_offset` from the symmetry axis: `axis_offset` + 2.1 `r` on each side of the axis,
 /// from 1 µm below the cell's bottom or the substrate's `floor` (the lower) to 1.5 µm
-/// above the cell's top. Shared by [`movie_view`] and [`movie_view3`].
+/// above the cell's top. Shared by [`movie_view`] and [`quarter_movie_view`].
 pub(crate) fn movie_bounds(axis_offset: f64, c_y: f64, r: f64, floor: f64) -> Bounds {
     let half = axis_offset + 2.1 * r;
     Bounds {
@@ -258,7 +258,7 @@ impl<P: FramePainter> MovieOf<P> {
     }
 }
 
-/// What each frame of a [`Movie3`] shows.
+/// What each frame of a [`QuarterMovie`] shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MovieView {
     /// The cell cut by a plane through its axis.
@@ -274,28 +274,28 @@ enum Framing {
 }
 
 /// An animated GIF of a 3-D run being written.
-pub type Movie3 = MovieOf<View3Painter>;
+pub type QuarterMovie = MovieOf<QuarterPainter>;
 
 /// Draws the frames of a 3-D movie: a section or the surface view ([`MovieView`]), over a
 /// fixed frame.
-pub struct View3Painter {
+pub struct QuarterPainter {
     mesh: QuarterMeshFile,
     framing: Framing,
     backdrop: Option<SectionBackdrop>,
 }
 
-impl View3Painter {
+impl QuarterPainter {
     /// The painter of `view` of the cell on `mesh`. A surface view is framed on the
     /// substrate around the cell and the reference cell ([`SurfaceFrame::new`]).
     fn with_view(mesh: &QuarterMeshFile, view: MovieView) -> Self {
         let framing = match view {
-            MovieView::Section(plane) => Framing::Section(plane, movie_view3(mesh)),
+            MovieView::Section(plane) => Framing::Section(plane, quarter_movie_view(mesh)),
             MovieView::Surface(coloring) => Framing::Surface(
                 coloring,
                 Box::new(SurfaceFrame::new(mesh, &[], Camera::DEFAULT)),
             ),
         };
-        View3Painter {
+        QuarterPainter {
             mesh: mesh.clone(),
             framing,
             backdrop: None,
@@ -303,12 +303,12 @@ impl View3Painter {
     }
 }
 
-impl FramePainter for View3Painter {
+impl FramePainter for QuarterPainter {
     type State = QuarterSnapshot;
     type Mesh = QuarterMeshFile;
 
     fn for_run(mesh: &QuarterMeshFile) -> (Self, [f64; 4]) {
-        let painter = View3Painter::with_view(mesh, MovieView::Section(Section::Z0));
+        let painter = QuarterPainter::with_view(mesh, MovieView::Section(Section::Z0));
         (painter, mesh.phase_times)
     }
 
@@ -356,7 +356,7 @@ impl FramePainter for View3Painter {
 /// The frame of a section movie: the reference cell widened to 2.1 cell radii on each side
 /// of the axis (room for spreading) and down to the substrate's floor (as the 2-D
 /// [`movie_view`]).
-pub fn movie_view3(mesh: &QuarterMeshFile) -> Bounds {
+pub fn quarter_movie_view(mesh: &QuarterMeshFile) -> Bounds {
     let c = mesh.center;
     let r = mesh
         .nodes
@@ -366,7 +366,7 @@ pub fn movie_view3(mesh: &QuarterMeshFile) -> Bounds {
     movie_bounds(0.0, c[1], r, substrate_floor(&mesh.substrate.plane))
 }
 
-impl Movie3 {
+impl QuarterMovie {
     /// Starts a GIF at `path` whose frames show `view`. A surface movie is framed on the
     /// substrate around the cell and the reference cell ([`SurfaceFrame::new`]).
     pub fn with_view(
@@ -376,7 +376,7 @@ impl Movie3 {
         outputs: usize,
         view: MovieView,
     ) -> Result<Self, OutputError> {
-        let painter = View3Painter::with_view(mesh, view);
+        let painter = QuarterPainter::with_view(mesh, view);
         Self::start(path, name, mesh.phase_times, outputs, painter)
     }
 }

@@ -8,8 +8,8 @@ use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
 
 use super::OutputError;
-use super::movie::{FramePainter, Movie, Movie3, MovieOf};
-use super::vtu::{VtuMesh, VtuSeries, VtuSeries3, VtuSeriesOf};
+use super::movie::{FramePainter, Movie, MovieOf, QuarterMovie};
+use super::vtu::{QuarterVtuSeries, VtuMesh, VtuSeries, VtuSeriesOf};
 use crate::run_files::{QuarterSnapshot, Snapshot};
 
 /// Which per-output-time files a run writes besides its CSV row.
@@ -80,7 +80,7 @@ pub struct SnapshotWriterOf<S, V, M> {
 pub type SnapshotWriter = SnapshotWriterOf<Snapshot, VtuSeries, Movie>;
 /// The writer of the 3-D model: quadratic tetrahedra and the section z = 0
 /// ([`super::vtu`], [`super::movie`]).
-pub type SnapshotWriter3 = SnapshotWriterOf<QuarterSnapshot, VtuSeries3, Movie3>;
+pub type QuarterSnapshotWriter = SnapshotWriterOf<QuarterSnapshot, QuarterVtuSeries, QuarterMovie>;
 
 /// The GIF of the run `name` in `out`.
 fn gif_path(out: &Path, name: &str) -> PathBuf {

@@ -378,7 +378,7 @@ pub struct VtuSeriesOf<M> {
 pub type VtuSeries = VtuSeriesOf<MeshFile>;
 
 /// The `.vtu` files of one 3-D run and their `.pvd` collection.
-pub type VtuSeries3 = VtuSeriesOf<QuarterMeshFile>;
+pub type QuarterVtuSeries = VtuSeriesOf<QuarterMeshFile>;
 
 impl<M: VtuMesh> VtuSeriesOf<M> {
     /// A series written into `out/vtu/<name>_NNNNN.vtu`, collected in `out/<name>.pvd`.

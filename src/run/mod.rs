@@ -21,7 +21,7 @@ use crate::fem::{Domain, Mesh, MeshError};
 use crate::model::{
     CellModel, CellOf, HalfPlane, ModelError, ModelParams, Quarter, Restart, Shape, State,
 };
-use crate::render::{SnapshotOptions, SnapshotWriter, SnapshotWriter3};
+use crate::render::{QuarterSnapshotWriter, SnapshotOptions, SnapshotWriter};
 use crate::run_files::Observables;
 use crate::run_files::read::STOPPED;
 use crate::run_files::{
@@ -986,7 +986,7 @@ impl Driver {
 /// The per-output-time writers of a run's model.
 enum Frames {
     Plane(SnapshotWriter),
-    Quarter(SnapshotWriter3),
+    Quarter(QuarterSnapshotWriter),
 }
 
 /// Why an output could not be written at an output time.
@@ -1136,8 +1136,13 @@ impl RunWriter {
             ModelView::Quarter(m) => {
                 let mesh_file = m.mesh_file(phase_times);
                 write_json(&out.join("mesh3.json"), &mesh_file)?;
-                let frames =
-                    SnapshotWriter3::new(&out, &case.name, &mesh_file, opts.snapshots, n_outputs)?;
+                let frames = QuarterSnapshotWriter::new(
+                    &out,
+                    &case.name,
+                    &mesh_file,
+                    opts.snapshots,
+                    n_outputs,
+                )?;
                 let header = format!(
                     "{},{}",
                     Observables::CSV_HEADER,
