@@ -9,7 +9,7 @@ use cellsim::scene;
 
 use crate::fd::deformed_state;
 use crate::model::coarse_mesh;
-use crate::model3d::coarse3;
+use crate::model3d::coarse_quarter;
 use crate::scenes::run_changed_case;
 
 /// The reference case (flat substrate, adhesion) without inertia, with adhesion started
@@ -56,7 +56,7 @@ fn the_adhered_radius_rate_is_its_derivative_along_the_motion() {
         let err = rate_error(|y, yp| m.adhered_radius(y, yp), &y, &yp);
         assert!(err < 1e-6, "{model:?}: relative error {err:.2e}");
     }
-    let m = QuarterCell::new(spreading_params(KinematicModel::ThreeD), coarse3()).unwrap();
+    let m = QuarterCell::new(spreading_params(KinematicModel::ThreeD), coarse_quarter()).unwrap();
     let (y, yp) = deformed_state(&m, 0.5, 3);
     let err = rate_error(|y, yp| m.adhered_radius(y, yp), &y, &yp);
     assert!(err < 1e-6, "3-D: relative error {err:.2e}");

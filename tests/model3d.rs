@@ -18,7 +18,7 @@ use cellsim::sundials::{Ida, IdaOptions};
 use nalgebra::{Matrix3, Vector3};
 
 /// The quarter cell's mesh at the given sizes (µm) for the reference cell.
-pub fn mesh3(h_bottom: f64, h_nucleus: f64) -> TetMesh {
+pub fn quarter_mesh(h_bottom: f64, h_nucleus: f64) -> TetMesh {
     wedge_mesh(h_bottom, h_nucleus, Wedge::Quarter)
 }
 
@@ -41,17 +41,17 @@ pub fn wedge_mesh(h_bottom: f64, h_nucleus: f64, wedge: Wedge) -> TetMesh {
 }
 
 /// A coarse quarter cell (fast tests).
-pub fn coarse3() -> TetMesh {
-    mesh3(0.6, 1.5)
+pub fn coarse_quarter() -> TetMesh {
+    quarter_mesh(0.6, 1.5)
 }
 
 /// A coarse eighth cell (fast tests).
-pub fn coarse8() -> TetMesh {
+pub fn coarse_eighth() -> TetMesh {
     wedge_mesh(0.6, 1.5, Wedge::Eighth)
 }
 
 /// The parameters of a half-plane case made the 3-D cell's (over four pillars).
-fn params3(plane: ModelParams) -> ModelParams {
+fn quarter_params(plane: ModelParams) -> ModelParams {
     ModelParams {
         kinematics: KinematicModel::ThreeD,
         lattice: Lattice::FourPillars,
@@ -67,26 +67,26 @@ const MU_STEP: f64 = 1e-1;
 
 #[test]
 fn jacobian_of_the_quarter_cell_without_inertia_matches_finite_differences() {
-    check_jacobian3(false, Lattice::Gap, &coarse3());
+    check_quarter_jacobian(false, Lattice::Gap, &coarse_quarter());
 }
 
 #[test]
 fn jacobian_of_the_quarter_cell_with_fibres_matches_finite_differences() {
     // The cytoplasm's fibres (MODEL.md §11) at k₁ = 1000 Pa, written once for every
     // kinematics: in 3-D along the meridian tangent T and the radial N.
-    check_jacobian3_of(false, Lattice::FourPillars, &coarse3(), 1000.0);
+    check_quarter_jacobian_of(false, Lattice::FourPillars, &coarse_quarter(), 1000.0);
 }
 
 #[test]
 fn jacobian_of_the_quarter_cell_with_inertia_matches_finite_differences() {
-    check_jacobian3(true, Lattice::FourPillars, &coarse3());
+    check_quarter_jacobian(true, Lattice::FourPillars, &coarse_quarter());
 }
 
 #[test]
 fn jacobian_of_the_eighth_cell_matches_finite_differences() {
     // What the eighth adds to the quarter's kernels is the tie on the diagonal plane: all of
     // its columns, and fewer of the others (the quarter's tests cover those).
-    check_jacobian3(true, Lattice::FourPillars, &coarse8());
+    check_quarter_jacobian(true, Lattice::FourPillars, &coarse_eighth());
 }
 
 /// Pillars (the cell above the centre of four, or above the gap between two), contact,
@@ -94,12 +94,12 @@ fn jacobian_of_the_eighth_cell_matches_finite_differences() {
 /// (medium drag): every block of J. t in the active phase, the cell sunk 0.5 µm into the
 /// bands. On the eighth cell, whose nodes on the diagonal plane carry one unknown for
 /// u_x = u_z, the u and v unknowns of every such node in the lower half are columns.
-fn check_jacobian3(inertia: bool, lattice: Lattice, mesh: &TetMesh) {
-    check_jacobian3_of(inertia, lattice, mesh, 0.0)
+fn check_quarter_jacobian(inertia: bool, lattice: Lattice, mesh: &TetMesh) {
+    check_quarter_jacobian_of(inertia, lattice, mesh, 0.0)
 }
 
-/// [`check_jacobian3`] with the cytoplasm's fibres at `k1_pa` (none at 0).
-fn check_jacobian3_of(inertia: bool, lattice: Lattice, mesh: &TetMesh, k1_pa: f64) {
+/// [`check_quarter_jacobian`] with the cytoplasm's fibres at `k1_pa` (none at 0).
+fn check_quarter_jacobian_of(inertia: bool, lattice: Lattice, mesh: &TetMesh, k1_pa: f64) {
     let wedge = mesh.params.wedge;
     let eighth = wedge == Wedge::Eighth;
     let mut c = Case::reference_active();
@@ -119,7 +119,7 @@ fn check_jacobian3_of(inertia: bool, lattice: Lattice, mesh: &TetMesh, k1_pa: f6
     let mut m = QuarterCell::new(
         ModelParams {
             lattice,
-            ..params3(p)
+            ..quarter_params(p)
         },
         mesh.clone(),
     )
@@ -191,7 +191,7 @@ fn patch_test_homogeneous_deformation_gives_exact_internal_forces() {
     ];
     let params = unloaded(solids);
     let visc = params.viscosity;
-    let mut m = QuarterCell::new(params3(params), coarse3()).unwrap();
+    let mut m = QuarterCell::new(quarter_params(params), coarse_quarter()).unwrap();
     let f0 = Matrix3::new(1.08, 0.0, 0.0, -0.06, 0.93, 0.04, 0.0, 0.0, 1.05);
     let c = Vector3::new(m.params.center[0], m.params.center[1], 0.0);
     let mut y = vec![0.0; m.size()];
@@ -268,13 +268,13 @@ fn patch_test_homogeneous_deformation_gives_exact_internal_forces() {
 fn weight_and_volumes_of_the_quarter_and_the_eighth_cell() {
     // The quarter (the eighth) of the ball's volume and weight, from the elements' mass,
     // to the P2 geometry's error.
-    for (mesh, share) in [(coarse3(), 0.25), (coarse8(), 0.125)] {
+    for (mesh, share) in [(coarse_quarter(), 0.25), (coarse_eighth(), 0.125)] {
         weight_and_volumes(mesh, share);
     }
 }
 
 fn weight_and_volumes(mesh: TetMesh, share: f64) {
-    let m = QuarterCell::new(params3(scene::reference_params()), mesh).unwrap();
+    let m = QuarterCell::new(quarter_params(scene::reference_params()), mesh).unwrap();
     let g = Case::reference().geometry;
     let ball = |r: f64| share * 4.0 * std::f64::consts::PI * r.powi(3) / 3.0;
     let v = m.volume(None);
@@ -333,12 +333,12 @@ fn ida_to<D: Dae>(m: D, atol: Vec<f64>, t: f64, lu: LinearSolver) -> Ida<D> {
 
 #[test]
 fn flat_gravity_phase_of_the_quarter_cell_agrees_with_the_axisymmetric_model() {
-    flat_gravity_phase_against_the_axisymmetric_model(coarse3());
+    flat_gravity_phase_against_the_axisymmetric_model(coarse_quarter());
 }
 
 #[test]
 fn flat_gravity_phase_of_the_eighth_cell_agrees_with_the_axisymmetric_model() {
-    flat_gravity_phase_against_the_axisymmetric_model(coarse8());
+    flat_gravity_phase_against_the_axisymmetric_model(coarse_eighth());
 }
 
 fn flat_gravity_phase_against_the_axisymmetric_model(mesh: TetMesh) {
@@ -360,7 +360,7 @@ fn flat_gravity_phase_against_the_axisymmetric_model(mesh: TetMesh) {
     let idaa = ida_to(ma, atola, t_end, LinearSolver::Faer);
     let oa = idaa.dae().observe(t_end, idaa.y());
     let wedge = mesh.params.wedge;
-    let m3 = QuarterCell::new(params3(p.clone()), mesh).unwrap();
+    let m3 = QuarterCell::new(quarter_params(p.clone()), mesh).unwrap();
     let atol3 = m3.atol_vector(1e-7);
     let ida3 = ida_to(m3, atol3, t_end, LinearSolver::UmfpackNd);
     let (m3, y3) = (ida3.dae(), ida3.y());
@@ -415,7 +415,7 @@ fn a_slab_with_u_z_fixed_reproduces_plane_strain() {
     let ida2 = ida_to(m2, atol2, t_end, LinearSolver::Faer);
     let o2 = ida2.dae().observe(t_end, ida2.y());
     let slab = TetMesh::extruded(&mesh2, 1.0);
-    let m3 = QuarterCell::with_constraints(params3(p), slab, Constraints::Slab).unwrap();
+    let m3 = QuarterCell::with_constraints(quarter_params(p), slab, Constraints::Slab).unwrap();
     let atol3 = m3.atol_vector(1e-7);
     let ida3 = ida_to(m3, atol3, t_end, LinearSolver::UmfpackNd);
     let o3 = ida3.dae().observe(t_end, ida3.y());
@@ -664,9 +664,9 @@ fn deferred_exposures_leave_the_same_cell_and_join_consistently() {
     }
     let params = ModelParams {
         lattice: Lattice::Gap,
-        ..params3(p)
+        ..quarter_params(p)
     };
-    let mesh = coarse3();
+    let mesh = coarse_quarter();
     let mut full = QuarterCell::new(params.clone(), mesh.clone()).unwrap();
     let mut small = QuarterCell::deferring_adhesion(params, mesh).unwrap();
     assert!(small.adhesion_deferred() && !full.adhesion_deferred());
@@ -704,7 +704,7 @@ fn deferred_exposures_leave_the_same_cell_and_join_consistently() {
 /// The 3-D Hertz run: a homogeneous ball (E, ν = 0.485, ρ = 1000 kg/m³) settled on the
 /// flat substrate by its weight, quasi-statically. Returns (contact radius along the
 /// meridian, √(A/π) of the contact area, Hertz's radius, contact force / weight).
-fn hertz3(e: f64, h_bottom: f64, eps_ct: f64, mu_ct: f64, degree: u32, sub: u32) -> [f64; 4] {
+fn hertz_ball(e: f64, h_bottom: f64, eps_ct: f64, mu_ct: f64, degree: u32, sub: u32) -> [f64; 4] {
     let text = format!(
         r#"(
         name: "hertz-3d",
@@ -724,7 +724,7 @@ fn hertz3(e: f64, h_bottom: f64, eps_ct: f64, mu_ct: f64, degree: u32, sub: u32)
     );
     let case = Case::from_str(&text, "hertz-3d.ron").unwrap();
     let p = scene::model_params(&case, "hertz-3d.ron", false).unwrap();
-    let m = QuarterCell::new(params3(p), mesh3(h_bottom, 1.5)).unwrap();
+    let m = QuarterCell::new(quarter_params(p), quarter_mesh(h_bottom, 1.5)).unwrap();
     let atol = m.atol_vector(1e-6);
     let ida = ida_to(m, atol, 150.0, LinearSolver::Faer);
     let (m, y) = (ida.dae(), ida.y());
@@ -753,7 +753,7 @@ fn hertz_contact_radius_of_a_ball_in_3d() {
     // √(A/π) of the contact area 1.2877 µm (0.968: the area is sampled at the points of
     // a rule on each face's sub-triangles, a coarser measure of the patch's edge than the
     // meridian's); contact force = weight to 1e-14.
-    let [a, a_eq, a_hertz, f] = hertz3(100.0, 0.3, 0.002, 2e15, 10, 1);
+    let [a, a_eq, a_hertz, f] = hertz_ball(100.0, 0.3, 0.002, 2e15, 10, 1);
     eprintln!(
         "3-D Hertz: contact radius {a:.4} µm (√(A/π) {a_eq:.4}), Hertz {a_hertz:.4} µm; \
          force / weight {f}"
