@@ -148,23 +148,31 @@ fn narrow_pillars_with_a_wide_gap_finish() {
 #[test]
 fn a_snap_through_is_followed_not_taken_for_a_stall() {
     // The J f_as reading of push-pull, without the fold release (with it this reading does
-    // not snap): at t ≈ 47 200 s the cell's edge lets go of a pillar's top corner and the
-    // cell springs back, a motion over ~1e-5 s with the paper's shear viscosity that IDA
-    // follows in thousands of short steps. The stall rule stopped it at
+    // not snap): at t ≈ 47 200–47 400 s the cell's edge lets go of a pillar's top corner and
+    // the cell springs back, a motion over ~1e-5 s with the paper's shear viscosity that
+    // IDA follows in thousands of short steps. The stall rule stopped it at
     // t = 47 225 s while those steps were still moving the solution (1.0e4 tolerance units
     // over its window); it must finish, and show the snap: u_y(p_t) rises by more than
-    // 0.5 µm between the outputs at 47 125 and 47 250 s (0.72 µm measured).
+    // 0.5 µm between two consecutive outputs in [47 000, 47 500] s (measured: 0.72 µm
+    // between 47 125 and 47 250 s with the rounded feet, 0.70 µm between 47 250 and
+    // 47 375 s with the straight ones).
     let s = run_hard("snap-through");
     assert!(s.finished, "{:?}", s.failure);
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hard-snap-through");
     let rows = read_csv(&out.join("timeseries.csv"));
-    let at = |t: f64| {
-        rows.iter()
-            .find(|r| (r[0] - t).abs() < 1e-6)
-            .unwrap_or_else(|| panic!("an output at {t} s"))[2]
-    };
-    let (before, after) = (at(47_125.0), at(47_250.0));
-    assert!(after - before > 0.5, "u_y(p_t) {before} -> {after} µm");
+    let window: Vec<&Vec<f64>> = rows
+        .iter()
+        .filter(|r| (47_000.0..=47_500.0).contains(&r[0]))
+        .collect();
+    assert!(window.len() >= 4, "{} outputs in the window", window.len());
+    let rise = window
+        .windows(2)
+        .map(|w| w[1][2] - w[0][2])
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        rise > 0.5,
+        "largest rise of u_y(p_t) between outputs: {rise} µm"
+    );
 }
 
 #[test]
@@ -290,21 +298,25 @@ fn a_fold_against_a_pillar_wall_closes_on_itself_and_the_scene_finishes() {
 }
 
 #[test]
-fn the_fold_holds_on_a_mesh_refined_twice_and_gives_the_default_mesh_answer() {
-    // The same scene refined x2: with the paper's spreading force the fold's turned-over
-    // inner face is pulled into the cell, deeper the finer the mesh, and this mesh stopped
-    // with an inverted membrane element at t = 47 629 s. With the release of turned-over
-    // membrane (docs/MODEL.md §5) it finishes with the same crease as the default mesh,
-    // and the nucleus ends where the default mesh's does (measured 2026-12-07: −9.2634
-    // against −9.2245 µm, 0.42 % apart; refined ×1.5 −9.2402).
-    let fine = fold_closes_and_the_scene_finishes("wide-gap-fold-refined-2");
-    let (_, case) = hard_case("wide-gap-fold");
-    let default = run_hard_with("wide-gap-fold", "-beside-refined", |_| {});
+fn the_wide_gap_on_a_mesh_refined_twice_finishes_with_the_default_mesh_answer() {
+    // The geometry map's w = s = 12 µm point on the default straight pillar feet, refined
+    // x2. With the rounded feet the membrane creased at the lip of the undercut under the
+    // pillar's foot, and refined meshes let the crease curl into the cell until an element
+    // inverted (docs/MODEL.md §5). On straight feet the scene finishes on every mesh, and
+    // the nucleus ends where the default mesh's does: the default mesh's discretisation
+    // error on this scene is under 1 % (measured 2026-12-07: −9.137 refined x2 against
+    // −9.072 µm, 0.72 % apart).
+    let s = run_hard("wide-gap-refined-2");
+    assert!(s.finished, "refined x2: {:?}", s.failure);
+    let fine = s.final_values.expect("final values").uy_top;
+    let default = run_hard_with("wide-gap-refined-2", "-default-mesh", |c| {
+        c.mesh.refine = 1.0
+    });
+    assert!(default.finished, "default mesh: {:?}", default.failure);
     let coarse = default.final_values.expect("final values").uy_top;
     assert!(
-        ((fine - coarse) / coarse).abs() < 5e-3,
-        "u_y(p_t) {fine} refined x2 against {coarse} µm ({})",
-        case.name
+        ((fine - coarse) / coarse).abs() < 1e-2,
+        "u_y(p_t) {fine} refined x2 against {coarse} µm on the default mesh"
     );
 }
 

@@ -497,12 +497,13 @@ pub struct Pillars {
     /// −0.30 µm for the defaults). Valid: the pillars must start below the cell (smallest
     /// initial gap > 0). Use [`Pillars::resolved_y_top`] for the value in effect.
     pub y_top: Option<f64>,
-    /// How a pillar meets the floor: `Rounded`, the whole superellipse (superellipsoid) of
-    /// MODEL.md, whose rounded lower half leaves an undercut under the pillar's lower
-    /// edges; or `Straight`, its upper half continued straight down to the floor (a column
-    /// with rounded top edges, no undercut). Default `Rounded` (MODEL.md §5); the 3-D
-    /// pillar scenes use `Straight` (MODEL.md §10: the cell that reaches the floor beside
-    /// a pillar's corner flows into the undercut).
+    /// How a pillar meets the floor: `Straight`, the superellipse's (superellipsoid's)
+    /// upper half continued straight down to the floor (a column with rounded top edges,
+    /// no undercut), or `Rounded`, the whole superellipse of the paper's pillar table,
+    /// whose rounded lower half leaves an undercut under the pillar's lower edges. Default
+    /// `Straight` in every dimension (MODEL.md §5: in 2-D the membrane creases at the
+    /// undercut's lip on refined meshes until an element inverts; in 3-D the cell that
+    /// reaches the floor beside a pillar's corner flows into the undercut and jams).
     pub foot: crate::physics::PillarFoot,
     /// Width k of the fillet where the floor meets a pillar (µm): 0 takes the deeper of
     /// floor and pillar, a kink in the concave corner at the pillar's foot; k > 0 their
@@ -524,7 +525,7 @@ impl Default for Pillars {
             gap: 0.5,
             lattice: crate::physics::Lattice::FourPillars,
             y_top: None,
-            foot: crate::physics::PillarFoot::Rounded,
+            foot: crate::physics::PillarFoot::Straight,
             fillet: DEFAULT_FILLET,
         }
     }
@@ -624,7 +625,7 @@ enum SubstrateRepr {
         lattice: crate::physics::Lattice,
         #[serde(default)]
         y_top: Option<f64>,
-        #[serde(default, skip_serializing_if = "is_rounded")]
+        #[serde(default, skip_serializing_if = "is_straight")]
         foot: crate::physics::PillarFoot,
         #[serde(default = "default_fillet", skip_serializing_if = "is_default_fillet")]
         fillet: f64,
@@ -637,8 +638,8 @@ fn is_four_pillars(l: &crate::physics::Lattice) -> bool {
 }
 
 /// The default foot is not written out either.
-fn is_rounded(f: &crate::physics::PillarFoot) -> bool {
-    *f == crate::physics::PillarFoot::Rounded
+fn is_straight(f: &crate::physics::PillarFoot) -> bool {
+    *f == crate::physics::PillarFoot::Straight
 }
 
 /// Width of the default fillet at a pillar's foot (µm; docs/MODEL.md §5): where the

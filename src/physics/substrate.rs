@@ -20,8 +20,9 @@
 //!
 //! **Pillar and floor.** `d = max(d_pillar, d_floor)` with the normal of the deeper one.
 //! This is not smooth where `d_pillar = d_floor`, i.e. along a curve in the concave corner
-//! between a pillar's side and the floor (and under the pillar's rounded bottom, which
-//! meets the floor in one point, leaving a thin undercut); the contact band meets it only
+//! between a pillar's side and the floor (and, for [`PillarFoot::Rounded`], under the
+//! pillar's rounded bottom, which meets the floor in one point, leaving a thin undercut;
+//! the default [`PillarFoot::Straight`] has none), rounded by the fillet; the contact band meets it only
 //! if material reaches within `ε` of the floor next to a pillar foot. `d_pillar` is also
 //! not smooth mid-way between two pillars (`x̃ = ±(w + s)/2`, where the nearest axis
 //! changes: `d` is continuous there by symmetry but `n` flips); there `d_pillar ≈ −s/2`
@@ -49,16 +50,18 @@ use serde::{Deserialize, Serialize};
 /// How a pillar meets the floor.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum PillarFoot {
-    /// The whole superellipse (superellipsoid in 3-D) of MODEL.md §5 (§10): its rounded
-    /// lower half touches the floor at one point, under its axis, leaving an undercut that
-    /// opens from there to h/2 under the pillar's edges (1.3 µm high where the default
-    /// 3-D push-pull cell jammed, under a corner 0.8 w/2 from the axis in x and z).
-    #[default]
+    /// The whole superellipse (superellipsoid in 3-D) of the paper's pillar table: its
+    /// rounded lower half touches the floor at one point, under its axis, leaving an
+    /// undercut that opens from there to h/2 under the pillar's edges (1.3 µm high where
+    /// the 3-D push-pull cell jammed, under a corner 0.8 w/2 from the axis in x and z;
+    /// in 2-D the membrane creases at the undercut's lip on refined meshes, MODEL.md §5).
     Rounded,
     /// The upper half of the superellipse (superellipsoid) continued straight down to the
     /// floor: a column with rounded top edges, its sides vertical where `ỹ < 0`, meeting
     /// the floor in a right-angled concave corner (no undercut). The level set is the same
-    /// with `ỹ` replaced by `max(ỹ, 0)` (C³ across `ỹ = 0` for q = 4).
+    /// with `ỹ` replaced by `max(ỹ, 0)` (C³ across `ỹ = 0` for q = 4). The default in every
+    /// dimension (MODEL.md §5): a micropillar stands on its floor.
+    #[default]
     Straight,
 }
 
@@ -78,7 +81,7 @@ pub struct Pillars {
     /// Height of the pillar tops `y_top` \[µm\] (MODEL.md: placed by [`Pillars::y_top_for_gap`],
     /// ≈ −0.3 for the default cell).
     pub y_top: f64,
-    /// How the pillar meets the floor (default [`PillarFoot::Rounded`], MODEL.md).
+    /// How the pillar meets the floor (default [`PillarFoot::Straight`], MODEL.md §5).
     #[serde(default)]
     pub foot: PillarFoot,
     /// Width `k` \[µm\] of the fillet where the floor meets a pillar: 0 (default, MODEL.md)

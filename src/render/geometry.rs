@@ -7,7 +7,7 @@ use nalgebra::Vector2;
 use crate::fem::Domain;
 use crate::fem::tri6::{EDGES, edge_shape};
 use crate::fem::{Lagrange, Tri6};
-use crate::physics::{ActiveStrain, Substrate};
+use crate::physics::{ActiveStrain, PillarFoot, Substrate};
 use crate::run_files::MeshFile;
 
 /// A point \[µm\].
@@ -512,11 +512,12 @@ pub struct Backdrop {
     pub layer: Vec<Rect>,
     /// The substrate `{d_sub ≥ 0}` as thin column rectangles.
     pub substrate: Vec<Rect>,
-    /// The pillars' feet: in each column within a pillar's width, from the floor up to the
-    /// pillar's mid-height (where its side is vertical). Drawn under [`Backdrop::substrate`],
-    /// it fills the undercuts below the superellipse's rounded lower corners, so the
-    /// pillars stand on their floor; the model's substrate leaves those undercuts open
-    /// (MODEL.md §5), and the fibronectin layer fills them there.
+    /// The rounded pillars' feet ([`PillarFoot::Rounded`]; none for straight ones): in each
+    /// column within a pillar's width, from the floor up to the pillar's mid-height (where
+    /// its side is vertical). Drawn under [`Backdrop::substrate`], it fills the undercuts
+    /// below the superellipse's rounded lower corners, so the pillars stand on their
+    /// floor; the model's substrate leaves those undercuts open (MODEL.md §5), and the
+    /// fibronectin layer fills them there.
     pub foot: Vec<Rect>,
     /// The layer's upper edge `d_sub = −e_f` (segments).
     pub layer_edge: Vec<[Pt; 2]>,
@@ -554,7 +555,7 @@ impl Backdrop {
                     let xm = 0.5 * (xa + xb);
                     // Within the pillar's width, as the substrate strips: by the centre.
                     let within = (xm - p.nearest_axis(xm)).abs() < 0.5 * p.width;
-                    if within && mid > floor.max(y0) {
+                    if within && p.foot == PillarFoot::Rounded && mid > floor.max(y0) {
                         b.foot.push([xa, xb, floor.max(y0), mid]);
                     }
                     for [lo, hi] in intervals(|y| depth(xm, y), y0, y1) {
