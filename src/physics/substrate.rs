@@ -749,7 +749,11 @@ mod tests {
 
     #[test]
     fn pillar_surface_has_zero_depth_and_unit_normal() {
-        let p = crate::physics::reference::pillars();
+        // The whole superellipse (`Rounded`), traced below mid-height too.
+        let p = Pillars {
+            foot: PillarFoot::Rounded,
+            ..crate::physics::reference::pillars()
+        };
         let s = Substrate::Pillars(p);
         for axis in [8.0, 24.0, -8.0, -40.0] {
             // upper half of the boundary (the lower half is below the floor level only at
@@ -1048,6 +1052,7 @@ mod lattice_tests {
     fn a_straight_foot_closes_the_undercut_and_keeps_the_upper_half() {
         let rounded = Pillars {
             fillet: 0.0,
+            foot: PillarFoot::Rounded,
             ..pillars()
         };
         let straight = Pillars {
@@ -1189,15 +1194,14 @@ mod lattice_tests {
     #[test]
     fn surface_has_zero_depth_unit_outward_normal_and_the_depth_gradient() {
         // On the surface l = 0, ∇d = −∇l/|∇l| = −n exactly; checked by central
-        // differences at points of the upper half and the sides of several pillars.
+        // differences at points of the upper half and the sides of several pillars, down
+        // the whole superellipsoid's sides (`Rounded`) below mid-height.
         let h = 1e-6;
-        for p in [
-            pillars(),
-            Pillars {
-                q: 4.5,
-                ..pillars()
-            },
-        ] {
+        let rounded = Pillars {
+            foot: PillarFoot::Rounded,
+            ..pillars()
+        };
+        for p in [rounded, Pillars { q: 4.5, ..rounded }] {
             for s in both(p) {
                 for (ax, k) in [(8.0, 0.0), (-24.0, 1.0), (40.0, -2.0)] {
                     let az = p.nearest_axis_z(0.3, s.lattice) + k * p.period();
