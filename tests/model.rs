@@ -84,6 +84,35 @@ fn global_jacobian_matches_finite_differences() {
     }
 }
 
+/// The outline's self-contact is in the model only where the outline can fold: on pillars
+/// once adhesion acts. Its pairs widen the Jacobian's pattern; on a flat substrate and
+/// while the μ_as unknowns are deferred (the fall) the pattern is that of the model
+/// without it.
+#[test]
+fn self_contact_is_in_the_pattern_only_on_pillars_once_adhesion_acts() {
+    let nnz = |m: &CellModel| m.pattern().compute_nnz();
+    let without = |mut p: ModelParams| {
+        p.contact.self_contact = false;
+        p
+    };
+    let pillars = active_pillars_params(false);
+    let with_mu = nnz(&CellModel::new(pillars.clone(), coarse_mesh()).unwrap());
+    let with_mu_off = nnz(&CellModel::new(without(pillars.clone()), coarse_mesh()).unwrap());
+    assert!(
+        with_mu > with_mu_off,
+        "pillars with μ_as: {with_mu} entries, {with_mu_off} without self-contact"
+    );
+    let deferred = nnz(&CellModel::deferring_adhesion(pillars.clone(), coarse_mesh()).unwrap());
+    let deferred_off =
+        nnz(&CellModel::deferring_adhesion(without(pillars), coarse_mesh()).unwrap());
+    assert_eq!(deferred, deferred_off, "pillars, μ_as deferred");
+    let flat = scene::reference_params();
+    assert!(matches!(flat.substrate, Substrate::Flat { .. }));
+    let flat_nnz = nnz(&CellModel::new(flat.clone(), coarse_mesh()).unwrap());
+    let flat_off = nnz(&CellModel::new(without(flat), coarse_mesh()).unwrap());
+    assert_eq!(flat_nnz, flat_off, "flat substrate");
+}
+
 /// The push-pull case on pillars without inertia (drag 1e-3), with `change` applied.
 fn pillars_reading(change: impl Fn(&mut Case)) -> ModelParams {
     let mut c = Case::reference_active();

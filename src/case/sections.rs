@@ -727,8 +727,11 @@ pub struct Contact {
     /// inside out (README, "Maps without holes"). The pressure on a point of the outline
     /// behind a face of it: μ_ct H_ε(d)(d + ε)/2 at depth d, for faces turned towards the
     /// point and within 1.5ε (released by 2.5ε), within 4 µm of it along the reference
-    /// outline. Default true (cellsim's choice, beyond MODEL.md); false: the model as
-    /// MODEL.md states it.
+    /// outline. It is in the model only where the outline can fold: on pillars, once
+    /// adhesion acts (as the μ_as unknowns join at T_g0; from the start without adhesion);
+    /// on a flat substrate and during the fall its pairs would only widen the Jacobian.
+    /// Default true (cellsim's choice, beyond MODEL.md); false: the model as MODEL.md
+    /// states it.
     #[serde(skip_serializing_if = "is_true")]
     pub self_contact: bool,
 }

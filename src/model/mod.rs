@@ -120,6 +120,19 @@ pub struct ModelParams {
 }
 
 impl ModelParams {
+    /// Whether the outline's self-contact is in the model (half-plane models with
+    /// `contact.self_contact`): only where the outline can fold, on pillars and once
+    /// adhesion acts (`adhesion_unknowns`: the μ_as unknowns are in the system; from the
+    /// start without adhesion). A fold forms where adhesion holds the membrane on a
+    /// pillar's wall and the cell sinks past it; on a flat substrate and during the fall no
+    /// face of the outline comes near another, and the pairs would only fill the
+    /// Jacobian's pattern (docs/benchmarks.md, "Self-contact only where a fold can form").
+    pub(crate) fn may_fold(&self, adhesion_unknowns: bool) -> bool {
+        self.contact.self_contact
+            && matches!(self.substrate, Substrate::Pillars(_))
+            && (adhesion_unknowns || self.adhesion.is_none())
+    }
+
     pub(crate) fn domain_index(d: Domain) -> usize {
         match d {
             Domain::Nucleus => 0,
@@ -354,7 +367,7 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         let ReferenceElements { elements, ctab } =
             ReferenceElements::new::<S, E>(&params, &mesh, adhesion_unknowns)?;
         let plan_elements: Vec<_> = elements.iter().map(|el| (el.nodes, el.with_mu)).collect();
-        let outline = if D == 2 && params.contact.self_contact {
+        let outline = if D == 2 && params.may_fold(adhesion_unknowns) {
             S::outline(&mesh)
         } else {
             Vec::new()
