@@ -46,8 +46,8 @@ use crate::dae::{DaeError, ElementPoint, Inadmissible};
 use crate::fem::ElementTabulation;
 use crate::physics::{
     Fibres, MaterialPointOf, Real, Surface, Viscosity, Yeoh, adhesion_force, adhesion_hoop_factor,
-    adhesion_rate, contact_force, material_point, material_point_full, piola_total,
-    piola_total_full,
+    adhesion_rate, contact_force, cst, material_point, material_point_full, piola_total,
+    piola_total_full, re,
 };
 
 /// The time-dependent switches of MODEL.md §5 at one time.
@@ -344,6 +344,9 @@ pub(crate) fn band_force<T: Real, const D: usize>(
     mu: Option<T>,
     t_as: f64,
 ) -> SVector<T, D> {
+    // J₊ = max(J, 0): none where the element's map degenerates between the solid rule's
+    // points ([`band_residual`]).
+    let j = if re(j) > 0.0 { j } else { cst(0.0) };
     let j = match hoop {
         Some(l) => j * l,
         None => j,
@@ -443,8 +446,14 @@ pub(crate) fn band_residual<
         let pt = BandPoint::at(el, nv, q, st, mue);
         let j = det(&pt.f);
         let hoop = K::hoop(&pt.x, &el.cgeo.x[q]);
-        let j3 = hoop.map_or(j, |l| j * l);
-        if !(j > 0.0 && j3 > 0.0) {
+        // The solid rule's points keep each element's material admissible (the law has a
+        // barrier at J = 0 there, [`check_admissible`]). The band rule's denser points can
+        // find a P2 element's map degenerate between them, at the tip of a crease of the
+        // membrane: there the contact force, J μ_ct H_ε n per reference volume, is taken
+        // at J = 0 ([`band_force`]), where it tends as J does. A point across the axis
+        // (hoop stretch ≤ 0) is no such crease: refused.
+        if !(j.is_finite() && hoop.is_none_or(|l| l > 0.0)) {
+            let j3 = hoop.map_or(j, |l| j * l);
             return Err(inadmissible(e, ElementPoint::Contact(q), "det F", j3));
         }
         let surf = match surf {
@@ -563,4 +572,35 @@ pub(crate) fn mu_rate_tangent<S: Shape<D, N, E>, const D: usize, const N: usize,
     let rate = adhesion_rate(sub, ad, &xd, S::RateDual::constant(0.0));
     let d = rate.gradient();
     (std::array::from_fn(|k| d[k]), d[D])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The contact force per reference volume is J μ_ct H_ε n: it tends to zero with J,
+    /// and where an element's map degenerates between the solid rule's points (J ≤ 0 at a
+    /// band point) it is that limit, zero; the adhesion force does not depend on J.
+    #[test]
+    fn the_band_force_takes_the_contact_at_j_plus() {
+        let p = crate::scene::reference_params();
+        let n = SVector::<f64, 2>::new(0.0, 1.0);
+        let surf = (0.0, n);
+        let f = SMatrix::<f64, 2, 2>::identity();
+        let b = |j: f64| band_force::<f64, 2>(&p, surf, &f, j, None, None, None, 0.0);
+        let full = contact_force(&p.contact, surf, 1.0);
+        assert!(full.y > 0.0);
+        assert!((b(1.0) - full).norm() <= 1e-12 * full.norm());
+        assert!((b(0.25) - full * 0.25).norm() <= 1e-12 * full.norm());
+        assert!((b(1e-9) - full * 1e-9).norm() <= 1e-12 * full.norm());
+        for j in [0.0, -1e-12, -0.3] {
+            assert_eq!(b(j), SVector::<f64, 2>::zeros(), "J = {j}");
+        }
+        // With adhesion (μ_as > 0, ramped in) the adhesion part stays.
+        let r = SVector::<f64, 2>::new(0.0, -1.0);
+        let ba = |j: f64| band_force(&p, surf, &f, j, None, Some(&r), Some(1.0), 1.0);
+        let adhesion_only = ba(-0.3);
+        assert!(adhesion_only.norm() > 0.0);
+        assert!((ba(0.5) - b(0.5) - adhesion_only).norm() <= 1e-9 * adhesion_only.norm());
+    }
 }
