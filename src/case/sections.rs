@@ -509,8 +509,8 @@ pub struct Pillars {
     /// floor and pillar, a kink in the concave corner at the pillar's foot; k > 0 their
     /// smooth maximum where the two depths are within k of each other (the normal turns
     /// continuously round the corner; the surface moves out by at most k/4 there).
-    /// Default 0.25 (`DEFAULT_FILLET`: the sharp corner of MODEL.md §5 stalls Newton's
-    /// method where the membrane reaches it). Valid: 0 ≤ k ≤ min(h, s)/2.
+    /// Default 0.5 (`DEFAULT_FILLET`: the sharp corner of MODEL.md §5 stalls Newton's
+    /// method where the membrane reaches it, and a 0.25 µm fillet on refined meshes). Valid: 0 ≤ k ≤ min(h, s)/2.
     pub fillet: f64,
 }
 
@@ -646,10 +646,13 @@ fn is_straight(f: &crate::physics::PillarFoot) -> bool {
 /// membrane reaches the concave corner between floor and pillar, the deeper-of-two normal
 /// jumps by 90–150° between neighbouring quadrature points, and Newton's method fails at
 /// every step size (the geometry map's narrow pillars with wide gaps stalled there).
-/// 0.25 µm: both points finish with 0.1, 0.25 and 0.5 µm; 0.1 µm (the band's ε_ct) turns
-/// the normal so fast that `cases/hard/rtol-loose.ron` fails at t = 43 553 s, and 0.5 µm
-/// moves the contact radius of w = 4, s = 8 µm by 1.7 % where 0.25 moves it by 0.01 %.
-pub const DEFAULT_FILLET: f64 = 0.25;
+/// 0.5 µm, in every dimension (the 3-D scenes' value): both points finish with 0.1, 0.25
+/// and 0.5 µm; 0.1 µm (the band's ε_ct) turns the normal so fast that
+/// `cases/hard/rtol-loose.ron` fails at t = 43 553 s; with 0.25 µm (the default until
+/// 2026-12-07) the fine map refined ×1.5 stopped at three narrow gaps (w = 3, s = 6 and
+/// w = 4, s = 5, 6 µm) where the cell's lower lobe reached the corner: Newton's method on
+/// IDA's kept matrix diverged at every step size there (`examples/newton_probe.rs`).
+pub const DEFAULT_FILLET: f64 = 0.5;
 
 fn default_fillet() -> f64 {
     DEFAULT_FILLET
