@@ -170,6 +170,42 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         largest
     }
 
+    /// The elements whose map is not positive at some point of the band rule (denser than
+    /// the solid rule, whose points the law keeps positive): P2 elements folded inside
+    /// between their solid points (docs/MODEL.md §5, J₊). Their number, the smallest det F
+    /// over every element's band points, and where it is (element, point, centroid of the
+    /// element's nodes); a mesh with none has `folded == 0` and `smallest > 0`.
+    pub fn folded_elements(&self, y: &[f64]) -> Folded {
+        let mut out = Folded {
+            folded: 0,
+            smallest: f64::INFINITY,
+            element: 0,
+            point: 0,
+            domain: Domain::Cytoplasm,
+            x: Vec::new(),
+        };
+        for (e, el) in self.elements.iter().enumerate() {
+            let ue = self.element_displacements(el, y);
+            let mut el_min = f64::INFINITY;
+            for q in 0..el.cgeo.jxw.len() {
+                let j = det(&deformation(&ue, &el.cgeo.grads[q]));
+                if j < el_min {
+                    el_min = j;
+                    if j < out.smallest {
+                        (out.smallest, out.element, out.point) = (j, e, q);
+                    }
+                }
+            }
+            out.folded += usize::from(el_min <= 0.0);
+        }
+        let nodes = &self.mesh.elements()[out.element];
+        out.domain = self.mesh.domains()[out.element];
+        out.x = (0..D)
+            .map(|k| nodes.iter().map(|&i| self.position(y, i)[k]).sum::<f64>() / N as f64)
+            .collect();
+        out
+    }
+
     /// The smallest vertical displacement (the largest downward one, negative = down)
     /// over every node of the nucleus elements, vertices and mid-side nodes \[µm\].
     pub fn nucleus_lowest_uy(&self, y: &[f64]) -> f64 {
@@ -366,4 +402,19 @@ mod tests {
         // (6 + 1)/(10 + 2), not the mean of the means (0.55).
         assert_eq!(s.mean(&[Domain::Cytoplasm, Domain::Membrane]), 7.0 / 12.0);
     }
+}
+
+/// Elements folded inside between the solid rule's points ([`CellOf::folded_elements`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Folded {
+    /// How many elements have det F ≤ 0 at some point of the band rule.
+    pub folded: usize,
+    /// The smallest det F at a band point over the mesh.
+    pub smallest: f64,
+    /// Its element, the band point and the element's domain.
+    pub element: usize,
+    pub point: usize,
+    pub domain: Domain,
+    /// Centroid of that element's nodes \[µm\].
+    pub x: Vec<f64>,
 }

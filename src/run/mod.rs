@@ -997,6 +997,11 @@ enum OutputStop {
     Unphysical(String),
     /// The state at an output time could not be formed (the reason): the run stops.
     State(f64, String),
+    /// Elements folded inside at an output time (det F ≤ 0 at a point of the band rule,
+    /// between the solid rule's points; nothing written): the run stops, classified
+    /// inverted. The contact takes J₊ at such points so that a crease's tip can pass
+    /// between outputs (docs/MODEL.md §5); a state that keeps them is not reported.
+    Folded(f64, crate::model::observe::Folded),
     /// A file could not be written: the run fails with this error.
     Io(RunError),
 }
@@ -1010,6 +1015,29 @@ impl OutputStop {
                 format!("non-finite state or output at t = {t} s (not written)"),
             )),
             OutputStop::Unphysical(why) => Ok(Stop::new(FailureKind::Unphysical, why)),
+            OutputStop::Folded(t, f) => {
+                let point = format!("band point {}", f.point);
+                let mut stop = Stop::new(
+                    FailureKind::Inverted,
+                    format!(
+                        "{} element(s) folded inside at t = {t} s (not written): det F = {:.3e} \
+                         at {point} of element {}, between the solid rule's points \
+                         (docs/MODEL.md §5); the mesh does not resolve the deformation there",
+                        f.folded, f.smallest, f.element
+                    ),
+                );
+                stop.t = Some(t);
+                stop.place = Some(StopPlace {
+                    element: f.element,
+                    domain: f.domain,
+                    point,
+                    quantity: "det F".into(),
+                    value: f.smallest,
+                    t,
+                    x: f.x,
+                });
+                Ok(stop)
+            }
             OutputStop::State(t, why) => Ok(Stop::new(
                 FailureKind::Integration,
                 format!("cannot form the state at t = {t} s: {why}"),
@@ -1180,6 +1208,7 @@ impl RunWriter {
             final_values: None,
             final_values_3d: None,
             strain_nucleus_max: None,
+            folded_elements: None,
             outputs: 0,
             inertia_switched_off_at: None,
             adhesion_unknowns_added_at: None,
@@ -1246,6 +1275,14 @@ impl RunWriter {
     /// end the state file. Nothing is written for a non-finite state.
     fn output(&mut self, model: &Cell, t: f64, y: &[f64], yp: &[f64]) -> Result<(), OutputStop> {
         let (obs, obs3) = observe_admissible(model, t, y, self.reach)?;
+        let folded = match model.view() {
+            ModelView::Plane(m) => m.folded_elements(y),
+            ModelView::Quarter(m) => m.folded_elements(y),
+        };
+        self.summary.folded_elements = Some((folded.folded, folded.smallest));
+        if folded.folded > 0 {
+            return Err(OutputStop::Folded(t, folded));
+        }
         let mut row = obs.csv_row();
         if let Some(o3) = &obs3 {
             for v in o3.values() {

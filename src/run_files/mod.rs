@@ -204,6 +204,11 @@ pub struct Summary {
     /// largest nucleus strain; `final_values` holds its mean).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub strain_nucleus_max: Option<f64>,
+    /// At the last output: the elements folded inside (det F ≤ 0 at a point of the band
+    /// rule while the solid rule's points stay positive; docs/MODEL.md §5) and the smallest
+    /// det F at those points over the mesh.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub folded_elements: Option<(usize, f64)>,
     /// Output rows written (including t = 0).
     pub outputs: usize,
     /// Time at which inertia was switched off, if it was.
