@@ -369,15 +369,23 @@ fn the_cell_reaching_the_corner_of_a_narrow_gap_finishes_on_the_refined_mesh() {
 }
 
 #[test]
-fn without_self_contact_the_fold_passes_through_itself_and_an_element_inverts() {
-    // The paper's model (no self-contact, the spreading force without the fold release):
-    // the same scene stops where the fold's faces have passed through each other, with an
-    // inverted element as its classified reason.
+fn without_self_contact_the_fold_finishes_within_the_band() {
+    // The paper's model (no self-contact, the spreading force without the fold release).
+    // Until 2026-12-07 the fold's faces passed through each other and the element at its
+    // tip inverted at a band point (t > 45 000 s); since the contact takes J₊ there (the
+    // tip's map degenerate between the solid rule's points, docs/MODEL.md §5) it finishes,
+    // nothing folded at any output, and its outline crosses itself by no more than the
+    // contact band at the end (measured: 0.011 µm).
     let s = run_hard_with("wide-gap-fold", "-without", |c| {
         c.contact.self_contact = false;
         c.adhesion.as_mut().expect("adhesion").fold_release = false;
     });
-    let f = s.failure.as_ref().expect("stops without self-contact");
-    assert_eq!(f.kind, FailureKind::Inverted, "{}", f.reason);
-    assert!(f.t_stop.unwrap() > 45_000.0, "{}", f.reason);
+    assert!(s.finished, "{:?}", s.failure);
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("hard-wide-gap-fold-without");
+    let depth = deepest_crossing(&outline_at(&out, "state_end.json"));
+    let (_, case) = hard_case("wide-gap-fold");
+    assert!(
+        depth < case.contact.eps_ct,
+        "the outline passes {depth} µm through itself"
+    );
 }
