@@ -510,7 +510,8 @@ pub struct Pillars {
     /// smooth maximum where the two depths are within k of each other (the normal turns
     /// continuously round the corner; the surface moves out by at most k/4 there).
     /// Default 0.5 (`DEFAULT_FILLET`: the sharp corner of MODEL.md §5 stalls Newton's
-    /// method where the membrane reaches it, and a 0.25 µm fillet on refined meshes). Valid: 0 ≤ k ≤ min(h, s)/2.
+    /// method where the membrane reaches it, and a 0.25 µm fillet does on refined meshes).
+    /// Valid: 0 ≤ k ≤ min(h, s)/2.
     pub fillet: f64,
 }
 

@@ -651,6 +651,20 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         self.inadmissible.as_ref()
     }
 
+    /// The centroid of element `e`'s nodes in state `y` \[µm\] (where a stop at an
+    /// element is reported).
+    pub(crate) fn element_centroid(&self, y: &[f64], e: usize) -> [f64; D] {
+        let nodes = &self.mesh.elements()[e];
+        let mut x = [0.0; D];
+        for &i in nodes {
+            let p = self.position(y, i);
+            for (k, xk) in x.iter_mut().enumerate() {
+                *xk += p[k] / N as f64;
+            }
+        }
+        x
+    }
+
     /// Records the outcome of an evaluation at `y` for [`Self::last_inadmissible`], and
     /// passes it on.
     fn note_admissibility(
@@ -659,17 +673,11 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         y: &[f64],
     ) -> Result<(), DaeError> {
         self.inadmissible = match &result {
-            Err(DaeError::Inadmissible(why @ Inadmissible::Element { element, .. })) => {
-                let nodes = &self.mesh.elements()[*element];
-                let mut x = [0.0; D];
-                for &i in nodes {
-                    let p = self.position(y, i);
-                    for (k, xk) in x.iter_mut().enumerate() {
-                        *xk += p[k] / N as f64;
-                    }
-                }
-                Some((why.clone(), self.mesh.domains()[*element], x))
-            }
+            Err(DaeError::Inadmissible(why @ Inadmissible::Element { element, .. })) => Some((
+                why.clone(),
+                self.mesh.domains()[*element],
+                self.element_centroid(y, *element),
+            )),
             _ => None,
         };
         result

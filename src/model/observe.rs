@@ -198,11 +198,8 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
             }
             out.folded += usize::from(el_min <= 0.0);
         }
-        let nodes = &self.mesh.elements()[out.element];
         out.domain = self.mesh.domains()[out.element];
-        out.x = (0..D)
-            .map(|k| nodes.iter().map(|&i| self.position(y, i)[k]).sum::<f64>() / N as f64)
-            .collect();
+        out.x = self.element_centroid(y, out.element).to_vec();
         out
     }
 
