@@ -5,28 +5,25 @@
 //!
 //! `cargo run --release --example newton_probe -- CASE STATE [--set FIELD=VALUE ...]`
 //! with `STATE` a state file of a half-plane run without inertia (`state_stopped.json`,
-//! `state_spreading.json`, …) and the case and overrides it ran with. From y₀ (the state's
+//! `state_spreading.json`, …; its run's `mesh.json` beside it) and the case and overrides
+//! it ran with. From y₀ (the state's
 //! u and μ_as) it solves F(t + h, y, (y − y₀)/h) = 0 for h = 10, 1, 0.1, 1e-2, 1e-3, 1e-4 s,
 //! starting at y = y₀, and prints per iteration the weighted RMS norm of the update
 //! (IDA's weights at rtol 1e-3, atol 1e-6: converged below 0.33 in IDA's test) and the
 //! largest residual entry. With `PROBE_SPLIT=1` in the environment each iteration also
-//! names the node of the largest displacement update (its current position) and splits
-//! the norm into the u and μ_as blocks.
+//! names the node of the largest displacement update (its current position) and gives
+//! the u and μ_as blocks' own norms.
+
+use std::path::Path;
 
 use cellsim::case::{Case, Override};
 use cellsim::dae::linsolve::{FaerFactory, LinearSolverFactory};
-use cellsim::dae::{Dae, State};
+use cellsim::dae::{Atol, Dae, State, error_weights, wrms_norm};
 use cellsim::fem::Mesh;
 use cellsim::model::CellModel;
+use cellsim::model::dofs::NONE;
+use cellsim::run_files::read::{read_mesh, read_state};
 use cellsim::scene;
-use serde::Deserialize;
-
-#[derive(Deserialize)]
-struct StateJson {
-    t: f64,
-    u: Vec<Vec<f64>>,
-    mu_as: Vec<Option<f64>>,
-}
 
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -43,31 +40,26 @@ fn main() -> Result<(), String> {
     let mesh = Mesh::generate(&scene::mesh_params(&case)).map_err(|e| e.to_string())?;
     let params = scene::model_params(&case, &case_file, false).map_err(|e| e.to_string())?;
     let mut m = CellModel::new(params, mesh).map_err(|e| e.to_string())?;
-    let text = std::fs::read_to_string(&state_file).map_err(|e| e.to_string())?;
-    let s: StateJson = serde_json::from_str(&text).map_err(|e| e.to_string())?;
+    let state_path = Path::new(&state_file);
+    let mesh_file =
+        read_mesh(&state_path.with_file_name("mesh.json")).map_err(|e| e.to_string())?;
+    let s = read_state(state_path, &mesh_file).map_err(|e| e.to_string())?;
     let n = m.size();
     let mut y0 = vec![0.0; n];
     for (i, u) in s.u.iter().enumerate() {
         for (k, &uk) in u.iter().enumerate() {
             let d = m.dofs.u[i][k];
-            if d != usize::MAX {
+            if d != NONE {
                 y0[d] = uk;
             }
         }
         let d = m.dofs.mu[i];
-        if d != usize::MAX {
+        if d != NONE {
             y0[d] = s.mu_as[i].unwrap_or(0.0);
         }
     }
-    let w: Vec<f64> = y0.iter().map(|v| 1.0 / (1e-3 * v.abs() + 1e-6)).collect();
-    let wrms = |d: &[f64]| {
-        (d.iter()
-            .zip(&w)
-            .map(|(a, b)| (a * b) * (a * b))
-            .sum::<f64>()
-            / n as f64)
-            .sqrt()
-    };
+    let mut w = vec![0.0; n];
+    error_weights(&y0, 1e-3, &Atol::Scalar(1e-6), &mut w);
     let pattern = m.pattern().clone();
     let nnz = pattern.compute_nnz();
     let factory = FaerFactory;
@@ -101,15 +93,11 @@ fn main() -> Result<(), String> {
                 r.iter_mut().for_each(|v| *v = -*v);
                 solver.solve_in_place(&mut r).map_err(|e| e.to_string())?;
                 y.iter_mut().zip(&r).for_each(|(a, d)| *a += d);
-                let dn = wrms(&r);
+                let dn = wrms_norm(&r, &w);
                 if std::env::var("PROBE_SPLIT").is_ok() {
                     let off = m.dofs.mu_offset();
                     let (ru, rm) = r.split_at(off);
                     let (wu, wm) = w.split_at(off);
-                    let part = |d: &[f64], w: &[f64]| {
-                        (d.iter().zip(w).map(|(a, b)| (a * b) * (a * b)).sum::<f64>() / n as f64)
-                            .sqrt()
-                    };
                     let mx = |d: &[f64]| d.iter().fold(0.0f64, |a, b| a.max(b.abs()));
                     let (imax, _) = ru.iter().enumerate().fold((0, 0.0f64), |a, (i, v)| {
                         if v.abs() > a.1 { (i, v.abs()) } else { a }
@@ -122,9 +110,9 @@ fn main() -> Result<(), String> {
                     }
                     line += &format!(
                         " (u {:.1e} max {:.1e}; mu {:.1e} max {:.1e})",
-                        part(ru, wu),
+                        wrms_norm(ru, wu),
                         mx(ru),
-                        part(rm, wm),
+                        wrms_norm(rm, wm),
                         mx(rm)
                     );
                 }
