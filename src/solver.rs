@@ -12,6 +12,7 @@ use crate::dae::condensed::CondensedLu;
 use crate::dae::linsolve::{
     self, ColumnOrdering, FaerLu, LinearSolverError, LinearSolverFactory, Permuted, SharedFactory,
 };
+use crate::dae::nonlinear::NonlinearMethod;
 
 // ---------------------------------------------------------------------------------------
 // The settings
@@ -88,6 +89,13 @@ pub struct Settings {
     /// (`Some(Krylov(max_dim: 5, eps_lin: 0.05))`). Default none. Unused by BDF2.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub krylov: Option<Krylov>,
+    /// IDA's nonlinear iteration: none for SUNDIALS' Newton module (the default);
+    /// `Some(Newton)` for ours, the same iterates, with every failed attempt counted by
+    /// kind in summary.json (`newton_detail`); `Some(Broyden(max_updates: 10))` for ours
+    /// with Broyden's updates of the kept matrix within each attempt. Valid:
+    /// 1 ≤ max_updates ≤ 50. Unused by BDF2.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nonlinear: Option<NonlinearMethod>,
     /// Compute the residual's and the Jacobian's element loops on rayon's thread pool
     /// (one thread per core; blocks of 64 elements, added in element order: the same bits
     /// either way). Default false: on the 2-D meshes the pool's synchronisation costs
@@ -137,6 +145,7 @@ impl Default for Settings {
             delta_cj: 0.25,
             newton_iters: 4,
             krylov: None,
+            nonlinear: None,
             parallel_elements: false,
         }
     }
@@ -192,6 +201,9 @@ impl Settings {
                 k.eps_lin > 0.0 && k.eps_lin < 1.0,
                 "0 < eps_lin < 1",
             );
+        }
+        if let Some(NonlinearMethod::Broyden { max_updates }) = self.nonlinear {
+            c.integer("nonlinear.max_updates", max_updates as u64, 1, Some(50));
         }
         if let Some(h0) = self.initial_step {
             c.positive("initial_step", h0);
@@ -558,6 +570,7 @@ mod tests {
                 max_dim: 0,
                 eps_lin: 2.0,
             }),
+            nonlinear: Some(NonlinearMethod::Broyden { max_updates: 51 }),
             initial_step: Some(-1e-9),
             ..Settings::default()
         };
@@ -579,6 +592,7 @@ mod tests {
                 "newton_iters = 0 is out of range (must satisfy 1 <= newton_iters <= 50)",
                 "krylov.max_dim = 0 is out of range (must satisfy 1 <= max_dim <= 100)",
                 "krylov.eps_lin = 2 is out of range (must satisfy 0 < eps_lin < 1)",
+                "nonlinear.max_updates = 51 is out of range (must satisfy 1 <= max_updates <= 50)",
                 "initial_step = -1e-9 is out of range (must satisfy initial_step > 0)",
             ]
         );

@@ -22,10 +22,12 @@
 pub mod bdf2;
 pub mod condensed;
 pub mod linsolve;
+pub mod nonlinear;
 pub mod problems;
 pub mod timing;
 
 use faer::sparse::SymbolicSparseColMat;
+use nonlinear::NewtonCounts;
 use serde::{Deserialize, Serialize};
 
 pub use linsolve::{LinearSolver, LinearSolverFactory, SharedFactory};
@@ -344,6 +346,10 @@ pub struct Stats {
     /// written to the summary).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub root_evals: u64,
+    /// Our nonlinear solver's failed attempts by kind and its Broyden updates
+    /// (`solver.nonlinear`; not written when nothing was counted).
+    #[serde(default, skip_serializing_if = "NewtonCounts::is_empty")]
+    pub newton_detail: NewtonCounts,
     /// How far the solution has moved over the run: Σ over the steps of ‖yₙ − yₙ₋₁‖ in
     /// the weighted RMS norm of the integrator's weights 1/(rtol |y| + atol) (IDA's error
     /// weights, BDF2's Newton weights): tolerance units. The stall rule's measure of
@@ -374,6 +380,7 @@ impl std::ops::AddAssign<&Stats> for Stats {
         self.linear_iters += b.linear_iters;
         self.linear_failures += b.linear_failures;
         self.root_evals += b.root_evals;
+        self.newton_detail += &b.newton_detail;
         self.path += b.path;
         self.last_order = b.last_order;
         self.last_step = b.last_step;

@@ -509,6 +509,7 @@ fn ida_options(s: &Settings, atol: Atol, linear_solver: solver::LinearSolver) ->
             max_dim: k.max_dim as i32,
             eps_lin: k.eps_lin,
         }),
+        nonlinear: s.nonlinear,
     }
 }
 

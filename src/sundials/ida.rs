@@ -15,8 +15,10 @@ use std::ptr;
 
 use sundials_sys as sys;
 
+use super::nls::Nls;
 use super::{Context, NVector, guard, ida_flag_name, view, view_mut};
 use crate::dae::linsolve::{FaerFactory, LinearSolver, LinearSolverError, SharedFactory};
+use crate::dae::nonlinear::{NewtonFailure, NonlinearMethod};
 use crate::dae::timing::{self, Phase};
 use crate::dae::{
     Atol, Dae, DaeError, Integrator, IntegratorError, Root, Setup, State, Stats, wrms_norm,
@@ -73,6 +75,10 @@ pub struct IdaOptions {
     /// Solve each Newton system by GMRES preconditioned by the last LU of the iteration
     /// matrix instead of by that LU alone (`None`: the LU alone).
     pub krylov: Option<Krylov>,
+    /// Solve the nonlinear systems by our own iteration ([`NonlinearMethod`]: Newton as
+    /// SUNDIALS' own, or with Broyden's updates), which records every failed attempt
+    /// (`None`: SUNDIALS' Newton module).
+    pub nonlinear: Option<NonlinearMethod>,
 }
 
 /// GMRES (SUNDIALS' SPGMR, left preconditioning) on the Newton systems, with the
@@ -116,6 +122,7 @@ impl Default for IdaOptions {
             max_err_test_fails: None,
             delta_cj: None,
             krylov: None,
+            nonlinear: None,
         }
     }
 }
@@ -127,6 +134,8 @@ struct LsState {
     values: Vec<f64>,
     factorizations: u64,
     last_error: Option<String>,
+    /// cj of the last Jacobian (the iteration matrix being factorized).
+    cj: f64,
 }
 
 /// What C keeps a pointer to (boxed, never moved): the problem, the linear solver state
@@ -168,6 +177,9 @@ pub struct Ida<D: Dae> {
     /// The end of the last step the problem was told of ([`Dae::accepted_step`]).
     accepted_to: f64,
     keep_before: bool,
+    /// Our nonlinear solver, when `IdaOptions::nonlinear` asks for it (freed after IDA's
+    /// memory).
+    nls: Option<Nls>,
     // Dropped last: everything above was created in this context.
     ctx: Context,
 }
@@ -232,6 +244,7 @@ impl<D: Dae> Ida<D> {
                 values: vec![0.0; setup.nnz],
                 factorizations: 0,
                 last_error: None,
+                cj: f64::NAN,
             },
             callback_error: None,
             ida_message: String::new(),
@@ -258,6 +271,7 @@ impl<D: Dae> Ida<D> {
             pending_root: None,
             accepted_to: f64::NEG_INFINITY,
             keep_before: false,
+            nls: None,
             ctx,
         };
         ida.setup(&opts, t0)?;
@@ -284,6 +298,9 @@ impl<D: Dae> Ida<D> {
     /// constraints, and (with `opts.calc_ic`) the corrected initial conditions.
     fn setup(&mut self, opts: &IdaOptions, t0: f64) -> Result<(), IntegratorError> {
         self.create_memory(opts, t0)?;
+        if let Some(method) = opts.nonlinear {
+            self.attach_nonlinear_solver(method)?;
+        }
         match opts.krylov {
             None => self.attach_linear_solver(t0)?,
             Some(k) => self.attach_krylov(k, t0)?,
@@ -394,6 +411,24 @@ impl<D: Dae> Ida<D> {
         let flag = unsafe { sys::IDAGetRootInfo(self.mem, found.as_mut_ptr()) };
         self.check("IDAGetRootInfo", flag)?;
         Ok(found)
+    }
+
+    /// Attaches our nonlinear solver ([`Nls`]) in place of SUNDIALS' Newton module.
+    fn attach_nonlinear_solver(&mut self, method: NonlinearMethod) -> Result<(), IntegratorError> {
+        let cj: *const f64 = &self.user.ls.cj;
+        let nls = Nls::new(self.user.dae.size(), method, cj, &self.ctx)
+            .map_err(IntegratorError::Input)?;
+        // SAFETY: valid IDA memory (made by `create_memory`); the solver outlives it (the
+        // field is dropped after `Drop::drop` frees the memory) and the cj it reads lives
+        // in the boxed user data.
+        let flag = unsafe { sys::IDASetNonlinearSolver(self.mem, nls.raw) };
+        self.nls = Some(nls);
+        self.check("IDASetNonlinearSolver", flag)
+    }
+
+    /// Every failed attempt of our nonlinear solver so far (empty with SUNDIALS' own).
+    pub fn newton_failures(&self) -> &[NewtonFailure] {
+        self.nls.as_ref().map_or(&[], |n| n.failures())
     }
 
     /// Attaches the thin matrix and the linear solver, both pointing at the LsState (the
@@ -832,6 +867,7 @@ impl<D: Dae> Integrator for Ida<D> {
                 0 => 0,
                 _ => self.getter("IDAGetNumGEvals", sys::IDAGetNumGEvals),
             },
+            newton_detail: self.nls.as_ref().map(|n| n.counts()).unwrap_or_default(),
             path: self.path,
             last_order: order.max(0) as u32,
             last_step: h,
@@ -945,6 +981,7 @@ unsafe fn jacobian_into_values<D: Dae>(
         let user = &mut *(user_data as *mut UserData<D>);
         let (y, ypv) = (view(yy), view(yp));
         let UserData { dae, ls, .. } = user;
+        ls.cj = cj;
         let out = guard(|| {
             timing::time(Phase::Jacobian, || {
                 dae.jacobian(State::new(t, y, ypv), cj, &mut ls.values)

@@ -10,6 +10,7 @@
 mod ida;
 mod klu;
 mod metis;
+mod nls;
 mod umfpack;
 
 pub use ida::{CalcIc, Ida, IdaOptions, Krylov};
