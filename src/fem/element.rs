@@ -400,6 +400,17 @@ pub trait ElementTabulation<const D: usize, const N: usize>: Send + Sync {
     /// the element with nodes `x`.
     fn element_geometry(&self, x: &[[f64; D]; N])
     -> Result<GeometryOf<D, N>, ElementGeometryError>;
+    /// Whether the element with reference nodes `xr` and current nodes `x` is certainly
+    /// not folded anywhere: its current map's det ∂x/∂ξ has the sign of the reference
+    /// map's (at its centroid) at every point, not only at a rule's points. A sufficient
+    /// test, cheap next to a dense rule: ∂x/∂ξ of a quadratic element is linear in ξ, the
+    /// interpolation J = Σ_v λ_v J_v of its values at the D + 1 vertices, so det J is a
+    /// polynomial of degree D in the barycentric coordinates; by multilinearity in the
+    /// columns its Bernstein coefficients are b_α = (α!/D!) Σ det[J_{s₁}e₁ … J_{s_D}e_D]
+    /// over the sequences s whose multiset of vertices is α, and det J lies between the
+    /// smallest and the largest of them on the element. All of the reference's sign: not
+    /// folded. False means "not shown", not "folded".
+    fn unfolded_throughout(xr: &[[f64; D]; N], x: &[[f64; D]; N]) -> bool;
 }
 
 impl<E: Lagrange<D, N>, const D: usize, const N: usize> ElementTabulation<D, N>
@@ -424,6 +435,37 @@ where
         x: &[[f64; D]; N],
     ) -> Result<GeometryOf<D, N>, ElementGeometryError> {
         Ok(self.geometry(x)?)
+    }
+    fn unfolded_throughout(xr: &[[f64; D]; N], x: &[[f64; D]; N]) -> bool {
+        let vertex = |v: usize| -> [f64; D] { std::array::from_fn(|k| f64::from(v == k + 1)) };
+        let js: Vec<SMatrix<f64, D, D>> = (0..=D)
+            .map(|v| jacobian(x, &E::grad_shape(vertex(v))).0)
+            .collect();
+        let sign = jacobian(xr, &E::grad_shape([1.0 / (D + 1) as f64; D])).1;
+        // Σ of the mixed determinants per multiset α of vertices (α as counts per vertex).
+        let mut sums: Vec<([u8; 4], f64)> = Vec::with_capacity(20);
+        for code in 0..(D + 1).pow(D as u32) {
+            let mut counts = [0u8; 4];
+            let mut seq = [0usize; D];
+            let mut c = code;
+            for s in seq.iter_mut() {
+                *s = c % (D + 1);
+                c /= D + 1;
+                counts[*s] += 1;
+            }
+            let m = SMatrix::<f64, D, D>::from_fn(|i, col| js[seq[col]][(i, col)]);
+            let d = m.det();
+            match sums.iter_mut().find(|(a, _)| *a == counts) {
+                Some((_, s)) => *s += d,
+                None => sums.push((counts, d)),
+            }
+        }
+        let factorial = |n: u8| (1..=u32::from(n)).product::<u32>() as f64;
+        let d_fact = factorial(D as u8);
+        sums.iter().all(|(alpha, sum)| {
+            let b = sum * alpha.iter().map(|&a| factorial(a)).product::<f64>() / d_fact;
+            b * sign > 0.0
+        })
     }
 }
 
@@ -455,6 +497,56 @@ pub(crate) mod checks {
     pub fn straight_triangle<const D: usize>(v: [[f64; D]; 3]) -> [[f64; D]; 6] {
         let mid = |a: usize, b: usize| std::array::from_fn(|i| 0.5 * (v[a][i] + v[b][i]));
         [v[0], v[1], v[2], mid(0, 1), mid(1, 2), mid(2, 0)]
+    }
+
+    /// The sufficient test of [`super::ElementTabulation::unfolded_throughout`] on the
+    /// element with reference nodes `xr`: the element itself passes; moving one mid-node
+    /// far across its element folds the map (det ∂x/∂ξ of both signs on a fine sample of
+    /// `points`) and the test does not pass; and over random moves of the nodes by up to
+    /// `amplitude`, wherever the test passes det ∂x/∂ξ has the reference's sign at every
+    /// sample point (the test is sufficient), and it passes for most small moves (it is
+    /// useful).
+    pub fn unfolded_test_is_sufficient<E: Lagrange<D, N>, const D: usize, const N: usize>(
+        xr: &[[f64; D]; N],
+        points: &[[f64; D]],
+    ) where
+        SMatrix<f64, D, D>: JacobianMatrix<D>,
+        super::Tabulation<E, D, N>: super::ElementTabulation<D, N>,
+    {
+        use super::{ElementTabulation, Tabulation};
+        let passes = |x: &[[f64; D]; N]| Tabulation::<E, D, N>::unfolded_throughout(xr, x);
+        let dets =
+            |x: &[[f64; D]; N]| -> Vec<f64> { points.iter().map(|&xi| E::map(x, xi).2).collect() };
+        let sign = E::map(xr, [1.0 / (D + 1) as f64; D]).2.signum();
+        assert!(passes(xr));
+        // Mid-node D + 1 (edge 0–1) pushed across the element, beyond the opposite vertex.
+        let mut folded = *xr;
+        let far = if D == 2 { 2 } else { 3 };
+        folded[D + 1] = std::array::from_fn(|k| 2.5 * xr[far][k] - 1.5 * xr[D + 1][k]);
+        let d = dets(&folded);
+        assert!(d.iter().any(|j| j * sign > 0.0) && d.iter().any(|j| j * sign < 0.0));
+        assert!(!passes(&folded));
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut rnd = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for amplitude in [0.05, 0.2, 0.5, 1.0] {
+            let mut passed = 0;
+            for _ in 0..400 {
+                let x: [[f64; D]; N] =
+                    std::array::from_fn(|a| std::array::from_fn(|k| xr[a][k] + amplitude * rnd()));
+                if passes(&x) {
+                    passed += 1;
+                    assert!(dets(&x).iter().all(|j| j * sign > 0.0), "{x:?}");
+                }
+            }
+            if amplitude == 0.05 {
+                assert!(passed > 300, "{passed} of 400 small moves shown unfolded");
+            }
+        }
     }
 
     /// Σ Nₐ = 1 and Σ ∇Nₐ = 0.

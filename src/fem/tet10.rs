@@ -141,6 +141,7 @@ mod tests {
     fn shape_functions_and_map() {
         let points = sample_points();
         checks::shape_functions_and_map::<Tet10, 3, 10>(&REFERENCE_NODES, &curved(), &points);
+        checks::unfolded_test_is_sufficient::<Tet10, 3, 10>(&curved(), &points);
     }
 
     fn sample_points() -> Vec<[f64; 3]> {

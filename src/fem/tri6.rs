@@ -114,6 +114,7 @@ mod tests {
     fn shape_functions_and_map() {
         let points = sample_points();
         checks::shape_functions_and_map::<Tri6, 2, 6>(&REFERENCE_NODES, &curved(), &points);
+        checks::unfolded_test_is_sufficient::<Tri6, 2, 6>(&curved(), &points);
         for (b, s) in [0.0, 0.5, 1.0].iter().enumerate() {
             let n = edge_shape(*s);
             for (a, na) in n.iter().enumerate() {

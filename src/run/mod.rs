@@ -1018,13 +1018,15 @@ impl OutputStop {
             OutputStop::Unphysical(why) => Ok(Stop::new(FailureKind::Unphysical, why)),
             OutputStop::Folded(t, f) => {
                 let point = format!("band point {}", f.point);
+                // A folded element was looked at point by point: the smallest is known.
+                let smallest = f.smallest.unwrap_or(f64::NAN);
                 let mut stop = Stop::new(
                     FailureKind::Inverted,
                     format!(
                         "{} element(s) folded inside at t = {t} s (not written): det F = {:.3e} \
                          at {point} of element {}, between the solid rule's points \
                          (docs/MODEL.md §5); the mesh does not resolve the deformation there",
-                        f.folded, f.smallest, f.element
+                        f.folded, smallest, f.element
                     ),
                 );
                 stop.t = Some(t);
@@ -1033,7 +1035,7 @@ impl OutputStop {
                     domain: f.domain,
                     point,
                     quantity: "det F".into(),
-                    value: f.smallest,
+                    value: smallest,
                     t,
                     x: f.x,
                 });

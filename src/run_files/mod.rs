@@ -206,9 +206,11 @@ pub struct Summary {
     pub strain_nucleus_max: Option<f64>,
     /// At the last output: the elements folded inside (det F ≤ 0 at a point of the band
     /// rule while the solid rule's points stay positive; docs/MODEL.md §5) and the smallest
-    /// det F at those points over the mesh.
+    /// det F at the band points of the elements a sufficient test did not show unfolded
+    /// throughout (null when it showed every element; summaries before 2026-12-07 15:30
+    /// give the smallest over every element).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub folded_elements: Option<(usize, f64)>,
+    pub folded_elements: Option<(usize, Option<f64>)>,
     /// Output rows written (including t = 0).
     pub outputs: usize,
     /// Time at which inertia was switched off, if it was.
