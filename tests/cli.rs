@@ -541,7 +541,7 @@ fn a_bad_override_exits_with_status_2_and_names_the_set_argument() {
             "error: --set solver.rtool=1e-3: solver.rtool: unknown field `rtool`; expected one \
              of `integrator`, `rtol`, `atol`, `bdf2_dt`, `max_order`, `max_steps`, \
              `linear_solver`, `initial_step`, `defer_adhesion`, `delta_cj`, `newton_iters`, `krylov`, \
-             `parallel_elements`",
+             `nonlinear`, `parallel_elements`",
         ),
         (
             // The file's own rule, located in the file, broken by the new spacing.
