@@ -36,7 +36,7 @@ fn main() {
         ));
     }
     for h in [
-        "ida/ida.h",
+        "idas/idas.h",
         "sunlinsol/sunlinsol_klu.h",
         "nvector/nvector_serial.h",
     ] {

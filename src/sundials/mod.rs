@@ -1,5 +1,6 @@
-//! The only FFI in the crate: SUNDIALS 6 (IDA, serial N_Vector, KLU), SuiteSparse's
-//! UMFPACK and METIS's nested-dissection ordering behind safe types.
+//! The only FFI in the crate: SUNDIALS 6 (IDA through the IDAS library, which adds forward
+//! sensitivities to the same integrator; serial N_Vector, KLU), SuiteSparse's UMFPACK and
+//! METIS's nested-dissection ordering behind safe types.
 //!
 //! Every C handle is owned by a Rust value that frees it on drop; anything whose address C
 //! keeps (the user data, the linear-solver state) is boxed so it never moves. Callbacks are
