@@ -222,6 +222,29 @@ impl<T: Dae + ?Sized> Dae for Box<T> {
     }
 }
 
+/// A DAE `F(t, y, ẏ; p) = 0` on parameters `p₁ … p_m` whose forward sensitivities
+/// `sᵢ = ∂y/∂pᵢ` an integrator can carry beside the solution (SUNDIALS IDAS): each solves
+/// the linear DAE `F_y sᵢ + F_ẏ ṡᵢ + F_{pᵢ} = 0` along the solution.
+pub trait SensitivityDae: Dae {
+    /// The number of parameters m.
+    fn parameter_count(&self) -> usize;
+
+    /// The sensitivity residuals `out[i] = F_y s[i] + F_ẏ sp[i] + F_{pᵢ}` at `at`, where
+    /// `r = F(at)` (the residual the integrator has just evaluated there).
+    fn sensitivity_residuals(
+        &mut self,
+        at: State,
+        r: &[f64],
+        s: &[&[f64]],
+        sp: &[&[f64]],
+        out: &mut [&mut [f64]],
+    ) -> Result<(), DaeError>;
+
+    /// Consistent initial sensitivities `(sᵢ(t₀), ṡᵢ(t₀))`, one pair of vectors per
+    /// parameter: the derivatives of [`Dae::initial`]'s `y₀`, `ẏ₀` with respect to pᵢ.
+    fn initial_sensitivities(&self) -> (Vec<Vec<f64>>, Vec<Vec<f64>>);
+}
+
 /// A zero of the DAE's root functions ([`Dae::root_directions`]) that an integrator
 /// stopped at.
 #[derive(Debug, Clone, PartialEq)]

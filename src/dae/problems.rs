@@ -1,19 +1,23 @@
 //! Reference DAEs with published SUNDIALS outputs or closed-form solutions, shared by the
 //! tests, the examples and the benchmarks.
 //!
-//! - [`Robertson`]: the stiff chemical kinetics index-1 DAE of SUNDIALS' `idaRoberts_dns`.
+//! - [`Robertson`]: the stiff chemical kinetics index-1 DAE of SUNDIALS' `idaRoberts_dns`,
+//!   with the forward sensitivities to its three rate constants of `idasRoberts_FSA_dns`.
 //! - [`Heat2D`]: the 2-D heat equation with algebraic boundary rows of `idaHeat2D_bnd` /
 //!   `idaHeat2D_klu`.
 //! - [`Analytic`]: Ascher & Petzold's example 10.2 (`idaAnalytic_mels`), with solution
 //!   x₁ = eᵗ, x₂ = eᵗ/(t − 2).
 
-use super::{Dae, DaeError, Pattern, State};
+use super::{Dae, DaeError, Pattern, SensitivityDae, State};
 use crate::fem::assembly::{pattern_from_entries, position};
 
 /// Robertson kinetics: y₁' = −0.04 y₁ + 10⁴ y₂ y₃, y₂' = 0.04 y₁ − 10⁴ y₂ y₃ − 3·10⁷ y₂²,
-/// 0 = y₁ + y₂ + y₃ − 1, y(0) = (1, 0, 0).
+/// 0 = y₁ + y₂ + y₃ − 1, y(0) = (1, 0, 0). The rate constants are its parameters
+/// p = (0.04, 10⁴, 3·10⁷) ([`SensitivityDae`]).
 pub struct Robertson {
     pattern: Pattern,
+    /// The rate constants p₁, p₂, p₃.
+    pub p: [f64; 3],
 }
 
 impl Default for Robertson {
@@ -28,6 +32,7 @@ impl Robertson {
         let entries: Vec<_> = (0..3).flat_map(|c| (0..3).map(move |r| (r, c))).collect();
         Self {
             pattern: pattern_from_entries(3, &entries),
+            p: [0.04, 1.0e4, 3.0e7],
         }
     }
 }
@@ -38,9 +43,10 @@ impl Dae for Robertson {
     }
 
     fn residual(&mut self, State { y, yp, .. }: State, r: &mut [f64]) -> Result<(), DaeError> {
-        let f1 = -0.04 * y[0] + 1.0e4 * y[1] * y[2];
+        let [p1, p2, p3] = self.p;
+        let f1 = -p1 * y[0] + p2 * y[1] * y[2];
         r[0] = f1 - yp[0];
-        r[1] = -f1 - 3.0e7 * y[1] * y[1] - yp[1];
+        r[1] = -f1 - p3 * y[1] * y[1] - yp[1];
         r[2] = y[0] + y[1] + y[2] - 1.0;
         Ok(())
     }
@@ -51,9 +57,10 @@ impl Dae for Robertson {
 
     fn jacobian(&mut self, State { y, .. }: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
         // Dense pattern, column-major: v[3c + r] = J[r][c].
+        let [p1, p2, p3] = self.p;
         let j = [
-            [-0.04 - cj, 1.0e4 * y[2], 1.0e4 * y[1]],
-            [0.04, -1.0e4 * y[2] - 6.0e7 * y[1] - cj, -1.0e4 * y[1]],
+            [-p1 - cj, p2 * y[2], p2 * y[1]],
+            [p1, -p2 * y[2] - 2.0 * p3 * y[1] - cj, -p2 * y[1]],
             [1.0, 1.0, 1.0],
         ];
         for c in 0..3 {
@@ -69,7 +76,49 @@ impl Dae for Robertson {
     }
 
     fn initial(&self) -> (f64, Vec<f64>, Vec<f64>) {
-        (0.0, vec![1.0, 0.0, 0.0], vec![-0.04, 0.04, 0.0])
+        let p1 = self.p[0];
+        (0.0, vec![1.0, 0.0, 0.0], vec![-p1, p1, 0.0])
+    }
+}
+
+impl SensitivityDae for Robertson {
+    fn parameter_count(&self) -> usize {
+        3
+    }
+
+    fn sensitivity_residuals(
+        &mut self,
+        State { y, .. }: State,
+        _r: &[f64],
+        s: &[&[f64]],
+        sp: &[&[f64]],
+        out: &mut [&mut [f64]],
+    ) -> Result<(), DaeError> {
+        let [p1, p2, p3] = self.p;
+        for (i, o) in out.iter_mut().enumerate() {
+            let (s, sp) = (s[i], sp[i]);
+            // F_y s + F_ẏ ṡ, then + ∂F/∂pᵢ.
+            let df1 = -p1 * s[0] + p2 * (y[2] * s[1] + y[1] * s[2]);
+            o[0] = df1 - sp[0];
+            o[1] = -df1 - 2.0 * p3 * y[1] * s[1] - sp[1];
+            o[2] = s[0] + s[1] + s[2];
+            let dp = match i {
+                0 => [-y[0], y[0]],
+                1 => [y[1] * y[2], -y[1] * y[2]],
+                _ => [0.0, -y[1] * y[1]],
+            };
+            o[0] += dp[0];
+            o[1] += dp[1];
+        }
+        Ok(())
+    }
+
+    fn initial_sensitivities(&self) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+        // y₀ does not depend on p; ẏ₀ = (−p₁, p₁, 0) does on p₁.
+        let s0 = vec![vec![0.0; 3]; 3];
+        let mut sp0 = vec![vec![0.0; 3]; 3];
+        sp0[0] = vec![-1.0, 1.0, 0.0];
+        (s0, sp0)
     }
 }
 

@@ -15,6 +15,10 @@ use std::ptr;
 
 use sundials_sys as sys;
 
+mod sens;
+
+pub use sens::{SensitivityMethod, SensitivityOptions};
+
 use super::nls::Nls;
 use super::{Context, NVector, guard, ida_flag_name, view, view_mut};
 use crate::dae::linsolve::{FaerFactory, LinearSolver, LinearSolverError, SharedFactory};
@@ -180,6 +184,9 @@ pub struct Ida<D: Dae> {
     /// Our nonlinear solver, when `IdaOptions::nonlinear` asks for it (freed after IDA's
     /// memory).
     nls: Option<Nls>,
+    /// The forward sensitivities' vectors, when [`Ida::with_sensitivities`] asked for them
+    /// (freed after IDA's memory).
+    sens: Option<sens::Sensitivities>,
     // Dropped last: everything above was created in this context.
     ctx: Context,
 }
@@ -224,6 +231,16 @@ impl<D: Dae> Ida<D> {
     /// Sets IDA up on `dae` from its consistent initial values; with `opts.calc_ic` the
     /// initial conditions are corrected by IDACalcIC first.
     pub fn new(dae: D, opts: IdaOptions) -> Result<Self, IntegratorError> {
+        Self::build(dae, opts, None)
+    }
+
+    /// [`Ida::new`], with the forward sensitivities of `sens` initialized before the
+    /// initial conditions are corrected (IDACalcIC then corrects theirs too).
+    fn build(
+        dae: D,
+        opts: IdaOptions,
+        sens: Option<sens::SensitivityInit>,
+    ) -> Result<Self, IntegratorError> {
         let setup = Setup::new(&dae, opts.linear_solver.as_ref(), &opts.atol)?;
         let (t0, y0, yp0) = (setup.t0, setup.y0, setup.yp0);
         if !(opts.rtol >= 0.0) || !(1..=5).contains(&opts.max_order) {
@@ -272,9 +289,10 @@ impl<D: Dae> Ida<D> {
             accepted_to: f64::NEG_INFINITY,
             keep_before: false,
             nls: None,
+            sens: None,
             ctx,
         };
-        ida.setup(&opts, t0)?;
+        ida.setup(&opts, t0, sens)?;
         Ok(ida)
     }
 
@@ -296,7 +314,12 @@ impl<D: Dae> Ida<D> {
     /// Creates IDA's memory on the initial values and configures it from `opts`: the
     /// tolerances, our linear solver, the step limits, the differential components and
     /// constraints, and (with `opts.calc_ic`) the corrected initial conditions.
-    fn setup(&mut self, opts: &IdaOptions, t0: f64) -> Result<(), IntegratorError> {
+    fn setup(
+        &mut self,
+        opts: &IdaOptions,
+        t0: f64,
+        sens: Option<sens::SensitivityInit>,
+    ) -> Result<(), IntegratorError> {
         self.create_memory(opts, t0)?;
         if let Some(method) = opts.nonlinear {
             self.attach_nonlinear_solver(method)?;
@@ -308,6 +331,9 @@ impl<D: Dae> Ida<D> {
         self.set_step_limits(opts)?;
         self.set_components(opts)?;
         self.init_roots()?;
+        if let Some(init) = sens {
+            self.init_sensitivities(init)?;
+        }
         if let Some(ic) = opts.calc_ic {
             self.correct_initial_conditions(ic)?;
         }

@@ -14,7 +14,7 @@ mod metis;
 mod nls;
 mod umfpack;
 
-pub use ida::{CalcIc, Ida, IdaOptions, Krylov};
+pub use ida::{CalcIc, Ida, IdaOptions, Krylov, SensitivityMethod, SensitivityOptions};
 pub use klu::KluLu;
 pub use metis::{nested_dissection, nested_dissection_ata};
 pub use umfpack::{UmfpackLu, UmfpackOrdering};
