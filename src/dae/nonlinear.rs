@@ -17,7 +17,9 @@ pub enum NonlinearMethod {
     /// Newton on the kept iteration matrix (SUNDIALS' own iteration).
     #[default]
     Newton,
-    /// Broyden's updates of the kept matrix, up to `max_updates` per attempt.
+    /// Broyden's updates of the kept matrix, up to `max_updates` per attempt; an attempt
+    /// that took updates and failed on a fresh matrix is made again with Newton steps alone
+    /// before the step is cut.
     Broyden {
         /// Most updates per attempt (≥ 1).
         max_updates: usize,

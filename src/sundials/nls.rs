@@ -12,7 +12,10 @@
 //!
 //! With [`NonlinearMethod::Broyden`] the steps after the first of an attempt take
 //! Broyden's updates of M ([`crate::dae::nonlinear`]), up to `max_updates` of them; past
-//! that the updates start again from M. Each attempt starts from M, as its set-ups do.
+//! that the updates start again from M. Each attempt starts from M, as its set-ups do. An
+//! attempt that took updates and failed on a fresh matrix is made once more with plain
+//! Newton steps on that matrix before IDA is told (and cuts the step): the updates never
+//! fail a step that Newton would have taken.
 
 use std::os::raw::{c_int, c_long, c_void};
 use std::ptr;
@@ -265,6 +268,8 @@ unsafe fn solve_inner(
         };
         let delta = s.delta.0;
         let mut jbad: c_int = 0;
+        // Newton steps only: the repeat of an attempt whose updates failed on a fresh matrix.
+        let mut plain = false;
         s.niters = 0;
         s.nconvfails = 0;
         let mut retval;
@@ -277,6 +282,7 @@ unsafe fn solve_inner(
                 };
             }
             let mut linear = false;
+            let updates_before = s.counts.updates;
             s.curiter = 0;
             s.steps.clear();
             s.norms.clear();
@@ -291,7 +297,7 @@ unsafe fn solve_inner(
                         linear = true;
                         break;
                     }
-                    if let NonlinearMethod::Broyden { max_updates } = s.method {
+                    if let (NonlinearMethod::Broyden { max_updates }, false) = (s.method, plain) {
                         let (z, wv) = (view_mut(delta), view(w));
                         if s.curiter > 0
                             && s.steps.len() <= max_updates
@@ -341,6 +347,13 @@ unsafe fn solve_inner(
                 s.nconvfails += 1;
                 call_lsetup = 1;
                 jbad = 1;
+                view_mut(ycor).fill(0.0);
+                continue;
+            }
+            if retval > 0 && !plain && s.counts.updates > updates_before {
+                s.nconvfails += 1;
+                plain = true;
+                call_lsetup = 0;
                 view_mut(ycor).fill(0.0);
                 continue;
             }
