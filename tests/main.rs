@@ -16,6 +16,7 @@ mod model3d;
 mod output3;
 mod plots;
 mod scenes;
+mod sensitivity;
 mod shared;
 mod study;
 mod sweep;

@@ -24,6 +24,7 @@ pub mod condensed;
 pub mod linsolve;
 pub mod nonlinear;
 pub mod problems;
+pub mod sensitivity;
 pub mod timing;
 
 use faer::sparse::SymbolicSparseColMat;

@@ -1,0 +1,279 @@
+//! Forward sensitivities of any [`Dae`] to parameters it was built from: [`Perturbed`]
+//! carries the problem and, per parameter pᵢ, the same problem built at pᵢ ± δᵢ, and is a
+//! [`SensitivityDae`]:
+//!
+//! - `F_y sᵢ + F_ẏ ṡᵢ` from the problem's own Jacobian, `F_y = J(cj = 0)` and
+//!   `F_ẏ = J(1) − J(0)` (exact, as the Jacobian is; assembled once per state, however many
+//!   times the integrator asks at it);
+//! - `F_{pᵢ}` by central differences of the two perturbed problems' residuals at the same
+//!   state, `(F(pᵢ + δᵢ) − F(pᵢ − δᵢ)) / 2δᵢ`: exact where the residual is linear in pᵢ (a
+//!   modulus, the gravity), `O(δᵢ²)` otherwise.
+//!
+//! Nothing here knows what the problem is: the cell model of every dimension gets its
+//! sensitivities from its residual and Jacobian alone.
+
+use super::{Dae, DaeError, FirstOrderBlocks, Pattern, SensitivityDae, State};
+
+/// One parameter's perturbed problems and their step.
+pub struct PerturbedPair<M> {
+    /// The problem built at pᵢ + δᵢ.
+    pub plus: M,
+    /// The problem built at pᵢ − δᵢ.
+    pub minus: M,
+    /// δᵢ (> 0), in the parameter's units.
+    pub delta: f64,
+}
+
+/// The Jacobian's two parts at one state.
+struct Parts {
+    t: f64,
+    y: Vec<f64>,
+    yp: Vec<f64>,
+    /// F_y and F_ẏ in the pattern's order.
+    fy: Vec<f64>,
+    fyp: Vec<f64>,
+}
+
+/// A problem with its perturbed copies: a [`Dae`] as the problem is, and a
+/// [`SensitivityDae`] on the parameters of the pairs (see the module's text).
+pub struct Perturbed<M> {
+    /// The problem integrated.
+    pub model: M,
+    /// Per parameter, the problem at pᵢ ± δᵢ.
+    pub pairs: Vec<PerturbedPair<M>>,
+    parts: Option<Parts>,
+    scratch: (Vec<f64>, Vec<f64>),
+}
+
+impl<M: Dae> Perturbed<M> {
+    /// `model` and its perturbed pairs (each of the same size as `model`).
+    pub fn new(model: M, pairs: Vec<PerturbedPair<M>>) -> Result<Self, DaeError> {
+        let n = model.size();
+        for (i, p) in pairs.iter().enumerate() {
+            if p.plus.size() != n || p.minus.size() != n || !(p.delta > 0.0) {
+                return Err(DaeError::Fatal(format!(
+                    "parameter {i}: perturbed problems of {} and {} unknowns for {n}, δ = {}",
+                    p.plus.size(),
+                    p.minus.size(),
+                    p.delta
+                )));
+            }
+        }
+        Ok(Self {
+            model,
+            pairs,
+            parts: None,
+            scratch: (vec![0.0; n], vec![0.0; n]),
+        })
+    }
+
+    /// F_y and F_ẏ at `at`, assembled unless they are those of the last call's state.
+    fn parts_at(&mut self, at: State) -> Result<&Parts, DaeError> {
+        let current = self
+            .parts
+            .as_ref()
+            .is_some_and(|p| p.t == at.t && p.y == at.y && p.yp == at.yp);
+        if !current {
+            let nnz = self.model.pattern().row_idx().len();
+            let mut parts = self.parts.take().unwrap_or(Parts {
+                t: f64::NAN,
+                y: Vec::new(),
+                yp: Vec::new(),
+                fy: vec![0.0; nnz],
+                fyp: vec![0.0; nnz],
+            });
+            // Invalid until both are assembled.
+            parts.t = f64::NAN;
+            self.model.jacobian(at, 0.0, &mut parts.fy)?;
+            self.model.jacobian(at, 1.0, &mut parts.fyp)?;
+            for (d, j0) in parts.fyp.iter_mut().zip(&parts.fy) {
+                *d -= j0;
+            }
+            parts.t = at.t;
+            parts.y.clear();
+            parts.y.extend_from_slice(at.y);
+            parts.yp.clear();
+            parts.yp.extend_from_slice(at.yp);
+            self.parts = Some(parts);
+        }
+        Ok(self.parts.as_ref().expect("assembled above"))
+    }
+}
+
+/// `out += A x` for the values `a` of the pattern `p` (column-major).
+fn add_product(p: &Pattern, a: &[f64], x: &[f64], out: &mut [f64]) {
+    let (cp, ri) = (p.col_ptr(), p.row_idx());
+    for (c, &xc) in x.iter().enumerate() {
+        if xc != 0.0 {
+            for k in cp[c]..cp[c + 1] {
+                out[ri[k]] += a[k] * xc;
+            }
+        }
+    }
+}
+
+impl<M: Dae> Dae for Perturbed<M> {
+    fn size(&self) -> usize {
+        self.model.size()
+    }
+    fn residual(&mut self, at: State, r: &mut [f64]) -> Result<(), DaeError> {
+        self.model.residual(at, r)
+    }
+    fn pattern(&self) -> &Pattern {
+        self.model.pattern()
+    }
+    fn jacobian(&mut self, at: State, cj: f64, v: &mut [f64]) -> Result<(), DaeError> {
+        self.model.jacobian(at, cj, v)
+    }
+    fn differential(&self) -> Vec<bool> {
+        self.model.differential()
+    }
+    fn initial(&self) -> (f64, Vec<f64>, Vec<f64>) {
+        self.model.initial()
+    }
+    fn accepted_step(&mut self, t: f64, y: &[f64], yp: &[f64]) {
+        self.model.accepted_step(t, y, yp);
+        for p in &mut self.pairs {
+            p.plus.accepted_step(t, y, yp);
+            p.minus.accepted_step(t, y, yp);
+        }
+    }
+    fn breakpoints(&self) -> Vec<f64> {
+        self.model.breakpoints()
+    }
+    fn first_order_blocks(&self) -> Option<FirstOrderBlocks> {
+        self.model.first_order_blocks()
+    }
+    fn root_directions(&self) -> Vec<i32> {
+        self.model.root_directions()
+    }
+    fn root_functions(&mut self, at: State, g: &mut [f64]) -> Result<(), DaeError> {
+        self.model.root_functions(at, g)
+    }
+}
+
+impl<M: Dae> SensitivityDae for Perturbed<M> {
+    fn parameter_count(&self) -> usize {
+        self.pairs.len()
+    }
+
+    fn sensitivity_residuals(
+        &mut self,
+        at: State,
+        _r: &[f64],
+        s: &[&[f64]],
+        sp: &[&[f64]],
+        out: &mut [&mut [f64]],
+    ) -> Result<(), DaeError> {
+        self.parts_at(at)?;
+        let (mut plus, mut minus) = std::mem::take(&mut self.scratch);
+        let result = (|| {
+            let parts = self.parts.as_ref().expect("assembled by parts_at");
+            let pattern = self.model.pattern();
+            for (i, o) in out.iter_mut().enumerate() {
+                let pair = &mut self.pairs[i];
+                pair.plus.residual(at, &mut plus)?;
+                pair.minus.residual(at, &mut minus)?;
+                let h = 2.0 * pair.delta;
+                for ((o, a), b) in o.iter_mut().zip(&plus).zip(&minus) {
+                    *o = (a - b) / h;
+                }
+                add_product(pattern, &parts.fy, s[i], o);
+                add_product(pattern, &parts.fyp, sp[i], o);
+            }
+            Ok(())
+        })();
+        self.scratch = (plus, minus);
+        result
+    }
+
+    /// The central differences of the perturbed problems' initial values.
+    fn initial_sensitivities(&self) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+        let diff = |a: &[f64], b: &[f64], h: f64| -> Vec<f64> {
+            a.iter().zip(b).map(|(a, b)| (a - b) / h).collect()
+        };
+        self.pairs
+            .iter()
+            .map(|p| {
+                let ((_, y1, yp1), (_, y0, yp0)) = (p.plus.initial(), p.minus.initial());
+                let h = 2.0 * p.delta;
+                (diff(&y1, &y0, h), diff(&yp1, &yp0, h))
+            })
+            .unzip()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dae::problems::Robertson;
+
+    fn robertson_at(p: [f64; 3]) -> Robertson {
+        let mut r = Robertson::new();
+        r.p = p;
+        r
+    }
+
+    #[test]
+    fn perturbed_robertson_has_robertsons_own_sensitivity_residuals() {
+        // Robertson's analytic sensitivity residuals against the generic ones made of its
+        // Jacobian and perturbed copies, at a state off the solution with arbitrary s, ṡ.
+        let p = Robertson::new().p;
+        let pairs = (0..3)
+            .map(|i| {
+                let delta = 1e-3 * p[i];
+                let (mut up, mut down) = (p, p);
+                up[i] += delta;
+                down[i] -= delta;
+                PerturbedPair {
+                    plus: robertson_at(up),
+                    minus: robertson_at(down),
+                    delta,
+                }
+            })
+            .collect();
+        let mut generic = Perturbed::new(Robertson::new(), pairs).unwrap();
+        let mut exact = Robertson::new();
+        let (y, yp) = ([0.7, 2e-5, 0.3], [-0.3, 1e-3, 0.3]);
+        let at = State::new(3.0, &y, &yp);
+        let s: Vec<Vec<f64>> = (0..3)
+            .map(|i| vec![0.1 * i as f64 - 0.2, 1e-6, 0.05])
+            .collect();
+        let sp: Vec<Vec<f64>> = (0..3).map(|i| vec![0.3, -0.1 * i as f64, 0.0]).collect();
+        let (s_ref, sp_ref): (Vec<&[f64]>, Vec<&[f64]>) = (
+            s.iter().map(|v| &v[..]).collect(),
+            sp.iter().map(|v| &v[..]).collect(),
+        );
+        let mut r = [0.0; 3];
+        exact.residual(at, &mut r).unwrap();
+        let mut a = vec![vec![0.0; 3]; 3];
+        let mut b = vec![vec![0.0; 3]; 3];
+        {
+            let mut out: Vec<&mut [f64]> = a.iter_mut().map(|v| &mut v[..]).collect();
+            generic
+                .sensitivity_residuals(at, &r, &s_ref, &sp_ref, &mut out)
+                .unwrap();
+        }
+        {
+            let mut out: Vec<&mut [f64]> = b.iter_mut().map(|v| &mut v[..]).collect();
+            exact
+                .sensitivity_residuals(at, &r, &s_ref, &sp_ref, &mut out)
+                .unwrap();
+        }
+        for i in 0..3 {
+            for k in 0..3 {
+                // The residual is linear in each pᵢ: the differences are exact to round-off.
+                let scale = b[i].iter().fold(1e-300_f64, |m, v| m.max(v.abs()));
+                assert!(
+                    (a[i][k] - b[i][k]).abs() <= 1e-9 * scale,
+                    "parameter {i}, row {k}: {} against {}",
+                    a[i][k],
+                    b[i][k]
+                );
+            }
+        }
+        let (s0, sp0) = generic.initial_sensitivities();
+        assert_eq!(s0, vec![vec![0.0; 3]; 3]);
+        assert!((sp0[0][0] + 1.0).abs() < 1e-12 && (sp0[0][1] - 1.0).abs() < 1e-12);
+    }
+}
