@@ -933,3 +933,40 @@ fn the_measures_table_gives_each_run_and_its_difference_from_the_first() {
         Some(2)
     );
 }
+
+#[test]
+fn sensitivity_refuses_what_it_cannot_follow_with_status_2() {
+    // A case whose system changes during the run, and a parameter that is no number field:
+    // each refused before anything is integrated, naming the fields.
+    for (args, expected) in [
+        (
+            vec![
+                "sensitivity",
+                "cases/flat.ron",
+                "--param",
+                "materials.cytoplasm.e",
+            ],
+            "error: cases/flat.ron: sensitivities through a change of the system are not \
+             implemented yet; this case changes it: inertia.mode = OffAfter (inertia is \
+             switched off during the run); solver.defer_adhesion = true with adhesion (the \
+             μ_as unknowns join at T_g0)",
+        ),
+        (
+            vec![
+                "sensitivity",
+                "cases/fast/push-pull-short-drag.ron",
+                "--set",
+                "solver.defer_adhesion=false",
+                "--param",
+                "materials.cytoplasm.modulus",
+            ],
+            "error: --param materials.cytoplasm.modulus: not a number field of \
+             cases/fast/push-pull-short-drag.ron (a dotted path, e.g. materials.cytoplasm.e)",
+        ),
+    ] {
+        let out = cellsim(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.trim_end(), expected, "{args:?}");
+    }
+}

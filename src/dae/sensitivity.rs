@@ -1,26 +1,24 @@
 //! Forward sensitivities of any [`Dae`] to parameters it was built from: [`Perturbed`]
-//! carries the problem and, per parameter pᵢ, the same problem built at pᵢ ± δᵢ, and is a
+//! carries the problem and, per parameter pᵢ, the same problem built at pᵢ + δᵢ, and is a
 //! [`SensitivityDae`]:
 //!
 //! - `F_y sᵢ + F_ẏ ṡᵢ` from the problem's own Jacobian, `F_y = J(cj = 0)` and
 //!   `F_ẏ = J(1) − J(0)` (exact, as the Jacobian is; assembled once per state, however many
 //!   times the integrator asks at it);
-//! - `F_{pᵢ}` by central differences of the two perturbed problems' residuals at the same
-//!   state, `(F(pᵢ + δᵢ) − F(pᵢ − δᵢ)) / 2δᵢ`: exact where the residual is linear in pᵢ (a
-//!   modulus, the gravity), `O(δᵢ²)` otherwise.
+//! - `F_{pᵢ}` by the difference of the perturbed problem's residual at the same state,
+//!   `(F(pᵢ + δᵢ) − F(pᵢ)) / δᵢ`, once per state: exact where the residual is linear in pᵢ
+//!   (a modulus, the gravity), `O(δᵢ)` otherwise (δᵢ = 1e-7 |pᵢ| leaves ~1e-7 relative).
 //!
 //! Nothing here knows what the problem is: the cell model of every dimension gets its
 //! sensitivities from its residual and Jacobian alone.
 
 use super::{Dae, DaeError, FirstOrderBlocks, Pattern, SensitivityDae, State};
 
-/// One parameter's perturbed problems and their step.
-pub struct PerturbedPair<M> {
+/// One parameter's perturbed problem and its step.
+pub struct PerturbedModel<M> {
     /// The problem built at pᵢ + δᵢ.
-    pub plus: M,
-    /// The problem built at pᵢ − δᵢ.
-    pub minus: M,
-    /// δᵢ (> 0), in the parameter's units.
+    pub model: M,
+    /// δᵢ (≠ 0), in the parameter's units.
     pub delta: f64,
 }
 
@@ -32,6 +30,8 @@ struct Parts {
     /// F_y and F_ẏ in the pattern's order.
     fy: Vec<f64>,
     fyp: Vec<f64>,
+    /// F_{pᵢ} per parameter.
+    fp: Vec<Vec<f64>>,
 }
 
 /// A problem with its perturbed copies: a [`Dae`] as the problem is, and a
@@ -39,36 +39,34 @@ struct Parts {
 pub struct Perturbed<M> {
     /// The problem integrated.
     pub model: M,
-    /// Per parameter, the problem at pᵢ ± δᵢ.
-    pub pairs: Vec<PerturbedPair<M>>,
+    /// Per parameter, the problem at pᵢ + δᵢ.
+    pub perturbed: Vec<PerturbedModel<M>>,
     parts: Option<Parts>,
-    scratch: (Vec<f64>, Vec<f64>),
 }
 
 impl<M: Dae> Perturbed<M> {
-    /// `model` and its perturbed pairs (each of the same size as `model`).
-    pub fn new(model: M, pairs: Vec<PerturbedPair<M>>) -> Result<Self, DaeError> {
+    /// `model` and its perturbed copies (each of the same size as `model`).
+    pub fn new(model: M, perturbed: Vec<PerturbedModel<M>>) -> Result<Self, DaeError> {
         let n = model.size();
-        for (i, p) in pairs.iter().enumerate() {
-            if p.plus.size() != n || p.minus.size() != n || !(p.delta > 0.0) {
+        for (i, p) in perturbed.iter().enumerate() {
+            if p.model.size() != n || p.delta == 0.0 || !p.delta.is_finite() {
                 return Err(DaeError::Fatal(format!(
-                    "parameter {i}: perturbed problems of {} and {} unknowns for {n}, δ = {}",
-                    p.plus.size(),
-                    p.minus.size(),
+                    "parameter {i}: a perturbed problem of {} unknowns for {n}, δ = {}",
+                    p.model.size(),
                     p.delta
                 )));
             }
         }
         Ok(Self {
             model,
-            pairs,
+            perturbed,
             parts: None,
-            scratch: (vec![0.0; n], vec![0.0; n]),
         })
     }
 
-    /// F_y and F_ẏ at `at`, assembled unless they are those of the last call's state.
-    fn parts_at(&mut self, at: State) -> Result<&Parts, DaeError> {
+    /// F_y, F_ẏ and F_p at `at` (where F = `r`), assembled unless they are those of the
+    /// last call's state.
+    fn parts_at(&mut self, at: State, r: &[f64]) -> Result<&Parts, DaeError> {
         let current = self
             .parts
             .as_ref()
@@ -81,13 +79,20 @@ impl<M: Dae> Perturbed<M> {
                 yp: Vec::new(),
                 fy: vec![0.0; nnz],
                 fyp: vec![0.0; nnz],
+                fp: vec![vec![0.0; r.len()]; self.perturbed.len()],
             });
-            // Invalid until both are assembled.
+            // Invalid until all are assembled.
             parts.t = f64::NAN;
             self.model.jacobian(at, 0.0, &mut parts.fy)?;
             self.model.jacobian(at, 1.0, &mut parts.fyp)?;
             for (d, j0) in parts.fyp.iter_mut().zip(&parts.fy) {
                 *d -= j0;
+            }
+            for (p, fp) in self.perturbed.iter_mut().zip(&mut parts.fp) {
+                p.model.residual(at, fp)?;
+                for (f, r) in fp.iter_mut().zip(r) {
+                    *f = (*f - r) / p.delta;
+                }
             }
             parts.t = at.t;
             parts.y.clear();
@@ -133,9 +138,8 @@ impl<M: Dae> Dae for Perturbed<M> {
     }
     fn accepted_step(&mut self, t: f64, y: &[f64], yp: &[f64]) {
         self.model.accepted_step(t, y, yp);
-        for p in &mut self.pairs {
-            p.plus.accepted_step(t, y, yp);
-            p.minus.accepted_step(t, y, yp);
+        for p in &mut self.perturbed {
+            p.model.accepted_step(t, y, yp);
         }
     }
     fn breakpoints(&self) -> Vec<f64> {
@@ -154,50 +158,39 @@ impl<M: Dae> Dae for Perturbed<M> {
 
 impl<M: Dae> SensitivityDae for Perturbed<M> {
     fn parameter_count(&self) -> usize {
-        self.pairs.len()
+        self.perturbed.len()
     }
 
     fn sensitivity_residuals(
         &mut self,
         at: State,
-        _r: &[f64],
+        r: &[f64],
         s: &[&[f64]],
         sp: &[&[f64]],
         out: &mut [&mut [f64]],
     ) -> Result<(), DaeError> {
-        self.parts_at(at)?;
-        let (mut plus, mut minus) = std::mem::take(&mut self.scratch);
-        let result = (|| {
-            let parts = self.parts.as_ref().expect("assembled by parts_at");
-            let pattern = self.model.pattern();
-            for (i, o) in out.iter_mut().enumerate() {
-                let pair = &mut self.pairs[i];
-                pair.plus.residual(at, &mut plus)?;
-                pair.minus.residual(at, &mut minus)?;
-                let h = 2.0 * pair.delta;
-                for ((o, a), b) in o.iter_mut().zip(&plus).zip(&minus) {
-                    *o = (a - b) / h;
-                }
-                add_product(pattern, &parts.fy, s[i], o);
-                add_product(pattern, &parts.fyp, sp[i], o);
-            }
-            Ok(())
-        })();
-        self.scratch = (plus, minus);
-        result
+        self.parts_at(at, r)?;
+        let parts = self.parts.as_ref().expect("assembled by parts_at");
+        let pattern = self.model.pattern();
+        for (i, o) in out.iter_mut().enumerate() {
+            o.copy_from_slice(&parts.fp[i]);
+            add_product(pattern, &parts.fy, s[i], o);
+            add_product(pattern, &parts.fyp, sp[i], o);
+        }
+        Ok(())
     }
 
-    /// The central differences of the perturbed problems' initial values.
+    /// The differences of the perturbed problems' initial values.
     fn initial_sensitivities(&self) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+        let (_, y0, yp0) = self.model.initial();
         let diff = |a: &[f64], b: &[f64], h: f64| -> Vec<f64> {
             a.iter().zip(b).map(|(a, b)| (a - b) / h).collect()
         };
-        self.pairs
+        self.perturbed
             .iter()
             .map(|p| {
-                let ((_, y1, yp1), (_, y0, yp0)) = (p.plus.initial(), p.minus.initial());
-                let h = 2.0 * p.delta;
-                (diff(&y1, &y0, h), diff(&yp1, &yp0, h))
+                let (_, y1, yp1) = p.model.initial();
+                (diff(&y1, &y0, p.delta), diff(&yp1, &yp0, p.delta))
             })
             .unzip()
     }
@@ -219,20 +212,18 @@ mod tests {
         // Robertson's analytic sensitivity residuals against the generic ones made of its
         // Jacobian and perturbed copies, at a state off the solution with arbitrary s, ṡ.
         let p = Robertson::new().p;
-        let pairs = (0..3)
+        let perturbed = (0..3)
             .map(|i| {
                 let delta = 1e-3 * p[i];
-                let (mut up, mut down) = (p, p);
+                let mut up = p;
                 up[i] += delta;
-                down[i] -= delta;
-                PerturbedPair {
-                    plus: robertson_at(up),
-                    minus: robertson_at(down),
+                PerturbedModel {
+                    model: robertson_at(up),
                     delta,
                 }
             })
             .collect();
-        let mut generic = Perturbed::new(Robertson::new(), pairs).unwrap();
+        let mut generic = Perturbed::new(Robertson::new(), perturbed).unwrap();
         let mut exact = Robertson::new();
         let (y, yp) = ([0.7, 2e-5, 0.3], [-0.3, 1e-3, 0.3]);
         let at = State::new(3.0, &y, &yp);

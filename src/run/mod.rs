@@ -35,6 +35,7 @@ use crate::sundials::{Ida, IdaOptions, Krylov};
 
 mod cell;
 mod events;
+pub mod sensitivity;
 mod shared;
 use cell::{Cell, ModelView, RunModel};
 pub use shared::{Member, run_all, shared_until};
