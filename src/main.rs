@@ -1082,6 +1082,7 @@ fn sensitivity_command(
         params,
         out: out.clone(),
         error_control,
+        progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
     };
     match sensitivities(&req) {
         Ok(report) => {

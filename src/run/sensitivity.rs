@@ -51,6 +51,8 @@ pub struct SensitivityRequest {
     /// Include the sensitivities in IDAS's error test (their accuracy controlled too, at
     /// the price of more steps); otherwise the solution's steps carry them.
     pub error_control: bool,
+    /// Show a progress bar (on a terminal).
+    pub progress: bool,
 }
 
 /// One output time's measures and their derivatives.
@@ -189,8 +191,12 @@ pub fn sensitivities(req: &SensitivityRequest) -> Result<SensitivityReport, Sens
     }
     csv.push('\n');
     let mut rows = Vec::new();
+    let bar = super::progress_bar(&req.case, req.progress);
     for t in output_times(&req.case) {
-        ida.advance_to(t, &mut |_, _| true)?;
+        ida.advance_to(t, &mut |t, _| {
+            bar.set_position((t * 1000.0).round() as u64);
+            true
+        })?;
         let s = ida
             .sensitivities(0)
             .expect("the integrator carries sensitivities")?;
@@ -224,6 +230,7 @@ pub fn sensitivities(req: &SensitivityRequest) -> Result<SensitivityReport, Sens
             derivatives,
         });
     }
+    bar.finish_and_clear();
     Ok(SensitivityReport {
         params,
         rows,
