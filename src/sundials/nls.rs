@@ -275,11 +275,21 @@ unsafe fn solve_inner(
         let mut retval;
         loop {
             retval = sys_fn(ycor, delta, mem);
+            let residual_refused = retval != 0;
             if retval == 0 && call_lsetup != 0 {
                 retval = match s.lsetup {
                     Some(lsetup) => lsetup(jbad, &mut s.jcur, mem),
                     None => sys::SUN_NLS_MEM_NULL,
                 };
+            }
+            if retval != 0 {
+                // As SUNDIALS' Newton: a residual refused at the predictor, or a failed
+                // set-up, goes back to IDA (which cuts the step) without another attempt:
+                // the same attempt would fail the same way.
+                if retval > 0 {
+                    record(s, retval, !residual_refused, mem);
+                }
+                break;
             }
             let mut linear = false;
             let updates_before = s.counts.updates;
