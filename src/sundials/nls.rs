@@ -296,58 +296,56 @@ unsafe fn solve_inner(
             s.curiter = 0;
             s.steps.clear();
             s.norms.clear();
-            if retval == 0 {
-                loop {
-                    s.niters += 1;
-                    for d in view_mut(delta).iter_mut() {
-                        *d = -*d;
+            loop {
+                s.niters += 1;
+                for d in view_mut(delta).iter_mut() {
+                    *d = -*d;
+                }
+                retval = lsolve(delta, mem);
+                if retval != 0 {
+                    linear = true;
+                    break;
+                }
+                if let (NonlinearMethod::Broyden { max_updates }, false) = (s.method, plain) {
+                    let (z, wv) = (view_mut(delta), view(w));
+                    if s.curiter > 0
+                        && s.steps.len() <= max_updates
+                        && broyden_step(z, &s.steps, &s.norms, wv)
+                    {
+                        s.counts.updates += 1;
+                    } else {
+                        // The first step, past the updates allowed, or a vanishing
+                        // denominator: a plain step on M, the updates started again.
+                        s.steps.clear();
+                        s.norms.clear();
                     }
-                    retval = lsolve(delta, mem);
-                    if retval != 0 {
-                        linear = true;
-                        break;
-                    }
-                    if let (NonlinearMethod::Broyden { max_updates }, false) = (s.method, plain) {
-                        let (z, wv) = (view_mut(delta), view(w));
-                        if s.curiter > 0
-                            && s.steps.len() <= max_updates
-                            && broyden_step(z, &s.steps, &s.norms, wv)
-                        {
-                            s.counts.updates += 1;
-                        } else {
-                            // The first step, past the updates allowed, or a vanishing
-                            // denominator: a plain step on M, the updates started again.
-                            s.steps.clear();
-                            s.norms.clear();
-                        }
-                        if s.steps.len() <= max_updates {
-                            let n = dot_w(z, z, wv);
-                            if n > 0.0 && n.is_finite() {
-                                s.steps.push(z.to_vec());
-                                s.norms.push(n);
-                            }
+                    if s.steps.len() <= max_updates {
+                        let n = dot_w(z, z, wv);
+                        if n > 0.0 && n.is_finite() {
+                            s.steps.push(z.to_vec());
+                            s.norms.push(n);
                         }
                     }
-                    for (y, d) in view_mut(ycor).iter_mut().zip(view(delta)) {
-                        *y += d;
-                    }
-                    retval = ctest(nls, ycor, delta, tol, w, s.ctest_data);
-                    if retval == 0 {
-                        s.jcur = 0;
-                        return 0;
-                    }
-                    if retval != sys::SUN_NLS_CONTINUE {
-                        break;
-                    }
-                    s.curiter += 1;
-                    if s.curiter >= s.max_iters {
-                        retval = sys::SUN_NLS_CONV_RECVR;
-                        break;
-                    }
-                    retval = sys_fn(ycor, delta, mem);
-                    if retval != 0 {
-                        break;
-                    }
+                }
+                for (y, d) in view_mut(ycor).iter_mut().zip(view(delta)) {
+                    *y += d;
+                }
+                retval = ctest(nls, ycor, delta, tol, w, s.ctest_data);
+                if retval == 0 {
+                    s.jcur = 0;
+                    return 0;
+                }
+                if retval != sys::SUN_NLS_CONTINUE {
+                    break;
+                }
+                s.curiter += 1;
+                if s.curiter >= s.max_iters {
+                    retval = sys::SUN_NLS_CONV_RECVR;
+                    break;
+                }
+                retval = sys_fn(ycor, delta, mem);
+                if retval != 0 {
+                    break;
                 }
             }
             if retval > 0 {
