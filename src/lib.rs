@@ -66,6 +66,7 @@ pub mod case;
 pub mod commands;
 pub mod dae;
 pub mod fem;
+pub mod fit;
 pub mod model;
 pub mod physics;
 pub mod render;

@@ -152,6 +152,14 @@ enum Command {
         #[arg(long)]
         error_control: bool,
     },
+    /// Fit case parameters to measurements (FIT.ron: cases, parameters with bounds and
+    /// scales, targets) by weighted least squares, Levenberg–Marquardt with bounds,
+    /// gradients from the IDAS sensitivities (differences of whole runs where a case's
+    /// system changes during the run): writes fit.json (values, standard errors,
+    /// correlations, what the data cannot determine), history.csv, residuals.csv and
+    /// fit-<case>-<measure>.png. With --make-data: writes the Series targets' data files
+    /// from runs at --truth with --noise (a twin experiment).
+    Fit(FitArgs),
     /// Redraw one run's figures from its files (works on a run that stopped early).
     Plot {
         /// The run directory (as written by `cellsim run`).
@@ -334,6 +342,35 @@ struct StudyArgs {
     /// No progress display while a run integrates.
     #[arg(long)]
     quiet: bool,
+}
+
+#[derive(clap::Args)]
+struct FitArgs {
+    /// The fit file (RON), e.g. cases/fits/twin.ron.
+    fit: PathBuf,
+    /// Output directory [default: runs/fit/<fit name>].
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Runs at once (cases, difference runs).
+    #[arg(long, default_value_t = 2)]
+    jobs: usize,
+    /// No line per evaluation on stderr.
+    #[arg(long)]
+    quiet: bool,
+    /// Do not fit: write each Series target's data file from runs at --truth, with
+    /// Gaussian noise of --noise (a twin experiment's data).
+    #[arg(long)]
+    make_data: bool,
+    /// With --make-data: a parameter's true value, PATH=VALUE (repeatable; the others at
+    /// their start).
+    #[arg(long = "truth", value_name = "PATH=VALUE", allow_hyphen_values = true)]
+    truth: Vec<String>,
+    /// With --make-data: a measured column and its noise σ, COLUMN=SIGMA (repeatable).
+    #[arg(long = "noise", value_name = "COLUMN=SIGMA")]
+    noise: Vec<String>,
+    /// With --make-data: the noise's seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 #[derive(clap::Args)]
@@ -556,6 +593,7 @@ fn main() -> ExitCode {
             out,
             error_control,
         } => sensitivity_command(&case, params, &set, out, error_control),
+        Command::Fit(args) => fit_command(args),
         Command::Plot { run_dir, out, with } => plot_command(&run_dir, out, &with),
         Command::Mesh { case, svg } => mesh_command(&case, svg.as_deref()),
         Command::Check { case, set } => check_command(&case, &set),
@@ -1114,6 +1152,124 @@ fn sensitivity_command(
                 }
                 _ => ExitCode::from(1),
             }
+        }
+    }
+}
+
+/// `NAME=NUMBER` of `--truth` and `--noise`.
+fn name_number(flag: &str, arg: &str) -> Result<(String, f64), ExitCode> {
+    let parsed = arg.split_once('=').and_then(|(n, v)| {
+        let v: f64 = v.trim().parse().ok()?;
+        (v.is_finite() && !n.trim().is_empty()).then(|| (n.trim().to_string(), v))
+    });
+    parsed.ok_or_else(|| {
+        err!("error: --{flag} {arg:?}: expected NAME=NUMBER");
+        ExitCode::from(2)
+    })
+}
+
+fn fit_command(args: FitArgs) -> ExitCode {
+    use cellsim::fit;
+    if args.jobs == 0 {
+        err!("error: --jobs = 0 is out of range (must be at least 1)");
+        return ExitCode::from(2);
+    }
+    let spec = match fit::spec::load(&args.fit, !args.make_data) {
+        Ok(s) => s,
+        Err(e) => {
+            err!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let out = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("runs").join("fit").join(&spec.name));
+    if args.make_data {
+        let truth = tryc!(
+            args.truth
+                .iter()
+                .map(|a| name_number("truth", a))
+                .collect::<Result<Vec<_>, _>>()
+        );
+        let noise = tryc!(
+            args.noise
+                .iter()
+                .map(|a| name_number("noise", a))
+                .collect::<Result<Vec<_>, _>>()
+        );
+        return match fit::make_data(&spec, &truth, &noise, args.seed, &out) {
+            Ok(files) => {
+                for f in files {
+                    out!("wrote {}", f.display());
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                err!("error: {e}");
+                ExitCode::from(1)
+            }
+        };
+    }
+    if !args.truth.is_empty() || !args.noise.is_empty() {
+        err!("error: --truth and --noise go with --make-data");
+        return ExitCode::from(2);
+    }
+    let opts = fit::FitOptions {
+        out: out.clone(),
+        jobs: args.jobs,
+        quiet: args.quiet,
+    };
+    match fit::run_fit(&spec, &opts) {
+        Ok(r) => {
+            out!(
+                "{}: {} ({} iterations, {} evaluations, {:.1} s); χ² {:.4e} -> {:.4e} \
+                 ({} data, {} degrees of freedom, reduced χ² {:.3})",
+                r.name,
+                r.termination,
+                r.iterations,
+                r.evaluations,
+                r.wall_seconds,
+                r.chi2_start,
+                r.chi2,
+                r.data_points,
+                r.degrees_of_freedom,
+                r.reduced_chi2
+            );
+            out!("| parameter | start | fitted | standard error | bounds |");
+            out!("|---|---:|---:|---:|---|");
+            for p in &r.parameters {
+                out!(
+                    "| {} | {:.6e} | {:.6e} | {:.3e}{} | [{}, {}] |",
+                    p.path,
+                    p.start,
+                    p.value,
+                    p.standard_error,
+                    if p.at_bound { " (at a bound)" } else { "" },
+                    p.lower,
+                    p.upper
+                );
+            }
+            for d in &r.undetermined {
+                let c: Vec<String> = d
+                    .combination
+                    .iter()
+                    .map(|(n, w)| format!("{w:+.3} {n}"))
+                    .collect();
+                out!(
+                    "not determined by the data: {} (standard error {:.3} in z)",
+                    c.join(" "),
+                    d.standard_error
+                );
+            }
+            out!(
+                "fit.json, history.csv, residuals.csv and figures in {}",
+                out.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            err!("error: {}: {e}", args.fit.display());
+            ExitCode::from(1)
         }
     }
 }

@@ -9,6 +9,7 @@ mod docs;
 mod events;
 mod fd;
 mod fem3;
+mod fit;
 mod hard;
 mod linsolve;
 mod model;

@@ -101,7 +101,7 @@ impl SensitivityReport {
 
 /// Why a case's system changes during the run, if it does (which this command cannot
 /// follow yet): the fields that make it so.
-fn restarts(case: &Case) -> Vec<&'static str> {
+pub fn restarts(case: &Case) -> Vec<&'static str> {
     let mut why = Vec::new();
     if matches!(case.inertia.mode, InertiaMode::OffAfter(_)) {
         why.push("inertia.mode = OffAfter (inertia is switched off during the run)");
