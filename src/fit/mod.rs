@@ -7,8 +7,8 @@
 //! `z` ([`spec::Scale`]: `ln(p/p₀)`, or `p − p₀` in units of the start p₀), so that the Jacobian's
 //! columns are comparable: its singular values and vectors say which combinations the data
 //! determine. Gradients come from the forward sensitivities integrated by IDAS with the
-//! solution ([`crate::run::sensitivity`]) where the case's system does not change during
-//! the run, and from central differences of whole runs otherwise (or everywhere, with
+//! solution ([`crate::run::sensitivity`]), and from central differences of whole runs for
+//! a case with a phase started by a condition (or everywhere, with
 //! `gradient: Differences`: the check).
 //!
 //! A run that fails at a trial point is reported and counted as a step that increased the
@@ -27,7 +27,7 @@ use serde::Serialize;
 use crate::case::{Case, Override};
 use crate::run::sensitivity::{SensitivityRequest, restarts, sensitivities};
 use crate::run::{self, RunOptions};
-use spec::{Datum, Fit, Gradient, Param, Scale, measure_names};
+use spec::{Datum, Fit, Gradient, Param, Scale, When, measure_names};
 
 /// A case's measures over its run: per output time, each of [`measure_names`]; with the
 /// sensitivities, per parameter ∂m/∂p at each time.
@@ -42,15 +42,24 @@ pub struct Curves {
 }
 
 impl Curves {
-    /// The measure `m` at `t` (`None`: the end), linear between output times; with the
-    /// weights of the two rows used.
-    fn at(&self, t: Option<f64>) -> Result<[(usize, f64); 2], String> {
+    /// The rows and weights that give measure `m` at `when`: linear between output times,
+    /// or the row where `m` is lowest.
+    fn at(&self, m: usize, when: When) -> Result<[(usize, f64); 2], String> {
         let n = self.t.len();
         if n == 0 {
             return Err("the run wrote no output".into());
         }
-        let t = t.unwrap_or(self.t_end);
         let tol = 1e-9 * self.t_end.max(1.0);
+        let t = match when {
+            When::Lowest => {
+                let k = (0..n)
+                    .min_by(|&a, &b| self.values[a][m].total_cmp(&self.values[b][m]))
+                    .expect("n > 0");
+                return Ok([(k, 1.0), (k, 0.0)]);
+            }
+            When::End => self.t_end,
+            When::At(t) => t,
+        };
         if t > self.t[n - 1] + tol {
             return Err(format!(
                 "the run reached t = {} s only, short of t = {t} s",
@@ -72,19 +81,26 @@ impl Curves {
         Ok([(k - 1, 1.0 - w), (k, w)])
     }
 
-    /// The value of measure `m` at `t`.
-    pub fn value(&self, m: usize, t: Option<f64>) -> Result<f64, String> {
-        let w = self.at(t)?;
+    /// The value of measure `m` at `when`.
+    pub fn value(&self, m: usize, when: When) -> Result<f64, String> {
+        let w = self.at(m, when)?;
         Ok(w.iter().map(|(k, a)| a * self.values[*k][m]).sum())
     }
 
-    /// ∂m/∂p_j at `t` (the sensitivities must be there).
-    fn derivative(&self, j: usize, m: usize, t: Option<f64>) -> Result<f64, String> {
+    /// The time of measure `m` at `when`.
+    pub fn time(&self, m: usize, when: When) -> Result<f64, String> {
+        let w = self.at(m, when)?;
+        Ok(w.iter().map(|(k, a)| a * self.t[*k]).sum())
+    }
+
+    /// ∂m/∂p_j at `when` (the sensitivities must be there; at the lowest row, the
+    /// derivative there: the envelope of the rows).
+    fn derivative(&self, j: usize, m: usize, when: When) -> Result<f64, String> {
         let d = self
             .derivatives
             .as_ref()
             .ok_or("no sensitivities were integrated")?;
-        let w = self.at(t)?;
+        let w = self.at(m, when)?;
         Ok(w.iter().map(|(k, a)| a * d[j][*k][m]).sum())
     }
 }
@@ -93,7 +109,12 @@ impl Curves {
 pub fn case_at(fit: &Fit, k: usize, p: &[f64]) -> Result<Case, String> {
     let c = &fit.cases[k];
     let mut set = c.set.clone();
-    for (param, v) in fit.params.iter().zip(p) {
+    for (param, v) in fit
+        .params
+        .iter()
+        .zip(p)
+        .filter(|(q, _)| q.cases.contains(&k))
+    {
         set.push(
             Override::new(&param.path, &format!("{v:e}"))
                 .map_err(|e| format!("{} = {v:e}: {e}", param.path))?,
@@ -129,10 +150,14 @@ pub fn evaluate(
     let ib = uy_bottom_index();
     let t_end = case.phases.t_end;
     if sensitive {
+        // The parameters of this case; the others' derivatives are 0.
+        let own: Vec<usize> = (0..fit.params.len())
+            .filter(|&j| fit.params[j].cases.contains(&k))
+            .collect();
         let req = SensitivityRequest {
             case: case.clone(),
             file: file.clone(),
-            params: fit.params.iter().map(|q| q.path.clone()).collect(),
+            params: own.iter().map(|&j| fit.params[j].path.clone()).collect(),
             out: dir.to_path_buf(),
             error_control: false,
             progress: false,
@@ -146,11 +171,17 @@ pub fn evaluate(
             let mut v = row.values.clone();
             let pen = penetration(&case, v[ib]);
             v.push(pen);
+            let zeros = vec![0.0; v.len()];
             values.push(v);
-            for (j, d) in row.derivatives.iter().enumerate() {
-                let mut d = d.clone();
-                d.push(if pen > 0.0 { -d[ib] } else { 0.0 });
-                derivatives[j].push(d);
+            for (j, list) in derivatives.iter_mut().enumerate() {
+                match own.iter().position(|&o| o == j) {
+                    Some(i) => {
+                        let mut d = row.derivatives[i].clone();
+                        d.push(if pen > 0.0 { -d[ib] } else { 0.0 });
+                        list.push(d);
+                    }
+                    None => list.push(zeros.clone()),
+                }
             }
         }
         return Ok(Curves {
@@ -275,7 +306,7 @@ impl Problem<'_> {
     fn deviates(&self, curves: &[Curves], out: &mut [f64]) -> Result<(), String> {
         let names = measure_names();
         for (r, d) in out.iter_mut().zip(&self.fit.data) {
-            let m = curves[d.case].value(d.measure, d.t).map_err(|e| {
+            let m = curves[d.case].value(d.measure, d.when).map_err(|e| {
                 format!(
                     "case {:?}, {}: {e}",
                     self.fit.cases[d.case].name, names[d.measure]
@@ -331,7 +362,11 @@ impl Problem<'_> {
         let h = fit.difference_step;
         let tasks: Vec<(usize, usize, f64)> = (0..fit.cases.len())
             .filter(|&k| !self.sensitive[k])
-            .flat_map(|k| (0..n).flat_map(move |j| [(k, j, h), (k, j, -h)]))
+            .flat_map(|k| {
+                (0..n)
+                    .filter(move |&j| fit.params[j].cases.contains(&k))
+                    .flat_map(move |j| [(k, j, h), (k, j, -h)])
+            })
             .collect();
         let out = &self.out;
         let runs = parallel(&tasks, self.jobs, &|&(k, j, dz)| {
@@ -354,20 +389,20 @@ impl Problem<'_> {
             let w = d.weight / d.sigma;
             if self.sensitive[d.case] {
                 for (j, q) in fit.params.iter().enumerate() {
-                    let dm = base[d.case].derivative(j, d.measure, d.t)?;
+                    let dm = base[d.case].derivative(j, d.measure, d.when)?;
                     jac[i][j] = w * dm * q.dp_dz(p[j]);
                 }
                 continue;
             }
-            for j in 0..n {
+            for j in (0..n).filter(|&j| fit.params[j].cases.contains(&d.case)) {
                 let find = |sign: f64| {
                     tasks
                         .iter()
                         .position(|&(k, jj, dz)| k == d.case && jj == j && dz * sign > 0.0)
                         .and_then(|i| runs[i].as_ref().ok())
-                        .map(|c| c.value(d.measure, d.t))
+                        .map(|c| c.value(d.measure, d.when))
                 };
-                let m0 = base[d.case].value(d.measure, d.t)?;
+                let m0 = base[d.case].value(d.measure, d.when)?;
                 let dm = match (find(1.0), find(-1.0)) {
                     (Some(Ok(a)), Some(Ok(b))) => (a - b) / (2.0 * h),
                     (Some(Ok(a)), _) => (a - m0) / h,
@@ -742,10 +777,7 @@ pub fn run_fit(fit: &Fit, opts: &FitOptions) -> Result<Report, String> {
                 } else if fit.gradient == Gradient::Differences {
                     "central differences".to_string()
                 } else {
-                    format!(
-                        "central differences (its system changes: {})",
-                        restarts(&c.case).join("; ")
-                    )
+                    format!("central differences ({})", restarts(&c.case).join("; "))
                 };
                 (c.name.clone(), how)
             })
@@ -814,11 +846,11 @@ fn write_residuals(
     let names = measure_names();
     let mut s = String::from("case,measure,t,value,sigma,weight,start,fitted,residual\n");
     for d in &fit.data {
-        let fitted = curves[d.case].value(d.measure, d.t).unwrap_or(f64::NAN);
+        let fitted = curves[d.case].value(d.measure, d.when).unwrap_or(f64::NAN);
         let at_start = start
-            .and_then(|c| c[d.case].value(d.measure, d.t).ok())
+            .and_then(|c| c[d.case].value(d.measure, d.when).ok())
             .unwrap_or(f64::NAN);
-        let t = d.t.unwrap_or(curves[d.case].t_end);
+        let t = curves[d.case].time(d.measure, d.when).unwrap_or(f64::NAN);
         s.push_str(&format!(
             "{},{},{t},{},{},{},{at_start},{fitted},{}\n",
             fit.cases[d.case].name,
@@ -873,7 +905,7 @@ fn figures(
             .iter()
             .filter(|d| d.case == k && d.measure == m)
             .collect();
-        let at = |d: &Datum| d.t.unwrap_or(ph.t_end);
+        let at = |d: &Datum| c.time(m, d.when).unwrap_or(ph.t_end);
         let plot = TimePlot {
             title: format!("{}: {} ({})", fit.name, names[m], fit.cases[k].name),
             y_desc: names[m].to_string(),
@@ -991,16 +1023,24 @@ mod tests {
             derivatives: Some(vec![vec![vec![0.0], vec![2.0], vec![4.0]]]),
             t_end: 30.0,
         };
-        assert_eq!(c.value(0, Some(20.0)).unwrap(), 3.0);
-        assert_eq!(c.value(0, Some(25.0)).unwrap(), 5.0);
-        assert_eq!(c.value(0, None).unwrap(), 7.0);
-        assert_eq!(c.derivative(0, 0, Some(15.0)).unwrap(), 1.0);
-        assert!(c.value(0, Some(5.0)).is_err());
+        assert_eq!(c.value(0, When::At(20.0)).unwrap(), 3.0);
+        assert_eq!(c.value(0, When::At(25.0)).unwrap(), 5.0);
+        assert_eq!(c.value(0, When::End).unwrap(), 7.0);
+        assert_eq!(c.value(0, When::Lowest).unwrap(), 1.0);
+        assert_eq!(c.time(0, When::Lowest).unwrap(), 10.0);
+        assert_eq!(c.derivative(0, 0, When::At(15.0)).unwrap(), 1.0);
+        assert!(c.value(0, When::At(5.0)).is_err());
         let short = Curves {
             t_end: 40.0,
             ..c.clone()
         };
-        assert!(short.value(0, None).unwrap_err().contains("reached t = 30"));
+        assert!(
+            short
+                .value(0, When::End)
+                .unwrap_err()
+                .contains("reached t = 30")
+        );
+        assert!(short.value(0, When::Lowest).is_ok());
     }
 
     #[test]
@@ -1016,6 +1056,7 @@ mod tests {
                 scale: Scale::Linear,
                 start: 1.0,
                 unit: 1.0,
+                cases: vec![0],
             })
             .collect();
         let jac = vec![vec![1.0, 0.0], vec![1.0, 1.0], vec![1.0, 2.0]];

@@ -71,9 +71,9 @@ pub enum Scale {
 /// Where the gradients come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize)]
 pub enum Gradient {
-    /// Forward sensitivities integrated by IDAS with the solution, for the cases whose
-    /// system does not change during the run; central differences of whole runs for the
-    /// others.
+    /// Forward sensitivities integrated by IDAS with the solution (through the inertia
+    /// switch); central differences of whole runs for a case with a phase started by a
+    /// condition.
     #[default]
     Sensitivities,
     /// Central differences of whole runs for every case (the check of the sensitivities).
@@ -105,9 +105,13 @@ pub struct ParameterSpec {
     /// How it is varied.
     #[serde(default)]
     pub scale: Scale,
-    /// Where the fit starts (default: the first case's value).
+    /// Where the fit starts (default: the value in the first case it applies to).
     #[serde(default)]
     pub start: Option<f64>,
+    /// The cases it applies to, by name (default: every case; a parameter the other cases
+    /// do not have, e.g. the actin cap's strain, which the flat scene has no cap for).
+    #[serde(default)]
+    pub cases: Option<Vec<String>>,
 }
 
 /// What the fit matches.
@@ -116,6 +120,16 @@ pub struct ParameterSpec {
 pub enum TargetSpec {
     /// A measure at the end of the case's run.
     Final {
+        case: String,
+        measure: String,
+        value: f64,
+        sigma: f64,
+        #[serde(default = "one")]
+        weight: f64,
+    },
+    /// The lowest value of a measure over the run (the paper's "maximum displacement of
+    /// the nucleus": the lowest `uy_nucleus_max`, negated).
+    Lowest {
         case: String,
         measure: String,
         value: f64,
@@ -195,6 +209,8 @@ pub struct Param {
     pub start: f64,
     /// The unit of z for a linear scale (|start|, or 1).
     pub unit: f64,
+    /// The cases it applies to (indices).
+    pub cases: Vec<usize>,
 }
 
 impl Param {
@@ -223,6 +239,17 @@ impl Param {
     }
 }
 
+/// Where in a run a datum is taken.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum When {
+    /// At a time \[s\] (linear between output times).
+    At(f64),
+    /// At the end of the run.
+    End,
+    /// Where the measure is lowest over the run's output times.
+    Lowest,
+}
+
 /// One measurement.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Datum {
@@ -230,8 +257,8 @@ pub struct Datum {
     pub case: usize,
     /// Index of its measure in [`measure_names`].
     pub measure: usize,
-    /// Its time, or `None` for the end of the run.
-    pub t: Option<f64>,
+    /// Where in the run.
+    pub when: When,
     pub value: f64,
     pub sigma: f64,
     pub weight: f64,
@@ -327,7 +354,22 @@ fn resolve(path: &Path, spec: FitFile, read_series: bool) -> Result<Fit, String>
         if params.iter().any(|o| o.path == p.path) {
             return Err(at("named twice".into()));
         }
-        for c in &cases {
+        let applies: Vec<usize> = match &p.cases {
+            None => (0..cases.len()).collect(),
+            Some(names) if names.is_empty() => {
+                return Err(at("cases = []: name at least one case".into()));
+            }
+            Some(names) => names
+                .iter()
+                .map(|n| {
+                    cases
+                        .iter()
+                        .position(|c| &c.name == n)
+                        .ok_or_else(|| at(format!("cases: {n:?} is not one of the fit's cases")))
+                })
+                .collect::<Result<_, _>>()?,
+        };
+        for c in applies.iter().map(|&k| &cases[k]) {
             if number_at(&c.case, &p.path).is_none() {
                 return Err(at(format!(
                     "not a number field of case {:?} ({}): a dotted path, e.g. \
@@ -351,7 +393,7 @@ fn resolve(path: &Path, spec: FitFile, read_series: bool) -> Result<Fit, String>
         }
         let start = match p.start {
             Some(s) => s,
-            None => number_at(&cases[0].case, &p.path).unwrap_or(f64::NAN),
+            None => number_at(&cases[applies[0]].case, &p.path).unwrap_or(f64::NAN),
         };
         if !(start >= p.lower && start <= p.upper) {
             return Err(at(format!(
@@ -367,6 +409,7 @@ fn resolve(path: &Path, spec: FitFile, read_series: bool) -> Result<Fit, String>
             scale: p.scale,
             start,
             unit,
+            cases: applies,
         });
     }
     let names = measure_names();
@@ -418,7 +461,26 @@ fn resolve(path: &Path, spec: FitFile, read_series: bool) -> Result<Fit, String>
                 data.push(Datum {
                     case: case_index(k, case)?,
                     measure: measure_index(k, measure)?,
-                    t: None,
+                    when: When::End,
+                    value: *value,
+                    sigma: *sigma,
+                    weight: *weight,
+                });
+            }
+            TargetSpec::Lowest {
+                case,
+                measure,
+                value,
+                sigma,
+                weight,
+            } => {
+                check_value(k, "value", *value)?;
+                check_positive(k, "sigma", *sigma)?;
+                check_positive(k, "weight", *weight)?;
+                data.push(Datum {
+                    case: case_index(k, case)?,
+                    measure: measure_index(k, measure)?,
+                    when: When::Lowest,
                     value: *value,
                     sigma: *sigma,
                     weight: *weight,
@@ -440,7 +502,7 @@ fn resolve(path: &Path, spec: FitFile, read_series: bool) -> Result<Fit, String>
                 data.push(Datum {
                     case: c,
                     measure: measure_index(k, measure)?,
-                    t: Some(*t),
+                    when: When::At(*t),
                     value: *value,
                     sigma: *sigma,
                     weight: *weight,
@@ -560,7 +622,7 @@ fn read_series_file(path: &Path, case: usize, weight: f64, c: &Case) -> Result<V
         out.push(Datum {
             case,
             measure,
-            t: Some(t),
+            when: When::At(t),
             value,
             sigma,
             weight,
