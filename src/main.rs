@@ -131,9 +131,9 @@ enum Command {
     /// The derivatives of a scene's measures with respect to case parameters, integrated
     /// by SUNDIALS IDAS with the solution (forward sensitivities): writes
     /// sensitivity.csv (per output time and parameter, ∂m/∂p of timeseries.csv's
-    /// measures) and prints the final normalised sensitivities p/m ∂m/∂p. For now on
-    /// scenes whose system does not change during the run (no inertia switch, no μ_as
-    /// unknowns joining, no phase started by a condition).
+    /// measures) and prints the final normalised sensitivities p/m ∂m/∂p. Through the
+    /// inertia switch (restarted consistently) and with the μ_as unknowns in the system from
+    /// the start; phases started by a condition are refused.
     Sensitivity {
         /// The case file (RON).
         case: PathBuf,
@@ -154,8 +154,8 @@ enum Command {
     },
     /// Fit case parameters to measurements (FIT.ron: cases, parameters with bounds and
     /// scales, targets) by weighted least squares, Levenberg–Marquardt with bounds,
-    /// gradients from the IDAS sensitivities (differences of whole runs where a case's
-    /// system changes during the run): writes fit.json (values, standard errors,
+    /// gradients from the IDAS sensitivities (differences of whole runs for a case with a
+    /// phase started by a condition): writes fit.json (values, standard errors,
     /// correlations, what the data cannot determine), history.csv, residuals.csv and
     /// fit-<case>-<measure>.png. With --make-data: writes the Series targets' data files
     /// from runs at --truth with --noise (a twin experiment).

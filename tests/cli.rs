@@ -936,20 +936,19 @@ fn the_measures_table_gives_each_run_and_its_difference_from_the_first() {
 
 #[test]
 fn sensitivity_refuses_what_it_cannot_follow_with_status_2() {
-    // A case whose system changes during the run, and a parameter that is no number field:
+    // A case with phases started by a condition, and a parameter that is no number field:
     // each refused before anything is integrated, naming the fields.
     for (args, expected) in [
         (
             vec![
                 "sensitivity",
-                "cases/flat.ron",
+                "cases/events/flat.ron",
                 "--param",
                 "materials.cytoplasm.e",
             ],
-            "error: cases/flat.ron: sensitivities through a change of the system are not \
-             implemented yet; this case changes it: inertia.mode = OffAfter (inertia is \
-             switched off during the run); solver.defer_adhesion = true with adhesion (the \
-             μ_as unknowns join at T_g0)",
+            "error: cases/events/flat.ron: sensitivities through a change of the system are \
+             not implemented yet; this case changes it: phases.adhesion_start / \
+             active_start (a phase started by a condition)",
         ),
         (
             vec![

@@ -14,6 +14,9 @@
 
 use super::{Dae, DaeError, FirstOrderBlocks, Pattern, SensitivityDae, State};
 
+/// Sensitivities and their time derivatives, one vector each per parameter.
+pub type SensitivityVectors = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
 /// One parameter's perturbed problem and its step.
 pub struct PerturbedModel<M> {
     /// The problem built at pᵢ + δᵢ.
@@ -42,6 +45,8 @@ pub struct Perturbed<M> {
     /// Per parameter, the problem at pᵢ + δᵢ.
     pub perturbed: Vec<PerturbedModel<M>>,
     parts: Option<Parts>,
+    /// Initial sensitivities given (a restart), instead of the perturbed problems' own.
+    initial: Option<SensitivityVectors>,
 }
 
 impl<M: Dae> Perturbed<M> {
@@ -61,7 +66,87 @@ impl<M: Dae> Perturbed<M> {
             model,
             perturbed,
             parts: None,
+            initial: None,
         })
+    }
+
+    /// Sensitivities consistent with the problem at `at` (a restart, as
+    /// [`super::consistent_init`] makes the state consistent): where `solve_for_y[i]`, sᵢ
+    /// is solved for and ṡᵢ kept as given; elsewhere ṡᵢ is solved for and sᵢ kept. The
+    /// linearisation of the consistent state, F_y s + F_ẏ ṡ + F_p = 0, one linear solve
+    /// per parameter on one factorization. Returns them, and keeps them as the initial
+    /// sensitivities ([`SensitivityDae::initial_sensitivities`]).
+    pub fn consistent_sensitivities(
+        &mut self,
+        at: State,
+        solve_for_y: &[bool],
+        mut s: Vec<Vec<f64>>,
+        mut sp: Vec<Vec<f64>>,
+        factory: &dyn super::LinearSolverFactory,
+    ) -> Result<SensitivityVectors, super::IntegratorError> {
+        use super::IntegratorError;
+        let n = self.model.size();
+        let problem = |e: DaeError| IntegratorError::Problem {
+            t: at.t,
+            message: format!("consistent sensitivities: {e}"),
+        };
+        let linear = |e: super::linsolve::LinearSolverError| IntegratorError::Linear {
+            context: "consistent sensitivities",
+            source: e,
+        };
+        if solve_for_y.len() != n
+            || s.len() != self.perturbed.len()
+            || sp.len() != s.len()
+            || s.iter().chain(&sp).any(|v| v.len() != n)
+        {
+            return Err(IntegratorError::Input(format!(
+                "consistent sensitivities: {} unknowns, {} parameters; given a mask of {} and \
+                 {} / {} vectors",
+                n,
+                self.perturbed.len(),
+                solve_for_y.len(),
+                s.len(),
+                sp.len()
+            )));
+        }
+        let mut r = vec![0.0; n];
+        self.model.residual(at, &mut r).map_err(problem)?;
+        self.parts_at(at, &r).map_err(problem)?;
+        let parts = self.parts.as_ref().expect("assembled by parts_at");
+        let pattern = self.model.pattern().clone();
+        let mut m = parts.fy.clone();
+        for (c, &for_y) in solve_for_y.iter().enumerate() {
+            if !for_y {
+                let range = pattern.col_ptr()[c]..pattern.col_ptr()[c + 1];
+                m[range.clone()].copy_from_slice(&parts.fyp[range]);
+            }
+        }
+        let mut solver = factory.build_for(&self.model).map_err(linear)?;
+        solver.analyse(&pattern).map_err(linear)?;
+        solver.factorize(&m).map_err(linear)?;
+        for (i, (si, spi)) in s.iter_mut().zip(sp.iter_mut()).enumerate() {
+            // The known parts: F_y s on the kept s, F_ẏ ṡ on the kept ṡ.
+            let known_s: Vec<f64> = (0..n)
+                .map(|c| if solve_for_y[c] { 0.0 } else { si[c] })
+                .collect();
+            let known_sp: Vec<f64> = (0..n)
+                .map(|c| if solve_for_y[c] { spi[c] } else { 0.0 })
+                .collect();
+            let mut b = parts.fp[i].clone();
+            add_product(&pattern, &parts.fy, &known_s, &mut b);
+            add_product(&pattern, &parts.fyp, &known_sp, &mut b);
+            b.iter_mut().for_each(|v| *v = -*v);
+            solver.solve_in_place(&mut b).map_err(linear)?;
+            for c in 0..n {
+                if solve_for_y[c] {
+                    si[c] = b[c];
+                } else {
+                    spi[c] = b[c];
+                }
+            }
+        }
+        self.initial = Some((s.clone(), sp.clone()));
+        Ok((s, sp))
     }
 
     /// F_y, F_ẏ and F_p at `at` (where F = `r`), assembled unless they are those of the
@@ -180,8 +265,12 @@ impl<M: Dae> SensitivityDae for Perturbed<M> {
         Ok(())
     }
 
-    /// The differences of the perturbed problems' initial values.
+    /// Those given by [`Perturbed::consistent_sensitivities`], else the differences of the
+    /// perturbed problems' initial values.
     fn initial_sensitivities(&self) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+        if let Some(given) = &self.initial {
+            return given.clone();
+        }
         let (_, y0, yp0) = self.model.initial();
         let diff = |a: &[f64], b: &[f64], h: f64| -> Vec<f64> {
             a.iter().zip(b).map(|(a, b)| (a - b) / h).collect()

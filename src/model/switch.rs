@@ -127,6 +127,43 @@ impl<S: Shape<D, N, E>, const D: usize, const N: usize, const E: usize> CellOf<S
         Ok(m)
     }
 
+    /// The same cell without inertia (with its own parameters), set to restart at `t` from
+    /// the state (`y`, `yp`), given in the new system's layout ([`Self::drop_inertia`]):
+    /// nothing is solved. The perturbed copies of a sensitivity run follow the solution's
+    /// switch so ([`crate::run::sensitivity`]).
+    pub fn without_inertia_from(
+        &self,
+        t: f64,
+        y: Vec<f64>,
+        yp: Vec<f64>,
+    ) -> Result<Self, ModelError> {
+        let mut params = self.params.clone();
+        params.inertia = false;
+        let mut m = self.rebuilt(params)?;
+        if y.len() != m.dofs.n || yp.len() != m.dofs.n {
+            return Err(refused(
+                "switching inertia off",
+                t,
+                format!(
+                    "a state of {} and {} values for {} unknowns",
+                    y.len(),
+                    yp.len(),
+                    m.dofs.n
+                ),
+            ));
+        }
+        self.carry_history(&mut m, t, &y, &yp)
+            .map_err(|e| refused("switching inertia off", t, e))?;
+        m.set_initial(t, y, yp);
+        Ok(m)
+    }
+
+    /// A state (or its sensitivities) of this system in the layout of the same system
+    /// without inertia: (u, μ_as), with u̇ = v.
+    pub fn drop_inertia(&self, y: &[f64], yp: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        self.dofs.drop_inertia(y, yp)
+    }
+
     /// The same cell with its μ_as unknowns, set to restart at time `t` (T_g0, where
     /// adhesion starts to act) from the state (`y`, `yp`) of this model, which defers them:
     /// u (and v) and their derivatives carried over, the exposure A from the history

@@ -38,6 +38,11 @@ pub(crate) trait RunModel: Dae + Send {
     /// The same cell without inertia, at rest in equilibrium at the time of `at`.
     fn without_inertia_at_rest(&self, at: State<'_>, restart: &Restart)
     -> Result<Cell, ModelError>;
+    /// The same cell without inertia, restarting from (`y`, `yp`) in the new layout
+    /// (nothing solved).
+    fn without_inertia_from(&self, t: f64, y: Vec<f64>, yp: Vec<f64>) -> Result<Cell, ModelError>;
+    /// A state of this system in the layout of the same system without inertia.
+    fn drop_inertia(&self, y: &[f64], yp: &[f64]) -> (Vec<f64>, Vec<f64>);
     /// The same system with the parameters `params` of a case that agrees with this one's
     /// up to the time of `at`, restarting from the state `at`.
     fn branched(&self, params: ModelParams, at: State<'_>) -> Result<Cell, ModelError>;
@@ -121,6 +126,14 @@ where
         Ok(Box::new(CellOf::without_inertia_at_rest(
             self, t, y, yp, restart,
         )?))
+    }
+
+    fn without_inertia_from(&self, t: f64, y: Vec<f64>, yp: Vec<f64>) -> Result<Cell, ModelError> {
+        Ok(Box::new(CellOf::without_inertia_from(self, t, y, yp)?))
+    }
+
+    fn drop_inertia(&self, y: &[f64], yp: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        CellOf::drop_inertia(self, y, yp)
     }
 
     fn branched(&self, params: ModelParams, at: State<'_>) -> Result<Cell, ModelError> {

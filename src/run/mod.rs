@@ -1502,7 +1502,7 @@ enum Switch {
 
 /// Longest stretch watched with inertia, after the requested switch time, for the moment
 /// the contact carries the cell \[s\].
-const SWITCH_PROBE_LIMIT: f64 = 50.0;
+pub(crate) const SWITCH_PROBE_LIMIT: f64 = 50.0;
 
 /// Advances towards `tout` one step at a time and, at the first accepted step at or after
 /// the requested switch time `ts` where the contact carries the cell's current weight,

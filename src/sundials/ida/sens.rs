@@ -183,6 +183,24 @@ impl<D: crate::dae::Dae> Ida<D> {
         Ok(())
     }
 
+    /// The `k`-th time derivative (0 or 1) of the sensitivities at `t`, which must lie in
+    /// the last step's interval (its end, say, after a step returned by an interrupted
+    /// [`crate::dae::Integrator::advance_to`]).
+    pub fn sensitivities_at(
+        &mut self,
+        t: f64,
+        k: u32,
+    ) -> Option<Result<Vec<Vec<f64>>, IntegratorError>> {
+        let sens = self.sens.as_ref()?;
+        // SAFETY: as in `sensitivities`.
+        let flag = unsafe { sys::IDAGetSensDky(self.mem, t, k as c_int, sens.out.ptr) };
+        Some(self.check("IDAGetSensDky", flag).map(|()| {
+            (0..sens.out.count)
+                .map(|i| sens.out.get(i).to_vec())
+                .collect()
+        }))
+    }
+
     /// The `k`-th time derivative (0 or 1) of the sensitivities at the output time
     /// ([`crate::dae::Integrator::t`]), one vector per parameter, interpolated by IDAS.
     /// `None` when the integrator carries no sensitivities.
