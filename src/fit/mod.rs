@@ -270,9 +270,48 @@ struct Problem<'a> {
     /// The smallest χ² met.
     best: f64,
     quiet: bool,
+    /// rmpfit's parameter constraints (the bounds in z) and configuration.
+    pars: Vec<rmpfit::MPPar>,
+    config: rmpfit::MPConfig,
 }
 
-impl Problem<'_> {
+impl<'a> Problem<'a> {
+    /// The problem of `fit`, its runs in `out`, gradients from `gradient`.
+    fn new(fit: &'a Fit, out: &Path, jobs: usize, gradient: Gradient, quiet: bool) -> Self {
+        Problem {
+            fit,
+            out: out.to_path_buf(),
+            jobs: jobs.max(1),
+            sensitive: fit
+                .cases
+                .iter()
+                .map(|c| gradient == Gradient::Sensitivities && restarts(&c.case).is_empty())
+                .collect(),
+            cache: VecDeque::new(),
+            history: Vec::new(),
+            best: f64::INFINITY,
+            quiet,
+            pars: fit
+                .params
+                .iter()
+                .map(|p| rmpfit::MPPar {
+                    limited_low: true,
+                    limited_up: true,
+                    limit_low: p.to_z(p.lower),
+                    limit_up: p.to_z(p.upper),
+                    side: rmpfit::MPSide::User,
+                    ..Default::default()
+                })
+                .collect(),
+            config: rmpfit::MPConfig {
+                max_iter: fit.max_iterations,
+                ftol: 1e-6,
+                xtol: 1e-6,
+                ..rmpfit::MPConfig::new()
+            },
+        }
+    }
+
     fn params_of(&self, z: &[f64]) -> Vec<f64> {
         self.fit
             .params
@@ -461,6 +500,14 @@ impl rmpfit::MPFitter for Problem<'_> {
         self.fit.data.len()
     }
 
+    fn config(&self) -> &rmpfit::MPConfig {
+        &self.config
+    }
+
+    fn parameters(&self) -> &[rmpfit::MPPar] {
+        &self.pars
+    }
+
     fn jacobian(
         &mut self,
         z: &[f64],
@@ -580,11 +627,7 @@ pub struct FitOptions {
 }
 
 /// Standard errors, correlations and directions from the Jacobian `jac` (data × params).
-fn statistics(
-    params: &[Param],
-    values: &[f64],
-    jac: &[Vec<f64>],
-) -> (Vec<f64>, Vec<Vec<f64>>, Vec<Direction>) {
+fn statistics(params: &[Param], jac: &[Vec<f64>]) -> (Vec<f64>, Vec<Vec<f64>>, Vec<Direction>) {
     let (m, n) = (jac.len(), params.len());
     let j = nalgebra::DMatrix::from_fn(m, n, |i, k| jac[i][k]);
     let svd = j.svd(false, true);
@@ -620,7 +663,6 @@ fn statistics(
             standard_error: 1.0 / s[k],
         })
         .collect();
-    let _ = values;
     (se_z, corr, directions)
 }
 
@@ -633,20 +675,7 @@ pub fn jacobian_at_start(
     out: &Path,
     jobs: usize,
 ) -> Result<Vec<Vec<f64>>, String> {
-    let mut problem = Problem {
-        fit,
-        out: out.to_path_buf(),
-        jobs: jobs.max(1),
-        sensitive: fit
-            .cases
-            .iter()
-            .map(|c| gradient == Gradient::Sensitivities && restarts(&c.case).is_empty())
-            .collect(),
-        cache: VecDeque::new(),
-        history: Vec::new(),
-        best: f64::INFINITY,
-        quiet: true,
-    };
+    let mut problem = Problem::new(fit, out, jobs, gradient, true);
     problem.jacobian_at(&vec![0.0; fit.params.len()])
 }
 
@@ -657,33 +686,8 @@ pub fn run_fit(fit: &Fit, opts: &FitOptions) -> Result<Report, String> {
     let started = Instant::now();
     std::fs::create_dir_all(&opts.out)
         .map_err(|e| format!("{}: cannot create: {e}", opts.out.display()))?;
-    let sensitive: Vec<bool> = fit
-        .cases
-        .iter()
-        .map(|c| fit.gradient == Gradient::Sensitivities && restarts(&c.case).is_empty())
-        .collect();
-    let mut problem = Problem {
-        fit,
-        out: opts.out.clone(),
-        jobs: opts.jobs.max(1),
-        sensitive: sensitive.clone(),
-        cache: VecDeque::new(),
-        history: Vec::new(),
-        best: f64::INFINITY,
-        quiet: opts.quiet,
-    };
-    let pars: Vec<rmpfit::MPPar> = fit
-        .params
-        .iter()
-        .map(|p| rmpfit::MPPar {
-            limited_low: true,
-            limited_up: true,
-            limit_low: p.to_z(p.lower),
-            limit_up: p.to_z(p.upper),
-            side: rmpfit::MPSide::User,
-            ..Default::default()
-        })
-        .collect();
+    let mut problem = Problem::new(fit, &opts.out, opts.jobs, fit.gradient, opts.quiet);
+    let sensitive = problem.sensitive.clone();
     let mut z = vec![0.0; fit.params.len()];
     // The residuals at the start (cached for the algorithm's first evaluation): its first
     // step is bounded by `first_step` of their norm (z = 0 there, so MINPACK's bound
@@ -698,21 +702,8 @@ pub fn run_fit(fit: &Fit, opts: &FitOptions) -> Result<Report, String> {
             .map_err(|e| format!("at the start: {e}"))?;
         r.iter().map(|x| x * x).sum::<f64>().sqrt()
     };
-    let config = rmpfit::MPConfig {
-        max_iter: fit.max_iterations,
-        ftol: 1e-6,
-        xtol: 1e-6,
-        step_factor: (fit.first_step * r0).max(1e-3),
-        ..rmpfit::MPConfig::new()
-    };
-    let status = {
-        let mut adapter = Adapter {
-            problem: &mut problem,
-            pars: &pars,
-            config: &config,
-        };
-        adapter.mpfit(&mut z)
-    };
+    problem.config.step_factor = (fit.first_step * r0).max(1e-3);
+    let status = problem.mpfit(&mut z);
     let status = status.map_err(|e| {
         let last = problem
             .history
@@ -725,7 +716,7 @@ pub fn run_fit(fit: &Fit, opts: &FitOptions) -> Result<Report, String> {
     })?;
     let z: Vec<f64> = z
         .iter()
-        .zip(&pars)
+        .zip(&problem.pars)
         .map(|(z, p)| z.clamp(p.limit_low, p.limit_up))
         .collect();
     let values = problem.params_of(&z);
@@ -734,7 +725,7 @@ pub fn run_fit(fit: &Fit, opts: &FitOptions) -> Result<Report, String> {
     let mut dev = vec![0.0; fit.data.len()];
     problem.deviates(&curves, &mut dev)?;
     let chi2: f64 = dev.iter().map(|r| r * r).sum();
-    let (se_z, correlation, directions) = statistics(&fit.params, &values, &jac);
+    let (se_z, correlation, directions) = statistics(&fit.params, &jac);
     let parameters = fit
         .params
         .iter()
@@ -805,36 +796,6 @@ pub fn run_fit(fit: &Fit, opts: &FitOptions) -> Result<Report, String> {
     write_residuals(&opts.out, fit, &curves, start_curves.as_deref())?;
     figures(&opts.out, fit, &curves, start_curves.as_deref())?;
     Ok(report)
-}
-
-/// [`Problem`] with rmpfit's parameter constraints and configuration.
-struct Adapter<'a, 'b> {
-    problem: &'a mut Problem<'b>,
-    pars: &'a [rmpfit::MPPar],
-    config: &'a rmpfit::MPConfig,
-}
-
-impl rmpfit::MPFitter for Adapter<'_, '_> {
-    fn eval(&mut self, z: &[f64], deviates: &mut [f64]) -> rmpfit::MPResult<()> {
-        self.problem.eval(z, deviates)
-    }
-    fn number_of_points(&self) -> usize {
-        self.problem.number_of_points()
-    }
-    fn config(&self) -> &rmpfit::MPConfig {
-        self.config
-    }
-    fn parameters(&self) -> &[rmpfit::MPPar] {
-        self.pars
-    }
-    fn jacobian(
-        &mut self,
-        z: &[f64],
-        deviates: &mut [f64],
-        derivs: &mut [Option<Vec<f64>>],
-    ) -> rmpfit::MPResult<()> {
-        self.problem.jacobian(z, deviates, derivs)
-    }
 }
 
 fn write_residuals(
@@ -1060,7 +1021,7 @@ mod tests {
             })
             .collect();
         let jac = vec![vec![1.0, 0.0], vec![1.0, 1.0], vec![1.0, 2.0]];
-        let (se, corr, dirs) = statistics(&params, &[1.0, 1.0], &jac);
+        let (se, corr, dirs) = statistics(&params, &jac);
         assert!((se[0] - (5.0f64 / 6.0).sqrt()).abs() < 1e-12);
         assert!((se[1] - (3.0f64 / 6.0).sqrt()).abs() < 1e-12);
         let c01 = -3.0 / 6.0 / ((5.0f64 / 6.0).sqrt() * (3.0f64 / 6.0).sqrt());

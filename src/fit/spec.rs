@@ -446,6 +446,21 @@ fn resolve(path: &Path, spec: FitFile, read_series: bool) -> Result<Fit, String>
     };
     let mut data = Vec::new();
     let mut series = Vec::new();
+    // A single measured value: checked, then recorded.
+    let one =
+        |k: usize, case: &str, measure: &str, when: When, value: f64, sigma: f64, weight: f64| {
+            check_value(k, "value", value)?;
+            check_positive(k, "sigma", sigma)?;
+            check_positive(k, "weight", weight)?;
+            Ok::<_, String>(Datum {
+                case: case_index(k, case)?,
+                measure: measure_index(k, measure)?,
+                when,
+                value,
+                sigma,
+                weight,
+            })
+        };
     for (k, t) in spec.targets.iter().enumerate() {
         match t {
             TargetSpec::Final {
@@ -454,38 +469,22 @@ fn resolve(path: &Path, spec: FitFile, read_series: bool) -> Result<Fit, String>
                 value,
                 sigma,
                 weight,
-            } => {
-                check_value(k, "value", *value)?;
-                check_positive(k, "sigma", *sigma)?;
-                check_positive(k, "weight", *weight)?;
-                data.push(Datum {
-                    case: case_index(k, case)?,
-                    measure: measure_index(k, measure)?,
-                    when: When::End,
-                    value: *value,
-                    sigma: *sigma,
-                    weight: *weight,
-                });
-            }
+            } => data.push(one(k, case, measure, When::End, *value, *sigma, *weight)?),
             TargetSpec::Lowest {
                 case,
                 measure,
                 value,
                 sigma,
                 weight,
-            } => {
-                check_value(k, "value", *value)?;
-                check_positive(k, "sigma", *sigma)?;
-                check_positive(k, "weight", *weight)?;
-                data.push(Datum {
-                    case: case_index(k, case)?,
-                    measure: measure_index(k, measure)?,
-                    when: When::Lowest,
-                    value: *value,
-                    sigma: *sigma,
-                    weight: *weight,
-                });
-            }
+            } => data.push(one(
+                k,
+                case,
+                measure,
+                When::Lowest,
+                *value,
+                *sigma,
+                *weight,
+            )?),
             TargetSpec::Point {
                 case,
                 measure,
@@ -494,19 +493,9 @@ fn resolve(path: &Path, spec: FitFile, read_series: bool) -> Result<Fit, String>
                 sigma,
                 weight,
             } => {
-                let c = case_index(k, case)?;
-                check_value(k, "value", *value)?;
-                check_positive(k, "sigma", *sigma)?;
-                check_positive(k, "weight", *weight)?;
-                check_time(k, *t, &cases[c].case)?;
-                data.push(Datum {
-                    case: c,
-                    measure: measure_index(k, measure)?,
-                    when: When::At(*t),
-                    value: *value,
-                    sigma: *sigma,
-                    weight: *weight,
-                });
+                let d = one(k, case, measure, When::At(*t), *value, *sigma, *weight)?;
+                check_time(k, *t, &cases[d.case].case)?;
+                data.push(d);
             }
             TargetSpec::Series { case, file, weight } => {
                 let c = case_index(k, case)?;
