@@ -514,9 +514,45 @@ pub fn estimated_run_memory(dim: usize, elements: f64) -> f64 {
     }
 }
 
+/// Shares the cores among `jobs` runs side by side: OpenBLAS (UMFPACK's BLAS, the 3-D
+/// runs') gets cores / jobs threads (at least one) unless the user chose its threads
+/// (`OPENBLAS_NUM_THREADS`, `OMP_NUM_THREADS`). Returns the threads set, if any.
+///
+/// Two 3-D runs side by side on two cores, each with OpenBLAS's default of two threads,
+/// spent half the machine in the kernel (`top`: 50 % system time, OpenBLAS's idle threads
+/// yielding) until one thread each gave 100 % user time (the 3-D map, 2026-12-08).
+pub fn share_cores_among(jobs: usize) -> Option<usize> {
+    if jobs <= 1
+        || std::env::var_os("OPENBLAS_NUM_THREADS").is_some()
+        || std::env::var_os("OMP_NUM_THREADS").is_some()
+    {
+        return None;
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = (cores / jobs).max(1);
+    crate::sundials::set_openblas_threads(threads)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// OpenBLAS (the BLAS the Makefile installs behind UMFPACK) is found in the process and
+    /// takes the threads it is given: two where there are two cores, then one again (what
+    /// `make test` runs with).
+    #[test]
+    fn openblas_is_loaded_and_takes_the_threads_it_is_given() {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let two = crate::sundials::set_openblas_threads(2);
+        let one = crate::sundials::set_openblas_threads(1);
+        assert_eq!(
+            one,
+            Some(1),
+            "OpenBLAS not loaded (libblas.so.3 should be libopenblas0-pthread's)"
+        );
+        assert_eq!(two, Some(cores.min(2)));
+        assert_eq!(share_cores_among(1), None);
+    }
 
     const ALL: [LinearSolver; 7] = [
         LinearSolver::Faer,

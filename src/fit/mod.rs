@@ -278,6 +278,7 @@ struct Problem<'a> {
 impl<'a> Problem<'a> {
     /// The problem of `fit`, its runs in `out`, gradients from `gradient`.
     fn new(fit: &'a Fit, out: &Path, jobs: usize, gradient: Gradient, quiet: bool) -> Self {
+        crate::solver::share_cores_among(jobs.min(fit.cases.len() * (fit.params.len() + 1)));
         Problem {
             fit,
             out: out.to_path_buf(),

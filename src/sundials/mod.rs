@@ -39,6 +39,30 @@ unsafe extern "C" {
     fn free(p: *mut c_void);
 }
 
+/// Sets the number of threads of OpenBLAS (the BLAS behind UMFPACK's dense fronts) when it
+/// is the BLAS this process has loaded; returns the number OpenBLAS reports afterwards, or
+/// `None` for another BLAS. Runs side by side on every core want one each: OpenBLAS's own
+/// threads, spinning while they wait for work, would take the cores from the runs.
+pub fn set_openblas_threads(n: usize) -> Option<usize> {
+    unsafe extern "C" {
+        fn dlsym(handle: *mut c_void, symbol: *const c_char) -> *mut c_void;
+    }
+    // SAFETY: dlsym with glibc's RTLD_DEFAULT (the null handle) looks a name up in the
+    // libraries loaded at start; found, `openblas_set_num_threads` and
+    // `openblas_get_num_threads` are OpenBLAS's `void (int)` and `int (void)`.
+    unsafe {
+        let set = dlsym(ptr::null_mut(), c"openblas_set_num_threads".as_ptr());
+        let get = dlsym(ptr::null_mut(), c"openblas_get_num_threads".as_ptr());
+        if set.is_null() || get.is_null() {
+            return None;
+        }
+        let set: unsafe extern "C" fn(c_int) = std::mem::transmute(set);
+        let get: unsafe extern "C" fn() -> c_int = std::mem::transmute(get);
+        set(c_int::try_from(n.max(1)).unwrap_or(1));
+        usize::try_from(get()).ok()
+    }
+}
+
 /// A SUNDIALS context (`SUNContext`), freed on drop.
 pub(crate) struct Context(sys::SUNContext);
 

@@ -975,7 +975,9 @@ pub fn run_sweep(plan: &Plan, opts: &SweepOptions) -> Result<SweepReport, SweepE
         }),
         first_error: Mutex::new(None),
     };
-    let (rows, copied) = runner.run(opts.jobs.clamp(1, to_run.max(1)))?;
+    let jobs = opts.jobs.clamp(1, to_run.max(1));
+    crate::solver::share_cores_among(jobs);
+    let (rows, copied) = runner.run(jobs)?;
     let rows = rows_in_order(plan, &mine, &points_dir, &rows);
     let written = match opts.shard {
         None => write_table_and_figures(out, &record, &rows)?,
