@@ -490,28 +490,53 @@ impl MemoryLimit {
     }
 }
 
-/// Peak memory \[bytes\] of a run of the cell on a mesh of `elements` elements in `dim`
-/// dimensions (2: six-node triangles, plane strain or axisymmetric; 3: ten-node
-/// tetrahedra) with the scenes' LUs (faer-condensed in 2-D, umfpack-condensed in 3-D):
-/// the model, its Jacobian and the LU's factors, with inertia and the μ_as unknowns.
+/// Peak memory \[bytes\] of a run of the cell on a mesh of `elements` elements (as
+/// estimated before meshing) in `dim` dimensions (2: six-node triangles, plane strain or
+/// axisymmetric; 3: ten-node tetrahedra) with the scenes' LUs (faer-condensed in 2-D,
+/// umfpack-condensed in 3-D): the model, its Jacobian and the LU's factors, with inertia and
+/// the μ_as unknowns.
 ///
-/// Fitted to the peak resident set of runs on this project's kind of machine
-/// (2026-12-02): in 2-D `cellsim run cases/pillars-push-pull.ron --set phases.t_end=0.5
-/// --set solver.defer_adhesion=false --set mesh.refine=R` at R = 4 and 8 (9 099 and
-/// 36 263 triangles: 0.53 and 2.41 GB, growing as elements^1.1); in 3-D the 3-D runs' LU
-/// on the Jacobian at rest (`cargo run --release --example cell3d -- --case
+/// In 2-D fitted to the peak resident set of `cellsim run cases/pillars-push-pull.ron --set
+/// phases.t_end=0.5 --set solver.defer_adhesion=false --set mesh.refine=R` at R = 4 and 8
+/// (9 099 and 36 263 triangles: 0.53 and 2.41 GB, growing as elements^1.1; 2026-12-02).
+/// In 3-D through the peaks of whole push-pull runs, the quarter cell
+/// ([`through_anchors`]): the 3-D maps' configuration (`cases/sweeps/pillar-geometry-3d.ron`,
+/// about 3 100 tetrahedra estimated: 0.80–0.86 GB, 2026-12-07/08), the default mesh
+/// (about 9 900: 2.63 GB) and refined ×1.5 (about 29 500: 5.41 GB); beyond, as the LU's
+/// factors alone grow (`cargo run --release --example cell3d -- --case
 /// cases/3d/pillars-push-pull.ron --t-end 1 --drag 1e-6 --lu-memory` at refine 1, 1.5, 2:
-/// 9 660, 26 927 and 57 626 tetrahedra, 1.38, 4.57 and 12.1 GB, growing as
-/// tetrahedra^1.25, the nested-dissection fill), times 1.2 for the velocities and the
-/// condensation while inertia is on (a run at refine 1.5 peaked at 5.41 GB). The
-/// estimate is within 10 % of those runs and 30 % above a mesh graded more steeply
-/// (h_bottom 0.02 µm: 51 374 tetrahedra, 9.7 GB for the LU alone).
+/// 1.38, 4.57 and 12.1 GB, as tetrahedra^1.25, the nested-dissection fill). Until
+/// 2026-12-08 the 3-D estimate was that LU law alone, times 1.2: about half the peak of the
+/// maps' points and of the default mesh (0.41 and 1.6 GB), and a Slurm task's request
+/// (× 1.5 + 200 MB) below the maps' points' peak.
 pub fn estimated_run_memory(dim: usize, elements: f64) -> f64 {
     if dim == 3 {
-        16_200.0 * elements.powf(1.25)
+        through_anchors(
+            &[(3_102.0, 0.86e9), (9_884.0, 2.63e9), (29_538.0, 5.41e9)],
+            1.25,
+            elements,
+        )
     } else {
         23_300.0 * elements.powf(1.1)
     }
+}
+
+/// A cost measured at a few mesh sizes (`anchors`: elements estimated before meshing, and
+/// the cost; increasing in both), interpolated linearly in log-log between them; below the
+/// first, the first segment's growth, beyond the last as elements^`beyond`.
+pub fn through_anchors(anchors: &[(f64, f64)], beyond: f64, elements: f64) -> f64 {
+    let slope = |(n0, c0): (f64, f64), (n1, c1): (f64, f64)| (c1 / c0).ln() / (n1 / n0).ln();
+    let (first, last) = (anchors[0], anchors[anchors.len() - 1]);
+    if anchors.len() < 2 || elements >= last.0 {
+        return last.1 * (elements / last.0).powf(beyond);
+    }
+    let k = anchors
+        .windows(2)
+        .position(|w| elements < w[1].0)
+        .unwrap_or(anchors.len() - 2);
+    let (a, b) = (anchors[k], anchors[k + 1]);
+    let from = if elements < first.0 { first } else { a };
+    from.1 * (elements / from.0).powf(slope(a, b))
 }
 
 /// Shares the cores among `jobs` runs side by side: OpenBLAS (UMFPACK's BLAS, the 3-D
@@ -536,6 +561,28 @@ pub fn share_cores_among(jobs: usize) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The anchored cost law passes through its anchors, is continuous and increasing
+    /// between and around them, and grows beyond the last as asked.
+    #[test]
+    fn the_anchored_cost_law_passes_through_its_anchors() {
+        let a = [(100.0, 1.0), (400.0, 2.0), (1_600.0, 16.0)];
+        for &(n, c) in &a {
+            assert!((through_anchors(&a, 1.5, n) / c - 1.0).abs() < 1e-12, "{n}");
+        }
+        // Below the first: the first segment's growth (a factor 2 per factor 4).
+        assert!((through_anchors(&a, 1.5, 25.0) - 0.5).abs() < 1e-12);
+        // Between: log-log linear (the geometric mean of the ends at the middle).
+        assert!((through_anchors(&a, 1.5, 800.0) - (2.0f64 * 16.0).sqrt()).abs() < 1e-12);
+        // Beyond: elements^1.5.
+        assert!((through_anchors(&a, 1.5, 6_400.0) - 16.0 * 8.0).abs() < 1e-9);
+        let mut last = 0.0;
+        for k in 1..400 {
+            let c = through_anchors(&a, 1.5, 10.0 * f64::from(k));
+            assert!(c > last);
+            last = c;
+        }
+    }
 
     /// OpenBLAS (the BLAS the Makefile installs behind UMFPACK) is found in the process and
     /// takes the threads it is given: two where there are two cores, then one again (what

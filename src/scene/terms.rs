@@ -552,26 +552,34 @@ pub fn run_cost(case: &Case) -> Option<RunCost> {
 }
 
 /// Wall time \[s\] of a run of the scene phases `phases` (to its `t_end`) on a mesh of
-/// `elements` expected elements in `dim` dimensions, at the scenes' tolerances, on one
-/// core of this project's kind of machine.
+/// `elements` elements (as estimated before meshing) in `dim` dimensions, at the scenes'
+/// tolerances, on one core of this project's kind of machine.
 ///
 /// Calibrated on the push-pull scene (to 50 000 s, the scenes' hardest), whose cost grows
-/// with the mesh as the cost per step (the step count hardly changes with the mesh):
-/// in 2-D 7.3 s on the default mesh (590 triangles; 5 388 unknowns) and n^1.21 with the
-/// mesh from refine 1 to 4 (`cargo run --release --example scaling`); in 3-D 1 551 s on
-/// the default mesh and 5 544 s refined ×1.5 (`cellsim run cases/3d/pillars-push-pull.ron
-/// [--set mesh.refine=1.5]`: 9 660 and 26 927 tetrahedra, growing as tetrahedra^1.24),
-/// the README's measurements of 2026-12-02. A run that ends earlier, or whose phases are
+/// with the mesh as the cost per step (the step count hardly changes with the mesh).
+/// In 2-D 7.3 s on the default mesh (590 triangles; 5 388 unknowns) and n^1.21 with the
+/// mesh from refine 1 to 4 (`cargo run --release --example scaling`). In 3-D, the quarter
+/// cell, through measured runs ([`crate::solver::through_anchors`]): the 3-D maps'
+/// configuration (`cases/sweeps/pillar-geometry-3d.ron` at w = s = 8 µm, about 3 100
+/// tetrahedra estimated: 722 s, two runs side by side on two cores, 2026-12-08),
+/// the default mesh (about 9 900: 1 551 s) and refined ×1.5 (about 29 500: 5 544 s; the
+/// README's measurements of 2026-12-02), beyond as tetrahedra^1.24. The coarse mesh costs
+/// more per tetrahedron than a uniform coarsening would (its graded bottom layer); the law
+/// of the finer two alone gave it 379 s. A run that ends earlier, or whose phases are
 /// shorter, costs the fraction [`work_fraction`] of that. What the estimate leaves out
-/// (another tolerance or integrator, a slower node, the mesh generator's first run) is
-/// the margin's job.
+/// (the geometry: up to 1.3× at the narrowest posts of the map; another tolerance or
+/// integrator; a slower node; the mesh generator's first run) is the margin's job.
 pub fn estimated_run_seconds(dim: usize, elements: f64, phases: &case::Phases) -> f64 {
-    let (seconds, reference, growth) = if dim == 3 {
-        (1_551.0, 9_660.0, 1.24)
+    let seconds = if dim == 3 {
+        crate::solver::through_anchors(
+            &[(3_102.0, 722.0), (9_884.0, 1_551.0), (29_538.0, 5_544.0)],
+            1.24,
+            elements,
+        )
     } else {
-        (7.3, 590.0, 1.21)
+        7.3 * (elements / 590.0).powf(1.21)
     };
-    seconds * (elements / reference).powf(growth) * work_fraction(phases)
+    seconds * work_fraction(phases)
 }
 
 /// The fraction of the push-pull scene's work a run of `phases` does, by phase: the
