@@ -401,6 +401,11 @@ struct SweepArgs {
     /// Wall-clock budget of each run, s [default: none].
     #[arg(long, allow_hyphen_values = true)]
     max_wall: Option<f64>,
+    /// Override a case field of every point, PATH=VALUE (repeatable), after the sweep
+    /// file's own `set` and before the design's values: the same map on another mesh,
+    /// e.g. --set mesh.refine=1.5 (give it another --out).
+    #[arg(long = "set", value_name = "PATH=VALUE")]
+    set: Vec<String>,
     /// No progress display (by default a progress bar on a terminal, a line per finished
     /// point otherwise).
     #[arg(long)]
@@ -874,7 +879,7 @@ fn sweep_command(a: SweepArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let plan = match sweep::Plan::load(&file) {
+    let plan = match sweep::Plan::load_with(&file, &a.set) {
         Ok(p) => p,
         Err(e) => return sweep_error(&e),
     };
@@ -942,6 +947,7 @@ fn sweep_slurm_command(a: &SweepArgs, plan: &sweep::Plan, file: &Path, out: &Pat
         jobs: a.jobs,
         retry_failed: a.retry_failed,
         max_wall: a.max_wall,
+        set: a.set.clone(),
     };
     let path = match sweep::slurm::write_script(plan, file, out, &o) {
         Ok(p) => p,

@@ -623,9 +623,23 @@ impl Plan {
     /// Reads the sweep file and its base case and resolves every point. Errors name the
     /// file (and line and column where ron tells them) or the axis.
     pub fn load(sweep_file: &Path) -> Result<Plan, SweepError> {
-        let spec = read_sweep_file(sweep_file)?;
-        resolve_plan(sweep_file, spec)
-            .map_err(|m| SweepError::Input(format!("{}: {m}", sweep_file.display())))
+        Self::load_with(sweep_file, &[])
+    }
+
+    /// [`Plan::load`] with `set` (`PATH=VALUE`, the command line's `--set`) applied to
+    /// every point after the sweep file's own `set`, before the design's values: the same
+    /// map on another mesh or tolerance without another sweep file.
+    pub fn load_with(sweep_file: &Path, set: &[String]) -> Result<Plan, SweepError> {
+        let mut spec = read_sweep_file(sweep_file)?;
+        spec.set.extend(set.iter().cloned());
+        resolve_plan(sweep_file, spec).map_err(|m| {
+            let from = if set.is_empty() {
+                ""
+            } else {
+                " (with the command line's --set)"
+            };
+            SweepError::Input(format!("{}{from}: {m}", sweep_file.display()))
+        })
     }
 
     /// Each point on one line, as `--list` prints them: id, value on each axis, and valid

@@ -32,6 +32,8 @@ pub struct SlurmOptions {
     pub retry_failed: bool,
     /// Pass `--max-wall S` to the tasks.
     pub max_wall: Option<f64>,
+    /// Pass `--set PATH=VALUE` to the tasks (the command line's, in order).
+    pub set: Vec<String>,
 }
 
 /// Quotes `s` for a POSIX shell.
@@ -229,6 +231,9 @@ pub fn script(plan: &Plan, exe: &Path, sweep_file: &Path, out: &Path, o: &SlurmO
     }
     if let Some(w) = o.max_wall {
         cmd += &format!(" --max-wall {w}");
+    }
+    for set in &o.set {
+        cmd += &format!(" --set {}", quote(set));
     }
     s += &cmd;
     s.push('\n');
