@@ -526,36 +526,32 @@ pub fn estimated_run_memory(dim: usize, elements: f64) -> f64 {
 /// first, the first segment's growth, beyond the last as elements^`beyond`.
 pub fn through_anchors(anchors: &[(f64, f64)], beyond: f64, elements: f64) -> f64 {
     let slope = |(n0, c0): (f64, f64), (n1, c1): (f64, f64)| (c1 / c0).ln() / (n1 / n0).ln();
-    let (first, last) = (anchors[0], anchors[anchors.len() - 1]);
-    if anchors.len() < 2 || elements >= last.0 {
-        return last.1 * (elements / last.0).powf(beyond);
+    let last = anchors[anchors.len() - 1];
+    // The segment that holds `elements` (the first one below it, which extends it).
+    match anchors.windows(2).find(|w| elements < w[1].0) {
+        Some(w) => w[0].1 * (elements / w[0].0).powf(slope(w[0], w[1])),
+        None => last.1 * (elements / last.0).powf(beyond),
     }
-    let k = anchors
-        .windows(2)
-        .position(|w| elements < w[1].0)
-        .unwrap_or(anchors.len() - 2);
-    let (a, b) = (anchors[k], anchors[k + 1]);
-    let from = if elements < first.0 { first } else { a };
-    from.1 * (elements / from.0).powf(slope(a, b))
 }
 
 /// Shares the cores among `jobs` runs side by side: OpenBLAS (UMFPACK's BLAS, the 3-D
-/// runs') gets cores / jobs threads (at least one) unless the user chose its threads
-/// (`OPENBLAS_NUM_THREADS`, `OMP_NUM_THREADS`). Returns the threads set, if any.
+/// runs') gets [`blas_threads`] threads. Returns the threads OpenBLAS reports, if it is the
+/// BLAS loaded and the user did not choose its threads.
 ///
-/// Two 3-D runs side by side on two cores, each with OpenBLAS's default of two threads,
-/// spent half the machine in the kernel (`top`: 50 % system time, OpenBLAS's idle threads
-/// yielding) until one thread each gave 100 % user time (the 3-D map, 2026-12-08).
+/// Two 3-D runs side by side on two cores with OpenBLAS's default two threads each took
+/// 1.4× the wall time of one thread each (docs/benchmarks.md, 2026-12-08: the idle threads
+/// spin, 82–94 s of system time a run against 19 s).
 pub fn share_cores_among(jobs: usize) -> Option<usize> {
-    if jobs <= 1
-        || std::env::var_os("OPENBLAS_NUM_THREADS").is_some()
-        || std::env::var_os("OMP_NUM_THREADS").is_some()
-    {
-        return None;
-    }
+    let chosen = std::env::var_os("OPENBLAS_NUM_THREADS").is_some()
+        || std::env::var_os("OMP_NUM_THREADS").is_some();
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let threads = (cores / jobs).max(1);
-    crate::sundials::set_openblas_threads(threads)
+    crate::sundials::set_openblas_threads(blas_threads(jobs, cores, chosen)?)
+}
+
+/// OpenBLAS's threads for `jobs` runs side by side on `cores` cores: cores / jobs, at least
+/// one; none set where the user chose them (`chosen`).
+fn blas_threads(jobs: usize, cores: usize, chosen: bool) -> Option<usize> {
+    (!chosen).then(|| (cores / jobs.max(1)).max(1))
 }
 
 #[cfg(test)]
@@ -602,7 +598,17 @@ mod tests {
             matches!(two, Some(n) if n == 2 || n == cores),
             "{two:?} on {cores} cores"
         );
-        assert_eq!(share_cores_among(1), None);
+    }
+
+    /// The cores shared among runs side by side: one thread each where the runs fill the
+    /// cores, the rest divided, all of them to a single run, none where the user chose.
+    #[test]
+    fn blas_threads_share_the_cores_among_the_runs() {
+        assert_eq!(blas_threads(2, 2, false), Some(1));
+        assert_eq!(blas_threads(3, 2, false), Some(1));
+        assert_eq!(blas_threads(2, 8, false), Some(4));
+        assert_eq!(blas_threads(1, 2, false), Some(2));
+        assert_eq!(blas_threads(2, 2, true), None);
     }
 
     const ALL: [LinearSolver; 7] = [

@@ -224,8 +224,10 @@ pub fn evaluate(
 fn parallel<T: Sync, R: Send>(tasks: &[T], jobs: usize, f: &(dyn Fn(&T) -> R + Sync)) -> Vec<R> {
     let queue = Mutex::new((0..tasks.len()).collect::<VecDeque<_>>());
     let results: Mutex<Vec<Option<R>>> = Mutex::new((0..tasks.len()).map(|_| None).collect());
+    let jobs = jobs.clamp(1, tasks.len().max(1));
+    crate::solver::share_cores_among(jobs);
     std::thread::scope(|s| {
-        for _ in 0..jobs.clamp(1, tasks.len().max(1)) {
+        for _ in 0..jobs {
             s.spawn(|| {
                 loop {
                     let next = queue.lock().expect("queue").pop_front();
@@ -278,7 +280,6 @@ struct Problem<'a> {
 impl<'a> Problem<'a> {
     /// The problem of `fit`, its runs in `out`, gradients from `gradient`.
     fn new(fit: &'a Fit, out: &Path, jobs: usize, gradient: Gradient, quiet: bool) -> Self {
-        crate::solver::share_cores_among(jobs.min(fit.cases.len() * (fit.params.len() + 1)));
         Problem {
             fit,
             out: out.to_path_buf(),

@@ -128,7 +128,8 @@ pub enum TargetSpec {
         weight: f64,
     },
     /// The lowest value of a measure over the run (the paper's "maximum displacement of
-    /// the nucleus": the lowest `uy_nucleus_max`, negated).
+    /// the nucleus" is minus the lowest `uy_nucleus_max`: `value` is the lowest, −5.4 µm
+    /// for 5.4 µm down).
     Lowest {
         case: String,
         measure: String,

@@ -567,7 +567,7 @@ pub fn run_cost(case: &Case) -> Option<RunCost> {
 /// more per tetrahedron than a uniform coarsening would (its graded bottom layer); the law
 /// of the finer two alone gave it 379 s. A run that ends earlier, or whose phases are
 /// shorter, costs the fraction [`work_fraction`] of that. What the estimate leaves out
-/// (the geometry: up to 1.3× at the narrowest posts of the map; another tolerance or
+/// (the geometry: up to 2× on the map, the `Gap` lattice and the narrow gaps; another tolerance or
 /// integrator; a slower node; the mesh generator's first run) is the margin's job.
 pub fn estimated_run_seconds(dim: usize, elements: f64, phases: &case::Phases) -> f64 {
     let seconds = if dim == 3 {
